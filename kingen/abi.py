@@ -1,0 +1,87 @@
+"""The DELMIA V5 / IGRIP user-kinematics interface, declared once.
+
+The stand-in ``shlibdefs.h``, the generated plugin's prototypes and the cffi
+declarations used to load plugins are all rendered from these lists, so the C
+side and the Python side cannot drift apart. Values are those of the vendor
+header (../shared/delmia-abi.md).
+"""
+
+HEADER_VERSION = 1
+"""Bumped when the stand-in header changes in a way generated sources rely on."""
+
+WARNINGS = {
+    "WARN_GOOD_SOLUTION": 0,
+    "WARN_JOINT_LIMITS_EXCEEDED": 1,
+    "WARN_UNREACHABLE": 2,
+    "WARN_SINGULAR_SOLUTION": 5,
+}
+WARNING_ALIASES = {"WARN_JOINT_LIMIT_EXCEEDED": "WARN_JOINT_LIMITS_EXCEEDED"}
+WARNING_NAMES = {value: name for name, value in WARNINGS.items()}
+
+CONSTANTS = {
+    "USR_KIN_DATA_NULL": 0,
+    "USR_KIN_DATA_KINSTAT": 1,
+    "KIN_MODE_NORMAL": 0,
+    "KIN_MODE_TRACK_TCP": 1,
+    "KIN_MODE_OTHER": 2,
+    "ROTATIONAL": 0,
+    "TRANSLATIONAL": 1,
+    "STATUS_OKAY": 0,
+    "STATUS_ERROR": 1,
+    "ZERO_TOL": 0.00001,
+}
+
+KINSTAT_FIELDS = (
+    ("int", "dof_count"),
+    ("int *", "joint_types"),
+    ("int", "kin_mode"),
+    ("double *", "joint_values"),
+    ("double *", "jnt_trvl_lmts[2]"),
+    ("double", "mount_plate_offset[6]"),
+    ("double", "curr_tool_offset[6]"),
+)
+
+GET_KIN_CONFIG = "int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)"
+
+HOST_MATH = (
+    ("sqrt", "double DNBVMAP_Sqrt(double x)"),
+    ("asin", "double DNBVMAP_Asin(double x)"),
+    ("acos", "double DNBVMAP_Acos(double x)"),
+    ("atan", "double DNBVMAP_Atan(double x)"),
+    ("atan2", "double DNBVMAP_Atan2(double y, double x)"),
+)
+"""Math functions the vendor header maps to host symbols: (C name, host prototype)."""
+
+HOST_CHECK = "int DNBVMAP_kin_check_definition(int dof_count, int solution_count)"
+
+EMULATOR_FUNCTIONS = (
+    "void kingen_host_reset(int dof_count, int solution_count)",
+    "void kingen_host_refuse(int refuse)",
+    "int kingen_host_check_calls(void)",
+    "int kingen_host_last_dof(void)",
+    "int kingen_host_last_solutions(void)",
+    "int kingen_host_run_batch(void *routine, int count, double *t6, double *link_lengths, "
+    "double *link_offsets, double *solutions, int solution_block, int *warnings, int warning_block, "
+    "int *returns, void *pData)",
+)
+"""Functions only the host emulator offers (state of kin_check_definition, batch driver)."""
+
+
+def routine_prototype(routine, solutions):
+    """The routine's ANSI prototype; ``solutions`` is the column count (a number or a macro name)."""
+    return (
+        f"int {routine}(double link_lengths[], double link_offsets[], double T6[4][4], "
+        f"double solutions[][{solutions}], int warnings[], void *pData)"
+    )
+
+
+def kinstat_struct():
+    """The C declaration of DLM_Data_KinStat, field by field in the vendor's order."""
+    fields = "".join(f"    {ctype} {name};\n" for ctype, name in KINSTAT_FIELDS)
+    return f"typedef struct {{\n{fields}}} DLM_Data_KinStat;"
+
+
+def cffi_declarations():
+    """Everything cffi needs to drive a host emulator and plugins, except the routines."""
+    prototypes = [GET_KIN_CONFIG, HOST_CHECK, *EMULATOR_FUNCTIONS]
+    return kinstat_struct() + "\n" + "".join(f"{p};\n" for p in prototypes)

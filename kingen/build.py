@@ -1,0 +1,158 @@
+"""Building: write rendered sources atomically and compile them with the system C compiler.
+
+Plugins are built exactly as for DELMIA: against the stand-in ``shlibdefs.h``, with
+the host symbols (``DNBVMAP_*``) left undefined for the host process to resolve.
+The stand-in header and the host emulator library live in a cache folder
+(``$KINGEN_CACHE``, else ``~/.cache/kingen``) keyed by their content and compiler.
+A plugin build is skipped when its folder already holds the same source built
+with the same compiler and flags (``.kingen-build.json``).
+"""
+
+import hashlib
+import json
+import os
+import shlex
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import __version__
+from .errors import KingenError
+from .render import render, render_header, host_source, source_name
+
+STRICT_C89 = ("-std=c89", "-pedantic", "-Wall", "-Wextra", "-Werror")
+"""The dialect and warnings every generated source must pass (old Visual C is C89)."""
+SHARED_FLAGS = ("-O2", "-fPIC", "-shared")
+STAMP = ".kingen-build.json"
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    """Paths of a built plugin; ``compiled`` is False when the cache was up to date."""
+
+    source: Path
+    library: Path
+    routine: str
+    compiled: bool
+
+
+def compiler_command():
+    """The C compiler as an argument list: ``$CC`` (may hold flags), else ``cc``."""
+    return shlex.split(os.environ.get("CC") or "cc")
+
+
+def write_atomic(path, content):
+    """Write text or bytes to ``path`` through a temporary file and a rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    data = content.encode() if isinstance(content, str) else content
+    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(handle, "wb") as stream:
+            stream.write(data)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def compile_c(sources, output, flags, compiler=None):
+    """Compile ``sources`` into ``output`` (atomically); compiler errors become a KingenError.
+
+    The error names the compiler's first diagnostic line (file:line: error: ...).
+    """
+    command = list(compiler or compiler_command())
+    output = Path(output)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(dir=output.parent, prefix=f".{output.name}.")
+    os.close(handle)
+    try:
+        try:
+            result = subprocess.run(
+                [*command, *flags, *map(str, sources), "-o", temporary, "-lm"],
+                capture_output=True, text=True,
+            )
+        except FileNotFoundError:
+            raise KingenError(f"C compiler '{command[0]}' not found: install one or set CC") from None
+        if result.returncode != 0:
+            raise KingenError(f"{' '.join(map(str, sources))}: does not compile: {first_diagnostic(result.stderr)}")
+        os.replace(temporary, output)
+    finally:
+        Path(temporary).unlink(missing_ok=True)
+
+
+def first_diagnostic(stderr):
+    """The compiler's first error line (or first line) with file and line, stripped."""
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    for line in lines:
+        if "error" in line.lower():
+            return line
+    return lines[0] if lines else "the compiler failed without a message"
+
+
+def _digest(*parts):
+    return hashlib.sha256("\0".join(parts).encode()).hexdigest()
+
+
+def cache_dir():
+    """kingen's cache folder for the stand-in header and the host emulator."""
+    return Path(os.environ.get("KINGEN_CACHE") or Path.home() / ".cache" / "kingen")
+
+
+def host_support():
+    """(include folder with shlibdefs.h, host emulator library), built once per content."""
+    header, source = render_header(), host_source()
+    command = compiler_command()
+    folder = cache_dir() / f"host-{_digest(__version__, header, source, *command)[:16]}"
+    include, library = folder / "include", folder / "libkingen_host.so"
+    if not library.is_file():
+        write_atomic(include / "shlibdefs.h", header)
+        write_atomic(folder / "kingen_host.c", source)
+        compile_c([folder / "kingen_host.c"], library, [*STRICT_C89, *SHARED_FLAGS, f"-I{include}"])
+    return include, library
+
+
+def default_out_dir(robot):
+    return Path("build") / robot.name
+
+
+def library_name(robot):
+    """lib<name>.so, as DELMIA's Solver Attributes tab names the library (libtau)."""
+    return f"{robot.library}.so"
+
+
+def build_plugin(robot, out_dir=None, defines=()):
+    """Render and compile ``robot`` into ``out_dir`` (default build/<name>).
+
+    Writes ``kin_<name>.c`` and ``lib<name>.so``; ``defines`` are extra -D macros
+    (for example KINGEN_DEBUG). Skips compiling when the stamp matches.
+    """
+    out_dir = Path(out_dir or default_out_dir(robot))
+    (name, text), = render(robot).items()
+    include, _ = host_support()
+    flags = [*STRICT_C89, *SHARED_FLAGS, f"-I{include}", *(f"-D{d}" for d in defines)]
+    source, library = out_dir / name, out_dir / library_name(robot)
+    key = _digest(__version__, text, *compiler_command(), *flags)
+    stamp = out_dir / STAMP
+    if library.is_file() and source.is_file() and _read_stamp(stamp) == key and source.read_text() == text:
+        return BuildResult(source, library, robot.routine, compiled=False)
+    write_atomic(source, text)
+    compile_c([source], library, flags)
+    write_atomic(stamp, json.dumps({"key": key, "robot": robot.name, "kingen": __version__}) + "\n")
+    return BuildResult(source, library, robot.routine, compiled=True)
+
+
+def write_source(robot, out_dir):
+    """Render ``robot`` and write ``kin_<name>.c`` into ``out_dir``; returns its path."""
+    for name, text in render(robot).items():
+        write_atomic(Path(out_dir) / name, text)
+    return Path(out_dir) / source_name(robot)
+
+
+def _read_stamp(stamp):
+    try:
+        return json.loads(stamp.read_text()).get("key")
+    except (OSError, ValueError):
+        return None
+

@@ -1,0 +1,76 @@
+"""Units, frames and pose conventions shared by every kingen module.
+
+- Lengths in mm. Prismatic joints in mm, revolute joints in radians in (-pi, pi].
+- YAML files and command-line poses give angles in degrees.
+- A pose ``x y z roll pitch yaw`` (mm, degrees) is the platform frame in the base
+  frame with R = Rz(yaw) . Ry(pitch) . Rx(roll) (fixed axes X, then Y, then Z).
+- H is the usual homogeneous matrix (columns n, o, a, p). DELMIA passes
+  T6 = transpose(H): rows n, o, a, p, column 3 = (0, 0, 0, 1).
+- Posture k: each two-branch limb gives one binary digit, the first such limb
+  most significant, branch 0 before branch 1.
+
+All functions are vectorised over leading axes.
+"""
+
+import numpy as np
+
+
+def rotation_from_rpy(roll, pitch, yaw):
+    """Rotation matrices R = Rz(yaw) Ry(pitch) Rx(roll); angles in radians, shape (..., 3, 3)."""
+    roll, pitch, yaw = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (roll, pitch, yaw)))
+    cr, sr = np.cos(roll), np.sin(roll)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    rotation = np.empty(roll.shape + (3, 3))
+    rotation[..., 0, 0] = cy * cp
+    rotation[..., 0, 1] = cy * sp * sr - sy * cr
+    rotation[..., 0, 2] = cy * sp * cr + sy * sr
+    rotation[..., 1, 0] = sy * cp
+    rotation[..., 1, 1] = sy * sp * sr + cy * cr
+    rotation[..., 1, 2] = sy * sp * cr - cy * sr
+    rotation[..., 2, 0] = -sp
+    rotation[..., 2, 1] = cp * sr
+    rotation[..., 2, 2] = cp * cr
+    return rotation
+
+
+def matrix_from_pose(pose):
+    """Homogeneous matrices H (..., 4, 4) from poses (..., 6): x y z in mm, roll pitch yaw in degrees."""
+    pose = np.asarray(pose, dtype=float)
+    angles = np.radians(pose[..., 3:6])
+    matrix = np.zeros(pose.shape[:-1] + (4, 4))
+    matrix[..., :3, :3] = rotation_from_rpy(angles[..., 0], angles[..., 1], angles[..., 2])
+    matrix[..., :3, 3] = pose[..., :3]
+    matrix[..., 3, 3] = 1.0
+    return matrix
+
+
+def t6_from_matrix(matrix):
+    """DELMIA's transposed T6 (rows n, o, a, p) from homogeneous matrices H."""
+    return np.swapaxes(np.asarray(matrix, dtype=float), -1, -2).copy()
+
+
+def matrix_from_t6(t6):
+    """Homogeneous matrices H from DELMIA's transposed T6."""
+    return t6_from_matrix(t6)
+
+
+def t6_from_pose(pose):
+    """DELMIA's T6 (..., 4, 4) for poses (..., 6) in mm and degrees."""
+    return t6_from_matrix(matrix_from_pose(pose))
+
+
+def wrap_angle(angle):
+    """Angles in radians mapped to (-pi, pi]."""
+    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
+    return np.where(wrapped == -np.pi, np.pi, wrapped)
+
+
+def angle_difference(a, b):
+    """Signed difference a - b in radians, wrapped to (-pi, pi] (so pi and -pi agree)."""
+    return wrap_angle(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+
+
+def branch_of_posture(posture, bit):
+    """Branch (0 or 1) a two-branch limb with binary digit ``bit`` takes in posture ``posture``."""
+    return (np.asarray(posture) >> bit) & 1

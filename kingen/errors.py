@@ -1,0 +1,15 @@
+"""The one error type kingen raises for bad input; only the CLI prints it."""
+
+
+class KingenError(Exception):
+    """A one-line diagnostic a user can act on: ``file:line: field: problem``.
+
+    The message is complete on its own; the CLI prints it on stderr and exits 2.
+    """
+
+
+def located(source, line, field, problem):
+    """Build a KingenError in compiler style from its parts (any part may be None)."""
+    where = ":".join(str(part) for part in (source, line) if part is not None)
+    text = ": ".join(str(part) for part in (where or None, field or None, problem) if part)
+    return KingenError(text)

@@ -1,0 +1,448 @@
+"""Robot definitions: load a YAML file, validate it once, expand layouts.
+
+``load_robot(spec)`` is the only entry point the other modules need. It returns
+a frozen :class:`Robot` or raises one :class:`~kingen.errors.KingenError` whose
+message names the file, the line, the field and the problem. Geometry in the
+YAML is in mm and degrees (see :mod:`kingen.conventions`); the Robot exposes
+travel limits in internal units (mm, radians).
+"""
+
+import hashlib
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, ClassVar, Literal, Optional, Union
+
+import numpy as np
+import yaml
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError
+
+from .errors import KingenError, located
+from .resources import robots_dir
+
+C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto if "
+    "inline int long register restrict return short signed sizeof static struct switch typedef "
+    "union unsigned void volatile while".split()
+)
+MAX_TWO_BRANCH_LIMBS = 8
+"""At most 2**8 = 256 postures: the solutions array is NUM_DOFS x NUM_SOLUTIONS doubles."""
+UNIT_TOLERANCE = 1e-6
+"""How far from 1 the norm of a declared direction may be; it is then normalised exactly."""
+
+PRISMATIC = "prismatic"
+REVOLUTE = "revolute"
+
+
+def _check_identifier(name):
+    if name in C_KEYWORDS:
+        raise ValueError(f"'{name}' is a C keyword")
+    return name
+
+
+def _check_travel(travel):
+    if not travel[0] < travel[1]:
+        raise ValueError(f"lower limit {travel[0]} must be below upper limit {travel[1]}")
+    return travel
+
+
+def _check_unit(vector):
+    norm = math.sqrt(sum(component * component for component in vector))
+    if norm == 0.0:
+        raise ValueError("direction is the zero vector")
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        raise ValueError(f"direction must be a unit vector, its norm is {norm:.9g}")
+    return [component / norm for component in vector]
+
+
+def _check_non_negative(values):
+    if any(value < 0 for value in values):
+        raise ValueError("ranges must not be negative")
+    return values
+
+
+Identifier = Annotated[
+    str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,62}$"), AfterValidator(_check_identifier)
+]
+Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+UnitVec3 = Annotated[Vec3, AfterValidator(_check_unit)]
+Six = Annotated[list[float], Field(min_length=6, max_length=6)]
+Length = Annotated[float, Field(gt=0)]
+Travel = Annotated[list[float], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False)
+
+
+class _Limb(_Strict):
+    name: Optional[Identifier] = None
+    travel: Optional[Travel] = None
+    """[lower, upper] in mm (prismatic) or degrees (revolute); absent: no limits."""
+
+
+class Leg(_Limb):
+    """S-P-S / U-P-S leg: q = |R t + p - b| - L0 (mm). One branch."""
+
+    model: Literal["leg"]
+    base_point: Vec3
+    platform_point: Vec3
+    reference_length: Length
+    branches: ClassVar[int] = 1
+    joint_type: ClassVar[str] = PRISMATIC
+
+
+class Rail(_Limb):
+    """P-S-S carriage on a rail: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) (mm). Two branches."""
+
+    model: Literal["rail"]
+    rail_point: Vec3
+    direction: UnitVec3
+    carriage_offset: Vec3
+    platform_point: Vec3
+    link_length: Length
+    branches: ClassVar[int] = 2
+    joint_type: ClassVar[str] = PRISMATIC
+
+
+class Crank(_Limb):
+    """R-U-S crank: theta = phi +/- acos(K / rho) (radians). Two branches.
+
+    ``crank_direction`` (beta) is in degrees in the YAML.
+    """
+
+    model: Literal["crank"]
+    pivot: Vec3
+    crank_direction: float
+    crank_length: Length
+    rod_length: Length
+    platform_point: Vec3
+    branches: ClassVar[int] = 2
+    joint_type: ClassVar[str] = REVOLUTE
+
+
+Limb = Annotated[Union[Leg, Rail, Crank], Field(discriminator="model")]
+
+
+class StewartGoughLayout(_Strict):
+    """Six legs on the controller thesis's parametric layout (points at z = heights)."""
+
+    type: Literal["stewart_gough"]
+    base_radius: Length
+    platform_radius: Length
+    base_pair_angle: Annotated[float, Field(gt=0, lt=120)]
+    platform_pair_angle: Annotated[float, Field(gt=0, lt=120)]
+    base_height: float = 0.0
+    platform_height: float = 0.0
+    reference_length: Length
+    travel: Optional[Travel] = None
+
+    def limbs(self):
+        """The six legs; point angles lambda_1 = 60 - pair/2, lambda_2 = lambda_1 + pair, ... (degrees)."""
+        legs = []
+        for index in range(6):
+            pair, second = divmod(index, 2)
+            centre = 60.0 + 120.0 * pair
+            base_angle = math.radians(centre + (second - 0.5) * self.base_pair_angle)
+            platform_angle = math.radians(centre + (second - 0.5) * self.platform_pair_angle)
+            legs.append(Leg(
+                model="leg",
+                name=f"leg{index + 1}",
+                base_point=[self.base_radius * math.cos(base_angle),
+                            self.base_radius * math.sin(base_angle), self.base_height],
+                platform_point=[self.platform_radius * math.cos(platform_angle),
+                                self.platform_radius * math.sin(platform_angle), self.platform_height],
+                reference_length=self.reference_length,
+                travel=self.travel,
+            ))
+        return legs
+
+
+class Rus6Layout(_Strict):
+    """Six cranks on the 6-RUS flight-simulator layout (robots.md, '6-RUS family')."""
+
+    type: Literal["rus6"]
+    base_radius: Length
+    platform_radius: Length
+    base_half_distance: Annotated[float, Field(ge=0)]
+    platform_half_distance: Annotated[float, Field(ge=0)]
+    crank_length: Length
+    rod_length: Length
+    pair_angles: Six
+    crank_directions: Six
+    travel: Optional[Travel] = None
+
+    def limbs(self):
+        """The six cranks: A_i and c_i from chi_i with m, n = (-1)^(i-1) times the half-distances."""
+        cranks = []
+        for index, (chi_deg, beta) in enumerate(zip(self.pair_angles, self.crank_directions)):
+            chi = math.radians(chi_deg)
+            sign = 1.0 if index % 2 == 0 else -1.0
+            m, n = sign * self.base_half_distance, sign * self.platform_half_distance
+            cranks.append(Crank(
+                model="crank",
+                name=f"crank{index + 1}",
+                pivot=[self.base_radius * math.cos(chi) - m * math.sin(chi),
+                       self.base_radius * math.sin(chi) + m * math.cos(chi), 0.0],
+                crank_direction=beta,
+                crank_length=self.crank_length,
+                rod_length=self.rod_length,
+                platform_point=[self.platform_radius * math.cos(chi) - n * math.sin(chi),
+                                self.platform_radius * math.sin(chi) + n * math.cos(chi), 0.0],
+                travel=self.travel,
+            ))
+        return cranks
+
+
+Layout = Annotated[Union[StewartGoughLayout, Rus6Layout], Field(discriminator="type")]
+
+
+class Region(_Strict):
+    """Verification region: poses drawn uniformly in home +/- range (mm, degrees)."""
+
+    home: Six
+    range: Annotated[Six, AfterValidator(_check_non_negative)]
+
+
+class Golden(_Strict):
+    """A published (or independently derived) pose -> joints pair, with its source."""
+
+    source: Annotated[str, Field(min_length=1)]
+    pose: Six
+    posture: Annotated[int, Field(ge=0)] = 0
+    joints: list[float]
+    """mm for prismatic joints, degrees for revolute joints."""
+    tolerance: Length
+    """In the units of ``joints``: half a unit of the last published digit is typical."""
+
+
+class RobotFile(_Strict):
+    """The YAML schema; documented field by field in README.md ('Robot definitions')."""
+
+    name: Identifier
+    description: Annotated[str, Field(min_length=1)]
+    source: Optional[str] = None
+    limbs: Optional[Annotated[list[Limb], Field(min_length=1, max_length=64)]] = None
+    layout: Optional[Layout] = None
+    verification: Region
+    golden: list[Golden] = []
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A validated robot. Limbs are in joint order: limb i drives solutions row i."""
+
+    name: str
+    description: str
+    path: Path
+    sha256: str
+    limbs: tuple
+    verification: Region
+    golden: tuple
+
+    @property
+    def routine(self):
+        return f"kin_{self.name}"
+
+    @property
+    def library(self):
+        return f"lib{self.name}"
+
+    @property
+    def dof(self):
+        return len(self.limbs)
+
+    @property
+    def branch_bits(self):
+        """Per limb: its binary digit in the posture number (most significant first), or -1."""
+        two_branch = [i for i, limb in enumerate(self.limbs) if limb.branches == 2]
+        bits = [-1] * self.dof
+        for rank, index in enumerate(two_branch):
+            bits[index] = len(two_branch) - 1 - rank
+        return tuple(bits)
+
+    @property
+    def postures(self):
+        return 2 ** sum(1 for bit in self.branch_bits if bit >= 0)
+
+    @property
+    def joint_names(self):
+        return tuple(limb.name or f"joint{i + 1}" for i, limb in enumerate(self.limbs))
+
+    @property
+    def joint_types(self):
+        return tuple(limb.joint_type for limb in self.limbs)
+
+    @property
+    def models(self):
+        return tuple(dict.fromkeys(limb.model for limb in self.limbs))
+
+    def travel_limits(self):
+        """(lower, upper) arrays in internal units (mm, rad); -inf/+inf where no limit is set."""
+        lower = np.full(self.dof, -np.inf)
+        upper = np.full(self.dof, np.inf)
+        for i, limb in enumerate(self.limbs):
+            if limb.travel is not None:
+                scale = math.pi / 180.0 if limb.joint_type == REVOLUTE else 1.0
+                lower[i], upper[i] = limb.travel[0] * scale, limb.travel[1] * scale
+        return lower, upper
+
+    def joint_scale(self):
+        """Per joint: factor from YAML units (mm, degrees) to internal units (mm, radians)."""
+        return np.array([math.pi / 180.0 if t == REVOLUTE else 1.0 for t in self.joint_types])
+
+
+def shipped_robots():
+    """Names of the shipped robots, sorted."""
+    return sorted(path.stem for path in robots_dir().glob("*.yaml"))
+
+
+def resolve_robot_path(spec):
+    """A YAML path as given, or the shipped robot of that name."""
+    path = Path(spec)
+    if path.is_file():
+        return path
+    shipped = robots_dir() / f"{spec}.yaml"
+    if path.suffix == "" and shipped.is_file():
+        return shipped
+    raise KingenError(
+        f"{spec}: no such robot file, and no shipped robot of that name "
+        f"(shipped: {', '.join(shipped_robots())})"
+    )
+
+
+def load_robot(spec):
+    """Load, validate and expand a robot definition (path or shipped name)."""
+    path = resolve_robot_path(spec)
+    raw = path.read_bytes()
+    shown = str(path)
+    data, lines = _parse_yaml(raw, shown)
+    locate = _Locator(shown, lines)
+    try:
+        document = RobotFile.model_validate(data)
+    except ValidationError as error:
+        raise _diagnostic(error, locate) from None
+    limbs = _expand_limbs(document, locate)
+    robot = Robot(
+        name=document.name,
+        description=document.description,
+        path=path,
+        sha256=hashlib.sha256(raw).hexdigest(),
+        limbs=tuple(limbs),
+        verification=document.verification,
+        golden=tuple(document.golden),
+    )
+    _check_golden(robot, locate)
+    return robot
+
+
+class _Locator:
+    """Turns a field path into 'file:line: field: problem' using the YAML's key lines."""
+
+    def __init__(self, source, lines):
+        self.source = source
+        self.lines = lines
+
+    def error(self, path, problem):
+        line = None
+        for cut in range(len(path), -1, -1):
+            if tuple(path[:cut]) in self.lines:
+                line = self.lines[tuple(path[:cut])]
+                break
+        return located(self.source, line, _dotted(path), problem)
+
+
+def _dotted(path):
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
+    return text
+
+
+def _parse_yaml(raw, shown):
+    """The document as plain data plus {field path: line}; rejects duplicate keys."""
+    try:
+        text = raw.decode("utf-8")
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except UnicodeDecodeError as error:
+        raise located(shown, None, None, f"not UTF-8 text ({error.reason})") from None
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else None
+        problem = getattr(error, "problem", None) or str(error).splitlines()[0]
+        raise located(shown, line, None, f"YAML syntax: {problem}") from None
+    if not isinstance(data, dict):
+        raise located(shown, None, None, "expected a mapping of robot fields at the top level")
+    lines = {}
+    _record_lines(node, (), lines, shown)
+    return data, lines
+
+
+def _record_lines(node, path, lines, shown):
+    if isinstance(node, yaml.MappingNode):
+        seen = set()
+        for key_node, value_node in node.value:
+            key = key_node.value
+            line = key_node.start_mark.line + 1
+            if key in seen:
+                raise located(shown, line, _dotted(path + (key,)), "duplicate key")
+            seen.add(key)
+            lines[path + (key,)] = line
+            _record_lines(value_node, path + (key,), lines, shown)
+    elif isinstance(node, yaml.SequenceNode):
+        for index, item in enumerate(node.value):
+            lines[path + (index,)] = item.start_mark.line + 1
+            _record_lines(item, path + (index,), lines, shown)
+
+
+_UNION_TAGS = {"leg", "rail", "crank", "stewart_gough", "rus6"}
+_FRIENDLY = {"extra_forbidden": "unknown key", "missing": "required key missing"}
+
+
+def _diagnostic(error, locate):
+    """The first pydantic error as a located one-line KingenError."""
+    first = error.errors(include_url=False)[0]
+    path = []
+    for part in first["loc"]:
+        if isinstance(part, str) and part in _UNION_TAGS and path and (
+            isinstance(path[-1], int) or path[-1] == "layout"
+        ):
+            continue
+        path.append(part)
+    problem = _FRIENDLY.get(first["type"], first["msg"])
+    if problem.startswith("Value error, "):
+        problem = problem[len("Value error, "):]
+    value = first.get("input")
+    if first["type"] not in _FRIENDLY and not isinstance(value, (dict, list)) and len(repr(value)) < 40:
+        problem += f" (got {value!r})"
+    return locate.error(path, problem)
+
+
+def _expand_limbs(document, locate):
+    if (document.limbs is None) == (document.layout is None):
+        raise locate.error(["limbs"], "give exactly one of 'limbs' and 'layout'")
+    limbs = document.limbs if document.limbs is not None else document.layout.limbs()
+    names = [limb.name or f"joint{i + 1}" for i, limb in enumerate(limbs)]
+    for index, name in enumerate(names):
+        if names.index(name) != index:
+            raise locate.error(["limbs", index, "name"], f"joint name '{name}' is used twice")
+    two_branch = sum(1 for limb in limbs if limb.branches == 2)
+    if two_branch > MAX_TWO_BRANCH_LIMBS:
+        raise locate.error(
+            ["limbs"], f"{two_branch} two-branch limbs; at most {MAX_TWO_BRANCH_LIMBS} (256 postures)"
+        )
+    return limbs
+
+
+def _check_golden(robot, locate):
+    for index, golden in enumerate(robot.golden):
+        if len(golden.joints) != robot.dof:
+            raise locate.error(
+                ["golden", index, "joints"], f"expected {robot.dof} joint values, got {len(golden.joints)}"
+            )
+        if golden.posture >= robot.postures:
+            raise locate.error(
+                ["golden", index, "posture"],
+                f"posture {golden.posture} does not exist (the robot has {robot.postures})",
+            )

@@ -1,0 +1,127 @@
+"""Reference inverse kinematics in numpy, written from robots.md's equations.
+
+Independent of the C templates: neither is generated from the other. Vectorised
+over poses. Inputs are DELMIA T6 arrays (n, 4, 4) in the base frame, mm; outputs
+are every posture's joint values (mm, radians in (-pi, pi]) and warning.
+
+Warnings follow the generated C exactly (README, 'Warnings'):
+``WARN_UNREACHABLE`` when some limb has no real solution, ``WARN_SINGULAR_SOLUTION``
+when a rail or crank limb's normalised radicand D is within ``SINGULAR_TOLERANCE``
+of zero, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;
+unreachable wins over singular, singular over joint limits. A limb without a
+real solution reports the value at the clamped radicand (closest approach), so
+values are always finite. Non-finite T6: all postures unreachable, all joints 0.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import abi
+from .conventions import wrap_angle
+
+SINGULAR_TOLERANCE = abi.CONSTANTS["ZERO_TOL"]
+"""Band |D| <= 1e-5 around a limb singularity. Rails: D = radicand / l^2 (cos^2 of the
+link-to-rail angle). Cranks: D = (rho^2 - K^2) / rho^2 (sin^2 of the crank-to-rod angle)."""
+
+
+@dataclass(frozen=True)
+class LimbSolution:
+    """One limb over n poses: ``values`` (n, 2) per branch, ``radicand`` D (n,) or None for legs."""
+
+    values: np.ndarray
+    radicand: np.ndarray = None
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Every posture over n poses.
+
+    joints: (n, dof, postures), mm or rad. warnings: (n, postures) WARN_* codes.
+    radicands: (n, dof) normalised radicand D per limb (+inf for legs).
+    finite: (n,) whether the T6 was finite.
+    """
+
+    joints: np.ndarray
+    warnings: np.ndarray
+    radicands: np.ndarray
+    finite: np.ndarray
+
+
+def platform_points_in_base(t6, points):
+    """Platform-frame points (m, 3) mapped to the base frame for each T6: shape (n, m, 3), mm."""
+    t6 = np.asarray(t6, dtype=float)
+    rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
+    return np.einsum("nij,mj->nmi", rotation, np.asarray(points, dtype=float)) + t6[:, None, 3, :3]
+
+
+def solve_leg(leg, platform_point):
+    """q = |N - b| - L0 for N (n, 3) in the base frame, mm; same value for both 'branches'."""
+    length = np.linalg.norm(platform_point - np.asarray(leg.base_point), axis=-1)
+    q = length - leg.reference_length
+    return LimbSolution(values=np.stack([q, q], axis=-1))
+
+
+def solve_rail(rail, platform_point):
+    """Carriage position along the rail (mm): u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2)."""
+    direction = np.asarray(rail.direction)
+    w = platform_point - np.asarray(rail.rail_point) - np.asarray(rail.carriage_offset)
+    along = w @ direction
+    radicand = rail.link_length ** 2 - np.sum(w * w, axis=-1) + along * along
+    root = np.sqrt(np.maximum(radicand, 0.0))
+    return LimbSolution(
+        values=np.stack([along - root, along + root], axis=-1),
+        radicand=radicand / rail.link_length ** 2,
+    )
+
+
+def solve_crank(crank, platform_point):
+    """Crank angle (rad, (-pi, pi]): phi +/- acos(K / rho), robots.md's 6-RUS convention."""
+    beta = np.radians(crank.crank_direction)
+    g = platform_point - np.asarray(crank.pivot)
+    a = g[:, 0] * np.cos(beta) + g[:, 1] * np.sin(beta)
+    b = -g[:, 2]
+    k = (np.sum(g * g, axis=-1) + crank.crank_length ** 2 - crank.rod_length ** 2) / (2.0 * crank.crank_length)
+    rho_squared = a * a + b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        radicand = np.where(rho_squared > 0.0, (rho_squared - k * k) / rho_squared, -1.0)
+        cosine = np.where(rho_squared > 0.0, k / np.sqrt(rho_squared), 1.0)
+    half = np.arccos(np.clip(cosine, -1.0, 1.0))
+    phi = np.arctan2(b, a)
+    return LimbSolution(
+        values=wrap_angle(np.stack([phi + half, phi - half], axis=-1)),
+        radicand=radicand,
+    )
+
+
+SOLVERS = {"leg": solve_leg, "rail": solve_rail, "crank": solve_crank}
+
+
+def solve(robot, t6):
+    """Every posture of ``robot`` for T6 arrays (n, 4, 4); see the module docstring."""
+    t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
+    count = t6.shape[0]
+    finite = np.all(np.isfinite(t6[:, :, :3]), axis=(1, 2))
+    safe_t6 = np.where(finite[:, None, None], t6, 0.0)
+    points = platform_points_in_base(safe_t6, [limb.platform_point for limb in robot.limbs])
+
+    postures = np.arange(robot.postures)
+    joints = np.empty((count, robot.dof, robot.postures))
+    radicands = np.full((count, robot.dof), np.inf)
+    for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
+        limb_solution = SOLVERS[limb.model](limb, points[:, index])
+        branch = (postures >> bit) & 1 if bit >= 0 else np.zeros_like(postures)
+        joints[:, index, :] = limb_solution.values[:, branch]
+        if limb_solution.radicand is not None:
+            radicands[:, index] = limb_solution.radicand
+
+    lower, upper = robot.travel_limits()
+    outside = np.any((joints < lower[None, :, None]) | (joints > upper[None, :, None]), axis=1)
+    unreachable = np.any(radicands < -SINGULAR_TOLERANCE, axis=1)
+    singular = np.any(np.abs(radicands) <= SINGULAR_TOLERANCE, axis=1)
+
+    warnings = np.where(outside, abi.WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], abi.WARNINGS["WARN_GOOD_SOLUTION"])
+    warnings = np.where(singular[:, None], abi.WARNINGS["WARN_SINGULAR_SOLUTION"], warnings)
+    warnings = np.where(unreachable[:, None] | ~finite[:, None], abi.WARNINGS["WARN_UNREACHABLE"], warnings)
+    joints[~finite] = 0.0
+    return Solution(joints=joints, warnings=warnings.astype(np.int32), radicands=radicands, finite=finite)
