@@ -1,0 +1,198 @@
+"""The ``kingen`` command line: list, render, build, solve, verify.
+
+Exit codes: 0 success, 1 verification failed, 2 bad input or usage (one line on
+stderr naming file, field and problem). Library code raises KingenError; only
+this module prints and chooses exit codes.
+"""
+
+import json
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from . import __version__, abi
+from .build import build_plugin, default_out_dir, write_atomic, write_source
+from .conventions import t6_from_pose
+from .errors import KingenError
+from .host import Plugin
+from .model import REVOLUTE, load_robot, shipped_robots
+from .reference import solve as reference_solve
+from .verify import VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, verify as run_verify
+
+EXIT_FAILED = 1
+EXIT_BAD_INPUT = 2
+
+ROBOT = click.argument("robot", metavar="ROBOT")
+OUT_DIR = click.option(
+    "-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    help="Output folder [default: build/<name>].",
+)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="kingen")
+def cli():
+    """Robot YAML -> DELMIA V5 / IGRIP user-inverse-kinematics plugin, verified.
+
+    ROBOT is a YAML path or the name of a shipped robot (see `kingen list`).
+    """
+
+
+@cli.command("list")
+def list_robots():
+    """The shipped robots with DOF, postures and limb models."""
+    rows = [("robot", "dof", "postures", "limbs", "description")]
+    for name in shipped_robots():
+        robot = load_robot(name)
+        counts = ", ".join(f"{sum(l.model == m for l in robot.limbs)} {m}" for m in robot.models)
+        rows.append((name, str(robot.dof), str(robot.postures), counts, _shorten(robot.description, 60)))
+    _print_table(rows)
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+def render(robot, out_dir):
+    """Write kin_<name>.c into the output folder."""
+    model = load_robot(robot)
+    path = write_source(model, out_dir or default_out_dir(model))
+    click.echo(str(path))
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--debug", is_flag=True, help="Compile with KINGEN_DEBUG (DELMIA-style printing; slow).")
+def build(robot, out_dir, debug):
+    """Render and compile lib<name>.so with $CC (else cc), host symbols left to the host."""
+    model = load_robot(robot)
+    result = build_plugin(model, out_dir, defines=("KINGEN_DEBUG",) if debug else ())
+    state = "compiled" if result.compiled else "up to date"
+    click.echo(f"{result.library} ({state}; routine {result.routine}, source {result.source})")
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--pose", nargs=6, type=float, metavar="X Y Z ROLL PITCH YAW",
+              help="Platform pose: mm and degrees, R = Rz(yaw) Ry(pitch) Rx(roll).")
+@click.option("--t6", nargs=16, type=float, metavar="16 NUMBERS",
+              help="DELMIA's T6, row by row: n, o, a, p rows, each with its 0/1 last entry.")
+@click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
+def solve(robot, out_dir, pose, t6, degrees):
+    """Every posture's joints and warning from the plugin, with the reference's beside it."""
+    if (pose is None) == (t6 is None):
+        raise click.UsageError("give exactly one of --pose and --t6")
+    model = load_robot(robot)
+    matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
+    plugin = _plugin(model, out_dir)
+    calls = plugin.call(matrix)
+    expected = reference_solve(model, matrix)
+    scale = np.where(np.array(model.joint_types) == REVOLUTE, 180.0 / np.pi if degrees else 1.0, 1.0)
+    units = ["deg" if (t == REVOLUTE and degrees) else ("rad" if t == REVOLUTE else "mm") for t in model.joint_types]
+    names = [f"{name} ({unit})" for name, unit in zip(model.joint_names, units)]
+    header = ["posture", "branches"] + names + ["warning", "| reference"] + names + ["warning"]
+    rows = [header]
+    digits = [bit for bit in model.branch_bits if bit >= 0]
+    for k in range(model.postures):
+        branches = "".join(str((k >> bit) & 1) for bit in digits) or "-"
+        rows.append(
+            [str(k), branches]
+            + [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k]), "|"]
+            + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale] + [_warning_name(expected.warnings[0, k])]
+        )
+    _print_table(rows)
+    click.echo(f"routine returned {calls.returned[0]}")
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--samples", type=click.IntRange(min=1), default=10000, show_default=True,
+              help="Poses drawn in the robot's verification region.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the pose generator.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write the report as JSON to this file.")
+def verify(robot, out_dir, samples, seed, json_path):
+    """Build if needed, then compare the plugin with the reference: exit 0 when all agree, 1 when not."""
+    model = load_robot(robot)
+    plugin = _plugin(model, out_dir)
+    report = run_verify(model, plugin, samples=samples, seed=seed)
+    _print_report(report, plugin)
+    if json_path is not None:
+        write_atomic(json_path, json.dumps(report.as_json(), indent=2) + "\n")
+    if not report.passed:
+        sys.exit(EXIT_FAILED)
+
+
+def _plugin(model, out_dir):
+    result = build_plugin(model, out_dir)
+    return Plugin(result.library, result.routine)
+
+
+def _print_report(report, plugin):
+    verdict = "PASSED" if report.passed else "FAILED"
+    click.echo(f"verify {report.robot}: {report.samples} poses x {report.postures} postures, "
+               f"{plugin.path} ({report.routine})")
+    click.echo(f"  joints: max |error| {report.max_abs_error_mm:.3g} mm (limit {VALUE_TOLERANCE_MM:g}), "
+               f"{report.max_abs_error_rad:.3g} rad (limit {VALUE_TOLERANCE_RAD:g})")
+    click.echo(f"  warnings: {report.warning_mismatches} mismatches "
+               f"({report.warnings_in_band} differences inside the tolerance band)")
+    click.echo(f"  golden values: {report.golden_checked} checked, {report.golden_failed} failed")
+    for result in report.golden:
+        if not result.passed:
+            click.echo(f"    {result.source}: pose {result.pose} posture {result.posture}: expected {result.expected}, "
+                       f"plugin {_rounded(result.plugin)}, reference {_rounded(result.reference)}")
+    click.echo(f"  interface: {'ok' if not report.interface_failures else 'FAILED'}")
+    for failure in report.interface_failures:
+        click.echo(f"    {failure}")
+    click.echo(f"{verdict} in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s)")
+
+
+def _rounded(values):
+    return [round(v, 6) for v in values]
+
+
+def _warning_name(code):
+    return abi.WARNING_NAMES.get(int(code), f"UNWRITTEN({code})")
+
+
+def _shorten(text, width):
+    text = " ".join(text.split())
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _print_table(rows):
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        click.echo("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip())
+
+
+def main(argv=None):
+    """Entry point: runs the CLI and maps errors to one stderr line and an exit code."""
+    try:
+        cli.main(args=argv, prog_name="kingen", standalone_mode=False)
+    except KingenError as error:
+        click.echo(f"kingen: error: {error}", err=True)
+        return EXIT_BAD_INPUT
+    except click.exceptions.NoArgsIsHelpError as error:
+        click.echo(error.ctx.get_help())
+        return 0
+    except click.ClickException as error:
+        click.echo(f"kingen: error: {error.format_message()}", err=True)
+        return EXIT_BAD_INPUT
+    except click.exceptions.Abort:
+        click.echo("kingen: aborted", err=True)
+        return 130
+    except click.exceptions.Exit as exit_request:
+        return exit_request.exit_code
+    except OSError as error:
+        click.echo(f"kingen: error: {error.filename or ''}: {error.strerror or error}", err=True)
+        return EXIT_BAD_INPUT
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,57 @@
+"""Shared fixtures: shipped robots, plugins built once per test session."""
+
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache-"))
+
+from kingen.build import build_plugin  # noqa: E402
+from kingen.conventions import t6_from_pose  # noqa: E402
+from kingen.host import Plugin  # noqa: E402
+from kingen.model import load_robot, shipped_robots  # noqa: E402
+
+SHIPPED = shipped_robots()
+
+
+@pytest.fixture(scope="session")
+def build_root(tmp_path_factory):
+    return tmp_path_factory.mktemp("plugins")
+
+
+@pytest.fixture(scope="session")
+def built(build_root):
+    """built(name) -> (robot, BuildResult), compiled once per session."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            robot = load_robot(name)
+            cache[name] = (robot, build_plugin(robot, build_root / name))
+        return cache[name]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def plugin(built):
+    """plugin(name) -> (robot, Plugin) loaded through the host emulator."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            robot, result = built(name)
+            cache[name] = (robot, Plugin(result.library, result.routine))
+        return cache[name]
+
+    return get
+
+
+def random_t6(robot, count, seed):
+    """T6 arrays for ``count`` seeded poses in the robot's verification region."""
+    rng = np.random.default_rng(seed)
+    region = robot.verification
+    poses = np.asarray(region.home) + rng.uniform(-1, 1, (count, 6)) * np.asarray(region.range)
+    return poses, t6_from_pose(poses)
