@@ -137,8 +137,12 @@ def build_plugin(robot, out_dir=None, defines=()):
     stamp = out_dir / STAMP
     if library.is_file() and source.is_file() and _read_stamp(stamp) == key and source.read_text() == text:
         return BuildResult(source, library, robot.routine, compiled=False)
-    write_atomic(source, text)
-    compile_c([source], library, flags)
+    with tempfile.TemporaryDirectory(prefix="kingen-build-") as scratch:
+        scratch_source, scratch_library = Path(scratch) / name, Path(scratch) / library.name
+        scratch_source.write_text(text)
+        compile_c([scratch_source], scratch_library, flags)
+        write_atomic(source, text)
+        write_atomic(library, scratch_library.read_bytes())
     write_atomic(stamp, json.dumps({"key": key, "robot": robot.name, "kingen": __version__}) + "\n")
     return BuildResult(source, library, robot.routine, compiled=True)
 

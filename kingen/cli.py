@@ -124,7 +124,7 @@ def verify(robot, out_dir, samples, seed, json_path):
     if json_path is not None:
         write_atomic(json_path, json.dumps(report.as_json(), indent=2) + "\n")
     if not report.passed:
-        sys.exit(EXIT_FAILED)
+        raise click.exceptions.Exit(EXIT_FAILED)
 
 
 def _plugin(model, out_dir):
@@ -173,7 +173,7 @@ def _print_table(rows):
 def main(argv=None):
     """Entry point: runs the CLI and maps errors to one stderr line and an exit code."""
     try:
-        cli.main(args=argv, prog_name="kingen", standalone_mode=False)
+        outcome = cli.main(args=argv, prog_name="kingen", standalone_mode=False)
     except KingenError as error:
         click.echo(f"kingen: error: {error}", err=True)
         return EXIT_BAD_INPUT
@@ -186,12 +186,10 @@ def main(argv=None):
     except click.exceptions.Abort:
         click.echo("kingen: aborted", err=True)
         return 130
-    except click.exceptions.Exit as exit_request:
-        return exit_request.exit_code
     except OSError as error:
         click.echo(f"kingen: error: {error.filename or ''}: {error.strerror or error}", err=True)
         return EXIT_BAD_INPUT
-    return 0
+    return outcome if isinstance(outcome, int) else 0
 
 
 if __name__ == "__main__":

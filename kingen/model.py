@@ -410,6 +410,8 @@ def _diagnostic(error, locate):
         ):
             continue
         path.append(part)
+    if first["type"] in ("union_tag_invalid", "union_tag_not_found"):
+        path.append(first["ctx"]["discriminator"].strip("'"))
     problem = _FRIENDLY.get(first["type"], first["msg"])
     if problem.startswith("Value error, "):
         problem = problem[len("Value error, "):]

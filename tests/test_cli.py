@@ -1,0 +1,127 @@
+"""The command line: outputs, JSON contract, exit codes, one-line errors, no partial files."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from kingen.cli import main
+
+JSON_KEYS = {"robot", "samples", "postures", "max_abs_error_mm", "max_abs_error_rad", "warning_mismatches",
+             "golden_checked", "golden_failed", "passed"}
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_list_shows_every_shipped_robot(capsys):
+    code, out, _ = run(capsys, "list")
+    assert code == 0
+    assert any(line.split()[:3] == ["ceart", "6", "64"] for line in out.splitlines())
+    assert any(line.split()[:5] == ["tau", "3", "8", "3", "rail"] for line in out.splitlines())
+
+
+def test_render_writes_only_the_source(capsys, tmp_path):
+    code, out, _ = run(capsys, "render", "tau", "-o", str(tmp_path))
+    assert code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kin_tau.c"]
+    assert "generated file, do not edit" in (tmp_path / "kin_tau.c").read_text().lower()
+
+
+def test_build_writes_library_and_source_then_caches(capsys, tmp_path):
+    code, out, _ = run(capsys, "build", "hexapod", "-o", str(tmp_path))
+    assert code == 0 and "compiled" in out
+    assert (tmp_path / "libhexapod.so").is_file() and (tmp_path / "kin_hexapod.c").is_file()
+    code, out, _ = run(capsys, "build", "hexapod", "-o", str(tmp_path))
+    assert code == 0 and "up to date" in out
+
+
+def test_solve_tau_prints_eight_postures_with_reference(capsys, tmp_path):
+    code, out, _ = run(capsys, "solve", "tau", "-o", str(tmp_path), "--pose", "-1200", "-750", "-1900", "0", "0", "0")
+    assert code == 0
+    rows = [line.split() for line in out.splitlines()[1:9]]
+    assert [row[1] for row in rows] == ["000", "001", "010", "011", "100", "101", "110", "111"]
+    for row in rows:
+        assert row[2:6] == row[7:11]  # plugin columns equal the reference columns
+    assert out.splitlines()[-1] == "routine returned 0"
+
+
+def test_solve_accepts_t6(capsys, tmp_path):
+    t6 = ["1", "0", "0", "0", "0", "1", "0", "0", "0", "0", "1", "0", "100", "50", "-1250", "1"]
+    code, out, _ = run(capsys, "solve", "exechon", "-o", str(tmp_path), "--t6", *t6)
+    assert code == 0
+    published = [-24.8915, 36.1332, 5.6258]
+    row = out.splitlines()[1].split()
+    assert [float(v) for v in row[2:5]] == pytest.approx(published, abs=5e-5)
+    assert row[2:5] == row[7:10]
+
+
+def test_verify_json_contract(capsys, tmp_path):
+    report = tmp_path / "report.json"
+    code, out, _ = run(capsys, "verify", "exechon", "-o", str(tmp_path / "b"), "--samples", "500", "--json", str(report))
+    assert code == 0 and "PASSED" in out
+    data = json.loads(report.read_text())
+    assert JSON_KEYS <= set(data)
+    assert data["passed"] is True and data["samples"] == 500 and data["golden_checked"] == 2
+    assert data["max_abs_error_mm"] <= 1e-9
+
+
+def test_verify_fails_with_exit_1_on_a_wrong_golden_value(capsys, tmp_path):
+    from kingen.model import robots_dir
+    text = (robots_dir() / "exechon.yaml").read_text().replace("-24.8915", "-24.9915")
+    path = tmp_path / "exechon.yaml"
+    path.write_text(text)
+    code, out, _ = run(capsys, "verify", str(path), "-o", str(tmp_path / "b"), "--samples", "100")
+    assert code == 1
+    assert "golden values: 2 checked, 1 failed" in out and "FAILED" in out
+
+
+BAD_CALLS = [
+    (["verify", "nonexistent"], "no shipped robot of that name"),
+    (["render", "nonexistent"], "no shipped robot of that name"),
+    (["build", "nonexistent"], "no shipped robot of that name"),
+    (["solve", "nonexistent", "--pose", "0", "0", "0", "0", "0", "0"], "no shipped robot of that name"),
+    (["solve", "tau"], "give exactly one of --pose and --t6"),
+    (["solve", "tau", "--pose", "1", "2"], "--pose"),
+    (["verify", "tau", "--samples", "0"], "--samples"),
+    (["frobnicate"], "No such command"),
+    (["verify"], "Missing argument"),
+]
+
+
+@pytest.mark.parametrize("argv, fragment", BAD_CALLS, ids=[" ".join(c[0]) for c in BAD_CALLS])
+def test_usage_and_input_errors_exit_2_with_one_line(capsys, argv, fragment):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("kingen: error: ") and fragment in err, err
+
+
+@pytest.mark.parametrize("command", ["render", "build", "verify", "solve"])
+def test_invalid_yaml_writes_nothing(capsys, tmp_path, command):
+    path = tmp_path / "bad.yaml"
+    path.write_text("name: bad\ndescription: x\nlimbs: []\nverification: {home: [0,0,0,0,0,0], range: [0,0,0,0,0,0]}\n")
+    out_dir = tmp_path / "out"
+    extra = ["--pose", "0", "0", "0", "0", "0", "0"] if command == "solve" else []
+    code, _, err = run(capsys, command, str(path), "-o", str(out_dir), *extra)
+    assert code == 2
+    assert err.startswith(f"kingen: error: {path}:3: limbs: List should have at least 1 item")
+    assert not out_dir.exists()
+
+
+def test_missing_compiler_is_a_one_line_error(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("CC", "no-such-compiler-kingen")
+    code, _, err = run(capsys, "build", "tau", "-o", str(tmp_path))
+    assert code == 2
+    assert "C compiler 'no-such-compiler-kingen' not found" in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_console_script_runs_without_traceback(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", str(tmp_path / "missing.yaml")],
+                            capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr and result.stderr.count("\n") == 1

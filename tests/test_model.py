@@ -1,0 +1,146 @@
+"""Robot definitions: shipped robots, layout generators, and one-line diagnostics for bad input."""
+
+import math
+
+import numpy as np
+import pytest
+
+from conftest import SHIPPED
+from kingen.errors import KingenError
+from kingen.model import load_robot
+
+EXPECTED_SHAPE = {  # (dof, postures, limb model) from robots.md
+    "hexapod": (6, 1, "leg"), "flexapod": (6, 1, "leg"), "exechon": (3, 1, "leg"), "tau": (3, 8, "rail"),
+    "ceart": (6, 64, "crank"), "iwf": (6, 64, "crank"), "rus_optimized": (6, 64, "crank"),
+    "stewart_gough_example": (6, 1, "leg"),
+}
+
+
+def test_exactly_the_required_robots_ship():
+    assert sorted(EXPECTED_SHAPE) == SHIPPED
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_shipped_robot_shape(name):
+    robot = load_robot(name)
+    assert robot.name == name
+    assert (robot.dof, robot.postures, robot.models[0]) == EXPECTED_SHAPE[name]
+
+
+def test_example_robot_says_it_is_an_example():
+    text = (load_robot("stewart_gough_example").path).read_text()
+    assert "EXAMPLE" in text and "not a published machine" in text
+
+
+def test_rus6_layout_matches_robots_md_formula_for_ceart():
+    robot = load_robot("ceart")
+    chi = math.radians(120)
+    # leg 2: m = -e_b, n = -e_p
+    assert robot.limbs[0].pivot == pytest.approx([636.885, 197.555, 0])
+    assert robot.limbs[0].platform_point == pytest.approx([291.73, 402.345, 0])
+    assert robot.limbs[1].pivot == pytest.approx(
+        [636.885 * math.cos(chi) + 197.555 * math.sin(chi), 636.885 * math.sin(chi) - 197.555 * math.cos(chi), 0])
+    assert [limb.crank_direction for limb in robot.limbs] == [120, 180, 240, 300, 0, 60]
+
+
+def test_stewart_gough_layout_angles():
+    robot = load_robot("stewart_gough_example")
+    angles = [math.degrees(math.atan2(l.platform_point[1], l.platform_point[0])) % 360 for l in robot.limbs]
+    thetap = 100
+    expected = [60 - thetap / 2, 60 + thetap / 2, 180 - thetap / 2, 180 + thetap / 2, 300 - thetap / 2, 300 + thetap / 2]
+    np.testing.assert_allclose(angles, expected, atol=1e-9)
+    assert all(l.travel == [10, 140] for l in robot.limbs)
+
+
+VALID = """\
+name: demo
+description: test robot
+limbs:
+  - name: c1
+    model: rail
+    rail_point: [0, 0, 0]
+    direction: [0, 0, -1]
+    carriage_offset: [0, 0, 0]
+    platform_point: [0, 0, 0]
+    link_length: 100
+    travel: [-1, 50]
+verification:
+  home: [0, 0, 0, 0, 0, 0]
+  range: [1, 1, 1, 1, 1, 1]
+"""
+
+BAD = [
+    # (replace this, with this, expected message fragment)
+    ("name: demo", "name: 2demo", ":1: name: String should match pattern"),
+    ("name: demo", "name: int", ":1: name: 'int' is a C keyword"),
+    ("name: demo", "name: de-mo", ":1: name:"),
+    ("    link_length: 100", "    link_length: 0", ":10: limbs[0].link_length: Input should be greater than 0"),
+    ("    link_length: 100", "    link_length: -5", ":10: limbs[0].link_length: Input should be greater than 0"),
+    ("    link_length: 100", "    link_length: .nan", ":10: limbs[0].link_length: Input should be a finite number"),
+    ("    link_length: 100", "    link_length: .inf", ":10: limbs[0].link_length: Input should be a finite number"),
+    ("    link_length: 100", "    link_length: '100'", ":10: limbs[0].link_length: Input should be a valid number"),
+    ("    direction: [0, 0, -1]", "    direction: [0, 0, 0]", ":7: limbs[0].direction: direction is the zero vector"),
+    ("    direction: [0, 0, -1]", "    direction: [0, 0, -2]", ":7: limbs[0].direction: direction must be a unit vector"),
+    ("    rail_point: [0, 0, 0]", "    rail_point: [0, 0]", ":6: limbs[0].rail_point: List should have at least 3 items"),
+    ("    rail_point: [0, 0, 0]", "    rail_point: [0, 0, 0, 0]", ":6: limbs[0].rail_point: List should have at most 3 items"),
+    ("    travel: [-1, 50]", "    travel: [50, -1]", ":11: limbs[0].travel: lower limit 50.0 must be below upper limit -1.0"),
+    ("    model: rail", "    model: piston", ":5: limbs[0].model: Input tag 'piston'"),
+    ("    link_length: 100", "    link_length: 100\n    colour: red", ":11: limbs[0].colour: unknown key"),
+    ("    link_length: 100", "    link_length: 100\n    link_length: 200", ":11: limbs[0].link_length: duplicate key"),
+    ("description: test robot\n", "", "description: required key missing"),
+    ("  range: [1, 1, 1, 1, 1, 1]", "  range: [1, 1, 1, 1, 1, -1]", ":14: verification.range: ranges must not be negative"),
+    ("  home: [0, 0, 0, 0, 0, 0]", "  home: [0, 0, 0]", ":13: verification.home: List should have at least 6 items"),
+    ("name: demo", "name: [demo", ": YAML syntax:"),
+    ("    model: rail\n", "", ":4: limbs[0].model: Unable to extract tag"),
+    ("verification:", "golden:\n  - {source: s, pose: [0,0,0,0,0,0], joints: [1, 2], tolerance: 0.1}\nverification:",
+     ":13: golden[0].joints: expected 1 joint values, got 2"),
+    ("verification:", "golden:\n  - {source: s, pose: [0,0,0,0,0,0], posture: 2, joints: [1], tolerance: 0.1}\nverification:",
+     ":13: golden[0].posture: posture 2 does not exist (the robot has 2)"),
+    ("limbs:", "layout: {type: rus6, base_radius: 1, platform_radius: 1, base_half_distance: 0, platform_half_distance: 0, "
+     "crank_length: 1, rod_length: 2, pair_angles: [0,0,0,0,0,0], crank_directions: [0,0,0,0,0,0]}\nlimbs:",
+     ": limbs: give exactly one of 'limbs' and 'layout'"),
+    ("    link_length: 100", "    link_length: true", ":10: limbs[0].link_length: Input should be a valid number"),
+]
+
+
+@pytest.mark.parametrize("old, new, fragment", BAD, ids=[case[2] for case in BAD])
+def test_bad_input_gives_one_located_line(tmp_path, old, new, fragment):
+    assert old in VALID
+    path = tmp_path / "demo.yaml"
+    path.write_text(VALID.replace(old, new, 1))
+    with pytest.raises(KingenError) as raised:
+        load_robot(str(path))
+    message = str(raised.value)
+    assert "\n" not in message
+    assert message.startswith(str(path)), message
+    assert fragment in message, message
+
+
+def test_valid_demo_loads(tmp_path):
+    path = tmp_path / "demo.yaml"
+    path.write_text(VALID)
+    robot = load_robot(str(path))
+    assert (robot.dof, robot.postures, robot.joint_names) == (1, 2, ("c1",))
+
+
+def test_duplicate_joint_names_are_rejected(tmp_path):
+    path = tmp_path / "demo.yaml"
+    second = VALID.split("limbs:\n")[1].split("verification:")[0]
+    path.write_text(VALID.replace("verification:", second + "verification:"))
+    with pytest.raises(KingenError, match=r":12: limbs\[1\]\.name: joint name 'c1' is used twice"):
+        load_robot(str(path))
+
+
+@pytest.mark.parametrize("content, fragment", [
+    (b"\xff\xfe", "not UTF-8"), (b"- 1\n- 2\n", "expected a mapping"), (b"", "expected a mapping"),
+])
+def test_unreadable_files(tmp_path, content, fragment):
+    path = tmp_path / "x.yaml"
+    path.write_bytes(content)
+    with pytest.raises(KingenError, match=fragment):
+        load_robot(str(path))
+
+
+def test_unknown_robot_names_the_shipped_ones():
+    with pytest.raises(KingenError, match="no shipped robot of that name .shipped: ceart, exechon"):
+        load_robot("nonexistent")
