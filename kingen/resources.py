@@ -1,21 +1,22 @@
 """Where the shipped templates and robot definitions are.
 
 In a checkout (and an editable install) they are the top-level ``templates/`` and
-``robots/`` folders; a regular install packs them as ``kingen.templates`` and
-``kingen.robots`` (see pyproject.toml).
+``robots/`` folders; a regular install packs them inside the package as
+``kingen/templates`` and ``kingen/robots`` (see pyproject.toml).
 """
 
-import importlib.resources
 from pathlib import Path
 
-_CHECKOUT = Path(__file__).resolve().parent.parent
+from .errors import KingenError
+
+_PACKAGE = Path(__file__).resolve().parent
 
 
 def _folder(name, marker):
-    local = _CHECKOUT / name
-    if (local / marker).is_file():
-        return local
-    return Path(str(importlib.resources.files(f"kingen.{name}")))
+    for folder in (_PACKAGE.parent / name, _PACKAGE / name):
+        if (folder / marker).is_file():
+            return folder
+    raise KingenError(f"kingen's {name} folder is missing from this installation (looked for {marker})")
 
 
 def templates_dir():
