@@ -60,6 +60,7 @@ EMULATOR_FUNCTIONS = (
     "int kingen_host_check_calls(void)",
     "int kingen_host_last_dof(void)",
     "int kingen_host_last_solutions(void)",
+    "void kingen_host_flush(void)",
     "int kingen_host_run_batch(void *routine, int count, double *t6, double *link_lengths, "
     "double *link_offsets, double *solutions, int solution_block, int *warnings, int warning_block, "
     "int *returns, void *pData)",

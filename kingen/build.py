@@ -147,6 +147,30 @@ def build_plugin(robot, out_dir=None, defines=()):
     return BuildResult(source, library, robot.routine, compiled=True)
 
 
+LEGACY_FLAGS = ("-std=gnu99", "-O2", "-fPIC", "-shared")
+"""For hand-written sources: K&R definitions, // comments and long double accepted, no -Werror."""
+
+
+def legacy_library_name(source):
+    """kin_hexapodFullTest.c -> libhexapodFullTest.so, the thesis's naming habit."""
+    stem = Path(source).stem
+    return f"lib{stem[4:] if stem.startswith('kin_') and len(stem) > 4 else stem}.so"
+
+
+def build_legacy(source, out_dir):
+    """Compile a hand-written plugin source as DELMIA's makefile would, against the stand-in
+    header with the host symbols left undefined; returns the library path.
+
+    A source that does not compile raises KingenError with the compiler's first error."""
+    source = Path(source)
+    if not source.is_file():
+        raise KingenError(f"{source}: no such C source")
+    include, _ = host_support()
+    library = Path(out_dir) / legacy_library_name(source)
+    compile_c([source], library, [*LEGACY_FLAGS, f"-I{include}"])
+    return library
+
+
 def write_source(robot, out_dir):
     """Render ``robot`` and write ``kin_<name>.c`` into ``out_dir``; returns its path."""
     for name, text in render(robot).items():

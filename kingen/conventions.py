@@ -74,3 +74,17 @@ def angle_difference(a, b):
 def branch_of_posture(posture, bit):
     """Branch (0 or 1) a two-branch limb with binary digit ``bit`` takes in posture ``posture``."""
     return (np.asarray(posture) >> bit) & 1
+
+
+def joint_errors(solutions, joints, revolute):
+    """|solutions - joints| per entry for arrays (n, dof, postures), mm or rad.
+
+    ``revolute`` (dof,) marks joints compared modulo 2 pi (so pi equals -pi).
+    A non-finite entry of ``solutions`` (unwritten, NaN) is an infinite error.
+    """
+    difference = np.array(solutions, dtype=float) - joints
+    turns = difference[:, revolute]
+    difference[:, revolute] = turns - (2.0 * np.pi) * np.rint(turns / (2.0 * np.pi))
+    np.abs(difference, out=difference)
+    difference[~np.isfinite(difference)] = np.inf
+    return difference

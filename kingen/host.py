@@ -5,11 +5,15 @@ plugin's undefined ``DNBVMAP_*`` symbols resolve to it, as they resolve to the
 host process inside DELMIA. Then the plugin is loaded, ``get_kin_config`` is
 asked about the routine, and the routine is called per pose (``call``) or for a
 whole array of T6 in C (``call_batch``). Outputs are pre-filled with sentinels
-(NaN, -1) so an entry the routine never wrote stays visible.
+(NaN, -1) so an entry the routine never wrote stays visible, and every pose's
+buffers sit between guard zones so a write outside them is caught.
 """
 
+import os
 import shutil
+import sys
 import tempfile
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,6 +30,10 @@ ffi.cdef(abi.cffi_declarations())
 
 UNWRITTEN_WARNING = -1
 """Sentinel left in a warning slot the routine did not write."""
+GUARD = 8
+"""Entries of guard zone before and after each pose's solutions and warnings."""
+GUARD_DOUBLE = -7.0e300
+GUARD_INT = -20260001
 
 _host_library = None
 _loaded = {}
@@ -52,11 +60,17 @@ class KinConfig:
 
 @dataclass(frozen=True)
 class Calls:
-    """Routine results for n poses: returned (n,), solutions (n, dof, postures), warnings (n, postures)."""
+    """Routine results for n poses: returned (n,), solutions (n, dof, postures), warnings (n, postures).
+
+    guard_violations: poses whose guard zones were written; inputs_modified: whether the
+    routine wrote into T6, link_lengths or link_offsets.
+    """
 
     returned: np.ndarray
     solutions: np.ndarray
     warnings: np.ndarray
+    guard_violations: int = 0
+    inputs_modified: bool = False
 
 
 def _dlopen(path):
@@ -127,30 +141,68 @@ class Plugin:
         """Call the routine for every T6 in (n, 4, 4) from C, in one host call."""
         return self._run(np.asarray(t6, dtype=float).reshape(-1, 4, 4), link_lengths, link_offsets, kinstat, batch=True)
 
-    def _run(self, t6, link_lengths, link_offsets, kinstat, batch):
+    def batch_runner(self, t6):
+        """A function that runs the C batch driver over ``t6`` (n, 4, 4) into buffers allocated
+        here once: what it costs is the routine's own time, for benchmarks."""
+        t6 = np.ascontiguousarray(t6, dtype=float).reshape(-1, 4, 4)
         count = t6.shape[0]
+        zeros = np.zeros(6)
+        solutions = np.empty(count * self.dof * self.postures)
+        warnings = np.empty(count * self.postures, dtype=np.intc)
+        returned = np.empty(count, dtype=np.intc)
+        arguments = (
+            ffi.cast("void *", self.function), count, _pointer("double *", t6), _pointer("double *", zeros),
+            _pointer("double *", zeros), _pointer("double *", solutions), self.dof * self.postures,
+            _pointer("int *", warnings), self.postures, _pointer("int *", returned), ffi.NULL,
+        )
+        keep_alive = (t6, zeros, solutions, warnings, returned)
+
+        def run():
+            host().kingen_host_run_batch(*arguments)
+            return keep_alive
+
+        return run
+
+    def _run(self, t6, link_lengths, link_offsets, kinstat, batch):
+        count, dof, postures = t6.shape[0], self.dof, self.postures
         t6 = np.ascontiguousarray(t6)
-        lengths = np.ascontiguousarray(np.zeros(6) if link_lengths is None else link_lengths, dtype=float)
-        offsets = np.ascontiguousarray(np.zeros(6) if link_offsets is None else link_offsets, dtype=float)
-        solutions = np.full((count, self.dof, self.postures), np.nan)
-        warnings = np.full((count, self.postures), UNWRITTEN_WARNING, dtype=np.intc)
+        lengths = np.array(np.zeros(6) if link_lengths is None else link_lengths, dtype=float)
+        offsets = np.array(np.zeros(6) if link_offsets is None else link_offsets, dtype=float)
+        inputs = (t6.copy(), lengths.copy(), offsets.copy())
+        solution_block, warning_block = dof * postures + 2 * GUARD, postures + 2 * GUARD
+        solution_buffer = np.full((count, solution_block), GUARD_DOUBLE)
+        solution_buffer[:, GUARD:GUARD + dof * postures] = np.nan
+        warning_buffer = np.full((count, warning_block), GUARD_INT, dtype=np.intc)
+        warning_buffer[:, GUARD:GUARD + postures] = UNWRITTEN_WARNING
         returned = np.full(count, -1, dtype=np.intc)
         data = ffi.NULL if kinstat is None else kinstat.pointer
         lengths_p, offsets_p = _pointer("double *", lengths), _pointer("double *", offsets)
+        solutions_p = _pointer("double *", solution_buffer) + GUARD
+        warnings_p = _pointer("int *", warning_buffer) + GUARD
         if batch:
             host().kingen_host_run_batch(
                 ffi.cast("void *", self.function), count, _pointer("double *", t6), lengths_p, offsets_p,
-                _pointer("double *", solutions), self.dof * self.postures,
-                _pointer("int *", warnings), self.postures, _pointer("int *", returned), data,
+                solutions_p, solution_block, warnings_p, warning_block, _pointer("int *", returned), data,
             )
         else:
+            t6_p = _pointer("double *", t6)
             for i in range(count):
                 returned[i] = self.function(
-                    lengths_p, offsets_p, ffi.cast("double (*)[4]", _pointer("double *", t6[i])),
-                    ffi.cast(f"double (*)[{self.postures}]", _pointer("double *", solutions[i])),
-                    _pointer("int *", warnings[i]), data,
+                    lengths_p, offsets_p, ffi.cast("double (*)[4]", t6_p + 16 * i),
+                    ffi.cast(f"double (*)[{postures}]", solutions_p + i * solution_block),
+                    warnings_p + i * warning_block, data,
                 )
-        return Calls(returned=returned, solutions=solutions, warnings=warnings)
+        guards_intact = np.all(
+            np.concatenate([solution_buffer[:, :GUARD], solution_buffer[:, -GUARD:]], axis=1) == GUARD_DOUBLE, axis=1
+        ) & np.all(np.concatenate([warning_buffer[:, :GUARD], warning_buffer[:, -GUARD:]], axis=1) == GUARD_INT, axis=1)
+        modified = not all(np.array_equal(a, b, equal_nan=True) for a, b in zip(inputs, (t6, lengths, offsets)))
+        return Calls(
+            returned=returned,
+            solutions=solution_buffer[:, GUARD:GUARD + dof * postures].reshape(count, dof, postures),
+            warnings=warning_buffer[:, GUARD:GUARD + postures],
+            guard_violations=int(np.count_nonzero(~guards_intact)),
+            inputs_modified=modified,
+        )
 
 
 def _pointer(ctype, array):
@@ -192,3 +244,31 @@ def set_host_refusal(refuse):
     host().kingen_host_refuse(int(refuse))
 
 
+
+
+@contextmanager
+def captured_output(limit=4096):
+    """Capture what native code writes on file descriptors 1 and 2 (printf included).
+
+    Yields a dict that holds, after the block, ``bytes`` (how many were written) and
+    ``text`` (the first ``limit`` bytes, decoded).
+    """
+    result = {"bytes": 0, "text": ""}
+    sys.stdout.flush()
+    sys.stderr.flush()
+    host().kingen_host_flush()
+    saved = [os.dup(1), os.dup(2)]
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 1)
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield result
+        finally:
+            host().kingen_host_flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for descriptor in saved:
+                os.close(descriptor)
+            result["bytes"] = sink.seek(0, os.SEEK_END)
+            sink.seek(0)
+            result["text"] = sink.read(limit).decode(errors="replace")

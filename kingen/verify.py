@@ -1,22 +1,25 @@
-"""Verification: a compiled routine against the numpy reference, the published
-golden values and the interface contract of shared/delmia-abi.md.
+"""Verification: a compiled routine (kingen's or hand-written) against the numpy
+reference, the golden values and the interface contract of shared/delmia-abi.md.
 
 Everything is compared, nothing sampled away: every joint of every posture of
 every pose, and every warning. A warning may differ only inside the documented
 tolerance band (``WARNING_BAND``): where the reference's decision quantity (a
 normalised radicand or a joint value) lies that close to its threshold, both
-answers are right within floating-point rounding.
+answers are right within floating-point rounding. Each clause is a named check;
+failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 """
 
 import math
 import time
+import xml.etree.ElementTree as ElementTree
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
 from . import abi
-from .conventions import angle_difference, t6_from_pose
-from .host import UNWRITTEN_WARNING, host_state
+from .conventions import joint_errors, t6_from_pose
+from .diagnose import diagnose, diagnose_warnings
+from .host import UNWRITTEN_WARNING, captured_output, host_state
 from .model import REVOLUTE
 from .reference import SINGULAR_TOLERANCE, solve
 
@@ -31,6 +34,18 @@ near 0): there it is compared within CONDITIONING_FACTOR * scale / sqrt(max(|D|,
 scale = link length (mm) for rails, 1 rad for cranks. Everywhere else the fixed limits hold."""
 CHUNK = 20000
 """Poses per batch: bounds memory (a 64-posture robot holds 6 x 64 doubles per pose)."""
+DIAGNOSIS_POSES = 2000
+DETERMINISM_POSES = 1000
+
+
+@dataclass
+class Check:
+    """One clause of the contract: its name, verdict, the evidence, and diagnoses when it failed."""
+
+    name: str
+    passed: bool
+    detail: str = ""
+    diagnoses: list = field(default_factory=list)
 
 
 @dataclass
@@ -63,7 +78,8 @@ class Report:
     warning_mismatches: int = 0
     warnings_in_band: int = 0
     golden: list = field(default_factory=list)
-    interface_failures: list = field(default_factory=list)
+    checks: list = field(default_factory=list)
+    notices: list = field(default_factory=list)
     seconds: float = 0.0
 
     @property
@@ -76,14 +92,11 @@ class Report:
 
     @property
     def passed(self):
-        return (
-            self.max_abs_error_mm <= VALUE_TOLERANCE_MM
-            and self.max_abs_error_rad <= VALUE_TOLERANCE_RAD
-            and self.singular_out_of_bound == 0
-            and self.warning_mismatches == 0
-            and self.golden_failed == 0
-            and not self.interface_failures
-        )
+        return all(check.passed for check in self.checks)
+
+    @property
+    def failures(self):
+        return [check for check in self.checks if not check.passed]
 
     @property
     def poses_per_second(self):
@@ -107,11 +120,17 @@ class Report:
             "golden_checked": self.golden_checked,
             "golden_failed": self.golden_failed,
             "golden": [asdict(result) for result in self.golden],
-            "interface_failures": list(self.interface_failures),
+            "checks": [asdict(check) for check in self.checks],
+            "interface_failures": [check.detail for check in self.failures if check.name in INTERFACE_CHECKS],
+            "diagnoses": [text for check in self.checks for text in check.diagnoses],
+            "notices": list(self.notices),
             "seconds": round(self.seconds, 6),
             "poses_per_second": _json_number(self.poses_per_second),
             "passed": self.passed,
         }
+
+
+INTERFACE_CHECKS = ("get_kin_config", "kin_check_definition", "refusal", "non-finite T6")
 
 
 def _json_number(value):
@@ -125,14 +144,8 @@ def sample_poses(robot, count, seed):
     return np.asarray(region.home) + rng.uniform(-1.0, 1.0, size=(count, 6)) * np.asarray(region.range)
 
 
-def joint_errors(robot, solutions, joints):
-    """|plugin - reference| per entry, (n, dof, postures); angle-aware for revolute joints.
-
-    A non-finite plugin value (unwritten or NaN) counts as an infinite error.
-    """
-    revolute = np.array([t == REVOLUTE for t in robot.joint_types])[None, :, None]
-    difference = np.where(revolute, angle_difference(solutions, joints), solutions - joints)
-    return np.where(np.isfinite(solutions), np.abs(difference), np.inf)
+def revolute_mask(robot):
+    return np.array([t == REVOLUTE for t in robot.joint_types])
 
 
 def singular_bounds(robot, reference_solution):
@@ -154,6 +167,8 @@ def warnings_in_band(robot, reference_solution):
         axis=1,
     )
     lower, upper = robot.travel_limits()
+    if not np.any(np.isfinite(lower) | np.isfinite(upper)):
+        return np.broadcast_to(near_radicand[:, None], reference_solution.warnings.shape)
     joints = reference_solution.joints
     near_limit = np.any(
         (np.abs(joints - lower[None, :, None]) < WARNING_BAND) | (np.abs(joints - upper[None, :, None]) < WARNING_BAND),
@@ -162,40 +177,115 @@ def warnings_in_band(robot, reference_solution):
     return near_radicand[:, None] | near_limit
 
 
+@dataclass
+class _Tally:
+    """Running totals over the chunks of one verification."""
+
+    returns_wrong: int = 0
+    guard_violations: int = 0
+    inputs_modified: bool = False
+    first: tuple = None
+
+
 def verify(robot, plugin, samples=10000, seed=0, progress=None):
-    """Compare ``plugin`` with the reference on ``samples`` seeded poses, the golden values
-    and the interface checks. ``progress(done)`` is called after each chunk."""
+    """Check ``plugin`` against ``robot``'s reference on ``samples`` seeded poses, its golden
+    values and the interface contract. ``progress(done)`` is called after each chunk.
+    What the routine prints on stdout/stderr is captured and reported as a notice."""
     report = Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures)
-    report.interface_failures = check_interface(robot, plugin)
-    if (plugin.dof, plugin.postures) != (robot.dof, robot.postures):
-        return report
-    poses = sample_poses(robot, samples, seed)
-    revolute = np.array([t == REVOLUTE for t in robot.joint_types])
+    with captured_output() as printed:
+        report.checks.extend(check_interface(robot, plugin))
+        if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
+            _compare_samples(robot, plugin, report, progress)
+            report.golden = check_golden(robot, plugin)
+            report.checks.extend(
+                Check(f"golden[{i}]", result.passed, _golden_detail(result)) for i, result in enumerate(report.golden)
+            )
+        else:
+            report.checks.append(Check("values", False, "not compared: the routine's joint or posture count differs"))
+    if printed["bytes"]:
+        first = printed["text"].strip().splitlines()[0] if printed["text"].strip() else ""
+        report.notices.append(
+            f"the routine printed {printed['bytes']} bytes on stdout/stderr (first line: {first!r}); "
+            "debug printing slows the host by orders of magnitude"
+        )
+    return report
+
+
+def _compare_samples(robot, plugin, report, progress):
+    poses = sample_poses(robot, report.samples, report.seed)
+    revolute = revolute_mask(robot)
+    tally = _Tally()
     start = time.perf_counter()
-    for begin in range(0, samples, CHUNK):
+    for begin in range(0, report.samples, CHUNK):
         t6 = t6_from_pose(poses[begin:begin + CHUNK])
         plugin.reset_host()
         calls = plugin.call_batch(t6)
         expected = solve(robot, t6)
-        errors = joint_errors(robot, calls.solutions, expected.joints)
-        bounds = singular_bounds(robot, expected)[:, :, None]
-        singular = np.broadcast_to(bounds > 0, errors.shape)
-        report.singular_entries += int(np.count_nonzero(singular))
-        report.singular_out_of_bound += int(np.count_nonzero(singular & (errors > bounds)))
-        regular = np.where(singular, 0.0, errors)
-        if regular[:, ~revolute].size:
-            report.max_abs_error_mm = max(report.max_abs_error_mm, float(regular[:, ~revolute].max()))
-        if regular[:, revolute].size:
-            report.max_abs_error_rad = max(report.max_abs_error_rad, float(regular[:, revolute].max()))
-        differ = calls.warnings != expected.warnings
-        excused = differ & warnings_in_band(robot, expected) & (calls.warnings != UNWRITTEN_WARNING)
-        report.warning_mismatches += int(np.count_nonzero(differ & ~excused))
-        report.warnings_in_band += int(np.count_nonzero(excused))
+        _accumulate(robot, report, tally, revolute, t6, calls, expected)
         if progress is not None:
-            progress(min(begin + CHUNK, samples))
+            progress(min(begin + CHUNK, report.samples))
     report.seconds = time.perf_counter() - start
-    report.golden = check_golden(robot, plugin)
-    return report
+    report.checks.extend(_sample_checks(robot, plugin, report, tally))
+
+
+def _accumulate(robot, report, tally, revolute, t6, calls, expected):
+    errors = joint_errors(calls.solutions, expected.joints, revolute)
+    bounds = singular_bounds(robot, expected)[:, :, None]
+    singular = np.broadcast_to(bounds > 0, errors.shape)
+    report.singular_entries += int(np.count_nonzero(singular))
+    report.singular_out_of_bound += int(np.count_nonzero(singular & (errors > bounds)))
+    regular = np.where(singular, 0.0, errors)
+    if np.any(~revolute):
+        report.max_abs_error_mm = max(report.max_abs_error_mm, float(regular[:, ~revolute].max()))
+    if np.any(revolute):
+        report.max_abs_error_rad = max(report.max_abs_error_rad, float(regular[:, revolute].max()))
+    differ = calls.warnings != expected.warnings
+    excused = differ & warnings_in_band(robot, expected) & (calls.warnings != UNWRITTEN_WARNING)
+    report.warning_mismatches += int(np.count_nonzero(differ & ~excused))
+    report.warnings_in_band += int(np.count_nonzero(excused))
+    none_reachable = np.all(expected.warnings == abi.WARNINGS["WARN_UNREACHABLE"], axis=1)
+    tally.returns_wrong += int(np.count_nonzero(calls.returned != np.where(none_reachable, 1, 0)))
+    tally.guard_violations += calls.guard_violations
+    tally.inputs_modified |= calls.inputs_modified
+    if tally.first is None:
+        keep = slice(0, DIAGNOSIS_POSES)
+        tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
+                       expected.warnings[keep])
+
+
+def _sample_checks(robot, plugin, report, tally):
+    t6, solutions, warnings, reference_joints, reference_warnings = tally.first
+    values_ok = (report.max_abs_error_mm <= VALUE_TOLERANCE_MM and report.max_abs_error_rad <= VALUE_TOLERANCE_RAD
+                 and report.singular_out_of_bound == 0)
+    values = Check("values", values_ok,
+                   f"max |error| {report.max_abs_error_mm:.3g} mm, {report.max_abs_error_rad:.3g} rad over "
+                   f"{report.samples} poses x {report.postures} postures; {report.singular_entries} entries in a "
+                   f"singular band, {report.singular_out_of_bound} beyond their bound")
+    if not values_ok:
+        values.diagnoses = diagnose(robot, t6, solutions, reference_joints)
+    warnings_check = Check("warnings", report.warning_mismatches == 0,
+                           f"{report.warning_mismatches} mismatches, {report.warnings_in_band} inside the tolerance band")
+    if not warnings_check.passed:
+        warnings_check.diagnoses = diagnose_warnings(warnings, reference_warnings, abi.WARNING_NAMES)
+    checks = [values, warnings_check]
+    checks.append(Check("return value", tally.returns_wrong == 0,
+                        f"{tally.returns_wrong} calls return other than 1 when no posture is reachable, 0 otherwise"))
+    checks.append(Check("buffers", tally.guard_violations == 0 and not tally.inputs_modified,
+                        f"{tally.guard_violations} calls wrote outside solutions/warnings; inputs "
+                        f"{'modified' if tally.inputs_modified else 'untouched'}"))
+    plugin.reset_host()
+    again = plugin.call_batch(t6[:DETERMINISM_POSES])
+    same = (np.array_equal(again.solutions, solutions[:DETERMINISM_POSES], equal_nan=True)
+            and np.array_equal(again.warnings, warnings[:DETERMINISM_POSES]))
+    checks.append(Check("determinism", same, "the same T6 gives the same output" if same
+                        else "calling again with the same T6 gives different output (state kept between calls?)"))
+    return checks
+
+
+def _golden_detail(result):
+    return (f"{result.source}: pose {result.pose} posture {result.posture}: expected {result.expected}, "
+            f"plugin {[round(v, 6) for v in result.plugin]}, reference {[round(v, 6) for v in result.reference]}, "
+            f"tolerance {result.tolerance:g}")
 
 
 def check_golden(robot, plugin):
@@ -213,52 +303,76 @@ def check_golden(robot, plugin):
             and np.all(np.abs(from_reference - expected) <= golden.tolerance)
         )
         results.append(GoldenResult(
-            source=golden.source, pose=list(golden.pose), posture=golden.posture, expected=list(golden.joints),
-            plugin=[float(v) for v in from_plugin], reference=[float(v) for v in from_reference],
-            tolerance=golden.tolerance, passed=passed,
+            source=" ".join(golden.source.split()), pose=list(golden.pose), posture=golden.posture,
+            expected=list(golden.joints), plugin=[float(v) for v in from_plugin],
+            reference=[float(v) for v in from_reference], tolerance=golden.tolerance, passed=passed,
         ))
     return results
 
 
 def check_interface(robot, plugin):
-    """The contract of shared/delmia-abi.md, each broken clause as one sentence."""
-    failures = []
+    """The contract of shared/delmia-abi.md as named checks, each failure in one sentence."""
     config = plugin.config
+    problems = []
     if (config.dof, config.solutions) != (robot.dof, robot.postures):
-        failures.append(
-            f"get_kin_config answers {config.dof} joints and {config.solutions} solutions; "
-            f"the robot has {robot.dof} and {robot.postures}"
-        )
+        problems.append(f"answers {config.dof} joints and {config.solutions} solutions; "
+                        f"the robot has {robot.dof} and {robot.postures}")
     if config.data_hint not in (abi.CONSTANTS["USR_KIN_DATA_NULL"], abi.CONSTANTS["USR_KIN_DATA_KINSTAT"]):
-        failures.append(f"get_kin_config answers an unknown data hint {config.data_hint}")
+        problems.append(f"answers an unknown data hint {config.data_hint}")
     if plugin.kin_config(plugin.routine + "_unknown").status == 0:
-        failures.append(f"get_kin_config accepts a routine name that is not '{plugin.routine}'")
+        problems.append(f"accepts a routine name that is not '{plugin.routine}'")
+    checks = [Check("get_kin_config", not problems, "; ".join(problems) or
+                    f"answers '{plugin.routine}' with {config.dof} joints, {config.solutions} solutions, "
+                    f"hint {config.data_hint}; refuses other names")]
     home = t6_from_pose(np.asarray([robot.verification.home]))
 
     plugin.reset_host()
     plugin.call(home)
     calls, dof, solutions = host_state()
-    if (calls, dof, solutions) != (1, plugin.dof, plugin.postures):
-        failures.append(
-            f"kin_check_definition was called {calls} times with ({dof}, {solutions}); "
-            f"expected once with ({plugin.dof}, {plugin.postures})"
-        )
+    expected = (1, plugin.dof, plugin.postures)
+    checks.append(Check("kin_check_definition", (calls, dof, solutions) == expected,
+                        f"called {calls} times, last with ({dof}, {solutions}); expected once with "
+                        f"({plugin.dof}, {plugin.postures})"))
 
     plugin.reset_host(refuse=True)
     refused = plugin.call(home)
     plugin.reset_host()
+    problems = []
     if refused.returned[0] != 1:
-        failures.append(f"the routine returns {refused.returned[0]}, not 1, when kin_check_definition refuses")
+        problems.append(f"returns {refused.returned[0]}, not 1")
     if not (np.all(np.isnan(refused.solutions)) and np.all(refused.warnings == UNWRITTEN_WARNING)):
-        failures.append("the routine writes outputs although kin_check_definition refused")
+        problems.append("writes solutions or warnings")
+    checks.append(Check("refusal", not problems, "when kin_check_definition refuses, the routine " +
+                        (" and ".join(problems) if problems else "returns 1 and writes nothing")))
 
+    problems = []
     for bad in (np.nan, np.inf):
         t6 = home.copy()
         t6[0, 3, 0] = bad
         result = plugin.call(t6)
         if not (result.returned[0] == 1 and np.all(np.isfinite(result.solutions))
                 and np.all(result.warnings == abi.WARNINGS["WARN_UNREACHABLE"])):
-            failures.append(
-                f"a T6 holding {bad} must give return 1, finite joints and WARN_UNREACHABLE everywhere"
-            )
-    return failures
+            problems.append(f"a T6 holding {bad} gives return {result.returned[0]}, "
+                            f"{'finite' if np.all(np.isfinite(result.solutions)) else 'non-finite'} joints, "
+                            f"warnings {sorted(set(result.warnings[0].tolist()))}")
+    checks.append(Check("non-finite T6", not problems, "; ".join(problems) or
+                        "NaN and inf give return 1, finite joints, WARN_UNREACHABLE everywhere"))
+    return checks
+
+
+def junit_xml(report):
+    """The report as JUnit XML: one test case per check."""
+    suite = ElementTree.Element("testsuite", {
+        "name": f"kingen verify {report.robot}", "tests": str(len(report.checks)),
+        "failures": str(len(report.failures)), "time": f"{report.seconds:.6f}",
+    })
+    for check in report.checks:
+        case = ElementTree.SubElement(suite, "testcase", {"classname": f"kingen.{report.robot}", "name": check.name})
+        if not check.passed:
+            failure = ElementTree.SubElement(case, "failure", {"message": check.detail})
+            failure.text = "\n".join([check.detail, *check.diagnoses])
+        else:
+            ElementTree.SubElement(case, "system-out").text = check.detail
+    if report.notices:
+        ElementTree.SubElement(suite, "system-err").text = "\n".join(report.notices)
+    return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"

@@ -47,6 +47,11 @@ int kingen_host_last_solutions(void)
     return last_solutions;
 }
 
+void kingen_host_flush(void)
+{
+    fflush(NULL);
+}
+
 int DNBVMAP_kin_check_definition(int dof_count, int solution_count)
 {
     check_calls++;

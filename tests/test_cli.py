@@ -77,7 +77,7 @@ def test_verify_fails_with_exit_1_on_a_wrong_golden_value(capsys, tmp_path):
     path.write_text(text)
     code, out, _ = run(capsys, "verify", str(path), "-o", str(tmp_path / "b"), "--samples", "100")
     assert code == 1
-    assert "golden values: 2 checked, 1 failed" in out and "FAILED" in out
+    assert "FAILED golden[0]: DELMIA V5 methodology thesis" in out and "FAILED (1 of " in out
 
 
 BAD_CALLS = [
