@@ -71,12 +71,15 @@ def compile_c(sources, output, flags, compiler=None):
         try:
             result = subprocess.run(
                 [*command, *flags, *map(str, sources), "-o", temporary, "-lm"],
-                capture_output=True, text=True,
+                capture_output=True, text=True, env={**os.environ, "LC_ALL": "C"},
             )
         except FileNotFoundError:
             raise KingenError(f"C compiler '{command[0]}' not found: install one or set CC") from None
         if result.returncode != 0:
-            raise KingenError(f"{' '.join(map(str, sources))}: does not compile: {first_diagnostic(result.stderr)}")
+            diagnostic = first_diagnostic(result.stderr)
+            if not diagnostic.startswith(str(sources[0])):
+                diagnostic = f"{' '.join(map(str, sources))}: {diagnostic}"
+            raise KingenError(f"does not compile: {diagnostic}")
         os.replace(temporary, output)
     finally:
         Path(temporary).unlink(missing_ok=True)

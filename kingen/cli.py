@@ -21,7 +21,7 @@ from .errors import KingenError
 from .host import Plugin
 from .model import REVOLUTE, load_robot, shipped_robots
 from .reference import solve as reference_solve
-from .verify import CHUNK, junit_xml, verify as run_verify
+from .verify import chunk_size, junit_xml, verify as run_verify
 
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
@@ -139,7 +139,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     """
     model = load_robot(robot)
     plugin = _plugin(model, out_dir, library, source, routine)
-    with _progress(samples) as progress:
+    with _progress(samples, chunk_size(model)) as progress:
         report = run_verify(model, plugin, samples=samples, seed=seed, progress=progress)
     _print_report(report, plugin)
     if json_path is not None:
@@ -181,9 +181,9 @@ def _plugin(model, out_dir, library=None, source=None, routine=None):
     return Plugin(library, routine or model.routine)
 
 
-def _progress(total):
-    """A progress bar on stderr for long runs at a terminal; otherwise nothing."""
-    if total <= CHUNK or not sys.stderr.isatty():
+def _progress(total, chunk):
+    """A progress bar on stderr for runs of several chunks at a terminal; otherwise nothing."""
+    if total <= chunk or not sys.stderr.isatty():
         return contextlib.nullcontext(None)
     bar = click.progressbar(length=total, label="verifying", file=sys.stderr)
 

@@ -10,11 +10,13 @@ import math
 
 import numpy as np
 
+from .abi import WARNINGS
 from .conventions import joint_errors
 from .host import UNWRITTEN_WARNING
 from .model import REVOLUTE
 from .reference import solve
 
+UNREACHABLE_CODE = WARNINGS["WARN_UNREACHABLE"]
 MATCH = 1e-6
 """Largest residual (mm or rad) at which a hypothesis counts as explaining the data."""
 NAMED_SCALES = (
@@ -31,9 +33,13 @@ def _errors(robot, a, b):
     return joint_errors(a, b, np.array([t == REVOLUTE for t in robot.joint_types]))
 
 
-def diagnose(robot, t6, solutions, reference_joints):
-    """Hypotheses, one sentence each, explaining why ``solutions`` differ from the reference."""
-    finite = np.all(np.isfinite(solutions), axis=(1, 2))
+def diagnose(robot, t6, solutions, reference_joints, reference_warnings):
+    """Hypotheses, one sentence each, explaining why ``solutions`` differ from the reference.
+
+    Only poses where every posture is reachable (reference) and every value finite are
+    used: joints of unreachable postures are free for a routine to choose."""
+    reachable = np.all(reference_warnings != UNREACHABLE_CODE, axis=1)
+    finite = np.all(np.isfinite(solutions), axis=(1, 2)) & reachable
     findings = []
     never = np.where(np.all(~np.isfinite(solutions), axis=(0, 1)))[0]
     if never.size:

@@ -1,0 +1,285 @@
+"""Hand-written plugins in the style of the published thesis ones (K&R definitions,
+long double, pow, printf debugging, one routine per library), each with one classic
+mistake: verify must pass the right ones and name the defect in the wrong ones."""
+
+import json
+
+import pytest
+
+from kingen.cli import main
+
+HEXAPOD_LEGACY = r"""
+/* kin_hexapodFullTest.c: hand-written in the thesis's style */
+#include "shlibdefs.h"
+#include <math.h>
+
+#define NUM_DOFS 6
+#define NUM_SOLUTIONS 1
+
+static long double b[6][3] = {
+    {31, 118.156, 40.205}, {-31, 118.156, 40.205}, {-117.826, -32.231, 40.205},
+    {-86.826, -85.925, 40.205}, {86.826, -85.925, 40.205}, {117.826, -32.231, 40.205}};
+static long double t[6][3] = {
+    {31, 48.799, -31.45}, {-31, 48.799, -31.45}, {-57.761, 2.447, -31.45},
+    {-26.761, -51.246, -31.45}, {26.761, -51.246, -31.45}, {57.761, 2.447, -31.45}};
+static int order[6] = {ORDER};
+
+DllExport int get_kin_config(kin_routine, kin_dof, solution_count, usrKinDataHint)
+char *kin_routine;
+int *kin_dof;
+int *solution_count;
+int *usrKinDataHint;
+{
+    if (strcmp(kin_routine, "kin_hexapodFullTest") != 0)
+        return 1;
+    *kin_dof = NUM_DOFS;
+    *solution_count = NUM_SOLUTIONS;
+    *usrKinDataHint = USR_KIN_DATA_NULL;
+    return 0;
+}
+
+DllExport int kin_hexapodFullTest(link_lengths, link_offsets, T6, solutions, warnings, pData)
+double link_lengths[];
+double link_offsets[];
+double T6[4][4];
+double solutions[][NUM_SOLUTIONS];
+int warnings[];
+void *pData;
+{
+    int i, j, k;
+    long double L0 = REFERENCE_LENGTH;
+    long double p[3];
+    if (CHECK_DEFINITION && !kin_check_definition(NUM_DOFS, NUM_SOLUTIONS))
+        return 1;
+    for (i = 0; i < 4; i++)
+        for (j = 0; j < 3; j++)
+            if (!(T6[i][j] - T6[i][j] == 0.0)) {
+                for (k = 0; k < NUM_DOFS; k++)
+                    solutions[k][0] = 0.0;
+                warnings[0] = WARN_UNREACHABLE;
+                return 1;
+            }
+    for (i = 0; i < 6; i++) {
+        for (j = 0; j < 3; j++)
+            p[j] = ROTATED - b[i][j];
+        solutions[order[i]][0] = SIGN (sqrt(pow(p[0], 2) + pow(p[1], 2) + pow(p[2], 2)) - L0) * SCALE;
+        if (PRINT)
+            printf("leg %d = %f\n", i + 1, (double)solutions[order[i]][0]);
+    }
+    if (OUT_OF_BOUNDS)
+        solutions[NUM_DOFS][0] = 0.0;
+    warnings[0] = WARN_GOOD_SOLUTION;
+    return 0;
+}
+"""
+
+RIGHT = {
+    "ORDER": "0, 1, 2, 3, 4, 5",
+    "REFERENCE_LENGTH": "399.413",
+    "CHECK_DEFINITION": "1",
+    "ROTATED": "T6[0][j] * t[i][0] + T6[1][j] * t[i][1] + T6[2][j] * t[i][2] + T6[3][j]",
+    "SIGN": "",
+    "SCALE": "1.0",
+    "PRINT": "0",
+    "OUT_OF_BOUNDS": "0",
+}
+
+TAU_LEGACY = r"""
+#include "shlibdefs.h"
+
+static double s[3][3] = {{0, 0, 0}, {-1100, 700, 0}, {-2200, 0, 0}};
+static double d[3][3] = {{-96.569, -185, -400}, {0, -322.843, -173.726}, {96.569, 0, -400}};
+static double n[3][3] = {{224.999, -240.001, 171.568}, {0, 39.705, 336.862}, {-182.574, -80, 213.994}};
+static double l[3] = {1500, 1500, 1499.775};
+
+DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
+{
+    if (strcmp(kin_routine, "kin_tau") != 0)
+        return 1;
+    *kin_dof = 3;
+    *solution_count = 8;
+    *usrKinDataHint = USR_KIN_DATA_NULL;
+    return 0;
+}
+
+DllExport int kin_tau(double link_lengths[], double link_offsets[], double T6[4][4],
+                      double solutions[][8], int warnings[], void *pData)
+{
+    int i, j, k, bad = 0, limits;
+    double w[3], along, radicand, q[3][2];
+    if (!kin_check_definition(3, 8))
+        return 1;
+    for (i = 0; i < 4; i++)
+        for (j = 0; j < 3; j++)
+            if (!(T6[i][j] - T6[i][j] == 0.0))
+                bad = 1;
+    for (i = 0; i < 3; i++) {
+        for (j = 0; j < 3; j++)
+            w[j] = bad ? 0.0 : T6[0][j] * n[i][0] + T6[1][j] * n[i][1] + T6[2][j] * n[i][2] + T6[3][j] - s[i][j] - d[i][j];
+        along = -w[2];
+        radicand = l[i] * l[i] - (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) + along * along;
+        if (bad || radicand < -1e-5 * l[i] * l[i])
+            bad = 1;
+        radicand = radicand > 0 ? sqrt(radicand) : 0;
+        q[i][BRANCH0] = bad ? 0.0 : along - radicand;
+        q[i][1 - BRANCH0] = bad ? 0.0 : along + radicand;
+    }
+    for (k = 0; k < WRITTEN; k++) {
+        limits = 0;
+        for (i = 0; i < 3; i++) {
+            solutions[i][k] = q[i][(k >> (2 - i)) & 1];
+            if (solutions[i][k] < -1 || solutions[i][k] > 2600)
+                limits = 1;
+        }
+        warnings[k] = bad ? WARN_UNREACHABLE : limits ? WARN_JOINT_LIMITS_EXCEEDED : WARN_GOOD_SOLUTION;
+    }
+    for (k = WRITTEN; k < 8; k++)
+        for (i = 0; i < 3; i++)
+            solutions[i][k] = q[i][(k >> (2 - i)) & 1];
+    return bad;
+}
+"""
+
+
+def hexapod_source(**mistake):
+    text = HEXAPOD_LEGACY
+    for key, value in {**RIGHT, **mistake}.items():
+        text = text.replace(key, value)
+    return text
+
+
+def run_verify(capsys, tmp_path, robot, text, routine, samples="3000"):
+    source = tmp_path / f"{routine}.c"
+    source.write_text(text)
+    report = tmp_path / "report.json"
+    code = main(["verify", robot, "--source", str(source), "--routine", routine, "-o", str(tmp_path / "lib"),
+                 "--samples", samples, "--json", str(report), "--junit", str(tmp_path / "report.xml")])
+    out, err = capsys.readouterr()
+    data = json.loads(report.read_text()) if report.exists() else None
+    return code, out, err, data
+
+
+def diagnoses(data):
+    return " | ".join(data["diagnoses"])
+
+
+def failed_checks(data):
+    return sorted(check["name"] for check in data["checks"] if not check["passed"])
+
+
+def test_right_hexapod_in_thesis_style_passes(capsys, tmp_path):
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(), "kin_hexapodFullTest")
+    assert code == 0, out
+    assert data["passed"] and data["max_abs_error_mm"] <= 1e-9
+    assert (tmp_path / "lib" / "libhexapodFullTest.so").is_file()
+    assert '<testcase classname="kingen.hexapod" name="values">' in (tmp_path / "report.xml").read_text()
+
+
+def test_debug_printing_is_a_notice_not_a_failure(capsys, tmp_path):
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(PRINT="1"), "kin_hexapodFullTest")
+    assert code == 0
+    assert "notice: the routine printed" in out and "'leg 1 = " in out
+    assert "debug printing slows the host" in data["notices"][0]
+
+
+def test_wrong_reference_length_is_named_with_its_offset(capsys, tmp_path):
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(REFERENCE_LENGTH="376.5"),
+                                    "kin_hexapodFullTest")
+    assert code == 1
+    assert failed_checks(data) == ["golden[0]", "values"]
+    text = diagnoses(data)
+    assert "joint 0 (leg1) is off by a constant +22.913 mm" in text
+    assert "as if L0 = 376.5 mm; the robot says 399.413 mm" in text
+    assert "diagnosis: joint 5 (leg6) is off by a constant +22.913 mm" in out
+
+
+def test_untransposed_t6_is_named(capsys, tmp_path):
+    untransposed = "T6[j][0] * t[i][0] + T6[j][1] * t[i][1] + T6[j][2] * t[i][2] + T6[j][3]"
+    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(ROTATED=untransposed),
+                                  "kin_hexapodFullTest")
+    assert code == 1
+    assert "reads T6 untransposed" in diagnoses(data)
+
+
+def test_swapped_joints_are_named(capsys, tmp_path):
+    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(ORDER="1, 0, 2, 3, 4, 5"),
+                                  "kin_hexapodFullTest")
+    assert code == 1
+    text = diagnoses(data)
+    assert "joint 0 (leg1) holds the values of reference joint 1 (leg2)" in text
+    assert "joint 1 (leg2) holds the values of reference joint 0 (leg1)" in text
+
+
+@pytest.mark.parametrize("mistake, words", [
+    ({"SCALE": "0.001"}, "scaled by 0.001 (metres instead of mm)"),
+    ({"SIGN": "-"}, "has its sign flipped"),
+])
+def test_scale_and_sign_are_named(capsys, tmp_path, mistake, words):
+    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(**mistake), "kin_hexapodFullTest")
+    assert code == 1
+    assert words in diagnoses(data)
+
+
+def test_writing_past_the_solutions_array_is_caught(capsys, tmp_path):
+    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(OUT_OF_BOUNDS="1"),
+                                  "kin_hexapodFullTest")
+    assert code == 1
+    assert failed_checks(data) == ["buffers"]
+    assert "3000 calls wrote outside solutions/warnings" in next(c["detail"] for c in data["checks"] if c["name"] == "buffers")
+
+
+def test_ignoring_kin_check_definition_is_caught(capsys, tmp_path):
+    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(CHECK_DEFINITION="0"),
+                                  "kin_hexapodFullTest")
+    assert code == 1
+    assert failed_checks(data) == ["kin_check_definition", "refusal"]
+    assert "called 0 times" in " ".join(data["interface_failures"])
+
+
+def test_right_tau_passes(capsys, tmp_path):
+    text = TAU_LEGACY.replace("BRANCH0", "0").replace("WRITTEN", "8")
+    code, out, _, data = run_verify(capsys, tmp_path, "tau", text, "kin_tau")
+    assert code == 0, out
+
+
+def test_postures_in_another_order_give_the_permutation(capsys, tmp_path):
+    text = TAU_LEGACY.replace("BRANCH0", "1").replace("WRITTEN", "8")
+    code, _, _, data = run_verify(capsys, tmp_path, "tau", text, "kin_tau")
+    assert code == 1
+    assert "postures are in another order: plugin posture -> reference posture 0->7, 1->6" in diagnoses(data)
+
+
+def test_warnings_never_written_are_named(capsys, tmp_path):
+    text = TAU_LEGACY.replace("BRANCH0", "0").replace("WRITTEN", "1")
+    code, _, _, data = run_verify(capsys, tmp_path, "tau", text, "kin_tau")
+    assert code == 1
+    assert failed_checks(data) == ["non-finite T6", "warnings"]
+    assert "the warnings of postures 1-7 are never written" in diagnoses(data)
+
+
+def test_source_that_does_not_compile_is_bad_input(capsys, tmp_path):
+    source = tmp_path / "kin_broken.c"
+    source.write_text(hexapod_source().replace("return 0;\n}", "return 0\n}", 1))
+    code = main(["verify", "hexapod", "--source", str(source), "--routine", "kin_hexapodFullTest",
+                 "-o", str(tmp_path / "lib")])
+    _, err = capsys.readouterr()
+    assert code == 2
+    assert err.count("\n") == 1
+    assert err.startswith(f"kingen: error: does not compile: {source}:28:13: error: expected ';'")
+    assert not (tmp_path / "lib" / "libbroken.so").exists()
+
+
+def test_plugin_option_verifies_a_prebuilt_library(capsys, tmp_path):
+    run_verify(capsys, tmp_path, "hexapod", hexapod_source(), "kin_hexapodFullTest", samples="10")
+    code = main(["verify", "hexapod", "--plugin", str(tmp_path / "lib" / "libhexapodFullTest.so"),
+                 "--routine", "kin_hexapodFullTest", "--samples", "500"])
+    out, _ = capsys.readouterr()
+    assert code == 0 and "PASSED" in out
+
+
+def test_unknown_routine_is_bad_input(capsys, tmp_path):
+    run_verify(capsys, tmp_path, "hexapod", hexapod_source(), "kin_hexapodFullTest", samples="10")
+    code = main(["verify", "hexapod", "--plugin", str(tmp_path / "lib" / "libhexapodFullTest.so"),
+                 "--routine", "kin_other"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "get_kin_config does not know routine 'kin_other'" in err
