@@ -14,6 +14,7 @@ failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 import math
 import time
 import xml.etree.ElementTree as ElementTree
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -195,31 +196,48 @@ class _Tally:
     first: tuple = None
 
 
+class _Printed:
+    """What the routine printed on stdout/stderr over several captured blocks."""
+
+    def __init__(self):
+        self.bytes = 0
+        self.first_line = ""
+
+    @contextmanager
+    def capture(self):
+        with captured_output() as printed:
+            yield
+        self.bytes += printed["bytes"]
+        if not self.first_line and printed["text"].strip():
+            self.first_line = printed["text"].strip().splitlines()[0]
+
+
 def verify(robot, plugin, samples=10000, seed=0, progress=None):
     """Check ``plugin`` against ``robot``'s reference on ``samples`` seeded poses, its golden
     values and the interface contract. ``progress(done)`` is called after each chunk.
     What the routine prints on stdout/stderr is captured and reported as a notice."""
     report = Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures)
-    with captured_output() as printed:
+    printed = _Printed()
+    with printed.capture():
         report.checks.extend(check_interface(robot, plugin))
-        if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
-            _compare_samples(robot, plugin, report, progress)
+    if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
+        _compare_samples(robot, plugin, report, progress, printed)
+        with printed.capture():
             report.golden = check_golden(robot, plugin)
-            report.checks.extend(
-                Check(f"golden[{i}]", result.passed, _golden_detail(result)) for i, result in enumerate(report.golden)
-            )
-        else:
-            report.checks.append(Check("values", False, "not compared: the routine's joint or posture count differs"))
-    if printed["bytes"]:
-        first = printed["text"].strip().splitlines()[0] if printed["text"].strip() else ""
+        report.checks.extend(
+            Check(f"golden[{i}]", result.passed, _golden_detail(result)) for i, result in enumerate(report.golden)
+        )
+    else:
+        report.checks.append(Check("values", False, "not compared: the routine's joint or posture count differs"))
+    if printed.bytes:
         report.notices.append(
-            f"the routine printed {printed['bytes']} bytes on stdout/stderr (first line: {first!r}); "
+            f"the routine printed {printed.bytes} bytes on stdout/stderr (first line: {printed.first_line!r}); "
             "debug printing slows the host by orders of magnitude"
         )
     return report
 
 
-def _compare_samples(robot, plugin, report, progress):
+def _compare_samples(robot, plugin, report, progress, printed):
     poses = sample_poses(robot, report.samples, report.seed)
     revolute = revolute_mask(robot)
     tally = _Tally()
@@ -228,13 +246,15 @@ def _compare_samples(robot, plugin, report, progress):
     for begin in range(0, report.samples, chunk):
         t6 = t6_from_pose(poses[begin:begin + chunk])
         plugin.reset_host()
-        calls = plugin.call_batch(t6)
+        with printed.capture():
+            calls = plugin.call_batch(t6)
         expected = solve(robot, t6)
         _accumulate(robot, report, tally, revolute, t6, calls, expected)
         if progress is not None:
             progress(min(begin + chunk, report.samples))
     report.seconds = time.perf_counter() - start
-    report.checks.extend(_sample_checks(robot, plugin, report, tally))
+    with printed.capture():
+        report.checks.extend(_sample_checks(robot, plugin, report, tally))
 
 
 def _accumulate(robot, report, tally, revolute, t6, calls, expected):
