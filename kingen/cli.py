@@ -33,6 +33,26 @@ OUT_DIR = click.option(
 )
 
 
+def calibration_options(function):
+    """--link-lengths / --link-offsets: the Solver Attributes fields Length 1-6 and Offset 1-6."""
+    function = click.option("--link-offsets", nargs=6, type=float, default=None, metavar="O1 .. O6",
+                            help="Offset 1-6 of the Solver Attributes tab (link_offsets[]).")(function)
+    function = click.option("--link-lengths", nargs=6, type=float, default=None, metavar="L1 .. L6",
+                            help="Length 1-6 of the Solver Attributes tab (link_lengths[]).")(function)
+    return function
+
+
+def plugin_options(function):
+    """--plugin / --source / --routine: verify a hand-written routine instead of kingen's."""
+    function = click.option("--routine", default=None,
+                            help="Routine name in the library [default: kin_<name>].")(function)
+    function = click.option("--source", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                            help="Compile this C source (a legacy plugin) against the stand-in header first.")(function)
+    function = click.option("--plugin", "library", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                            help="Use this compiled library instead of building ROBOT's.")(function)
+    return function
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="kingen")
 def cli():
@@ -83,15 +103,16 @@ def build(robot, out_dir, debug):
 @click.option("--t6", nargs=16, type=float, metavar="16 NUMBERS",
               help="DELMIA's T6, row by row: n, o, a, p rows, each with its 0/1 last entry.")
 @click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
-def solve(robot, out_dir, pose, t6, degrees):
+@calibration_options
+def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
     model = load_robot(robot)
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
     plugin = _plugin(model, out_dir)
-    calls = plugin.call(matrix)
-    expected = reference_solve(model, matrix)
+    calls = plugin.call(matrix, link_lengths, link_offsets)
+    expected = reference_solve(model, matrix, link_lengths, link_offsets)
     scale = np.where(np.array(model.joint_types) == REVOLUTE, 180.0 / np.pi if degrees else 1.0, 1.0)
     units = ["deg" if (t == REVOLUTE and degrees) else ("rad" if t == REVOLUTE else "mm") for t in model.joint_types]
     names = [f"{name} ({unit})" for name, unit in zip(model.joint_names, units)]
@@ -109,17 +130,6 @@ def solve(robot, out_dir, pose, t6, degrees):
     click.echo(f"routine returned {calls.returned[0]}")
 
 
-def plugin_options(function):
-    """--plugin / --source / --routine: verify a hand-written routine instead of kingen's."""
-    function = click.option("--routine", default=None,
-                            help="Routine name in the library [default: kin_<name>].")(function)
-    function = click.option("--source", type=click.Path(dir_okay=False, path_type=Path), default=None,
-                            help="Compile this C source (a legacy plugin) against the stand-in header first.")(function)
-    function = click.option("--plugin", "library", type=click.Path(dir_okay=False, path_type=Path), default=None,
-                            help="Use this compiled library instead of building ROBOT's.")(function)
-    return function
-
-
 @cli.command()
 @ROBOT
 @OUT_DIR
@@ -131,7 +141,8 @@ def plugin_options(function):
               help="Write the report as JSON to this file.")
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the report as JUnit XML (one test case per check) to this file.")
-def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path):
+@calibration_options
+def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, link_lengths, link_offsets):
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
     By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
@@ -140,7 +151,8 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     model = load_robot(robot)
     plugin = _plugin(model, out_dir, library, source, routine)
     with _progress(samples, chunk_size(model)) as progress:
-        report = run_verify(model, plugin, samples=samples, seed=seed, progress=progress)
+        report = run_verify(model, plugin, samples=samples, seed=seed, progress=progress,
+                            link_lengths=link_lengths, link_offsets=link_offsets)
     _print_report(report, plugin)
     if json_path is not None:
         write_atomic(json_path, json.dumps(report.as_json(), indent=2) + "\n")

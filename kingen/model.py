@@ -9,13 +9,13 @@ travel limits in internal units (mm, radians).
 
 import hashlib
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
 import numpy as np
 import yaml
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from .errors import KingenError, located
 from .resources import robots_dir
@@ -69,6 +69,21 @@ UnitVec3 = Annotated[Vec3, AfterValidator(_check_unit)]
 Six = Annotated[list[float], Field(min_length=6, max_length=6)]
 Length = Annotated[float, Field(gt=0)]
 Travel = Annotated[list[float], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
+DialogField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
+"""A Solver Attributes field: length1..length6 (link_lengths[0..5]), offset1..offset6 (link_offsets[0..5])."""
+
+
+def field_index(dialog_field):
+    """length1..6 -> 0..5, offset1..6 -> 6..11: the encoding the generated C uses."""
+    number = int(dialog_field[-1]) - 1
+    return number if dialog_field.startswith("length") else 6 + number
+
+
+def dialog_value(dialog_field, link_lengths, link_offsets):
+    """The number the user typed into that field (0 when left empty)."""
+    index = field_index(dialog_field)
+    values = link_lengths if index < 6 else link_offsets
+    return 0.0 if values is None else float(values[index % 6])
 
 
 class _Strict(BaseModel):
@@ -79,6 +94,18 @@ class _Limb(_Strict):
     name: Optional[Identifier] = None
     travel: Optional[Travel] = None
     """[lower, upper] in mm (prismatic) or degrees (revolute); absent: no limits."""
+    calibrate: dict[str, DialogField] = {}
+    """Parameter -> dialog field read at run time; a zero field keeps the built-in value."""
+    calibratable: ClassVar[tuple] = ()
+
+    @field_validator("calibrate")
+    @classmethod
+    def _check_calibratable(cls, calibrate):
+        for parameter in calibrate:
+            if parameter not in cls.calibratable:
+                raise ValueError(f"'{parameter}' cannot be calibrated on a {cls.__name__.lower()} "
+                                 f"(choose from {', '.join(cls.calibratable)})")
+        return calibrate
 
 
 class Leg(_Limb):
@@ -90,6 +117,7 @@ class Leg(_Limb):
     reference_length: Length
     branches: ClassVar[int] = 1
     joint_type: ClassVar[str] = PRISMATIC
+    calibratable: ClassVar[tuple] = ("reference_length",)
 
 
 class Rail(_Limb):
@@ -101,8 +129,11 @@ class Rail(_Limb):
     carriage_offset: Vec3
     platform_point: Vec3
     link_length: Length
+    origin: float = 0.0
+    """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
     branches: ClassVar[int] = 2
     joint_type: ClassVar[str] = PRISMATIC
+    calibratable: ClassVar[tuple] = ("origin", "link_length")
 
 
 class Crank(_Limb):
@@ -117,8 +148,11 @@ class Crank(_Limb):
     crank_length: Length
     rod_length: Length
     platform_point: Vec3
+    zero_offset: float = 0.0
+    """Geometric crank angle (degrees) reported as joint 0: theta -= zero_offset."""
     branches: ClassVar[int] = 2
     joint_type: ClassVar[str] = REVOLUTE
+    calibratable: ClassVar[tuple] = ("zero_offset", "crank_length", "rod_length")
 
 
 Limb = Annotated[Union[Leg, Rail, Crank], Field(discriminator="model")]
@@ -136,6 +170,13 @@ class StewartGoughLayout(_Strict):
     platform_height: float = 0.0
     reference_length: Length
     travel: Optional[Travel] = None
+    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
+    """Parameter -> six dialog fields, one per leg."""
+
+    @field_validator("calibrate")
+    @classmethod
+    def _check_calibratable(cls, calibrate):
+        return _check_layout_calibration(calibrate, Leg)
 
     def limbs(self):
         """The six legs; point angles lambda_1 = 60 - pair/2, lambda_2 = lambda_1 + pair, ... (degrees)."""
@@ -154,6 +195,7 @@ class StewartGoughLayout(_Strict):
                                 self.platform_radius * math.sin(platform_angle), self.platform_height],
                 reference_length=self.reference_length,
                 travel=self.travel,
+                calibrate={parameter: fields[index] for parameter, fields in self.calibrate.items()},
             ))
         return legs
 
@@ -171,6 +213,13 @@ class Rus6Layout(_Strict):
     pair_angles: Six
     crank_directions: Six
     travel: Optional[Travel] = None
+    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
+    """Parameter -> six dialog fields, one per crank."""
+
+    @field_validator("calibrate")
+    @classmethod
+    def _check_calibratable(cls, calibrate):
+        return _check_layout_calibration(calibrate, Crank)
 
     def limbs(self):
         """The six cranks: A_i and c_i from chi_i with m, n = (-1)^(i-1) times the half-distances."""
@@ -190,8 +239,16 @@ class Rus6Layout(_Strict):
                 platform_point=[self.platform_radius * math.cos(chi) - n * math.sin(chi),
                                 self.platform_radius * math.sin(chi) + n * math.cos(chi), 0.0],
                 travel=self.travel,
+                calibrate={parameter: fields[index] for parameter, fields in self.calibrate.items()},
             ))
         return cranks
+
+
+def _check_layout_calibration(calibrate, limb_class):
+    for parameter in calibrate:
+        if parameter not in limb_class.calibratable:
+            raise ValueError(f"'{parameter}' cannot be calibrated (choose from {', '.join(limb_class.calibratable)})")
+    return calibrate
 
 
 Layout = Annotated[Union[StewartGoughLayout, Rus6Layout], Field(discriminator="type")]
@@ -286,6 +343,24 @@ class Robot:
                 scale = math.pi / 180.0 if limb.joint_type == REVOLUTE else 1.0
                 lower[i], upper[i] = limb.travel[0] * scale, limb.travel[1] * scale
         return lower, upper
+
+    def calibration(self):
+        """Per calibrated parameter: (joint index, parameter, dialog field, built-in value in YAML units)."""
+        return [
+            (index, parameter, dialog_field, getattr(limb, parameter))
+            for index, limb in enumerate(self.limbs)
+            for parameter, dialog_field in limb.calibrate.items()
+        ]
+
+    def calibrated(self, link_lengths=None, link_offsets=None):
+        """This robot with the dialog's values applied: a zero or non-finite field keeps the
+        built-in value, any other replaces it (mm, or degrees for a crank's zero_offset)."""
+        limbs = list(self.limbs)
+        for index, parameter, dialog_field, _ in self.calibration():
+            value = dialog_value(dialog_field, link_lengths, link_offsets)
+            if value != 0.0 and math.isfinite(value):
+                limbs[index] = limbs[index].model_copy(update={parameter: value})
+        return replace(self, limbs=tuple(limbs))
 
     def joint_scale(self):
         """Per joint: factor from YAML units (mm, degrees) to internal units (mm, radians)."""
@@ -429,6 +504,13 @@ def _expand_limbs(document, locate):
     for index, name in enumerate(names):
         if names.index(name) != index:
             raise locate.error(["limbs", index, "name"], f"joint name '{name}' is used twice")
+    used = {}
+    for index, limb in enumerate(limbs):
+        for parameter, dialog_field in limb.calibrate.items():
+            if dialog_field in used:
+                raise locate.error(["limbs", index, "calibrate", parameter],
+                                   f"dialog field {dialog_field} is already read for {used[dialog_field]}")
+            used[dialog_field] = f"{names[index]}.{parameter}"
     two_branch = sum(1 for limb in limbs if limb.branches == 2)
     if two_branch > MAX_TWO_BRANCH_LIMBS:
         raise locate.error(

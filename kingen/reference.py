@@ -13,6 +13,7 @@ real solution reports the value at the clamped radicand (closest approach), so
 values are always finite. Non-finite T6: all postures unreachable, all joints 0.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,20 +64,20 @@ def solve_leg(leg, platform_point):
 
 
 def solve_rail(rail, platform_point):
-    """Carriage position along the rail (mm): u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2)."""
+    """Carriage position along the rail (mm): u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) - origin."""
     direction = np.asarray(rail.direction)
     w = platform_point - np.asarray(rail.rail_point) - np.asarray(rail.carriage_offset)
     along = w @ direction
     radicand = rail.link_length ** 2 - np.sum(w * w, axis=-1) + along * along
     root = np.sqrt(np.maximum(radicand, 0.0))
     return LimbSolution(
-        values=np.stack([along - root, along + root], axis=-1),
+        values=np.stack([along - root, along + root], axis=-1) - rail.origin,
         radicand=radicand / rail.link_length ** 2,
     )
 
 
 def solve_crank(crank, platform_point):
-    """Crank angle (rad, (-pi, pi]): phi +/- acos(K / rho), robots.md's 6-RUS convention."""
+    """Crank angle (rad, (-pi, pi]): phi +/- acos(K / rho) - zero_offset, robots.md's 6-RUS convention."""
     beta = np.radians(crank.crank_direction)
     g = platform_point - np.asarray(crank.pivot)
     a = g[:, 0] * np.cos(beta) + g[:, 1] * np.sin(beta)
@@ -88,8 +89,9 @@ def solve_crank(crank, platform_point):
         cosine = np.where(rho_squared > 0.0, k / np.sqrt(rho_squared), 1.0)
     half = np.arccos(np.clip(cosine, -1.0, 1.0))
     phi = np.arctan2(b, a)
+    zero = math.radians(crank.zero_offset)
     return LimbSolution(
-        values=wrap_angle(np.stack([phi + half, phi - half], axis=-1)),
+        values=wrap_angle(np.stack([phi + half - zero, phi - half - zero], axis=-1)),
         radicand=radicand,
     )
 
@@ -97,8 +99,12 @@ def solve_crank(crank, platform_point):
 SOLVERS = {"leg": solve_leg, "rail": solve_rail, "crank": solve_crank}
 
 
-def solve(robot, t6):
-    """Every posture of ``robot`` for T6 arrays (n, 4, 4); see the module docstring."""
+def solve(robot, t6, link_lengths=None, link_offsets=None):
+    """Every posture of ``robot`` for T6 arrays (n, 4, 4); see the module docstring.
+
+    ``link_lengths`` / ``link_offsets`` (6 each, the dialog's Length i / Offset i) replace
+    the parameters the robot marks as calibrated, where non-zero."""
+    robot = robot.calibrated(link_lengths, link_offsets)
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
     count = t6.shape[0]
     finite = np.all(np.isfinite(t6[:, :, :3]), axis=(1, 2))

@@ -11,7 +11,7 @@ import math
 import jinja2
 
 from . import __version__, abi
-from .model import REVOLUTE
+from .model import REVOLUTE, field_index
 from .reference import SINGULAR_TOLERANCE
 from .resources import templates_dir
 
@@ -44,6 +44,13 @@ def source_name(robot):
     return f"kin_{robot.name}.c"
 
 
+def calibration_line(robot, joint, parameter, dialog_field, built_in):
+    """'Length 3 -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners."""
+    unit = "degrees" if parameter == "zero_offset" else "mm"
+    label = f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
+    return f"{label} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:g})"
+
+
 def view_model(robot):
     """Everything the plugin template substitutes, already formatted as C."""
     lower, upper = robot.travel_limits()
@@ -66,6 +73,8 @@ def view_model(robot):
     tables = {"leg": [], "rail": [], "crank": []}
     for index, limb in enumerate(robot.limbs):
         row = {"joint": index, "platform_point": _c_vector(limb.platform_point)}
+        row.update({f"{parameter}_field": field_index(limb.calibrate[parameter]) if parameter in limb.calibrate else -1
+                    for parameter in limb.calibratable})
         if limb.model == "leg":
             row.update(base_point=_c_vector(limb.base_point), reference_length=c_double(limb.reference_length))
         elif limb.model == "rail":
@@ -74,6 +83,7 @@ def view_model(robot):
                 direction=_c_vector(limb.direction),
                 carriage_offset=_c_vector(limb.carriage_offset),
                 link_length=c_double(limb.link_length),
+                origin=c_double(limb.origin),
             )
         else:
             beta = math.radians(limb.crank_direction)
@@ -83,6 +93,7 @@ def view_model(robot):
                 sin_direction=c_double(math.sin(beta)),
                 crank_length=c_double(limb.crank_length),
                 rod_length=c_double(limb.rod_length),
+                zero_offset=c_double(math.radians(limb.zero_offset)),
             )
         tables[limb.model].append(row)
     models = [model for model in ("leg", "rail", "crank") if tables[model]]
@@ -106,6 +117,8 @@ def view_model(robot):
         "cranks": tables["crank"],
         "models": models,
         "table_sizes": [(model, len(tables[model])) for model in models],
+        "degree": c_double(math.pi / 180.0),
+        "calibration": [calibration_line(robot, *entry) for entry in robot.calibration()],
         "get_kin_config": abi.GET_KIN_CONFIG,
         "routine_prototype": abi.routine_prototype(robot.routine, "NUM_SOLUTIONS"),
     }

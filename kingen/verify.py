@@ -84,6 +84,8 @@ class Report:
     checks: list = field(default_factory=list)
     notices: list = field(default_factory=list)
     seconds: float = 0.0
+    link_lengths: list = None
+    link_offsets: list = None
 
     @property
     def golden_checked(self):
@@ -112,6 +114,8 @@ class Report:
             "samples": self.samples,
             "seed": self.seed,
             "postures": self.postures,
+            "link_lengths": self.link_lengths,
+            "link_offsets": self.link_offsets,
             "max_abs_error_mm": _json_number(self.max_abs_error_mm),
             "max_abs_error_rad": _json_number(self.max_abs_error_rad),
             "tolerance_mm": VALUE_TOLERANCE_MM,
@@ -212,11 +216,14 @@ class _Printed:
             self.first_line = printed["text"].strip().splitlines()[0]
 
 
-def verify(robot, plugin, samples=10000, seed=0, progress=None):
+def verify(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=None, link_offsets=None):
     """Check ``plugin`` against ``robot``'s reference on ``samples`` seeded poses, its golden
     values and the interface contract. ``progress(done)`` is called after each chunk.
+    ``link_lengths`` / ``link_offsets`` (6 each) are passed to the routine and the reference
+    alike; golden values are checked with empty fields (the published geometry).
     What the routine prints on stdout/stderr is captured and reported as a notice."""
-    report = Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures)
+    report = Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures,
+                    link_lengths=_listed(link_lengths), link_offsets=_listed(link_offsets))
     printed = _Printed()
     with printed.capture():
         report.checks.extend(check_interface(robot, plugin))
@@ -237,6 +244,10 @@ def verify(robot, plugin, samples=10000, seed=0, progress=None):
     return report
 
 
+def _listed(values):
+    return None if values is None else [float(v) for v in values]
+
+
 def _compare_samples(robot, plugin, report, progress, printed):
     poses = sample_poses(robot, report.samples, report.seed)
     revolute = revolute_mask(robot)
@@ -247,8 +258,8 @@ def _compare_samples(robot, plugin, report, progress, printed):
         t6 = t6_from_pose(poses[begin:begin + chunk])
         plugin.reset_host()
         with printed.capture():
-            calls = plugin.call_batch(t6)
-        expected = solve(robot, t6)
+            calls = plugin.call_batch(t6, report.link_lengths, report.link_offsets)
+        expected = solve(robot, t6, report.link_lengths, report.link_offsets)
         _accumulate(robot, report, tally, revolute, t6, calls, expected)
         if progress is not None:
             progress(min(begin + chunk, report.samples))
@@ -305,7 +316,7 @@ def _sample_checks(robot, plugin, report, tally):
                         f"{tally.guard_violations} calls wrote outside solutions/warnings; inputs "
                         f"{'modified' if tally.inputs_modified else 'untouched'}"))
     plugin.reset_host()
-    again = plugin.call_batch(t6[:DETERMINISM_POSES])
+    again = plugin.call_batch(t6[:DETERMINISM_POSES], report.link_lengths, report.link_offsets)
     same = (np.array_equal(again.solutions, solutions[:DETERMINISM_POSES], equal_nan=True)
             and np.array_equal(again.warnings, warnings[:DETERMINISM_POSES]))
     checks.append(Check("determinism", same, "the same T6 gives the same output" if same
