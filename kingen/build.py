@@ -12,6 +12,7 @@ import hashlib
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import tempfile
 from dataclasses import dataclass
@@ -19,12 +20,16 @@ from pathlib import Path
 
 from . import __version__
 from .errors import KingenError
+from .pe import dll_exports
 from .render import render, render_header, host_source, source_name
 
 STRICT_C89 = ("-std=c89", "-pedantic", "-Wall", "-Wextra", "-Werror")
 """The dialect and warnings every generated source must pass (old Visual C is C89)."""
 SHARED_FLAGS = ("-O2", "-fPIC", "-shared")
-STAMP = ".kingen-build.json"
+WINDOWS_DEFINES = ("WINDOWS_SHELL", "_DNBUSERLIB", "WINDOWS_SOURCE", "NDEBUG", "WIN32", "WINNT", "WINDOWS_NT")
+"""The vendor makefile's defines (plus WINDOWS_SOURCE, which turns DllExport into dllexport)."""
+MINGW = "x86_64-w64-mingw32-gcc"
+TARGETS = ("linux", "windows")
 
 
 @dataclass(frozen=True)
@@ -116,38 +121,78 @@ def host_support():
     return include, library
 
 
+def mingw_command():
+    """The mingw-w64 cross compiler (``$KINGEN_MINGW_CC``, else x86_64-w64-mingw32-gcc)."""
+    command = shlex.split(os.environ.get("KINGEN_MINGW_CC") or MINGW)
+    if shutil.which(command[0]) is None:
+        raise KingenError(f"Windows cross compiler '{command[0]}' not found: install Debian's "
+                          "gcc-mingw-w64-x86-64 or set KINGEN_MINGW_CC")
+    return command
+
+
+def windows_host_import_library():
+    """An import library standing in for DELMIA's: the host emulator cross-built as a DLL."""
+    include, _ = host_support()
+    command = mingw_command()
+    folder = cache_dir() / f"host-windows-{_digest(__version__, render_header(), host_source(), *command)[:16]}"
+    import_library = folder / "libkingen_host.dll.a"
+    if not import_library.is_file():
+        write_atomic(folder / "kingen_host.c", host_source())
+        compile_c([folder / "kingen_host.c"], folder / "kingen_host.dll",
+                  [*STRICT_C89, "-O2", "-shared", f"-I{include}", f"-Wl,--out-implib,{import_library}"],
+                  compiler=command)
+    return import_library
+
+
 def default_out_dir(robot):
     return Path("build") / robot.name
 
 
-def library_name(robot):
-    """lib<name>.so, as DELMIA's Solver Attributes tab names the library (libtau)."""
-    return f"{robot.library}.so"
+def library_name(robot, target="linux"):
+    """lib<name>.so (or .dll), as DELMIA's Solver Attributes tab names the library (libtau)."""
+    return f"{robot.library}{'.dll' if target == 'windows' else '.so'}"
 
 
-def build_plugin(robot, out_dir=None, defines=()):
+def build_plugin(robot, out_dir=None, defines=(), target="linux"):
     """Render and compile ``robot`` into ``out_dir`` (default build/<name>).
 
-    Writes ``kin_<name>.c`` and ``lib<name>.so``; ``defines`` are extra -D macros
-    (for example KINGEN_DEBUG). Skips compiling when the stamp matches.
+    Writes ``kin_<name>.c`` and ``lib<name>.so``, or for ``target="windows"`` a
+    ``lib<name>.dll`` cross-compiled with mingw-w64 against a stand-in of DELMIA's import
+    library and checked to export ``get_kin_config`` and the routine. ``defines`` are
+    extra -D macros (for example KINGEN_DEBUG). Skips compiling when the stamp matches.
     """
     out_dir = Path(out_dir or default_out_dir(robot))
     (name, text), = render(robot).items()
     include, _ = host_support()
-    flags = [*STRICT_C89, *SHARED_FLAGS, f"-I{include}", *(f"-D{d}" for d in defines)]
-    source, library = out_dir / name, out_dir / library_name(robot)
-    key = _digest(__version__, text, *compiler_command(), *flags)
-    stamp = out_dir / STAMP
+    if target == "windows":
+        command = mingw_command()
+        flags = [*STRICT_C89, "-O2", "-shared", f"-I{include}", *(f"-D{d}" for d in (*WINDOWS_DEFINES, *defines))]
+        extra_sources = [windows_host_import_library()]
+    else:
+        command = compiler_command()
+        flags = [*STRICT_C89, *SHARED_FLAGS, f"-I{include}", *(f"-D{d}" for d in defines)]
+        extra_sources = []
+    source, library = out_dir / name, out_dir / library_name(robot, target)
+    key = _digest(__version__, text, *command, *flags)
+    stamp = out_dir / f".kingen-build-{target}.json"
     if library.is_file() and source.is_file() and _read_stamp(stamp) == key and source.read_text() == text:
         return BuildResult(source, library, robot.routine, compiled=False)
     with tempfile.TemporaryDirectory(prefix="kingen-build-") as scratch:
         scratch_source, scratch_library = Path(scratch) / name, Path(scratch) / library.name
         scratch_source.write_text(text)
-        compile_c([scratch_source], scratch_library, flags)
+        compile_c([scratch_source, *extra_sources], scratch_library, flags, compiler=command)
+        if target == "windows":
+            _check_exports(scratch_library, robot)
         write_atomic(source, text)
         write_atomic(library, scratch_library.read_bytes())
     write_atomic(stamp, json.dumps({"key": key, "robot": robot.name, "kingen": __version__}) + "\n")
     return BuildResult(source, library, robot.routine, compiled=True)
+
+
+def _check_exports(library, robot):
+    missing = {"get_kin_config", robot.routine} - set(dll_exports(library))
+    if missing:
+        raise KingenError(f"{library.name}: does not export {', '.join(sorted(missing))}")
 
 
 LEGACY_FLAGS = ("-std=gnu99", "-O2", "-fPIC", "-shared")

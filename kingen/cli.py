@@ -1,4 +1,4 @@
-"""The ``kingen`` command line: list, render, build, solve, verify, bench.
+"""The ``kingen`` command line: list, render, build, package, solve, verify, bench.
 
 Exit codes: 0 success, 1 verification failed, 2 bad input or usage (one line on
 stderr naming file, field and problem). Library code raises KingenError; only
@@ -15,11 +15,12 @@ import numpy as np
 
 from . import __version__, abi
 from .bench import benchmark
-from .build import build_legacy, build_plugin, default_out_dir, write_atomic, write_source
+from .build import TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
 from .conventions import t6_from_pose
 from .errors import KingenError
 from .host import Plugin
 from .model import REVOLUTE, load_robot, shipped_robots
+from .package import write_package
 from .reference import solve as reference_solve
 from .verify import chunk_size, junit_xml, verify as run_verify
 
@@ -87,12 +88,27 @@ def render(robot, out_dir):
 @ROBOT
 @OUT_DIR
 @click.option("--debug", is_flag=True, help="Compile with KINGEN_DEBUG (DELMIA-style printing; slow).")
-def build(robot, out_dir, debug):
-    """Render and compile lib<name>.so with $CC (else cc), host symbols left to the host."""
+@click.option("--target", type=click.Choice(TARGETS), default="linux", show_default=True,
+              help="linux: lib<name>.so with $CC; windows: lib<name>.dll cross-compiled with mingw-w64.")
+def build(robot, out_dir, debug, target):
+    """Render and compile the plugin, host symbols left to the host, as for DELMIA."""
     model = load_robot(robot)
-    result = build_plugin(model, out_dir, defines=("KINGEN_DEBUG",) if debug else ())
+    result = build_plugin(model, out_dir, defines=("KINGEN_DEBUG",) if debug else (), target=target)
     state = "compiled" if result.compiled else "up to date"
     click.echo(f"{result.library} ({state}; routine {result.routine}, source {result.source})")
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--target", type=click.Choice(TARGETS), default="windows", show_default=True,
+              help="windows: source, nmake makefile, .def, BUILD.txt; linux: source and lib<name>.so.")
+def package(robot, out_dir, target):
+    """A folder ready for the simulator, with SETUP.md: what to type into each dialog tab."""
+    model = load_robot(robot)
+    paths = write_package(model, out_dir or default_out_dir(model) / f"package-{target}", target)
+    for path in paths:
+        click.echo(str(path))
 
 
 @cli.command()

@@ -10,7 +10,8 @@ when a rail or crank limb's normalised radicand D is within ``SINGULAR_TOLERANCE
 of zero, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;
 unreachable wins over singular, singular over joint limits. A limb without a
 real solution reports the value at the clamped radicand (closest approach), so
-values are always finite. Non-finite T6: all postures unreachable, all joints 0.
+values are always finite. Non-finite T6: all postures unreachable, all joints 0. A limb
+whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0.
 """
 
 import math
@@ -69,7 +70,7 @@ def solve_rail(rail, platform_point):
     w = platform_point - np.asarray(rail.rail_point) - np.asarray(rail.carriage_offset)
     along = w @ direction
     radicand = rail.link_length ** 2 - np.sum(w * w, axis=-1) + along * along
-    root = np.sqrt(np.maximum(radicand, 0.0))
+    root = np.sqrt(np.where(radicand > 0.0, radicand, 0.0))
     return LimbSolution(
         values=np.stack([along - root, along + root], axis=-1) - rail.origin,
         radicand=radicand / rail.link_length ** 2,
@@ -114,16 +115,20 @@ def solve(robot, t6, link_lengths=None, link_offsets=None):
     postures = np.arange(robot.postures)
     joints = np.empty((count, robot.dof, robot.postures))
     radicands = np.full((count, robot.dof), np.inf)
+    overflow = np.zeros((count, robot.dof), dtype=bool)
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
-        limb_solution = SOLVERS[limb.model](limb, points[:, index])
+        with np.errstate(over="ignore", invalid="ignore"):
+            limb_solution = SOLVERS[limb.model](limb, points[:, index])
+        values = limb_solution.values
+        overflow[:, index] = ~np.all(np.isfinite(values), axis=1)
         branch = (postures >> bit) & 1 if bit >= 0 else np.zeros_like(postures)
-        joints[:, index, :] = limb_solution.values[:, branch]
+        joints[:, index, :] = np.where(overflow[:, index, None], 0.0, values[:, branch])
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
 
     lower, upper = robot.travel_limits()
     outside = np.any((joints < lower[None, :, None]) | (joints > upper[None, :, None]), axis=1)
-    unreachable = np.any(radicands < -SINGULAR_TOLERANCE, axis=1)
+    unreachable = np.any(~(radicands >= -SINGULAR_TOLERANCE) | overflow, axis=1)
     singular = np.any(np.abs(radicands) <= SINGULAR_TOLERANCE, axis=1)
 
     warnings = np.where(outside, abi.WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], abi.WARNINGS["WARN_GOOD_SOLUTION"])

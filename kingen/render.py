@@ -16,7 +16,8 @@ from .reference import SINGULAR_TOLERANCE
 from .resources import templates_dir
 
 
-def _environment():
+def environment():
+    """The jinja2 environment over templates/: strict undefined, no autoescape (C and Markdown)."""
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
         undefined=jinja2.StrictUndefined,
@@ -48,7 +49,7 @@ def calibration_line(robot, joint, parameter, dialog_field, built_in):
     """'Length 3 -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners."""
     unit = "degrees" if parameter == "zero_offset" else "mm"
     label = f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
-    return f"{label} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:g})"
+    return f"{label} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:.10g})"
 
 
 def view_model(robot):
@@ -67,7 +68,7 @@ def view_model(robot):
             "limited": int(limited),
             "lower": c_double(lower[index] if limited else 0.0),
             "upper": c_double(upper[index] if limited else 0.0),
-            "travel_text": f"[{limb.travel[0]:g}, {limb.travel[1]:g}] {'deg' if revolute else 'mm'}"
+            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {'deg' if revolute else 'mm'}"
             if limited else "",
         })
     tables = {"leg": [], "rail": [], "crank": []}
@@ -126,13 +127,13 @@ def view_model(robot):
 
 def render(robot):
     """The plugin's files as {file name: text}; today one file, ``kin_<name>.c``."""
-    text = _environment().get_template("kin_robot.c.j2").render(**view_model(robot))
+    text = environment().get_template("kin_robot.c.j2").render(**view_model(robot))
     return {source_name(robot): text}
 
 
 def render_header():
     """The stand-in ``shlibdefs.h`` text, from :mod:`kingen.abi`."""
-    return _environment().get_template("shlibdefs.h.j2").render(
+    return environment().get_template("shlibdefs.h.j2").render(
         version=__version__,
         header_version=abi.HEADER_VERSION,
         warnings=list(abi.WARNINGS.items()),

@@ -19,7 +19,7 @@ from kingen.verify import revolute_mask
 from kingen.reference import solve
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
-COMPILERS = ["gcc", "clang"]
+COMPILERS = ["gcc", "clang", "tcc"]
 
 
 @pytest.mark.parametrize("compiler", COMPILERS)
