@@ -158,7 +158,29 @@ class Crank(_Limb):
 Limb = Annotated[Union[Leg, Rail, Crank], Field(discriminator="model")]
 
 
-class StewartGoughLayout(_Strict):
+class _Layout(_Strict):
+    """A generator of six limbs of one model; ``calibrate`` maps a parameter to six fields."""
+
+    travel: Optional[Travel] = None
+    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
+    limb_class: ClassVar[type] = None
+
+    @field_validator("calibrate")
+    @classmethod
+    def _check_calibratable(cls, calibrate):
+        for parameter in calibrate:
+            if parameter not in cls.limb_class.calibratable:
+                raise ValueError(f"'{parameter}' cannot be calibrated "
+                                 f"(choose from {', '.join(cls.limb_class.calibratable)})")
+        return calibrate
+
+    def _shared(self, index):
+        """The keys every generated limb takes from the layout: travel and its calibration fields."""
+        return {"travel": self.travel,
+                "calibrate": {parameter: fields[index] for parameter, fields in self.calibrate.items()}}
+
+
+class StewartGoughLayout(_Layout):
     """Six legs on the controller thesis's parametric layout (points at z = heights)."""
 
     type: Literal["stewart_gough"]
@@ -169,14 +191,7 @@ class StewartGoughLayout(_Strict):
     base_height: float = 0.0
     platform_height: float = 0.0
     reference_length: Length
-    travel: Optional[Travel] = None
-    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
-    """Parameter -> six dialog fields, one per leg."""
-
-    @field_validator("calibrate")
-    @classmethod
-    def _check_calibratable(cls, calibrate):
-        return _check_layout_calibration(calibrate, Leg)
+    limb_class: ClassVar[type] = Leg
 
     def limbs(self):
         """The six legs; point angles lambda_1 = 60 - pair/2, lambda_2 = lambda_1 + pair, ... (degrees)."""
@@ -194,13 +209,12 @@ class StewartGoughLayout(_Strict):
                 platform_point=[self.platform_radius * math.cos(platform_angle),
                                 self.platform_radius * math.sin(platform_angle), self.platform_height],
                 reference_length=self.reference_length,
-                travel=self.travel,
-                calibrate={parameter: fields[index] for parameter, fields in self.calibrate.items()},
+                **self._shared(index),
             ))
         return legs
 
 
-class Rus6Layout(_Strict):
+class Rus6Layout(_Layout):
     """Six cranks on the 6-RUS flight-simulator layout (robots.md, '6-RUS family')."""
 
     type: Literal["rus6"]
@@ -212,14 +226,7 @@ class Rus6Layout(_Strict):
     rod_length: Length
     pair_angles: Six
     crank_directions: Six
-    travel: Optional[Travel] = None
-    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
-    """Parameter -> six dialog fields, one per crank."""
-
-    @field_validator("calibrate")
-    @classmethod
-    def _check_calibratable(cls, calibrate):
-        return _check_layout_calibration(calibrate, Crank)
+    limb_class: ClassVar[type] = Crank
 
     def limbs(self):
         """The six cranks: A_i and c_i from chi_i with m, n = (-1)^(i-1) times the half-distances."""
@@ -238,17 +245,9 @@ class Rus6Layout(_Strict):
                 rod_length=self.rod_length,
                 platform_point=[self.platform_radius * math.cos(chi) - n * math.sin(chi),
                                 self.platform_radius * math.sin(chi) + n * math.cos(chi), 0.0],
-                travel=self.travel,
-                calibrate={parameter: fields[index] for parameter, fields in self.calibrate.items()},
+                **self._shared(index),
             ))
         return cranks
-
-
-def _check_layout_calibration(calibrate, limb_class):
-    for parameter in calibrate:
-        if parameter not in limb_class.calibratable:
-            raise ValueError(f"'{parameter}' cannot be calibrated (choose from {', '.join(limb_class.calibratable)})")
-    return calibrate
 
 
 Layout = Annotated[Union[StewartGoughLayout, Rus6Layout], Field(discriminator="type")]
