@@ -92,7 +92,8 @@ def _dlopen(path):
     try:
         library = ffi.dlopen(str(target), ffi.RTLD_NOW)
     except OSError as error:
-        raise KingenError(f"{path}: cannot be loaded: {error}") from None
+        reason = str(error).split(".  Additionally")[0]
+        raise KingenError(f"{path}: cannot be loaded: {reason}") from None
     _loaded[path] = (identity, library)
     return library
 
