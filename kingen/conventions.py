@@ -61,9 +61,11 @@ def t6_from_pose(pose):
 
 
 def wrap_angle(angle):
-    """Angles in radians mapped to (-pi, pi]."""
-    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
+    """Angles in radians mapped to (-pi, pi]; an angle already there is returned unchanged."""
+    angle = np.asarray(angle, dtype=float)
+    wrapped = np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
+    wrapped = np.where(wrapped == -np.pi, np.pi, wrapped)
+    return np.where((angle > -np.pi) & (angle <= np.pi), angle, wrapped)
 
 
 def angle_difference(a, b):
