@@ -101,8 +101,8 @@ def _dlopen(path):
 class Plugin:
     """A loaded user-kinematics library and one of its routines.
 
-    ``open`` asks ``get_kin_config`` and tells the host emulator what the device
-    definition is (dof and solution count), as DELMIA does from that answer.
+    Loading asks ``get_kin_config`` about the routine and tells the host emulator the
+    device definition (dof and solution count) from that answer, as DELMIA does.
     """
 
     def __init__(self, library_path, routine):
@@ -238,13 +238,6 @@ def host_state():
     """(kin_check_definition calls, last dof, last solution count) recorded by the host."""
     lib = host()
     return lib.kingen_host_check_calls(), lib.kingen_host_last_dof(), lib.kingen_host_last_solutions()
-
-
-def set_host_refusal(refuse):
-    """Make the host's kin_check_definition refuse (True) or judge by counts (False)."""
-    host().kingen_host_refuse(int(refuse))
-
-
 
 
 @contextmanager
