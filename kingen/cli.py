@@ -22,7 +22,7 @@ from .host import Plugin
 from .model import REVOLUTE, load_robot, shipped_robots
 from .package import write_package
 from .reference import solve as reference_solve
-from .verify import chunk_size, junit_xml, verify as run_verify
+from .verify import chunk_size, junit_xml, verify as run_verify, verify_isolated
 
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
@@ -162,13 +162,15 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
     By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
-    that follows the DELMIA interface, hand-written ones included.
+    that follows the DELMIA interface, hand-written ones included, in a child process so
+    that a routine that crashes becomes a failed check.
     """
     model = load_robot(robot)
     plugin = _plugin(model, out_dir, library, source, routine)
+    run = run_verify if library is None and source is None else verify_isolated
     with _progress(samples, chunk_size(model)) as progress:
-        report = run_verify(model, plugin, samples=samples, seed=seed, progress=progress,
-                            link_lengths=link_lengths, link_offsets=link_offsets)
+        report = run(model, plugin, samples=samples, seed=seed, progress=progress,
+                     link_lengths=link_lengths, link_offsets=link_offsets)
     _print_report(report, plugin)
     if json_path is not None:
         write_atomic(json_path, json.dumps(report.as_json(), indent=2) + "\n")
@@ -233,7 +235,8 @@ def _print_report(report, plugin):
     for notice in report.notices:
         click.echo(f"  notice: {notice}")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
-    click.echo(f"{verdict} in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s)")
+    speed = f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s)" if report.seconds > 0 else ""
+    click.echo(verdict + speed)
 
 
 def _rounded(values):

@@ -11,7 +11,10 @@ answers are right within floating-point rounding. Each clause is a named check;
 failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 """
 
+import faulthandler
 import math
+import multiprocessing
+import signal
 import time
 import xml.etree.ElementTree as ElementTree
 from contextlib import contextmanager
@@ -216,19 +219,23 @@ class _Printed:
             self.first_line = printed["text"].strip().splitlines()[0]
 
 
-def verify(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=None, link_offsets=None):
+def verify(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=None, link_offsets=None,
+           phase=None):
     """Check ``plugin`` against ``robot``'s reference on ``samples`` seeded poses, its golden
-    values and the interface contract. ``progress(done)`` is called after each chunk.
+    values and the interface contract. ``progress(done)`` is called after each chunk and
+    ``phase(text)`` before each stage (both optional).
     ``link_lengths`` / ``link_offsets`` (6 each) are passed to the routine and the reference
     alike; golden values are checked with empty fields (the published geometry).
     What the routine prints on stdout/stderr is captured and reported as a notice."""
-    report = Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures,
-                    link_lengths=_listed(link_lengths), link_offsets=_listed(link_offsets))
+    report = _empty_report(robot, plugin, samples, seed, link_lengths, link_offsets)
+    phase = phase or (lambda text: None)
     printed = _Printed()
+    phase("the interface checks")
     with printed.capture():
         report.checks.extend(check_interface(robot, plugin))
     if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
-        _compare_samples(robot, plugin, report, progress, printed)
+        _compare_samples(robot, plugin, report, progress, printed, phase)
+        phase("the golden values")
         with printed.capture():
             report.golden = check_golden(robot, plugin)
         report.checks.extend(
@@ -244,17 +251,62 @@ def verify(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=Non
     return report
 
 
+def _empty_report(robot, plugin, samples, seed, link_lengths, link_offsets):
+    return Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures,
+                  link_lengths=_listed(link_lengths), link_offsets=_listed(link_offsets))
+
+
+def verify_isolated(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=None, link_offsets=None):
+    """``verify`` in a forked child process, for routines that may crash: a routine that
+    kills the process becomes a failed check ``crash`` naming the signal and the stage."""
+    context = multiprocessing.get_context("fork")
+    receiver, sender = context.Pipe(duplex=False)
+    options = {"samples": samples, "seed": seed, "link_lengths": link_lengths, "link_offsets": link_offsets}
+    child = context.Process(target=_verify_child, args=(sender, robot, plugin, options), daemon=True)
+    child.start()
+    sender.close()
+    stage, report = "loading", None
+    while report is None:
+        try:
+            kind, value = receiver.recv()
+        except EOFError:
+            break
+        if kind == "phase":
+            stage = value
+        elif kind == "progress" and progress is not None:
+            progress(value)
+        elif kind == "report":
+            report = value
+    child.join()
+    if report is not None:
+        return report
+    code = child.exitcode
+    how = f"signal {signal.Signals(-code).name}" if code is not None and code < 0 else f"exit status {code}"
+    report = _empty_report(robot, plugin, samples, seed, link_lengths, link_offsets)
+    report.checks.append(Check("crash", False, f"the routine crashed the host process ({how}) during {stage}"))
+    return report
+
+
+def _verify_child(sender, robot, plugin, options):
+    faulthandler.disable()
+    report = verify(robot, plugin, progress=lambda done: sender.send(("progress", done)),
+                    phase=lambda text: sender.send(("phase", text)), **options)
+    sender.send(("report", report))
+    sender.close()
+
+
 def _listed(values):
     return None if values is None else [float(v) for v in values]
 
 
-def _compare_samples(robot, plugin, report, progress, printed):
+def _compare_samples(robot, plugin, report, progress, printed, phase):
     poses = sample_poses(robot, report.samples, report.seed)
     revolute = revolute_mask(robot)
     tally = _Tally()
     start = time.perf_counter()
     chunk = chunk_size(robot)
     for begin in range(0, report.samples, chunk):
+        phase(f"poses {begin} to {min(begin + chunk, report.samples) - 1} of seed {report.seed}")
         t6 = t6_from_pose(poses[begin:begin + chunk])
         plugin.reset_host()
         with printed.capture():
@@ -264,6 +316,7 @@ def _compare_samples(robot, plugin, report, progress, printed):
         if progress is not None:
             progress(min(begin + chunk, report.samples))
     report.seconds = time.perf_counter() - start
+    phase("the determinism check")
     with printed.capture():
         report.checks.extend(_sample_checks(robot, plugin, report, tally))
 

@@ -51,6 +51,8 @@ void *pData;
     long double p[3];
     if (CHECK_DEFINITION && !kin_check_definition(NUM_DOFS, NUM_SOLUTIONS))
         return 1;
+    if (CRASH && T6[3][0] > 40.0 && T6[3][0] < 1e6)
+        *(volatile int *)0 = 1;
     for (i = 0; i < 4; i++)
         for (j = 0; j < 3; j++)
             if (!(T6[i][j] - T6[i][j] == 0.0)) {
@@ -82,6 +84,7 @@ RIGHT = {
     "SCALE": "1.0",
     "PRINT": "0",
     "OUT_OF_BOUNDS": "0",
+    "CRASH": "0",
 }
 
 TAU_LEGACY = r"""
@@ -139,6 +142,72 @@ DllExport int kin_tau(double link_lengths[], double link_offsets[], double T6[4]
     return bad;
 }
 """
+
+
+CRANK_LEGACY = r"""
+/* a 6-RUS routine in the thesis's style: one loop per crank, angles in DEGREES */
+#include "shlibdefs.h"
+
+static long double A[6][3] = {PIVOTS};
+static long double C[6][3] = {POINTS};
+static long double beta[6] = {DIRECTIONS};
+
+DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
+{
+    if (strcmp(kin_routine, "kin_ceart") != 0)
+        return 1;
+    *kin_dof = 6;
+    *solution_count = 64;
+    *usrKinDataHint = USR_KIN_DATA_NULL;
+    return 0;
+}
+
+DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[4][4],
+                        double solutions[][64], int warnings[], void *pData)
+{
+    int i, j, k, bad = 0;
+    long double g[3], a, b, K, rho, theta[6][2], pi = 3.14159265358979323846L;
+    if (!kin_check_definition(6, 64))
+        return 1;
+    for (i = 0; i < 4; i++)
+        for (j = 0; j < 3; j++)
+            if (!(T6[i][j] - T6[i][j] == 0.0))
+                bad = 1;
+    for (i = 0; i < 6; i++) {
+        for (j = 0; j < 3; j++)
+            g[j] = bad ? 1.0 : T6[0][j] * C[i][0] + T6[1][j] * C[i][1] + T6[2][j] * C[i][2] + T6[3][j] - A[i][j];
+        a = g[0] * cos(beta[i] * pi / 180) + g[1] * sin(beta[i] * pi / 180);
+        b = -g[2];
+        K = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2] + 194.0L * 194.0L - 650.0L * 650.0L) / (2 * 194.0L);
+        rho = sqrt(a * a + b * b);
+        if (fabs(K / rho) > 1)
+            bad = 1;
+        theta[i][0] = bad ? 0 : atan2(b, a) + acos(K / rho);
+        theta[i][1] = bad ? 0 : atan2(b, a) - acos(K / rho);
+        for (j = 0; j < 2; j++) {
+            if (theta[i][j] > pi) theta[i][j] -= 2 * pi;
+            if (theta[i][j] <= -pi) theta[i][j] += 2 * pi;
+            theta[i][j] = theta[i][j] * UNIT;
+        }
+    }
+    for (k = 0; k < 64; k++) {
+        for (i = 0; i < 6; i++)
+            solutions[i][k] = theta[i][(k >> (5 - i)) & 1];
+        warnings[k] = bad ? WARN_UNREACHABLE : WARN_GOOD_SOLUTION;
+    }
+    return bad;
+}
+"""
+
+
+def crank_source(unit):
+    from kingen.model import load_robot
+    limbs = load_robot("ceart").limbs
+    table = lambda rows: ", ".join("{" + ", ".join(repr(v) for v in row) + "}" for row in rows)  # noqa: E731
+    return (CRANK_LEGACY.replace("PIVOTS", table(l.pivot for l in limbs))
+            .replace("POINTS", table(l.platform_point for l in limbs))
+            .replace("DIRECTIONS", ", ".join(repr(float(l.crank_direction)) for l in limbs))
+            .replace("UNIT", unit))
 
 
 def hexapod_source(**mistake):
@@ -283,3 +352,22 @@ def test_unknown_routine_is_bad_input(capsys, tmp_path):
                  "--routine", "kin_other"])
     _, err = capsys.readouterr()
     assert code == 2 and "get_kin_config does not know routine 'kin_other'" in err
+
+
+def test_right_crank_routine_passes(capsys, tmp_path):
+    code, out, _, data = run_verify(capsys, tmp_path, "ceart", crank_source("1.0"), "kin_ceart")
+    assert code == 0, out
+    assert data["max_abs_error_rad"] <= 1e-9
+
+
+def test_crank_angles_in_degrees_are_named(capsys, tmp_path):
+    code, _, _, data = run_verify(capsys, tmp_path, "ceart", crank_source("(180 / pi)"), "kin_ceart")
+    assert code == 1
+    assert "joint 0 (crank1) is scaled by 57.2957795 (degrees instead of radians)" in diagnoses(data)
+
+
+def test_a_routine_that_crashes_is_a_failed_check_not_a_dead_process(capsys, tmp_path):
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(CRASH="1"), "kin_hexapodFullTest")
+    assert code == 1
+    assert failed_checks(data) == ["crash"]
+    assert "the routine crashed the host process (signal SIGSEGV) during poses 0 to 2999 of seed 0" in out
