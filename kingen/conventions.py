@@ -78,6 +78,11 @@ def branch_of_posture(posture, bit):
     return (np.asarray(posture) >> bit) & 1
 
 
+def wrap_difference(difference):
+    """Signed angle differences (radians) with whole turns removed, in [-pi, pi]."""
+    return difference - (2.0 * np.pi) * np.rint(difference / (2.0 * np.pi))
+
+
 def joint_errors(solutions, joints, revolute):
     """|solutions - joints| per entry for arrays (n, dof, postures), mm or rad.
 
@@ -85,8 +90,7 @@ def joint_errors(solutions, joints, revolute):
     A non-finite entry of ``solutions`` (unwritten, NaN) is an infinite error.
     """
     difference = np.array(solutions, dtype=float) - joints
-    turns = difference[:, revolute]
-    difference[:, revolute] = turns - (2.0 * np.pi) * np.rint(turns / (2.0 * np.pi))
+    difference[:, revolute] = wrap_difference(difference[:, revolute])
     np.abs(difference, out=difference)
     difference[~np.isfinite(difference)] = np.inf
     return difference

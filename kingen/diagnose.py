@@ -11,9 +11,8 @@ import math
 import numpy as np
 
 from .abi import WARNINGS
-from .conventions import joint_errors
+from .conventions import joint_errors, wrap_difference
 from .host import UNWRITTEN_WARNING
-from .model import REVOLUTE
 from .reference import solve
 
 UNREACHABLE_CODE = WARNINGS["WARN_UNREACHABLE"]
@@ -30,7 +29,7 @@ NAMED_SCALES = (
 
 def _errors(robot, a, b):
     """Angle-aware |a - b| (the rule verify uses), NaN counted as infinite."""
-    return joint_errors(a, b, np.array([t == REVOLUTE for t in robot.joint_types]))
+    return joint_errors(a, b, robot.revolute)
 
 
 def diagnose(robot, t6, solutions, reference_joints, reference_warnings):
@@ -88,13 +87,11 @@ def _posture_permutation(robot, solutions, reference):
 
 
 def _diagnose_joint(robot, joint, solutions, reference):
-    revolute = robot.joint_types[joint] == REVOLUTE
+    revolute = bool(robot.revolute[joint])
     unit = "rad" if revolute else "mm"
     name = f"joint {joint} ({robot.joint_names[joint]})"
     mine, theirs = solutions[:, joint], reference[:, joint]
-    difference = mine - theirs
-    if revolute:
-        difference = difference - 2.0 * np.pi * np.rint(difference / (2.0 * np.pi))
+    difference = _wrapped(mine - theirs, revolute)
     if np.abs(difference).max() <= MATCH:
         return None
 
@@ -132,7 +129,7 @@ def _diagnose_joint(robot, joint, solutions, reference):
 
 
 def _wrapped(values, revolute):
-    return values - 2.0 * np.pi * np.rint(values / (2.0 * np.pi)) if revolute else values
+    return wrap_difference(values) if revolute else values
 
 
 def diagnose_warnings(plugin_warnings, reference_warnings, warning_names):

@@ -79,6 +79,16 @@ def field_index(dialog_field):
     return number if dialog_field.startswith("length") else 6 + number
 
 
+def dialog_label(dialog_field):
+    """length3 -> 'Length 3', as the Solver Attributes tab labels it."""
+    return f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
+
+
+def calibration_unit(parameter):
+    """The unit a dialog value for ``parameter`` is read in: degrees for zero_offset, else mm."""
+    return "degrees" if parameter == "zero_offset" else "mm"
+
+
 def dialog_value(dialog_field, link_lengths, link_offsets):
     """The number the user typed into that field (0 when left empty)."""
     index = field_index(dialog_field)
@@ -360,6 +370,11 @@ class Robot:
             if value != 0.0 and math.isfinite(value):
                 limbs[index] = limbs[index].model_copy(update={parameter: value})
         return replace(self, limbs=tuple(limbs))
+
+    @property
+    def revolute(self):
+        """(dof,) bool: which joints are revolute (compared modulo 2 pi)."""
+        return np.array([t == REVOLUTE for t in self.joint_types])
 
     def joint_scale(self):
         """Per joint: factor from YAML units (mm, degrees) to internal units (mm, radians)."""

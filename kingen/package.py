@@ -9,7 +9,7 @@ import tempfile
 from pathlib import Path
 
 from .build import build_plugin, library_name, write_atomic
-from .model import REVOLUTE
+from .model import REVOLUTE, calibration_unit, dialog_label
 from .render import environment, render, view_model
 
 TARGETS = ("windows", "linux")
@@ -27,8 +27,8 @@ def sheet_view(robot, target):
     two_branch = [(index, bit) for index, bit in enumerate(robot.branch_bits) if bit >= 0]
     used = {dialog_field for _, _, dialog_field, _ in robot.calibration()}
     calibration = [
-        {"label": _label(dialog_field), "joint": robot.joint_names[index], "parameter": parameter,
-         "unit": "degrees" if parameter == "zero_offset" else "mm", "built_in": f"{built_in:.10g}"}
+        {"label": dialog_label(dialog_field), "joint": robot.joint_names[index], "parameter": parameter,
+         "unit": calibration_unit(parameter), "built_in": f"{built_in:.10g}"}
         for index, parameter, dialog_field, built_in in robot.calibration()
     ]
     joints = []
@@ -48,7 +48,7 @@ def sheet_view(robot, target):
         "target": target,
         "library": robot.library,
         "dialog_fields": [
-            {"label": _label(f"{kind}{i}"), "meaning": "read, see below" if f"{kind}{i}" in used else "leave empty"}
+            {"label": dialog_label(f"{kind}{i}"), "meaning": "read, see below" if f"{kind}{i}" in used else "leave empty"}
             for kind in ("length", "offset") for i in range(1, 7)
         ],
         "calibration": calibration,
@@ -63,10 +63,6 @@ def sheet_view(robot, target):
         "joints": joints,
         "any_limits": any(limb.travel for limb in robot.limbs),
     }
-
-
-def _label(dialog_field):
-    return f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
 
 
 def render_package(robot, target):

@@ -11,7 +11,7 @@ import math
 import jinja2
 
 from . import __version__, abi
-from .model import REVOLUTE, field_index
+from .model import REVOLUTE, calibration_unit, dialog_label, field_index
 from .reference import SINGULAR_TOLERANCE
 from .resources import templates_dir
 
@@ -47,9 +47,8 @@ def source_name(robot):
 
 def calibration_line(robot, joint, parameter, dialog_field, built_in):
     """'Length 3 -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners."""
-    unit = "degrees" if parameter == "zero_offset" else "mm"
-    label = f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
-    return f"{label} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:.10g})"
+    return (f"{dialog_label(dialog_field)} -> {robot.joint_names[joint]}.{parameter} "
+            f"({calibration_unit(parameter)}, built-in {built_in:.10g})")
 
 
 def view_model(robot):

@@ -26,7 +26,6 @@ from . import abi
 from .conventions import joint_errors, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
 from .host import UNWRITTEN_WARNING, captured_output, host_state
-from .model import REVOLUTE
 from .reference import SINGULAR_TOLERANCE, solve
 
 VALUE_TOLERANCE_MM = 1e-9
@@ -158,10 +157,6 @@ def sample_poses(robot, count, seed):
 def chunk_size(robot):
     """Poses per batch for ``robot``."""
     return max(1000, CHUNK_ENTRIES // (robot.dof * robot.postures))
-
-
-def revolute_mask(robot):
-    return np.array([t == REVOLUTE for t in robot.joint_types])
 
 
 def singular_bounds(robot, reference_solution):
@@ -301,7 +296,7 @@ def _listed(values):
 
 def _compare_samples(robot, plugin, report, progress, printed, phase):
     poses = sample_poses(robot, report.samples, report.seed)
-    revolute = revolute_mask(robot)
+    revolute = robot.revolute
     tally = _Tally()
     start = time.perf_counter()
     chunk = chunk_size(robot)

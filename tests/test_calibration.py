@@ -8,7 +8,6 @@ from kingen.conventions import joint_errors, t6_from_pose
 from kingen.errors import KingenError
 from kingen.model import load_robot
 from kingen.reference import solve
-from kingen.verify import revolute_mask
 
 
 def test_a_calibrated_reference_length_shifts_the_joint_exactly(plugin):
@@ -35,7 +34,7 @@ def test_plugin_and_reference_agree_under_random_calibration(plugin, name):
         loaded.reset_host()
         calls = loaded.call_batch(t6, lengths, offsets)
         expected = solve(robot, t6, lengths, offsets)
-        assert joint_errors(calls.solutions, expected.joints, revolute_mask(robot)).max() <= 1e-9
+        assert joint_errors(calls.solutions, expected.joints, robot.revolute).max() <= 1e-9
         np.testing.assert_array_equal(calls.warnings, expected.warnings)
 
 

@@ -15,7 +15,6 @@ from kingen.conventions import joint_errors, t6_from_pose
 from kingen.host import UNWRITTEN_WARNING, KinStat, Plugin, host_state
 from kingen.model import load_robot
 from kingen.render import render
-from kingen.verify import revolute_mask
 from kingen.reference import solve
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
@@ -61,7 +60,7 @@ def test_plugin_matches_reference_on_random_poses(plugin, name):
     loaded.reset_host()
     calls = loaded.call_batch(t6)
     expected = solve(robot, t6)
-    errors = joint_errors(calls.solutions, expected.joints, revolute_mask(robot))
+    errors = joint_errors(calls.solutions, expected.joints, robot.revolute)
     worst = np.unravel_index(np.argmax(errors), errors.shape)
     assert errors.max() <= 1e-9, f"{name}: pose {poses[worst[0]]} joint {worst[1]} posture {worst[2]}: {errors.max()}"
     mismatch = np.argwhere(calls.warnings != expected.warnings)
@@ -171,7 +170,7 @@ def test_plain_c_client_agrees_with_reference(built, abi_client, name):
         warnings = [int(w) for w in row[1:1 + postures]]
         joints = np.array([float(v) for v in row[1 + postures:]]).reshape(robot.dof, postures)
         assert warnings == expected.warnings[n].tolist(), f"{name} pose {n}"
-        assert joint_errors(joints[None], expected.joints[n:n + 1], revolute_mask(robot)).max() <= 1e-9, f"{name} pose {n}"
+        assert joint_errors(joints[None], expected.joints[n:n + 1], robot.revolute).max() <= 1e-9, f"{name} pose {n}"
 
 
 def test_plain_c_client_reproduces_published_exechon_values(built, abi_client):
