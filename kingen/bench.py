@@ -4,7 +4,6 @@ printed, never asserted: speed targets live here, not in unit tests."""
 
 import time
 
-
 from .conventions import t6_from_pose
 from .host import captured_output
 from .reference import solve
