@@ -86,3 +86,26 @@ def cffi_declarations():
     """Everything cffi needs to drive a host emulator and plugins, except the routines."""
     prototypes = [GET_KIN_CONFIG, HOST_CHECK, *EMULATOR_FUNCTIONS]
     return kinstat_struct() + "\n" + "".join(f"{p};\n" for p in prototypes)
+
+
+C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto if "
+    "inline int long register restrict return short signed sizeof static struct switch typedef "
+    "union unsigned void volatile while _Alignas _Alignof _Atomic _Bool _Complex _Generic "
+    "_Imaginary _Noreturn _Static_assert _Thread_local __declspec __cdecl __stdcall".split()
+)
+
+
+def _declared_name(prototype):
+    return prototype.split("(")[0].split()[-1].lstrip("*")
+
+
+RESERVED_NAMES = frozenset({
+    *C_KEYWORDS, *WARNINGS, *WARNING_ALIASES, *CONSTANTS, "DllExport", "DLM_Data_KinStat",
+    "kin_check_definition", _declared_name(GET_KIN_CONFIG), _declared_name(HOST_CHECK),
+    *(name for name, _ in HOST_MATH), *(_declared_name(prototype) for _, prototype in HOST_MATH),
+    *(_declared_name(prototype) for prototype in EMULATOR_FUNCTIONS),
+    "kin_routine", "kin_dof",
+})
+"""Names a generated routine or library may not take: C keywords and everything the vendor
+header (and so kingen's stand-in) defines, the parameters of get_kin_config included."""

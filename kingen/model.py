@@ -14,17 +14,21 @@ from pathlib import Path
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
 import numpy as np
-import yaml
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from . import abi
 from .errors import KingenError, located
 from .resources import robots_dir
+from .robot_file import dotted, read_robot_file
 
-C_KEYWORDS = frozenset(
-    "auto break case char const continue default do double else enum extern float for goto if "
-    "inline int long register restrict return short signed sizeof static struct switch typedef "
-    "union unsigned void volatile while".split()
-)
+MAX_MM = 1e6
+"""Coordinates and lengths are within +/- 1 km (mm): the stated geometry range, inside which
+double precision keeps plugin and reference within verify's bound (see verify.value_tolerance_mm)."""
+MIN_LENGTH_MM = 1e-3
+MAX_DEGREES = 720.0
+"""Angles in robot files (directions, offsets, poses) are within +/- two turns."""
+MAX_GOLDEN = 1000
+MAX_LIMBS = 64
 MAX_TWO_BRANCH_LIMBS = 8
 """At most 2**8 = 256 postures: the solutions array is NUM_DOFS x NUM_SOLUTIONS doubles."""
 UNIT_TOLERANCE = 1e-6
@@ -34,10 +38,19 @@ PRISMATIC = "prismatic"
 REVOLUTE = "revolute"
 
 
-def _check_identifier(name):
-    if name in C_KEYWORDS:
-        raise ValueError(f"'{name}' is a C keyword")
+def _check_c_names(name):
+    """The robot's own name may be anything identifier-shaped ('int' gives kin_int); the C
+    names made from it must not collide with a C keyword or a name the vendor header defines."""
+    for made in (f"kin_{name}", f"lib{name}"):
+        if made in abi.RESERVED_NAMES:
+            raise ValueError(f"gives the C name '{made}', which the DELMIA header or the C language already uses")
     return name
+
+
+def _check_pose(pose):
+    if any(abs(value) > MAX_MM for value in pose[:3]) or any(abs(value) > MAX_DEGREES for value in pose[3:]):
+        raise ValueError(f"x, y, z must be within +/-{MAX_MM:g} mm and angles within +/-{MAX_DEGREES:g} degrees")
+    return pose
 
 
 def _check_travel(travel):
@@ -61,14 +74,16 @@ def _check_non_negative(values):
     return values
 
 
-Identifier = Annotated[
-    str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,62}$"), AfterValidator(_check_identifier)
-]
-Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Identifier = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,62}$")]
+Coordinate = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
+"""mm, or for travel limits of revolute joints degrees."""
+Angle = Annotated[float, Field(ge=-MAX_DEGREES, le=MAX_DEGREES)]
+Vec3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
 UnitVec3 = Annotated[Vec3, AfterValidator(_check_unit)]
-Six = Annotated[list[float], Field(min_length=6, max_length=6)]
-Length = Annotated[float, Field(gt=0)]
-Travel = Annotated[list[float], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
+Pose = Annotated[list[float], Field(min_length=6, max_length=6), AfterValidator(_check_pose)]
+SixAngles = Annotated[list[Angle], Field(min_length=6, max_length=6)]
+Length = Annotated[float, Field(ge=MIN_LENGTH_MM, le=MAX_MM)]
+Travel = Annotated[list[Coordinate], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
 DialogField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
 """A Solver Attributes field: length1..length6 (link_lengths[0..5]), offset1..offset6 (link_offsets[0..5])."""
 
@@ -139,7 +154,7 @@ class Rail(_Limb):
     carriage_offset: Vec3
     platform_point: Vec3
     link_length: Length
-    origin: float = 0.0
+    origin: Coordinate = 0.0
     """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
     branches: ClassVar[int] = 2
     joint_type: ClassVar[str] = PRISMATIC
@@ -154,11 +169,11 @@ class Crank(_Limb):
 
     model: Literal["crank"]
     pivot: Vec3
-    crank_direction: float
+    crank_direction: Angle
     crank_length: Length
     rod_length: Length
     platform_point: Vec3
-    zero_offset: float = 0.0
+    zero_offset: Angle = 0.0
     """Geometric crank angle (degrees) reported as joint 0: theta -= zero_offset."""
     branches: ClassVar[int] = 2
     joint_type: ClassVar[str] = REVOLUTE
@@ -198,8 +213,8 @@ class StewartGoughLayout(_Layout):
     platform_radius: Length
     base_pair_angle: Annotated[float, Field(gt=0, lt=120)]
     platform_pair_angle: Annotated[float, Field(gt=0, lt=120)]
-    base_height: float = 0.0
-    platform_height: float = 0.0
+    base_height: Coordinate = 0.0
+    platform_height: Coordinate = 0.0
     reference_length: Length
     limb_class: ClassVar[type] = Leg
 
@@ -230,12 +245,12 @@ class Rus6Layout(_Layout):
     type: Literal["rus6"]
     base_radius: Length
     platform_radius: Length
-    base_half_distance: Annotated[float, Field(ge=0)]
-    platform_half_distance: Annotated[float, Field(ge=0)]
+    base_half_distance: Annotated[float, Field(ge=0, le=MAX_MM)]
+    platform_half_distance: Annotated[float, Field(ge=0, le=MAX_MM)]
     crank_length: Length
     rod_length: Length
-    pair_angles: Six
-    crank_directions: Six
+    pair_angles: SixAngles
+    crank_directions: SixAngles
     limb_class: ClassVar[type] = Crank
 
     def limbs(self):
@@ -266,32 +281,32 @@ Layout = Annotated[Union[StewartGoughLayout, Rus6Layout], Field(discriminator="t
 class Region(_Strict):
     """Verification region: poses drawn uniformly in home +/- range (mm, degrees)."""
 
-    home: Six
-    range: Annotated[Six, AfterValidator(_check_non_negative)]
+    home: Pose
+    range: Annotated[Pose, AfterValidator(_check_non_negative)]
 
 
 class Golden(_Strict):
     """A published (or independently derived) pose -> joints pair, with its source."""
 
     source: Annotated[str, Field(min_length=1)]
-    pose: Six
+    pose: Pose
     posture: Annotated[int, Field(ge=0)] = 0
-    joints: list[float]
+    joints: Annotated[list[Coordinate], Field(max_length=MAX_LIMBS)]
     """mm for prismatic joints, degrees for revolute joints."""
-    tolerance: Length
+    tolerance: Annotated[float, Field(gt=0, le=MAX_MM)]
     """In the units of ``joints``: half a unit of the last published digit is typical."""
 
 
 class RobotFile(_Strict):
     """The YAML schema; documented field by field in README.md ('Robot definitions')."""
 
-    name: Identifier
+    name: Annotated[Identifier, AfterValidator(_check_c_names)]
     description: Annotated[str, Field(min_length=1)]
     source: Optional[str] = None
-    limbs: Optional[Annotated[list[Limb], Field(min_length=1, max_length=64)]] = None
+    limbs: Optional[Annotated[list[Limb], Field(min_length=1, max_length=MAX_LIMBS)]] = None
     layout: Optional[Layout] = None
     verification: Region
-    golden: list[Golden] = []
+    golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = []
 
 
 @dataclass(frozen=True)
@@ -403,9 +418,8 @@ def resolve_robot_path(spec):
 def load_robot(spec):
     """Load, validate and expand a robot definition (path or shipped name)."""
     path = resolve_robot_path(spec)
-    raw = path.read_bytes()
     shown = str(path)
-    data, lines = _parse_yaml(raw, shown)
+    data, lines, raw = read_robot_file(path)
     locate = _Locator(shown, lines)
     try:
         document = RobotFile.model_validate(data)
@@ -438,51 +452,7 @@ class _Locator:
             if tuple(path[:cut]) in self.lines:
                 line = self.lines[tuple(path[:cut])]
                 break
-        return located(self.source, line, _dotted(path), problem)
-
-
-def _dotted(path):
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else str(part))
-    return text
-
-
-def _parse_yaml(raw, shown):
-    """The document as plain data plus {field path: line}; rejects duplicate keys."""
-    try:
-        text = raw.decode("utf-8")
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except UnicodeDecodeError as error:
-        raise located(shown, None, None, f"not UTF-8 text ({error.reason})") from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        line = mark.line + 1 if mark is not None else None
-        problem = getattr(error, "problem", None) or str(error).splitlines()[0]
-        raise located(shown, line, None, f"YAML syntax: {problem}") from None
-    if not isinstance(data, dict):
-        raise located(shown, None, None, "expected a mapping of robot fields at the top level")
-    lines = {}
-    _record_lines(node, (), lines, shown)
-    return data, lines
-
-
-def _record_lines(node, path, lines, shown):
-    if isinstance(node, yaml.MappingNode):
-        seen = set()
-        for key_node, value_node in node.value:
-            key = key_node.value
-            line = key_node.start_mark.line + 1
-            if key in seen:
-                raise located(shown, line, _dotted(path + (key,)), "duplicate key")
-            seen.add(key)
-            lines[path + (key,)] = line
-            _record_lines(value_node, path + (key,), lines, shown)
-    elif isinstance(node, yaml.SequenceNode):
-        for index, item in enumerate(node.value):
-            lines[path + (index,)] = item.start_mark.line + 1
-            _record_lines(item, path + (index,), lines, shown)
+        return located(self.source, line, dotted(path), problem)
 
 
 _UNION_TAGS = {"leg", "rail", "crank", "stewart_gough", "rus6"}

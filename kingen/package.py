@@ -10,7 +10,7 @@ from pathlib import Path
 
 from .build import build_plugin, library_name, write_atomic
 from .model import REVOLUTE, calibration_unit, dialog_label
-from .render import environment, render, view_model
+from .render import render, template, view_model
 
 TARGETS = ("windows", "linux")
 HOST_IMPORT_LIB_PLACEHOLDER = "DELMIA_HOST_IMPORT_LIB.lib"
@@ -71,13 +71,12 @@ def render_package(robot, target):
         raise ValueError(f"unknown target {target!r}")
     files = dict(render(robot))
     view = sheet_view(robot, target)
-    env = environment()
-    files["SETUP.md"] = env.get_template("setup_sheet.md.j2").render(**view)
+    files["SETUP.md"] = template("setup_sheet.md.j2").render(**view)
     if target == "windows":
         extra = {"object": f"kin_{robot.name}.obj", "host_import_lib": HOST_IMPORT_LIB_PLACEHOLDER}
-        files["makefile"] = env.get_template("makefile.nmake.j2").render(**view, **extra)
-        files[f"{robot.library}.def"] = env.get_template("exports.def.j2").render(**view)
-        files["BUILD.txt"] = env.get_template("BUILD.txt.j2").render(**view)
+        files["makefile"] = template("makefile.nmake.j2").render(**view, **extra)
+        files[f"{robot.library}.def"] = template("exports.def.j2").render(**view)
+        files["BUILD.txt"] = template("BUILD.txt.j2").render(**view)
     return files
 
 

@@ -6,6 +6,7 @@ substitute. Numbers are written with Python's shortest round-trip repr, so the
 C tables hold exactly the doubles the reference uses.
 """
 
+import functools
 import math
 
 import jinja2
@@ -14,10 +15,16 @@ from . import __version__, abi
 from .model import REVOLUTE, calibration_unit, dialog_label, field_index
 from .reference import SINGULAR_TOLERANCE
 from .resources import templates_dir
+from .text import finalizer, markdown
 
 
-def environment():
-    """The jinja2 environment over templates/: strict undefined, no autoescape (C and Markdown)."""
+TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown"}
+"""Which escaping (:func:`kingen.text.finalizer`) a template's substitutions get, by suffix;
+every other template is plain text. The stand-in header has no user text and none."""
+
+
+@functools.lru_cache(maxsize=None)
+def _environment(kind):
     return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
         undefined=jinja2.StrictUndefined,
@@ -25,7 +32,18 @@ def environment():
         lstrip_blocks=True,
         keep_trailing_newline=True,
         autoescape=False,
+        finalize=finalizer(kind) if kind else None,
     )
+
+
+def template(name):
+    """The jinja2 template ``name`` from templates/, in the environment that escapes its
+    substitutions for its kind of file (C, Markdown, plain text): strict undefined."""
+    kind = None if name == "shlibdefs.h.j2" else next(
+        (kind for suffix, kind in TEMPLATE_KINDS.items() if name.endswith(suffix)), "plain")
+    environment = _environment(kind)
+    environment.filters["markdown"] = markdown
+    return environment.get_template(name)
 
 
 def c_double(value):
@@ -126,13 +144,13 @@ def view_model(robot):
 
 def render(robot):
     """The plugin's files as {file name: text}; today one file, ``kin_<name>.c``."""
-    text = environment().get_template("kin_robot.c.j2").render(**view_model(robot))
+    text = template("kin_robot.c.j2").render(**view_model(robot))
     return {source_name(robot): text}
 
 
 def render_header():
     """The stand-in ``shlibdefs.h`` text, from :mod:`kingen.abi`."""
-    return environment().get_template("shlibdefs.h.j2").render(
+    return template("shlibdefs.h.j2").render(
         version=__version__,
         header_version=abi.HEADER_VERSION,
         warnings=list(abi.WARNINGS.items()),

@@ -72,10 +72,14 @@ verification:
 BAD = [
     # (replace this, with this, expected message fragment)
     ("name: demo", "name: 2demo", ":1: name: String should match pattern"),
-    ("name: demo", "name: int", ":1: name: 'int' is a C keyword"),
+    ("name: demo", "name: check_definition", ":1: name: gives the C name 'kin_check_definition', which the DELMIA"),
+    ("name: demo", "name: routine", ":1: name: gives the C name 'kin_routine'"),
     ("name: demo", "name: de-mo", ":1: name:"),
-    ("    link_length: 100", "    link_length: 0", ":10: limbs[0].link_length: Input should be greater than 0"),
-    ("    link_length: 100", "    link_length: -5", ":10: limbs[0].link_length: Input should be greater than 0"),
+    ("    link_length: 100", "    link_length: 0", ":10: limbs[0].link_length: Input should be greater than or equal to 0.001"),
+    ("    link_length: 100", "    link_length: -5", ":10: limbs[0].link_length: Input should be greater than or equal to 0.001"),
+    ("    link_length: 100", "    link_length: 1.0e+200", ":10: limbs[0].link_length: Input should be less than or equal to 1000000"),
+    ("    link_length: 100", "    link_length: 1" + "0" * 5000, ": YAML syntax: a number with thousands of digits"),
+    ("  home: [0, 0, 0, 0, 0, 0]", "  home: [0, 0, 0, 0, 0, 800]", ":13: verification.home: x, y, z must be within"),
     ("    link_length: 100", "    link_length: .nan", ":10: limbs[0].link_length: Input should be a finite number"),
     ("    link_length: 100", "    link_length: .inf", ":10: limbs[0].link_length: Input should be a finite number"),
     ("    link_length: 100", "    link_length: '100'", ":10: limbs[0].link_length: Input should be a valid number"),

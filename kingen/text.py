@@ -1,0 +1,75 @@
+"""Safe text: how user-supplied strings are emitted into generated files and terminals.
+
+Every string that comes from a robot file (description, sources, names) or from the
+file system (the robot file's name) and ends up in generated text passes through
+one of these functions, chosen by the kind of file it lands in. Each guarantees that
+the string cannot change the meaning of the text around it:
+
+- ``c_text``: inside a C block comment or string of generated C: ASCII only, no
+  comment delimiters, trigraphs, backslashes (line splices) or line breaks.
+- ``one_line``: one line of plain text (makefile comments, BUILD.txt, terminal
+  output, report files): no line breaks, control, bidi or other invisible characters.
+- ``markdown``: a Markdown paragraph or table cell: ``one_line`` plus Markdown and
+  HTML syntax escaped, so the text shows as typed and nothing is interpreted.
+
+Characters that are replaced are written as ``<U+XXXX>``, so nothing is silently lost.
+"""
+
+import re
+import unicodedata
+
+_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]<>()#+!|~&$])")
+_LINE_START_SPECIAL = re.compile(r"^([-=>:.0-9]+)")
+
+
+def _escaped(character):
+    return f"<U+{ord(character):04X}>"
+
+
+def unprintable(character):
+    """True for characters that must never reach a file or terminal as themselves:
+    control characters (C0, DEL, C1), line and paragraph separators, and format
+    characters (bidi overrides and isolates, zero-width characters)."""
+    return not character.isprintable() and character != " " or unicodedata.category(character) == "Cf"
+
+
+def one_line(text):
+    """``text`` as one line: runs of whitespace become one space; every unprintable
+    character becomes ``<U+XXXX>``."""
+    text = " ".join(str(text).split())
+    return "".join(_escaped(c) if unprintable(c) else c for c in text)
+
+
+def c_text(text):
+    """``text`` safe inside a C block comment or a C string literal of generated code.
+
+    ASCII printable only (others become ``<U+XXXX>``); ``*/`` and ``/*`` are broken
+    up, ``??`` (trigraph introducer), backslashes and double quotes are replaced, so
+    the text can neither end the comment or string nor splice lines."""
+    text = one_line(text)
+    text = "".join(c if " " <= c <= "~" else _escaped(c) for c in text)
+    text = text.replace("\\", "<U+005C>").replace('"', "<U+0022>")
+    while "??" in text:
+        text = text.replace("??", "? ?")
+    while "*/" in text or "/*" in text:
+        text = text.replace("*/", "* /").replace("/*", "/ *")
+    return text
+
+
+def markdown(text):
+    """``text`` as literal Markdown (no headings, lists, links, HTML or table breaks)."""
+    text = _MARKDOWN_SPECIAL.sub(r"\\\1", one_line(text))
+    return _LINE_START_SPECIAL.sub(lambda match: "".join("\\" + c for c in match.group(1)), text)
+
+
+def finalizer(kind):
+    """The jinja2 ``finalize`` for templates of ``kind`` ('c', 'markdown' or 'plain'):
+    applied to every substituted string, so no template can forget it. Numbers pass
+    unchanged; generated C fragments (identifiers, literals, prototypes) contain none
+    of the characters ``c_text`` replaces, so they pass unchanged too."""
+    escape = {"c": c_text, "markdown": one_line, "plain": one_line}[kind]
+
+    def finalize(value):
+        return escape(value) if isinstance(value, str) else value
+
+    return finalize
