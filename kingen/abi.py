@@ -64,8 +64,20 @@ EMULATOR_FUNCTIONS = (
     "int kingen_host_run_batch(void *routine, int count, double *t6, double *link_lengths, "
     "double *link_offsets, double *solutions, int solution_block, int *warnings, int warning_block, "
     "int *returns, void *pData)",
+    "int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_lengths, double *link_offsets, "
+    "int dof, int postures, double *solutions, int *warnings, int *returns, int *faults, void *pData)",
 )
-"""Functions only the host emulator offers (state of kin_check_definition, batch driver)."""
+"""Functions only the host emulator offers (state of kin_check_definition, batch drivers)."""
+GUARD_FAULTS = {
+    1: "wrote before solutions[0][0]",
+    2: "wrote past the end of solutions[][]",
+    4: "wrote before warnings[0]",
+    8: "wrote past the end of warnings[]",
+    16: "modified its inputs (T6, link_lengths or link_offsets)",
+}
+"""Bits kingen_host_run_guarded reports per call (its KINGEN_WROTE_* macros). Every bit but
+WROTE_INPUTS means the call was stopped at the faulting write (its outputs are partial)."""
+WROTE_INPUTS = 16
 
 
 def routine_prototype(routine, solutions):

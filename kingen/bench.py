@@ -1,45 +1,58 @@
 """Benchmarks: nanoseconds per routine call through the C batch driver and through one
 cffi call per pose, and the reference's and verify's poses per second. Figures are
-printed, never asserted: speed targets live here, not in unit tests."""
+printed, never asserted: speed targets live here, not in unit tests.
+
+Memory is bounded whatever the call count: the routine is timed over a pool of at most
+``POOL_POSES`` distinct poses, passed over repeatedly until ``calls`` calls are made."""
 
 import time
 
 from .conventions import t6_from_pose
 from .host import captured_output
 from .reference import solve
-from .verify import sample_poses, verify
+from .verify import VerifyOptions, sample_poses, verify
 
 PER_CALL_LIMIT = 20000
 """The per-call cffi path is slow; it is timed on at most this many poses."""
+POOL_POSES = 20000
+VERIFY_LIMIT = 200000
+"""verify's poses per second are measured on at most this many poses."""
 
 
-def _best_seconds(function, repeats):
+def _best_seconds(function, repeats, passes=1, tick=None):
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
-        function()
+        for _ in range(passes):
+            function()
+            if tick is not None:
+                tick()
         best = min(best, time.perf_counter() - start)
     return best
 
 
-def benchmark(robot, plugin, calls=200000, seed=0, repeats=3):
-    """Figures for ``robot``'s ``plugin`` as a dict (best of ``repeats`` timings)."""
-    t6 = t6_from_pose(sample_poses(robot, calls, seed))
+def benchmark(robot, plugin, calls=200000, seed=0, repeats=3, tick=None):
+    """Figures for ``robot``'s ``plugin`` as a dict (best of ``repeats`` timings).
+    ``tick()`` is called after every pass over the pose pool (progress for a watchdog)."""
+    pool = min(calls, POOL_POSES)
+    passes = -(-calls // pool)
+    t6 = t6_from_pose(sample_poses(robot, pool, seed))
     few = t6[:PER_CALL_LIMIT]
     plugin.reset_host()
     with captured_output():
-        batch = _best_seconds(plugin.batch_runner(t6), repeats)
-        single = _best_seconds(lambda: plugin.call(few), repeats)
-    reference = _best_seconds(lambda: solve(robot, t6), repeats)
-    report = verify(robot, plugin, samples=calls, seed=seed)
+        batch = _best_seconds(plugin.batch_runner(t6), repeats, passes, tick)
+        single = _best_seconds(plugin.each_runner(few), repeats, 1, tick)
+    reference = _best_seconds(lambda: solve(robot, t6), repeats, 1, tick)
+    verified = min(calls, VERIFY_LIMIT)
+    report = verify(robot, plugin, VerifyOptions(samples=verified, seed=seed), progress=tick and (lambda _: tick()))
     return {
         "robot": robot.name,
         "routine": plugin.routine,
         "postures": robot.postures,
-        "calls": calls,
-        "batch_ns_per_call": batch / calls * 1e9,
+        "calls": pool * passes,
+        "batch_ns_per_call": batch / (pool * passes) * 1e9,
         "cffi_ns_per_call": single / len(few) * 1e9,
-        "reference_poses_per_second": calls / reference,
+        "reference_poses_per_second": pool / reference,
         "verify_poses_per_second": report.poses_per_second,
         "verify_passed": report.passed,
     }

@@ -71,7 +71,7 @@ def compiler_command(variable="CC", default="cc"):
     return command
 
 
-def _umask():
+def umask():
     mask = os.umask(0o022)
     os.umask(mask)
     return mask
@@ -88,7 +88,7 @@ def write_atomic(path, content, executable=False):
     try:
         with os.fdopen(handle, "wb") as stream:
             stream.write(data)
-        os.chmod(temporary, (0o777 if executable else 0o666) & ~_umask())
+        os.chmod(temporary, (0o777 if executable else 0o666) & ~umask())
         os.replace(temporary, path)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
@@ -152,7 +152,7 @@ def compile_c(sources, output, flags, compiler=None, timeout=DEFAULT_TIMEOUT, sh
             if not diagnostic.startswith(first):
                 diagnostic = f"{first}: {diagnostic}"
             raise CompileError(f"does not compile: {diagnostic}")
-        os.chmod(temporary, 0o777 & ~_umask())
+        os.chmod(temporary, 0o777 & ~umask())
         os.replace(temporary, output)
     finally:
         Path(temporary).unlink(missing_ok=True)

@@ -1,31 +1,39 @@
 """The ``kingen`` command line: list, render, build, package, solve, verify, bench.
 
-Exit codes: 0 success, 1 verification failed, 2 bad input or usage (one line on
-stderr naming file, field and problem). Library code raises KingenError; only
-this module prints and chooses exit codes.
+Exit codes: 0 success, 1 verification failed (or the plugin broke, crashed or hung),
+2 bad input or usage (one line on stderr naming file, field and problem), 3 internal
+error (one line; the traceback only with ``KINGEN_DEBUG=1``), 143 terminated by
+SIGTERM. Library code raises KingenError; only this module prints and chooses exit
+codes. Plugin code (constructors, get_kin_config, routines) runs only in a child
+process (:mod:`kingen.isolation`), bounded by ``--timeout``.
 """
 
 import contextlib
-import json
+import math
+import os
+import signal
 import sys
+import traceback
 from pathlib import Path
 
 import click
 import numpy as np
 
 from . import __version__, abi
-from .bench import benchmark
-from .build import TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
+from .build import DEFAULT_TIMEOUT, TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
 from .conventions import t6_from_pose
-from .errors import KingenError
-from .host import Plugin
-from .model import REVOLUTE, load_robot, shipped_robots
+from .errors import InternalError, KingenError, PluginDefect
+from .host import check_routine_name
+from .model import MAX_MM, REVOLUTE, load_robot, shipped_robots
 from .package import write_package
-from .reference import solve as reference_solve
-from .verify import chunk_size, junit_xml, verify as run_verify, verify_isolated
+from .report import json_text, junit_xml
+from .text import printable
 
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
+EXIT_TERMINATED = 128 + signal.SIGTERM
+MAX_BENCH_CALLS = 100_000_000
 
 ROBOT = click.argument("robot", metavar="ROBOT")
 OUT_DIR = click.option(
@@ -34,18 +42,54 @@ OUT_DIR = click.option(
 )
 
 
+def _dialog_fields(context, parameter, values):
+    if values is not None and not all(math.isfinite(v) and abs(v) <= MAX_MM for v in values):
+        raise click.BadParameter(f"each value must be finite and within +/-{MAX_MM:g} (mm or degrees)")
+    return values
+
+
+def _routine_name(context, parameter, value):
+    if value is not None:
+        try:
+            check_routine_name(value)
+        except KingenError as error:
+            raise click.BadParameter(str(error)) from None
+    return value
+
+
+def _output_file(context, parameter, path):
+    """Report paths are checked before the run, not after it."""
+    if path is not None:
+        folder = path.parent
+        if path.is_dir():
+            raise click.BadParameter(f"{path} is a folder")
+        if not folder.is_dir():
+            raise click.BadParameter(f"folder {folder} does not exist")
+        if not os.access(folder, os.W_OK):
+            raise click.BadParameter(f"folder {folder} is not writable")
+    return path
+
+
+TIMEOUT = click.option("--timeout", type=click.FloatRange(min=0.1, max=7 * 86400), default=DEFAULT_TIMEOUT,
+                       envvar="KINGEN_TIMEOUT", show_default=True, metavar="SECONDS",
+                       help="Longest a compiler run may take, and a plugin may go without progress, "
+                            "before it is killed ($KINGEN_TIMEOUT).")
+
+
 def calibration_options(function):
     """--link-lengths / --link-offsets: the Solver Attributes fields Length 1-6 and Offset 1-6."""
     function = click.option("--link-offsets", nargs=6, type=float, default=None, metavar="O1 .. O6",
+                            callback=_dialog_fields,
                             help="Offset 1-6 of the Solver Attributes tab (link_offsets[]).")(function)
     function = click.option("--link-lengths", nargs=6, type=float, default=None, metavar="L1 .. L6",
+                            callback=_dialog_fields,
                             help="Length 1-6 of the Solver Attributes tab (link_lengths[]).")(function)
     return function
 
 
 def plugin_options(function):
     """--plugin / --source / --routine: verify a hand-written routine instead of kingen's."""
-    function = click.option("--routine", default=None,
+    function = click.option("--routine", default=None, callback=_routine_name,
                             help="Routine name in the library [default: kin_<name>].")(function)
     function = click.option("--source", type=click.Path(dir_okay=False, path_type=Path), default=None,
                             help="Compile this C source (a legacy plugin) against the stand-in header first.")(function)
@@ -81,7 +125,7 @@ def render(robot, out_dir):
     """Write kin_<name>.c into the output folder."""
     model = load_robot(robot)
     path = write_source(model, out_dir or default_out_dir(model))
-    click.echo(str(path))
+    _say(str(path))
 
 
 @cli.command()
@@ -90,12 +134,13 @@ def render(robot, out_dir):
 @click.option("--debug", is_flag=True, help="Compile with KINGEN_DEBUG (DELMIA-style printing; slow).")
 @click.option("--target", type=click.Choice(TARGETS), default="linux", show_default=True,
               help="linux: lib<name>.so with $CC; windows: lib<name>.dll cross-compiled with mingw-w64.")
-def build(robot, out_dir, debug, target):
+@TIMEOUT
+def build(robot, out_dir, debug, target, timeout):
     """Render and compile the plugin, host symbols left to the host, as for DELMIA."""
     model = load_robot(robot)
-    result = build_plugin(model, out_dir, defines=("KINGEN_DEBUG",) if debug else (), target=target)
+    result = build_plugin(model, out_dir, defines=("KINGEN_DEBUG",) if debug else (), target=target, timeout=timeout)
     state = "compiled" if result.compiled else "up to date"
-    click.echo(f"{result.library} ({state}; routine {result.routine}, source {result.source})")
+    _say(f"{result.library} ({state}; routine {result.routine}, source {result.source})")
 
 
 @cli.command()
@@ -103,12 +148,16 @@ def build(robot, out_dir, debug, target):
 @OUT_DIR
 @click.option("--target", type=click.Choice(TARGETS), default="windows", show_default=True,
               help="windows: source, nmake makefile, .def, BUILD.txt; linux: source and lib<name>.so.")
-def package(robot, out_dir, target):
-    """A folder ready for the simulator, with SETUP.md: what to type into each dialog tab."""
+@TIMEOUT
+def package(robot, out_dir, target, timeout):
+    """A folder ready for the simulator, with SETUP.md: what to type into each dialog tab.
+
+    The folder is written whole or not at all; an existing folder is replaced only when
+    kingen wrote it."""
     model = load_robot(robot)
-    paths = write_package(model, out_dir or default_out_dir(model) / f"package-{target}", target)
+    paths = write_package(model, out_dir or default_out_dir(model) / f"package-{target}", target, timeout=timeout)
     for path in paths:
-        click.echo(str(path))
+        _say(str(path))
 
 
 @cli.command()
@@ -120,14 +169,17 @@ def package(robot, out_dir, target):
               help="DELMIA's T6, row by row: n, o, a, p rows, each with its 0/1 last entry.")
 @click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
 @calibration_options
-def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets):
+@TIMEOUT
+def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets, timeout):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
+    from .reference import solve as reference_solve
+
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
     model = load_robot(robot)
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
-    plugin = _plugin(model, out_dir)
-    calls = plugin.call(matrix, link_lengths, link_offsets)
+    library, routine = _library(model, out_dir, timeout=timeout)
+    calls = _in_child(_solve_job, (library, routine, matrix, link_lengths, link_offsets), timeout)
     expected = reference_solve(model, matrix, link_lengths, link_offsets)
     scale = np.where(np.array(model.joint_types) == REVOLUTE, 180.0 / np.pi if degrees else 1.0, 1.0)
     units = ["deg" if (t == REVOLUTE and degrees) else ("rad" if t == REVOLUTE else "mm") for t in model.joint_types]
@@ -143,7 +195,19 @@ def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets):
             + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale] + [_warning_name(expected.warnings[0, k])]
         )
     _print_table(rows)
-    click.echo(f"routine returned {calls.returned[0]}")
+    _say(f"routine returned {calls.returned[0]}")
+    if calls.faults[0]:
+        _say(f"the routine {'; '.join(t for b, t in abi.GUARD_FAULTS.items() if calls.faults[0] & b)}")
+        return EXIT_FAILED
+    return 0
+
+
+def _solve_job(channel, library, routine, matrix, link_lengths, link_offsets):
+    from .host import Plugin
+
+    plugin = Plugin(library, routine)
+    channel.stage("the routine's call")
+    return plugin.call(matrix, link_lengths, link_offsets)
 
 
 @cli.command()
@@ -151,29 +215,33 @@ def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets):
 @OUT_DIR
 @plugin_options
 @click.option("--samples", type=click.IntRange(min=1), default=10000, show_default=True,
-              help="Poses drawn in the robot's verification region.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the pose generator.")
+              help="Poses drawn in the robot's verification region (memory does not grow with it).")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the pose generator.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Write the report as JSON to this file.")
+              callback=_output_file, help="Write the report as JSON to this file (null: not a finite number).")
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Write the report as JUnit XML (one test case per check) to this file.")
+              callback=_output_file, help="Write the report as JUnit XML (one test case per check) to this file.")
 @calibration_options
-def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, link_lengths, link_offsets):
+@TIMEOUT
+def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, link_lengths, link_offsets,
+           timeout):
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
     By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
-    that follows the DELMIA interface, hand-written ones included, in a child process so
-    that a routine that crashes becomes a failed check.
+    that follows the DELMIA interface, hand-written ones included. Plugin code runs in a
+    child process, so a routine that crashes, exits or hangs becomes a failed check.
     """
+    from .verify import VerifyOptions, chunk_size, verify_library
+
     model = load_robot(robot)
-    plugin = _plugin(model, out_dir, library, source, routine)
-    run = run_verify if library is None and source is None else verify_isolated
+    library, routine = _library(model, out_dir, library, source, routine, timeout)
+    options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
+                            timeout=timeout)
     with _progress(samples, chunk_size(model)) as progress:
-        report = run(model, plugin, samples=samples, seed=seed, progress=progress,
-                     link_lengths=link_lengths, link_offsets=link_offsets)
-    _print_report(report, plugin)
+        report = verify_library(model, library, routine, options, progress)
+    _print_report(report, library)
     if json_path is not None:
-        write_atomic(json_path, json.dumps(report.as_json(), indent=2) + "\n")
+        write_atomic(json_path, json_text(report))
     if junit_path is not None:
         write_atomic(junit_path, junit_xml(report))
     return 0 if report.passed else EXIT_FAILED
@@ -183,37 +251,57 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
 @ROBOT
 @OUT_DIR
 @plugin_options
-@click.option("--calls", type=click.IntRange(min=1), default=200000, show_default=True,
+@click.option("--calls", type=click.IntRange(min=1, max=MAX_BENCH_CALLS), default=200000, show_default=True,
               help="Routine calls per timing (the per-call path uses at most 20000).")
-def bench(robot, out_dir, library, source, routine, calls):
+@TIMEOUT
+def bench(robot, out_dir, library, source, routine, calls, timeout):
     """Print ns per routine call (C batch driver, per-call cffi) and poses per second."""
     model = load_robot(robot)
-    plugin = _plugin(model, out_dir, library, source, routine)
-    figures = benchmark(model, plugin, calls=calls)
-    click.echo(f"bench {model.name} ({plugin.routine}, {model.postures} postures, {calls} poses)")
-    click.echo(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
-    click.echo(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
-    click.echo(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
-    click.echo(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s")
+    library, routine = _library(model, out_dir, library, source, routine, timeout)
+    figures = _in_child(_bench_job, (model, library, routine, calls), timeout)
+    _say(f"bench {model.name} ({routine}, {model.postures} postures, {figures['calls']} calls)")
+    _say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
+    _say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
+    _say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
+    _say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s")
 
 
-def _plugin(model, out_dir, library=None, source=None, routine=None):
-    """The Plugin to check: kingen's own build, a given library, or a compiled legacy source."""
+def _bench_job(channel, model, library, routine, calls):
+    from .bench import benchmark
+    from .host import Plugin
+
+    plugin = Plugin(library, routine)
+    channel.stage("the timings")
+    return benchmark(model, plugin, calls=calls, tick=lambda: channel.send("progress", None))
+
+
+def _in_child(job, arguments, timeout):
+    """A job's result from a child process; a crash or a hang there is a failed run (exit 1)."""
+    from .isolation import run_in_child
+
+    result, failure = run_in_child(job, arguments, timeout)
+    if failure is not None:
+        raise PluginDefect(failure.detail)
+    return result
+
+
+def _library(model, out_dir, library=None, source=None, routine=None, timeout=DEFAULT_TIMEOUT):
+    """(library path, routine) to check: kingen's own build, a given library, or a compiled legacy source."""
     if library is not None and source is not None:
         raise click.UsageError("give at most one of --plugin and --source")
     if library is None and source is None:
         if routine is not None and routine != model.routine:
             raise click.UsageError(f"--routine needs --plugin or --source (kingen's routine is {model.routine})")
-        result = build_plugin(model, out_dir)
-        return Plugin(result.library, result.routine)
+        result = build_plugin(model, out_dir, timeout=timeout)
+        return result.library, result.routine
     if source is not None:
-        library = build_legacy(source, out_dir or default_out_dir(model) / "legacy")
-    return Plugin(library, routine or model.routine)
+        library = build_legacy(source, out_dir or default_out_dir(model) / "legacy", timeout=timeout)
+    return library, routine or model.routine
 
 
 def _progress(total, chunk):
     """A progress bar on stderr for runs of several chunks at a terminal; otherwise nothing."""
-    if total <= chunk or not sys.stderr.isatty():
+    if total <= chunk or sys.stderr is None or not sys.stderr.isatty():
         return contextlib.nullcontext(None)
     bar = click.progressbar(length=total, label="verifying", file=sys.stderr)
 
@@ -225,22 +313,17 @@ def _progress(total, chunk):
     return running()
 
 
-def _print_report(report, plugin):
-    click.echo(f"verify {report.robot}: {report.samples} poses x {report.postures} postures, "
-               f"{plugin.path} ({report.routine})")
+def _print_report(report, library):
+    _say(f"verify {report.robot}: {report.samples} poses x {report.postures} postures, {library} ({report.routine})")
     for check in report.checks:
-        click.echo(f"  {'ok' if check.passed else 'FAILED':6} {check.name}: {check.detail}")
+        _say(f"  {'ok' if check.passed else 'FAILED':6} {check.name}: {check.detail}")
         for diagnosis in check.diagnoses:
-            click.echo(f"         diagnosis: {diagnosis}")
+            _say(f"         diagnosis: {diagnosis}")
     for notice in report.notices:
-        click.echo(f"  notice: {notice}")
+        _say(f"  notice: {notice}")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
     speed = f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s)" if report.seconds > 0 else ""
-    click.echo(verdict + speed)
-
-
-def _rounded(values):
-    return [round(v, 6) for v in values]
+    _say(verdict + speed)
 
 
 def _warning_name(code):
@@ -255,28 +338,73 @@ def _shorten(text, width):
 def _print_table(rows):
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     for row in rows:
-        click.echo("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip())
+        _say("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip())
+
+
+def _say(text, err=False):
+    """Print one line on stdout (or stderr), unprintable characters escaped. A reader that
+    went away (``| head``) or a closed stream ends the printing, not the command: its exit
+    code still tells the verdict."""
+    stream = sys.stderr if err else sys.stdout
+    if stream is None:
+        return
+    try:
+        click.echo(printable(text), file=stream)
+    except (BrokenPipeError, ValueError, OSError):
+        _detach(err)
+
+
+def _detach(err):
+    """Point a broken standard stream at /dev/null, so later writes and the final flush succeed."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 2 if err else 1)
+    os.close(null)
+    if err:
+        sys.stderr = open(os.devnull, "w")
+    else:
+        sys.stdout = open(os.devnull, "w")
+
+
+def _terminate(signal_number, frame):
+    """SIGTERM: unwind (temporary files are removed, child processes killed), then exit 143."""
+    raise SystemExit(EXIT_TERMINATED)
 
 
 def main(argv=None):
-    """Entry point: runs the CLI and maps errors to one stderr line and an exit code."""
+    """Entry point: runs the CLI and maps every outcome to one stderr line and an exit code."""
+    signal.signal(signal.SIGTERM, _terminate)
+    np.seterr(all="ignore")
     try:
         outcome = cli.main(args=argv, prog_name="kingen", standalone_mode=False)
+    except PluginDefect as error:
+        _say(f"kingen: plugin failed: {error}", err=True)
+        return EXIT_FAILED
     except KingenError as error:
-        click.echo(f"kingen: error: {error}", err=True)
+        _say(f"kingen: error: {error}", err=True)
         return EXIT_BAD_INPUT
     except click.exceptions.NoArgsIsHelpError as error:
-        click.echo(error.ctx.get_help())
+        _say(error.ctx.get_help())
         return 0
     except click.ClickException as error:
-        click.echo(f"kingen: error: {error.format_message()}", err=True)
+        _say(f"kingen: error: {' '.join(error.format_message().split())}", err=True)
         return EXIT_BAD_INPUT
     except click.exceptions.Abort:
-        click.echo("kingen: aborted", err=True)
+        _say("kingen: aborted", err=True)
+        return 130
+    except KeyboardInterrupt:
+        _say("kingen: interrupted", err=True)
         return 130
     except OSError as error:
-        click.echo(f"kingen: error: {error.filename or ''}: {error.strerror or error}", err=True)
+        _say(f"kingen: error: {error.filename or ''}: {error.strerror or error}", err=True)
         return EXIT_BAD_INPUT
+    except (Exception, InternalError) as error:
+        if os.environ.get("KINGEN_DEBUG") == "1":
+            raise
+        where = traceback.extract_tb(error.__traceback__)[-1] if error.__traceback__ else None
+        origin = f" at {os.path.basename(where.filename)}:{where.lineno}" if where else ""
+        _say(f"kingen: internal error: {type(error).__name__}: {' '.join(str(error).split())}{origin}; "
+             "please report this (with KINGEN_DEBUG=1 for the traceback)", err=True)
+        return EXIT_INTERNAL
     return outcome if isinstance(outcome, int) else 0
 
 

@@ -13,3 +13,13 @@ def located(source, line, field, problem):
     where = ":".join(str(part) for part in (source, line) if part is not None)
     text = ": ".join(str(part) for part in (where or None, field or None, problem) if part)
     return KingenError(text)
+
+
+class PluginDefect(KingenError):
+    """A plugin that breaks the interface before it can be verified (no get_kin_config,
+    impossible counts): a failed verification (exit 1), not bad input."""
+
+
+class InternalError(Exception):
+    """A defect in kingen itself, raised where it is detected away from the CLI (in a
+    child process): the CLI reports it as an internal error (exit 3)."""

@@ -3,13 +3,17 @@
 The host emulator library is loaded first with global symbol visibility, so a
 plugin's undefined ``DNBVMAP_*`` symbols resolve to it, as they resolve to the
 host process inside DELMIA. Then the plugin is loaded, ``get_kin_config`` is
-asked about the routine, and the routine is called per pose (``call``) or for a
-whole array of T6 in C (``call_batch``). Outputs are pre-filled with sentinels
-(NaN, -1) so an entry the routine never wrote stays visible, and every pose's
-buffers sit between guard zones so a write outside them is caught.
+asked about the routine, and the routine is called for a whole array of T6 in C.
+Every call gets output buffers pre-filled with sentinels (NaN, -1), so an entry the
+routine never wrote stays visible, and placed against inaccessible pages, so a write
+past (or far before) them faults and is reported per call instead of corrupting memory.
+
+Loading runs the library's constructors and every call runs foreign code: the
+command line does both only in a child process (:mod:`kingen.isolation`).
 """
 
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -22,7 +26,7 @@ import numpy as np
 
 from . import abi
 from .build import host_support
-from .errors import KingenError
+from .errors import KingenError, PluginDefect
 from .model import REVOLUTE
 
 ffi = cffi.FFI()
@@ -30,10 +34,10 @@ ffi.cdef(abi.cffi_declarations())
 
 UNWRITTEN_WARNING = -1
 """Sentinel left in a warning slot the routine did not write."""
-GUARD = 8
-"""Entries of guard zone before and after each pose's solutions and warnings."""
-GUARD_DOUBLE = -7.0e300
-GUARD_INT = -20260001
+MAX_DOF = 64
+MAX_SOLUTIONS = 1 << 16
+"""The largest joint and solution counts a get_kin_config answer may give to be called at all."""
+C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,254}")
 
 _host_library = None
 _loaded = {}
@@ -62,15 +66,29 @@ class KinConfig:
 class Calls:
     """Routine results for n poses: returned (n,), solutions (n, dof, postures), warnings (n, postures).
 
-    guard_violations: poses whose guard zones were written; inputs_modified: whether the
-    routine wrote into T6, link_lengths or link_offsets.
+    faults (n,): per call the :data:`kingen.abi.GUARD_FAULTS` bits (writes outside the
+    output buffers, modified inputs); 0 for a clean call.
     """
 
     returned: np.ndarray
     solutions: np.ndarray
     warnings: np.ndarray
-    guard_violations: int = 0
-    inputs_modified: bool = False
+    faults: np.ndarray
+
+    @property
+    def guard_violations(self):
+        return int(np.count_nonzero(self.faults & ~16))
+
+    @property
+    def inputs_modified(self):
+        return bool(np.any(self.faults & 16))
+
+
+def check_routine_name(routine):
+    """``routine`` if it is a C identifier; else KingenError (it would be looked up as a symbol)."""
+    if not isinstance(routine, str) or not C_IDENTIFIER.fullmatch(routine):
+        raise KingenError(f"routine name {routine!r} is not a C identifier")
+    return routine
 
 
 def _dlopen(path):
@@ -103,22 +121,34 @@ class Plugin:
 
     Loading asks ``get_kin_config`` about the routine and tells the host emulator the
     device definition (dof and solution count) from that answer, as DELMIA does.
+    Raises KingenError for what is the user's to fix (no such file, not a loadable
+    library, a routine the library does not know) and PluginDefect for a library that
+    breaks the interface (no get_kin_config, impossible joint or solution counts).
     """
 
     def __init__(self, library_path, routine):
         host()
         self.path = Path(library_path)
-        self.routine = routine
+        self.routine = check_routine_name(routine)
         self.library = _dlopen(library_path)
-        self.config = self.kin_config(routine)
-        if self.config.status != 0:
-            raise KingenError(f"{self.path}: get_kin_config does not know routine '{routine}'")
-        self.dof, self.postures = self.config.dof, self.config.solutions
-        ffi.cdef(abi.routine_prototype(routine, self.postures) + ";", override=True)
+        ffi.cdef(f"int {routine}(double *, double *, double (*)[4], double *, int *, void *);", override=True)
         try:
             self.function = getattr(self.library, routine)
         except AttributeError:
-            raise KingenError(f"{self.path}: no exported routine '{routine}'") from None
+            self.function = None
+        try:
+            self.library.get_kin_config
+        except AttributeError:
+            raise PluginDefect("the library does not export get_kin_config") from None
+        self.config = self.kin_config(routine)
+        if self.config.status != 0:
+            raise KingenError(f"{self.path}: get_kin_config does not know routine '{routine}'")
+        if self.function is None:
+            raise KingenError(f"{self.path}: no exported routine '{routine}'")
+        self.dof, self.postures = self.config.dof, self.config.solutions
+        if not (1 <= self.dof <= MAX_DOF and 1 <= self.postures <= MAX_SOLUTIONS):
+            raise PluginDefect(f"get_kin_config answers {self.dof} joints and {self.postures} solutions for "
+                               f"'{routine}': the routine cannot be called with such buffers")
         self.reset_host()
 
     def kin_config(self, routine):
@@ -135,16 +165,27 @@ class Plugin:
         lib.kingen_host_refuse(int(refuse))
 
     def call(self, t6, link_lengths=None, link_offsets=None, kinstat=None):
-        """Call the routine once per T6 ((4, 4) or (n, 4, 4)) from Python, one cffi call each."""
-        return self._run(np.asarray(t6, dtype=float).reshape(-1, 4, 4), link_lengths, link_offsets, kinstat, batch=False)
-
-    def call_batch(self, t6, link_lengths=None, link_offsets=None, kinstat=None):
-        """Call the routine for every T6 in (n, 4, 4) from C, in one host call."""
-        return self._run(np.asarray(t6, dtype=float).reshape(-1, 4, 4), link_lengths, link_offsets, kinstat, batch=True)
+        """Call the routine for every T6 in ((4, 4) or (n, 4, 4)) from C, with guarded buffers."""
+        t6 = np.ascontiguousarray(t6, dtype=float).reshape(-1, 4, 4)
+        count = t6.shape[0]
+        solutions = np.empty((count, self.dof, self.postures))
+        warnings = np.empty((count, self.postures), dtype=np.intc)
+        returned = np.empty(count, dtype=np.intc)
+        faults = np.empty(count, dtype=np.intc)
+        lengths, offsets = _dialog(link_lengths), _dialog(link_offsets)
+        status = host().kingen_host_run_guarded(
+            ffi.cast("void *", self.function), count, _pointer("double *", t6), _pointer("double *", lengths),
+            _pointer("double *", offsets), self.dof, self.postures, _pointer("double *", solutions),
+            _pointer("int *", warnings), _pointer("int *", returned), _pointer("int *", faults),
+            ffi.NULL if kinstat is None else kinstat.pointer,
+        )
+        if status < 0:
+            raise KingenError("the host emulator could not map guarded buffers (out of memory?)")
+        return Calls(returned=returned, solutions=solutions, warnings=warnings, faults=faults)
 
     def batch_runner(self, t6):
-        """A function that runs the C batch driver over ``t6`` (n, 4, 4) into buffers allocated
-        here once: what it costs is the routine's own time, for benchmarks."""
+        """A function that runs the unguarded C batch driver over ``t6`` (n, 4, 4) into buffers
+        allocated here once: what it costs is the routine's own time, for benchmarks."""
         t6 = np.ascontiguousarray(t6, dtype=float).reshape(-1, 4, 4)
         count = t6.shape[0]
         zeros = np.zeros(6)
@@ -164,46 +205,30 @@ class Plugin:
 
         return run
 
-    def _run(self, t6, link_lengths, link_offsets, kinstat, batch):
-        count, dof, postures = t6.shape[0], self.dof, self.postures
-        t6 = np.ascontiguousarray(t6)
-        lengths = np.array(np.zeros(6) if link_lengths is None else link_lengths, dtype=float)
-        offsets = np.array(np.zeros(6) if link_offsets is None else link_offsets, dtype=float)
-        inputs = (t6.copy(), lengths.copy(), offsets.copy())
-        solution_block, warning_block = dof * postures + 2 * GUARD, postures + 2 * GUARD
-        solution_buffer = np.full((count, solution_block), GUARD_DOUBLE)
-        solution_buffer[:, GUARD:GUARD + dof * postures] = np.nan
-        warning_buffer = np.full((count, warning_block), GUARD_INT, dtype=np.intc)
-        warning_buffer[:, GUARD:GUARD + postures] = UNWRITTEN_WARNING
-        returned = np.full(count, -1, dtype=np.intc)
-        data = ffi.NULL if kinstat is None else kinstat.pointer
-        lengths_p, offsets_p = _pointer("double *", lengths), _pointer("double *", offsets)
-        solutions_p = _pointer("double *", solution_buffer) + GUARD
-        warnings_p = _pointer("int *", warning_buffer) + GUARD
-        if batch:
-            host().kingen_host_run_batch(
-                ffi.cast("void *", self.function), count, _pointer("double *", t6), lengths_p, offsets_p,
-                solutions_p, solution_block, warnings_p, warning_block, _pointer("int *", returned), data,
-            )
-        else:
-            t6_p = _pointer("double *", t6)
-            for i in range(count):
-                returned[i] = self.function(
-                    lengths_p, offsets_p, ffi.cast("double (*)[4]", t6_p + 16 * i),
-                    ffi.cast(f"double (*)[{postures}]", solutions_p + i * solution_block),
-                    warnings_p + i * warning_block, data,
-                )
-        guards_intact = np.all(
-            np.concatenate([solution_buffer[:, :GUARD], solution_buffer[:, -GUARD:]], axis=1) == GUARD_DOUBLE, axis=1
-        ) & np.all(np.concatenate([warning_buffer[:, :GUARD], warning_buffer[:, -GUARD:]], axis=1) == GUARD_INT, axis=1)
-        modified = not all(np.array_equal(a, b, equal_nan=True) for a, b in zip(inputs, (t6, lengths, offsets)))
-        return Calls(
-            returned=returned,
-            solutions=solution_buffer[:, GUARD:GUARD + dof * postures].reshape(count, dof, postures),
-            warnings=warning_buffer[:, GUARD:GUARD + postures],
-            guard_violations=int(np.count_nonzero(~guards_intact)),
-            inputs_modified=modified,
-        )
+    def each_runner(self, t6):
+        """A function that calls the routine once per T6 through cffi, as a Python host would:
+        the per-call overhead figure of benchmarks."""
+        t6 = np.ascontiguousarray(t6, dtype=float).reshape(-1, 4, 4)
+        zeros = np.zeros(6)
+        solutions = np.empty(self.dof * self.postures)
+        warnings = np.empty(self.postures, dtype=np.intc)
+        pointers = (_pointer("double *", zeros), _pointer("double *", zeros))
+        solutions_p, warnings_p = _pointer("double *", solutions), _pointer("int *", warnings)
+        matrices = [ffi.cast("double (*)[4]", _pointer("double *", t6) + 16 * i) for i in range(t6.shape[0])]
+        function = self.function
+
+        def run():
+            for matrix in matrices:
+                function(*pointers, matrix, solutions_p, warnings_p, ffi.NULL)
+            return t6, zeros, solutions, warnings
+
+        return run
+
+
+def _dialog(values):
+    """The six Length or Offset fields as a contiguous array (zeros: all empty)."""
+    array = np.zeros(6) if values is None else np.array(values, dtype=float).reshape(6)
+    return np.ascontiguousarray(array)
 
 
 def _pointer(ctype, array):

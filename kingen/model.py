@@ -143,6 +143,7 @@ class Leg(_Limb):
     branches: ClassVar[int] = 1
     joint_type: ClassVar[str] = PRISMATIC
     calibratable: ClassVar[tuple] = ("reference_length",)
+    length_fields: ClassVar[tuple] = ("base_point", "platform_point", "reference_length")
 
 
 class Rail(_Limb):
@@ -159,6 +160,7 @@ class Rail(_Limb):
     branches: ClassVar[int] = 2
     joint_type: ClassVar[str] = PRISMATIC
     calibratable: ClassVar[tuple] = ("origin", "link_length")
+    length_fields: ClassVar[tuple] = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
 
 
 class Crank(_Limb):
@@ -178,6 +180,7 @@ class Crank(_Limb):
     branches: ClassVar[int] = 2
     joint_type: ClassVar[str] = REVOLUTE
     calibratable: ClassVar[tuple] = ("zero_offset", "crank_length", "rod_length")
+    length_fields: ClassVar[tuple] = ("pivot", "crank_length", "rod_length", "platform_point")
 
 
 Limb = Annotated[Union[Leg, Rail, Crank], Field(discriminator="model")]
@@ -385,6 +388,17 @@ class Robot:
             if value != 0.0 and math.isfinite(value):
                 limbs[index] = limbs[index].model_copy(update={parameter: value})
         return replace(self, limbs=tuple(limbs))
+
+    @property
+    def size_mm(self):
+        """The largest magnitude of any length or coordinate of the robot and its verification
+        region, mm: the scale floating-point rounding is relative to."""
+        values = [abs(h) + abs(r) for h, r in zip(self.verification.home[:3], self.verification.range[:3])]
+        for limb in self.limbs:
+            for name in limb.length_fields:
+                value = getattr(limb, name)
+                values.extend(abs(v) for v in (value if isinstance(value, list) else [value]))
+        return max(values)
 
     @property
     def revolute(self):

@@ -5,15 +5,20 @@ says exactly what to type into DELMIA's Inverse Kinematics dialog.
 the files atomically and, for Linux, adds the compiled library.
 """
 
+import os
+import shutil
 import tempfile
 from pathlib import Path
 
-from .build import build_plugin, library_name, write_atomic
+from .build import DEFAULT_TIMEOUT, umask, build_plugin, library_name, write_atomic
+from .errors import KingenError
 from .model import REVOLUTE, calibration_unit, dialog_label
 from .render import render, template, view_model
 
 TARGETS = ("windows", "linux")
 HOST_IMPORT_LIB_PLACEHOLDER = "DELMIA_HOST_IMPORT_LIB.lib"
+MARKER = ".kingen-package"
+"""Marks a folder kingen wrote, so that it may be replaced by a newer package."""
 CRLF_FILES = ("makefile", "BUILD.txt")
 """nmake and Notepad want CRLF line ends; the C source keeps LF (cl reads both)."""
 BRANCHES = {
@@ -80,18 +85,49 @@ def render_package(robot, target):
     return files
 
 
-def write_package(robot, out_dir, target):
-    """Write the package into ``out_dir``; for linux also compile and add lib<name>.so.
+def write_package(robot, out_dir, target, timeout=DEFAULT_TIMEOUT):
+    """Write the package folder ``out_dir``, whole or not at all; for linux also compile and
+    add lib<name>.so. Returns the written paths.
 
-    Everything is produced first (a compile error leaves ``out_dir`` untouched), then
-    each file is written atomically. Returns the written paths."""
+    The files are written into a hidden sibling folder which then takes ``out_dir``'s place.
+    An existing ``out_dir`` is replaced only if it is empty or kingen wrote it (it holds
+    the marker file ``.kingen-package``); anything else is refused, never overwritten."""
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not (out_dir.is_dir() and (not any(out_dir.iterdir()) or (out_dir / MARKER).is_file())):
+        raise KingenError(f"{out_dir}: exists and is not a kingen package folder; choose another -o")
     files = {name: text.encode() for name, text in render_package(robot, target).items()}
     if target == "windows":
         files.update({name: files[name].replace(b"\n", b"\r\n") for name in files if name in CRLF_FILES
                       or name.endswith(".def")})
-    else:
-        with tempfile.TemporaryDirectory(prefix="kingen-package-") as scratch:
-            files[library_name(robot)] = build_plugin(robot, scratch).library.read_bytes()
-    for name, data in files.items():
-        write_atomic(Path(out_dir) / name, data)
-    return [Path(out_dir) / name for name in files]
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+    try:
+        if target == "linux":
+            built = build_plugin(robot, staging / ".build", timeout=timeout)
+            write_atomic(staging / library_name(robot), built.library.read_bytes(), executable=True)
+            shutil.rmtree(staging / ".build")
+        for name, data in files.items():
+            write_atomic(staging / name, data)
+        write_atomic(staging / MARKER, f"written by kingen for {robot.name} ({target})\n")
+        os.chmod(staging, 0o777 & ~umask())
+        _replace_folder(staging, out_dir)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    names = [*files, *([library_name(robot)] if target == "linux" else [])]
+    return [out_dir / name for name in names]
+
+
+def _replace_folder(new, old):
+    """Put folder ``new`` where ``old`` is: the old one is moved aside first, removed last."""
+    if not old.exists():
+        os.replace(new, old)
+        return
+    aside = Path(tempfile.mkdtemp(prefix=f".{old.name}.old.", dir=old.parent))
+    os.replace(old, aside / old.name)
+    try:
+        os.replace(new, old)
+    except OSError:
+        os.replace(aside / old.name, old)
+        raise
+    finally:
+        shutil.rmtree(aside, ignore_errors=True)

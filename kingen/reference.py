@@ -69,11 +69,12 @@ def solve_rail(rail, platform_point):
     direction = np.asarray(rail.direction)
     w = platform_point - np.asarray(rail.rail_point) - np.asarray(rail.carriage_offset)
     along = w @ direction
-    radicand = rail.link_length ** 2 - np.sum(w * w, axis=-1) + along * along
+    link_squared = rail.link_length * rail.link_length
+    radicand = link_squared - np.sum(w * w, axis=-1) + along * along
     root = np.sqrt(np.where(radicand > 0.0, radicand, 0.0))
     return LimbSolution(
         values=np.stack([along - root, along + root], axis=-1) - rail.origin,
-        radicand=radicand / rail.link_length ** 2,
+        radicand=radicand / link_squared,
     )
 
 
@@ -83,7 +84,8 @@ def solve_crank(crank, platform_point):
     g = platform_point - np.asarray(crank.pivot)
     a = g[:, 0] * np.cos(beta) + g[:, 1] * np.sin(beta)
     b = -g[:, 2]
-    k = (np.sum(g * g, axis=-1) + crank.crank_length ** 2 - crank.rod_length ** 2) / (2.0 * crank.crank_length)
+    r, rod = crank.crank_length, crank.rod_length
+    k = (np.sum(g * g, axis=-1) + r * r - rod * rod) / (2.0 * r)
     rho_squared = a * a + b * b
     with np.errstate(divide="ignore", invalid="ignore"):
         radicand = np.where(rho_squared > 0.0, (rho_squared - k * k) / rho_squared, -1.0)
@@ -105,8 +107,11 @@ def solve(robot, t6, link_lengths=None, link_offsets=None):
 
     ``link_lengths`` / ``link_offsets`` (6 each, the dialog's Length i / Offset i) replace
     the parameters the robot marks as calibrated, where non-zero."""
-    robot = robot.calibrated(link_lengths, link_offsets)
-    t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
+    with np.errstate(all="ignore"):
+        return _solve(robot.calibrated(link_lengths, link_offsets), np.asarray(t6, dtype=float).reshape(-1, 4, 4))
+
+
+def _solve(robot, t6):
     count = t6.shape[0]
     finite = np.all(np.isfinite(t6[:, :, :3]), axis=(1, 2))
     safe_t6 = np.where(finite[:, None, None], t6, 0.0)
@@ -117,8 +122,7 @@ def solve(robot, t6, link_lengths=None, link_offsets=None):
     radicands = np.full((count, robot.dof), np.inf)
     overflow = np.zeros((count, robot.dof), dtype=bool)
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
-        with np.errstate(over="ignore", invalid="ignore"):
-            limb_solution = SOLVERS[limb.model](limb, points[:, index])
+        limb_solution = SOLVERS[limb.model](limb, points[:, index])
         values = limb_solution.values
         overflow[:, index] = ~np.all(np.isfinite(values), axis=1)
         branch = (postures >> bit) & 1 if bit >= 0 else np.zeros_like(postures)

@@ -33,11 +33,16 @@ def unprintable(character):
     return not character.isprintable() and character != " " or unicodedata.category(character) == "Cf"
 
 
+def printable(text):
+    """``text`` with every unprintable character written as ``<U+XXXX>`` (spacing kept):
+    safe for a terminal, where escape sequences could otherwise recolour or rewrite it."""
+    return "".join(_escaped(c) if unprintable(c) else c for c in str(text))
+
+
 def one_line(text):
     """``text`` as one line: runs of whitespace become one space; every unprintable
     character becomes ``<U+XXXX>``."""
-    text = " ".join(str(text).split())
-    return "".join(_escaped(c) if unprintable(c) else c for c in text)
+    return printable(" ".join(str(text).split()))
 
 
 def c_text(text):
@@ -60,6 +65,15 @@ def markdown(text):
     """``text`` as literal Markdown (no headings, lists, links, HTML or table breaks)."""
     text = _MARKDOWN_SPECIAL.sub(r"\\\1", one_line(text))
     return _LINE_START_SPECIAL.sub(lambda match: "".join("\\" + c for c in match.group(1)), text)
+
+
+def xml_text(text):
+    """``text`` with what XML 1.0 cannot hold (control characters other than tab and line
+    breaks, lone surrogates, U+FFFE/U+FFFF) written as ``<U+XXXX>``; line breaks are kept."""
+    return "".join(
+        _escaped(c) if (c < " " and c not in "\t\n\r") or "\ud800" <= c <= "\udfff" or c in "\ufffe\uffff" else c
+        for c in str(text)
+    )
 
 
 def finalizer(kind):

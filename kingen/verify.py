@@ -1,5 +1,5 @@
 """Verification: a compiled routine (kingen's or hand-written) against the numpy
-reference, the golden values and the interface contract of shared/delmia-abi.md.
+reference, the golden values and the interface contract (docs: README, 'What verify proves').
 
 Everything is compared, nothing sampled away: every joint of every posture of
 every pose, and every warning. Where the reference calls a posture unreachable the
@@ -9,27 +9,34 @@ tolerance band (``WARNING_BAND``): where the reference's decision quantity (a
 normalised radicand or a joint value) lies that close to its threshold, both
 answers are right within floating-point rounding. Each clause is a named check;
 failed value checks carry diagnoses (:mod:`kingen.diagnose`).
+
+``verify`` runs in the calling process (for tests and kingen's own code);
+``verify_library`` loads and verifies a library in a child process
+(:mod:`kingen.isolation`), so that a crash, an ``exit()`` or a hang in foreign code
+becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
-import faulthandler
 import math
-import multiprocessing
-import signal
 import time
-import xml.etree.ElementTree as ElementTree
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from . import abi
+from .build import DEFAULT_TIMEOUT
 from .conventions import joint_errors, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
-from .host import UNWRITTEN_WARNING, captured_output, host_state
+from .errors import PluginDefect
+from .host import UNWRITTEN_WARNING, Plugin, captured_output, host_state
+from .isolation import run_in_child
 from .reference import SINGULAR_TOLERANCE, solve
+from .report import Check, GoldenResult, Report
 
 VALUE_TOLERANCE_MM = 1e-9
 VALUE_TOLERANCE_RAD = 1e-9
+RELATIVE_TOLERANCE = 256 * np.finfo(float).eps
+"""For robots larger than about 17 m the prismatic bound grows with size: 256 eps x size."""
 WARNING_BAND = 1e-9
 """Half-width of the band around a warning threshold (radicand +/- tolerance: relative;
 travel limits: mm or rad) inside which plugin and reference may disagree."""
@@ -41,117 +48,39 @@ CHUNK_ENTRIES = 400000
 """Joint entries (poses x dof x postures) per batch: keeps arrays small enough to stay in cache."""
 DIAGNOSIS_POSES = 2000
 DETERMINISM_POSES = 1000
-
-
-@dataclass
-class Check:
-    """One clause of the contract: its name, verdict, the evidence, and diagnoses when it failed."""
-
-    name: str
-    passed: bool
-    detail: str = ""
-    diagnoses: list = field(default_factory=list)
-
-
-@dataclass
-class GoldenResult:
-    """One golden value: published joints against the plugin's and the reference's (YAML units)."""
-
-    source: str
-    pose: list
-    posture: int
-    expected: list
-    plugin: list
-    reference: list
-    tolerance: float
-    passed: bool
-
-
-@dataclass
-class Report:
-    """The outcome of ``verify``; ``as_json`` gives the contract keys of the CLI's --json."""
-
-    robot: str
-    routine: str
-    samples: int
-    seed: int
-    postures: int
-    max_abs_error_mm: float = 0.0
-    max_abs_error_rad: float = 0.0
-    singular_entries: int = 0
-    singular_out_of_bound: int = 0
-    warning_mismatches: int = 0
-    warnings_in_band: int = 0
-    golden: list = field(default_factory=list)
-    checks: list = field(default_factory=list)
-    notices: list = field(default_factory=list)
-    seconds: float = 0.0
-    link_lengths: list = None
-    link_offsets: list = None
-
-    @property
-    def golden_checked(self):
-        return len(self.golden)
-
-    @property
-    def golden_failed(self):
-        return sum(1 for result in self.golden if not result.passed)
-
-    @property
-    def passed(self):
-        return all(check.passed for check in self.checks)
-
-    @property
-    def failures(self):
-        return [check for check in self.checks if not check.passed]
-
-    @property
-    def poses_per_second(self):
-        return self.samples / self.seconds if self.seconds > 0 else math.inf
-
-    def as_json(self):
-        return {
-            "robot": self.robot,
-            "routine": self.routine,
-            "samples": self.samples,
-            "seed": self.seed,
-            "postures": self.postures,
-            "link_lengths": self.link_lengths,
-            "link_offsets": self.link_offsets,
-            "max_abs_error_mm": _json_number(self.max_abs_error_mm),
-            "max_abs_error_rad": _json_number(self.max_abs_error_rad),
-            "tolerance_mm": VALUE_TOLERANCE_MM,
-            "tolerance_rad": VALUE_TOLERANCE_RAD,
-            "singular_entries": self.singular_entries,
-            "singular_out_of_bound": self.singular_out_of_bound,
-            "warning_mismatches": self.warning_mismatches,
-            "warnings_in_band": self.warnings_in_band,
-            "golden_checked": self.golden_checked,
-            "golden_failed": self.golden_failed,
-            "golden": [asdict(result) for result in self.golden],
-            "checks": [asdict(check) for check in self.checks],
-            "interface_failures": [check.detail for check in self.failures if check.name in INTERFACE_CHECKS],
-            "diagnoses": [text for check in self.checks for text in check.diagnoses],
-            "notices": list(self.notices),
-            "seconds": round(self.seconds, 6),
-            "poses_per_second": _json_number(self.poses_per_second),
-            "passed": self.passed,
-        }
-
-
 UNREACHABLE = abi.WARNINGS["WARN_UNREACHABLE"]
-INTERFACE_CHECKS = ("get_kin_config", "kin_check_definition", "refusal", "non-finite T6")
 
 
-def _json_number(value):
-    return value if math.isfinite(value) else None
+@dataclass(frozen=True)
+class VerifyOptions:
+    """What a verification is asked to do: poses, seed, the dialog's fields, time limit (s)."""
+
+    samples: int = 10000
+    seed: int = 0
+    link_lengths: tuple = None
+    link_offsets: tuple = None
+    timeout: float = DEFAULT_TIMEOUT
+
+
+def value_tolerance_mm(robot):
+    """The bound on prismatic joints: 1e-9 mm, or 256 eps x the robot's size (mm) when larger."""
+    return max(VALUE_TOLERANCE_MM, RELATIVE_TOLERANCE * robot.size_mm)
+
+
+def pose_chunks(robot, count, seed, chunk):
+    """(first index, poses (m, 6)) chunk by chunk: ``count`` poses (mm, degrees) uniform in the
+    robot's verification region from one seeded generator, so the poses are the same, bit for
+    bit, whatever the chunk size; memory stays that of one chunk."""
+    region = robot.verification
+    home, half_widths = np.asarray(region.home), np.asarray(region.range)
+    rng = np.random.default_rng(seed)
+    for begin in range(0, count, chunk):
+        yield begin, home + rng.uniform(-1.0, 1.0, size=(min(chunk, count - begin), 6)) * half_widths
 
 
 def sample_poses(robot, count, seed):
     """``count`` poses (mm, degrees) uniform in the robot's verification region, seeded."""
-    region = robot.verification
-    rng = np.random.default_rng(seed)
-    return np.asarray(region.home) + rng.uniform(-1.0, 1.0, size=(count, 6)) * np.asarray(region.range)
+    return np.concatenate([poses for _, poses in pose_chunks(robot, count, seed, max(count, 1))])
 
 
 def chunk_size(robot):
@@ -193,8 +122,9 @@ class _Tally:
     """Running totals over the chunks of one verification."""
 
     returns_wrong: int = 0
-    guard_violations: int = 0
-    inputs_modified: bool = False
+    aborted: int = 0
+    faulty_calls: int = 0
+    fault_bits: int = 0
     first: tuple = None
 
 
@@ -214,30 +144,34 @@ class _Printed:
             self.first_line = printed["text"].strip().splitlines()[0]
 
 
-def verify(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=None, link_offsets=None,
-           phase=None):
-    """Check ``plugin`` against ``robot``'s reference on ``samples`` seeded poses, its golden
-    values and the interface contract. ``progress(done)`` is called after each chunk and
-    ``phase(text)`` before each stage (both optional).
-    ``link_lengths`` / ``link_offsets`` (6 each) are passed to the routine and the reference
-    alike; golden values are checked with empty fields (the published geometry).
-    What the routine prints on stdout/stderr is captured and reported as a notice."""
-    report = _empty_report(robot, plugin, samples, seed, link_lengths, link_offsets)
+def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on_check=None):
+    """Check ``plugin`` against ``robot``'s reference on ``options.samples`` seeded poses,
+    its golden values and the interface contract. ``progress(done)`` is called after each
+    chunk, ``phase(text)`` before each stage and ``on_check(check)`` as each check is
+    decided (all optional). The dialog fields of ``options`` are passed to the routine
+    and the reference alike; golden values are checked with empty fields (the published
+    geometry). What the routine prints on stdout/stderr is reported as a notice."""
+    report = _empty_report(robot, plugin.routine, options)
     phase = phase or (lambda text: None)
     printed = _Printed()
+
+    def decided(checks):
+        for check in checks:
+            report.checks.append(check)
+            if on_check is not None:
+                on_check(check)
+
     phase("the interface checks")
     with printed.capture():
-        report.checks.extend(check_interface(robot, plugin))
+        decided(check_interface(robot, plugin))
     if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
-        _compare_samples(robot, plugin, report, progress, printed, phase)
+        decided(_compare_samples(robot, plugin, report, progress, printed, phase))
         phase("the golden values")
         with printed.capture():
             report.golden = check_golden(robot, plugin)
-        report.checks.extend(
-            Check(f"golden[{i}]", result.passed, _golden_detail(result)) for i, result in enumerate(report.golden)
-        )
+        decided(Check(f"golden[{i}]", result.passed, _golden_detail(result)) for i, result in enumerate(report.golden))
     else:
-        report.checks.append(Check("values", False, "not compared: the routine's joint or posture count differs"))
+        decided([Check("values", False, "not compared: the routine's joint or posture count differs")])
     if printed.bytes:
         report.notices.append(
             f"the routine printed {printed.bytes} bytes on stdout/stderr (first line: {printed.first_line!r}); "
@@ -246,48 +180,51 @@ def verify(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=Non
     return report
 
 
-def _empty_report(robot, plugin, samples, seed, link_lengths, link_offsets):
-    return Report(robot=robot.name, routine=plugin.routine, samples=samples, seed=seed, postures=robot.postures,
-                  link_lengths=_listed(link_lengths), link_offsets=_listed(link_offsets))
+def _empty_report(robot, routine, options):
+    return Report(robot=robot.name, routine=routine, samples=options.samples, seed=options.seed,
+                  postures=robot.postures, link_lengths=_listed(options.link_lengths),
+                  link_offsets=_listed(options.link_offsets), tolerance_mm=value_tolerance_mm(robot),
+                  tolerance_rad=VALUE_TOLERANCE_RAD)
 
 
-def verify_isolated(robot, plugin, samples=10000, seed=0, progress=None, link_lengths=None, link_offsets=None):
-    """``verify`` in a forked child process, for routines that may crash: a routine that
-    kills the process becomes a failed check ``crash`` naming the signal and the stage."""
-    context = multiprocessing.get_context("fork")
-    receiver, sender = context.Pipe(duplex=False)
-    options = {"samples": samples, "seed": seed, "link_lengths": link_lengths, "link_offsets": link_offsets}
-    child = context.Process(target=_verify_child, args=(sender, robot, plugin, options), daemon=True)
-    child.start()
-    sender.close()
-    stage, report = "loading", None
-    while report is None:
-        try:
-            kind, value = receiver.recv()
-        except EOFError:
-            break
-        if kind == "phase":
-            stage = value
-        elif kind == "progress" and progress is not None:
+def verify_library(robot, library, routine, options=VerifyOptions(), progress=None):
+    """Load ``library`` and verify its ``routine`` in a child process. A plugin that crashes,
+    exits or stops making progress for ``options.timeout`` seconds, at load time or in any
+    call, gives a report whose last check is ``crash`` or ``timeout`` naming the stage;
+    a plugin that breaks the interface before it can be called fails ``get_kin_config``.
+    Bad input (no such file, not a library, unknown routine) raises KingenError."""
+    checks = []
+
+    def on_message(kind, value):
+        if kind == "progress" and progress is not None:
             progress(value)
-        elif kind == "report":
-            report = value
-    child.join()
+        elif kind == "check":
+            checks.append(value)
+
+    try:
+        report, failure = run_in_child(_verify_job, (robot, library, routine, options), options.timeout, on_message)
+    except PluginDefect as defect:
+        report, failure = None, None
+        checks = [Check("get_kin_config", False, str(defect))]
     if report is not None:
         return report
-    code = child.exitcode
-    how = f"signal {signal.Signals(-code).name}" if code is not None and code < 0 else f"exit status {code}"
-    report = _empty_report(robot, plugin, samples, seed, link_lengths, link_offsets)
-    report.checks.append(Check("crash", False, f"the routine crashed the host process ({how}) during {stage}"))
+    report = _empty_report(robot, routine, options)
+    report.checks.extend(checks)
+    if failure is not None:
+        report.checks.append(Check(failure.kind, False, failure.detail))
     return report
 
 
-def _verify_child(sender, robot, plugin, options):
-    faulthandler.disable()
-    report = verify(robot, plugin, progress=lambda done: sender.send(("progress", done)),
-                    phase=lambda text: sender.send(("phase", text)), **options)
-    sender.send(("report", report))
-    sender.close()
+def _verify_job(channel, robot, library, routine, options):
+    printed = _Printed()
+    with printed.capture():
+        plugin = Plugin(library, routine)
+    report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
+                    phase=channel.stage, on_check=lambda check: channel.send("check", check))
+    if printed.bytes:
+        report.notices.insert(0, f"loading the library printed {printed.bytes} bytes on stdout/stderr "
+                                 f"(first line: {printed.first_line!r})")
+    return report
 
 
 def _listed(values):
@@ -295,28 +232,38 @@ def _listed(values):
 
 
 def _compare_samples(robot, plugin, report, progress, printed, phase):
-    poses = sample_poses(robot, report.samples, report.seed)
     revolute = robot.revolute
     tally = _Tally()
     start = time.perf_counter()
-    chunk = chunk_size(robot)
-    for begin in range(0, report.samples, chunk):
-        phase(f"poses {begin} to {min(begin + chunk, report.samples) - 1} of seed {report.seed}")
-        t6 = t6_from_pose(poses[begin:begin + chunk])
+    for begin, poses in pose_chunks(robot, report.samples, report.seed, chunk_size(robot)):
+        phase(f"poses {begin} to {begin + len(poses) - 1} of seed {report.seed}")
+        t6 = t6_from_pose(poses)
         plugin.reset_host()
         with printed.capture():
-            calls = plugin.call_batch(t6, report.link_lengths, report.link_offsets)
+            calls = plugin.call(t6, report.link_lengths, report.link_offsets)
         expected = solve(robot, t6, report.link_lengths, report.link_offsets)
         _accumulate(robot, report, tally, revolute, t6, calls, expected)
         if progress is not None:
-            progress(min(begin + chunk, report.samples))
+            progress(begin + len(poses))
     report.seconds = time.perf_counter() - start
     phase("the determinism check")
     with printed.capture():
-        report.checks.extend(_sample_checks(robot, plugin, report, tally))
+        return _sample_checks(robot, plugin, report, tally)
 
 
 def _accumulate(robot, report, tally, revolute, t6, calls, expected):
+    tally.faulty_calls += int(np.count_nonzero(calls.faults))
+    tally.fault_bits |= int(np.bitwise_or.reduce(calls.faults)) if len(calls.faults) else 0
+    aborted = (calls.faults & ~abi.WROTE_INPUTS) != 0
+    if np.any(aborted):  # judged by the buffers check; its outputs are partial
+        tally.aborted += int(np.count_nonzero(aborted))
+        kept = ~aborted
+        t6, expected = t6[kept], replace(expected, **{name: getattr(expected, name)[kept]
+                                                      for name in ("joints", "warnings", "radicands", "finite")})
+        calls = replace(calls, **{name: getattr(calls, name)[kept]
+                                  for name in ("returned", "solutions", "warnings", "faults")})
+        if not len(t6):
+            return
     errors = joint_errors(calls.solutions, expected.joints, revolute)
     unreachable = expected.warnings == UNREACHABLE
     errors = np.where(unreachable[:, None, :] & np.isfinite(calls.solutions), 0.0, errors)
@@ -335,8 +282,6 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
     report.warnings_in_band += int(np.count_nonzero(excused))
     none_reachable = np.all(expected.warnings == UNREACHABLE, axis=1)
     tally.returns_wrong += int(np.count_nonzero(calls.returned != np.where(none_reachable, 1, 0)))
-    tally.guard_violations += calls.guard_violations
-    tally.inputs_modified |= calls.inputs_modified
     if tally.first is None:
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
@@ -344,13 +289,19 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
 
 
 def _sample_checks(robot, plugin, report, tally):
+    buffers = buffers_check(tally.faulty_calls, tally.fault_bits)
+    if tally.first is None:
+        return [Check(name, False, "not compared: every call was stopped at a write outside its buffers")
+                for name in ("values", "warnings", "return value")] + [buffers]
     t6, solutions, warnings, reference_joints, reference_warnings = tally.first
-    values_ok = (report.max_abs_error_mm <= VALUE_TOLERANCE_MM and report.max_abs_error_rad <= VALUE_TOLERANCE_RAD
+    values_ok = (report.max_abs_error_mm <= report.tolerance_mm and report.max_abs_error_rad <= report.tolerance_rad
                  and report.singular_out_of_bound == 0)
+    aborted = f" ({tally.aborted} calls stopped at a write outside their buffers left out)" if tally.aborted else ""
     values = Check("values", values_ok,
                    f"max |error| {report.max_abs_error_mm:.3g} mm, {report.max_abs_error_rad:.3g} rad over "
-                   f"{report.samples} poses x {report.postures} postures; {report.singular_entries} entries in a "
-                   f"singular band, {report.singular_out_of_bound} beyond their bound")
+                   f"{report.samples - tally.aborted} poses x {report.postures} postures{aborted}; "
+                   f"{report.singular_entries} entries in a singular band, {report.singular_out_of_bound} beyond "
+                   f"their bound")
     if not values_ok:
         values.diagnoses = diagnose(robot, t6, solutions, reference_joints, reference_warnings)
     warnings_check = Check("warnings", report.warning_mismatches == 0,
@@ -360,16 +311,23 @@ def _sample_checks(robot, plugin, report, tally):
     checks = [values, warnings_check]
     checks.append(Check("return value", tally.returns_wrong == 0,
                         f"{tally.returns_wrong} calls return other than 1 when no posture is reachable, 0 otherwise"))
-    checks.append(Check("buffers", tally.guard_violations == 0 and not tally.inputs_modified,
-                        f"{tally.guard_violations} calls wrote outside solutions/warnings; inputs "
-                        f"{'modified' if tally.inputs_modified else 'untouched'}"))
+    checks.append(buffers)
     plugin.reset_host()
-    again = plugin.call_batch(t6[:DETERMINISM_POSES], report.link_lengths, report.link_offsets)
+    again = plugin.call(t6[:DETERMINISM_POSES], report.link_lengths, report.link_offsets)
     same = (np.array_equal(again.solutions, solutions[:DETERMINISM_POSES], equal_nan=True)
             and np.array_equal(again.warnings, warnings[:DETERMINISM_POSES]))
     checks.append(Check("determinism", same, "the same T6 gives the same output" if same
                         else "calling again with the same T6 gives different output (state kept between calls?)"))
     return checks
+
+
+def buffers_check(faulty_calls, fault_bits):
+    """The ``buffers`` check from the guarded driver's per-call fault bits."""
+    if not faulty_calls:
+        return Check("buffers", True, "no call wrote outside solutions/warnings (each against an "
+                                      "inaccessible page) and inputs stayed untouched")
+    what = "; ".join(text for bit, text in abi.GUARD_FAULTS.items() if fault_bits & bit)
+    return Check("buffers", False, f"{faulty_calls} calls: the routine {what}")
 
 
 def _golden_detail(result):
@@ -450,19 +408,3 @@ def check_interface(robot, plugin):
     return checks
 
 
-def junit_xml(report):
-    """The report as JUnit XML: one test case per check."""
-    suite = ElementTree.Element("testsuite", {
-        "name": f"kingen verify {report.robot}", "tests": str(len(report.checks)),
-        "failures": str(len(report.failures)), "time": f"{report.seconds:.6f}",
-    })
-    for check in report.checks:
-        case = ElementTree.SubElement(suite, "testcase", {"classname": f"kingen.{report.robot}", "name": check.name})
-        if not check.passed:
-            failure = ElementTree.SubElement(case, "failure", {"message": check.detail})
-            failure.text = "\n".join([check.detail, *check.diagnoses])
-        else:
-            ElementTree.SubElement(case, "system-out").text = check.detail
-    if report.notices:
-        ElementTree.SubElement(suite, "system-err").text = "\n".join(report.notices)
-    return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"

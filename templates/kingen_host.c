@@ -2,11 +2,22 @@
  *
  * Provides the host symbols the vendor header maps to (DNBVMAP_kin_check_definition
  * and the DNBVMAP_* math functions), records how kin_check_definition was called,
- * can be told to refuse, and drives a routine over an array of T6 in one call.
- * Loaded with global symbol visibility before any plugin, as the host process is.
+ * can be told to refuse, and drives a routine over an array of T6 in one call:
+ * kingen_host_run_batch as fast as possible (for benchmarks), kingen_host_run_guarded
+ * with every output buffer placed against an inaccessible page, so that a write past
+ * (or far before) solutions[][] or warnings[] faults at once and is named, not silently
+ * corrupting memory. Loaded with global symbol visibility before any plugin, as the
+ * host process is.
  */
+#define _DEFAULT_SOURCE 1
 #define KINGEN_HOST 1
 #include "shlibdefs.h"
+#ifndef _WIN32
+#include <setjmp.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
 
 typedef int (*kingen_routine)(double *, double *, double (*)[4], double *, int *, void *);
 
@@ -81,3 +92,193 @@ int kingen_host_run_batch(void *routine, int count, double *t6, double *link_len
                           warnings + (size_t)i * warning_block, pData);
     return count;
 }
+
+#ifndef _WIN32
+/* Fault bits of kingen_host_run_guarded, per pose. */
+#define KINGEN_WROTE_BEFORE_SOLUTIONS 1
+#define KINGEN_WROTE_AFTER_SOLUTIONS 2
+#define KINGEN_WROTE_BEFORE_WARNINGS 4
+#define KINGEN_WROTE_AFTER_WARNINGS 8
+#define KINGEN_WROTE_INPUTS 16
+#define KINGEN_GUARD_DOUBLE (-7.0e300)
+#define KINGEN_GUARD_INT (-20260001)
+#define KINGEN_PAD_ENTRIES 64
+
+typedef struct {
+    char *base;           /* mapping: guard page, pad + data, guard page */
+    size_t size;
+    char *data;           /* first byte of the buffer handed to the routine */
+    size_t data_bytes;
+    char *pad;            /* sentinel-filled bytes between the leading guard page and data */
+    char *after;          /* the trailing guard page, right after the last data byte */
+} kingen_guarded;
+
+static sigjmp_buf guard_jump;
+static volatile sig_atomic_t guard_armed = 0;
+static volatile int guard_fault = 0;
+static kingen_guarded *guard_regions[2];
+static struct sigaction previous_segv, previous_bus;
+
+static int guarded_open(kingen_guarded *region, size_t data_bytes)
+{
+    size_t page = (size_t)sysconf(_SC_PAGESIZE);
+    size_t body = ((data_bytes + KINGEN_PAD_ENTRIES * sizeof(double) + page - 1) / page) * page;
+    void *base = mmap(NULL, body + 2 * page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (base == MAP_FAILED)
+        return 0;
+    region->base = (char *)base;
+    region->size = body + 2 * page;
+    region->after = region->base + page + body;
+    region->data = region->after - data_bytes;
+    region->data_bytes = data_bytes;
+    region->pad = region->base + page;
+    if (mprotect(region->base, page, PROT_NONE) != 0 || mprotect(region->after, page, PROT_NONE) != 0) {
+        munmap(base, region->size);
+        return 0;
+    }
+    return 1;
+}
+
+static void guarded_close(kingen_guarded *region)
+{
+    if (region->base != NULL)
+        munmap(region->base, region->size);
+    region->base = NULL;
+}
+
+static void on_fault(int signal_number, siginfo_t *info, void *context)
+{
+    char *address = (char *)info->si_addr;
+    size_t page = (size_t)sysconf(_SC_PAGESIZE);
+    int i;
+    (void)context;
+    if (guard_armed)
+        for (i = 0; i < 2; i++) {
+            kingen_guarded *region = guard_regions[i];
+            if (address >= region->base && address < region->base + page) {
+                guard_fault = i == 0 ? KINGEN_WROTE_BEFORE_SOLUTIONS : KINGEN_WROTE_BEFORE_WARNINGS;
+                siglongjmp(guard_jump, 1);
+            }
+            if (address >= region->after && address < region->after + page) {
+                guard_fault = i == 0 ? KINGEN_WROTE_AFTER_SOLUTIONS : KINGEN_WROTE_AFTER_WARNINGS;
+                siglongjmp(guard_jump, 1);
+            }
+        }
+    /* Not a guard page: a real crash. Restore the default action and let it happen. */
+    signal(signal_number, SIG_DFL);
+}
+
+static int pad_intact(const kingen_guarded *region, int doubles)
+{
+    if (doubles) {
+        const double *value;
+        for (value = (const double *)region->pad; (const char *)value < region->data; value++)
+            if (*value != KINGEN_GUARD_DOUBLE)
+                return 0;
+    } else {
+        const int *value;
+        for (value = (const int *)region->pad; (const char *)value < region->data; value++)
+            if (*value != KINGEN_GUARD_INT)
+                return 0;
+    }
+    return 1;
+}
+
+static void fill_pad(kingen_guarded *region, int doubles)
+{
+    if (doubles) {
+        double *value;
+        for (value = (double *)region->pad; (char *)value < region->data; value++)
+            *value = KINGEN_GUARD_DOUBLE;
+    } else {
+        int *value;
+        for (value = (int *)region->pad; (char *)value < region->data; value++)
+            *value = KINGEN_GUARD_INT;
+    }
+}
+
+/* Call the routine once per T6 with guarded buffers; outputs are copied to the caller's
+ * contiguous arrays (solutions: count x dof x postures, warnings: count x postures).
+ * Unwritten outputs keep the sentinels NaN and -1. faults[i] gets the KINGEN_WROTE_* bits
+ * of pose i; after a fault the pose's outputs are what was written before it. Returns the
+ * number of poses with a fault, or -1 when the guarded buffers cannot be set up. */
+int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_lengths, double *link_offsets,
+                            int dof, int postures, double *solutions, int *warnings, int *returns,
+                            int *faults, void *pData)
+{
+    kingen_routine call;
+    kingen_guarded solution_region, warning_region;
+    struct sigaction action;
+    double inputs[28], copy[28], not_a_number;
+    volatile double zero = 0.0;
+    volatile int i, faulty = 0;
+    size_t solution_bytes = (size_t)dof * (size_t)postures * sizeof(double);
+    size_t warning_bytes = (size_t)postures * sizeof(int);
+    int k;
+    memcpy(&call, &routine, sizeof call);
+    not_a_number = zero / zero;
+    memset(&solution_region, 0, sizeof solution_region);
+    memset(&warning_region, 0, sizeof warning_region);
+    if (!guarded_open(&solution_region, solution_bytes) || !guarded_open(&warning_region, warning_bytes)) {
+        guarded_close(&solution_region);
+        return -1;
+    }
+    guard_regions[0] = &solution_region;
+    guard_regions[1] = &warning_region;
+    memset(&action, 0, sizeof action);
+    action.sa_sigaction = on_fault;
+    action.sa_flags = SA_SIGINFO | SA_NODEFER;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGSEGV, &action, &previous_segv);
+    sigaction(SIGBUS, &action, &previous_bus);
+    for (i = 0; i < count; i++) {
+        double *solution_data = (double *)solution_region.data;
+        int *warning_data = (int *)warning_region.data;
+        memcpy(inputs, t6 + 16 * (size_t)i, 16 * sizeof(double));
+        memcpy(inputs + 16, link_lengths, 6 * sizeof(double));
+        memcpy(inputs + 22, link_offsets, 6 * sizeof(double));
+        memcpy(copy, inputs, sizeof copy);
+        fill_pad(&solution_region, 1);
+        fill_pad(&warning_region, 0);
+        for (k = 0; k < dof * postures; k++)
+            solution_data[k] = not_a_number;
+        for (k = 0; k < postures; k++)
+            warning_data[k] = -1;
+        faults[i] = 0;
+        returns[i] = -1;
+        guard_fault = 0;
+        if (sigsetjmp(guard_jump, 0) == 0) {
+            guard_armed = 1;
+            returns[i] = call(inputs + 16, inputs + 22, (double (*)[4])inputs, solution_data, warning_data, pData);
+            guard_armed = 0;
+        } else {
+            guard_armed = 0;
+            faults[i] = guard_fault;
+        }
+        if (!pad_intact(&solution_region, 1))
+            faults[i] |= KINGEN_WROTE_BEFORE_SOLUTIONS;
+        if (!pad_intact(&warning_region, 0))
+            faults[i] |= KINGEN_WROTE_BEFORE_WARNINGS;
+        if (memcmp(inputs, copy, sizeof copy) != 0)
+            faults[i] |= KINGEN_WROTE_INPUTS;
+        memcpy(solutions + (size_t)i * dof * postures, solution_data, solution_bytes);
+        memcpy(warnings + (size_t)i * postures, warning_data, warning_bytes);
+        if (faults[i])
+            faulty++;
+    }
+    sigaction(SIGSEGV, &previous_segv, NULL);
+    sigaction(SIGBUS, &previous_bus, NULL);
+    guarded_close(&solution_region);
+    guarded_close(&warning_region);
+    return faulty;
+}
+#else
+int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_lengths, double *link_offsets,
+                            int dof, int postures, double *solutions, int *warnings, int *returns,
+                            int *faults, void *pData)
+{
+    (void)routine; (void)count; (void)t6; (void)link_lengths; (void)link_offsets; (void)dof; (void)postures;
+    (void)solutions; (void)warnings; (void)returns; (void)faults; (void)pData;
+    return -1;
+}
+#endif

@@ -32,7 +32,7 @@ def test_plugin_and_reference_agree_under_random_calibration(plugin, name):
             lengths = np.where(lengths > 0, lengths - 700.0, 0.0)
         offsets = np.where(rng.random(6) < 0.3, 0.0, rng.uniform(-40.0, 40.0, 6))
         loaded.reset_host()
-        calls = loaded.call_batch(t6, lengths, offsets)
+        calls = loaded.call(t6, lengths, offsets)
         expected = solve(robot, t6, lengths, offsets)
         assert joint_errors(calls.solutions, expected.joints, robot.revolute).max() <= 1e-9
         np.testing.assert_array_equal(calls.warnings, expected.warnings)
@@ -42,9 +42,9 @@ def test_zero_and_non_finite_fields_keep_the_built_in_values(plugin):
     robot, loaded = plugin("tau")
     _, t6 = random_t6(robot, 50, seed=2)
     loaded.reset_host()
-    plain = loaded.call_batch(t6)
+    plain = loaded.call(t6)
     for lengths in ([0.0] * 6, [np.nan, np.inf, -np.inf, 0.0, 0.0, 0.0]):
-        calls = loaded.call_batch(t6, lengths, [0.0] * 6)
+        calls = loaded.call(t6, lengths, [0.0] * 6)
         np.testing.assert_array_equal(calls.solutions, plain.solutions)
         np.testing.assert_array_equal(solve(robot, t6, lengths).joints, solve(robot, t6).joints)
 

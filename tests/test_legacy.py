@@ -293,8 +293,9 @@ def test_writing_past_the_solutions_array_is_caught(capsys, tmp_path):
     code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(OUT_OF_BOUNDS="1"),
                                   "kin_hexapodFullTest")
     assert code == 1
-    assert failed_checks(data) == ["buffers"]
-    assert "3000 calls wrote outside solutions/warnings" in next(c["detail"] for c in data["checks"] if c["name"] == "buffers")
+    assert failed_checks(data) == ["buffers", "return value", "values", "warnings"]
+    assert "3000 calls: the routine wrote past the end of solutions[][]" in next(
+        c["detail"] for c in data["checks"] if c["name"] == "buffers")
 
 
 def test_ignoring_kin_check_definition_is_caught(capsys, tmp_path):
@@ -370,4 +371,4 @@ def test_a_routine_that_crashes_is_a_failed_check_not_a_dead_process(capsys, tmp
     code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(CRASH="1"), "kin_hexapodFullTest")
     assert code == 1
     assert failed_checks(data) == ["crash"]
-    assert "the routine crashed the host process (signal SIGSEGV) during poses 0 to 2999 of seed 0" in out
+    assert "the plugin ended the host process (signal SIGSEGV) during poses 0 to 2999 of seed 0" in out

@@ -58,7 +58,7 @@ def test_plugin_matches_reference_on_random_poses(plugin, name):
     robot, loaded = plugin(name)
     poses, t6 = random_t6(robot, 3000, seed=11)
     loaded.reset_host()
-    calls = loaded.call_batch(t6)
+    calls = loaded.call(t6)
     expected = solve(robot, t6)
     errors = joint_errors(calls.solutions, expected.joints, robot.revolute)
     worst = np.unravel_index(np.argmax(errors), errors.shape)
@@ -69,13 +69,16 @@ def test_plugin_matches_reference_on_random_poses(plugin, name):
 
 
 @pytest.mark.parametrize("name", ["hexapod", "tau", "ceart"])
-def test_batch_and_per_call_paths_agree(plugin, name):
+def test_guarded_and_unguarded_drivers_agree(plugin, name):
     robot, loaded = plugin(name)
     _, t6 = random_t6(robot, 50, seed=5)
     loaded.reset_host()
-    batch, single = loaded.call_batch(t6), loaded.call(t6)
-    np.testing.assert_array_equal(batch.solutions, single.solutions)
-    np.testing.assert_array_equal(batch.warnings, single.warnings)
+    guarded = loaded.call(t6)
+    _, _, solutions, warnings, returned = loaded.batch_runner(t6)()
+    np.testing.assert_array_equal(guarded.solutions.reshape(50, -1), solutions.reshape(50, -1))
+    np.testing.assert_array_equal(guarded.warnings.ravel(), warnings)
+    np.testing.assert_array_equal(guarded.returned, returned)
+    assert not np.any(guarded.faults)
 
 
 def test_get_kin_config_answers_only_its_routine(plugin):

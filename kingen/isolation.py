@@ -1,0 +1,136 @@
+"""Running foreign code in a child process: loading a plugin (its constructors run),
+``get_kin_config`` and every routine call.
+
+The command line never executes plugin code in its own process. A job runs in a
+forked child and talks to the parent through a pipe: stage names, progress, finished
+checks and at last its result. The parent waits at most ``timeout`` seconds for each
+message, so a routine that stops making progress (an endless loop, a sleep per call)
+is killed and named with the stage it was in; a child that dies (a segfault, a call to
+``exit()``) becomes a :class:`ChildFailure` naming the signal or exit status and the
+stage. The child dies with the parent (``PR_SET_PDEATHSIG`` on Linux), and the parent
+kills it on the way out of any exception, SIGTERM included (the CLI turns SIGTERM into
+``SystemExit``).
+"""
+
+import ctypes
+import faulthandler
+import multiprocessing
+import os
+import signal
+import traceback
+from dataclasses import dataclass
+
+from .errors import InternalError, KingenError, PluginDefect
+
+FIRST_STAGE = "loading the plugin (its constructors and get_kin_config)"
+
+
+@dataclass(frozen=True)
+class ChildFailure:
+    """Why a job ended without a result: ``kind`` 'crash' or 'timeout', and where."""
+
+    kind: str
+    stage: str
+    detail: str
+
+
+class Channel:
+    """The child's end: ``stage(text)`` before each step, ``send(kind, value)`` for the rest."""
+
+    def __init__(self, connection):
+        self._connection = connection
+
+    def stage(self, text):
+        self._connection.send(("stage", text))
+
+    def send(self, kind, value):
+        self._connection.send((kind, value))
+
+
+def run_in_child(job, arguments, timeout, on_message=None):
+    """Run ``job(channel, *arguments)`` in a forked child; return (result, None) or
+    (None, ChildFailure). ``on_message(kind, value)`` gets every message other than
+    stages. A KingenError raised in the child is raised here (bad input found while
+    loading); any other exception there is a kingen defect, raised as InternalError."""
+    context = multiprocessing.get_context("fork")
+    receiver, sender = context.Pipe(duplex=False)
+    child = context.Process(target=_child_main, args=(sender, job, arguments), daemon=True)
+    child.start()
+    sender.close()
+    stage = FIRST_STAGE
+    try:
+        while True:
+            if not receiver.poll(timeout):
+                return None, ChildFailure("timeout", stage, f"no progress for {timeout:g} s during {stage}; "
+                                                            "the routine was stopped (--timeout)")
+            try:
+                kind, value = receiver.recv()
+            except EOFError:
+                break
+            if kind == "stage":
+                stage = value
+            elif kind == "result":
+                return value, None
+            elif kind == "defect":
+                raise PluginDefect(value)
+            elif kind == "error":
+                raise KingenError(value)
+            elif kind == "internal":
+                raise InternalError(value)
+            elif on_message is not None:
+                on_message(kind, value)
+    finally:
+        receiver.close()
+        _end(child)
+    code = child.exitcode
+    how = f"signal {signal.Signals(-code).name}" if code is not None and code < 0 else f"exit status {code}"
+    return None, ChildFailure("crash", stage, f"the plugin ended the host process ({how}) during {stage}")
+
+
+def _end(child):
+    """Stop the child if it still runs (after a result it exits by itself) and reap it."""
+    child.join(timeout=5.0)
+    if child.is_alive():
+        child.kill()
+        child.join()
+
+
+def _child_main(connection, job, arguments):
+    _die_with_parent()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    faulthandler.disable()
+    _silence_standard_streams()
+    channel = Channel(connection)
+    try:
+        channel.send("result", job(channel, *arguments))
+    except PluginDefect as error:
+        channel.send("defect", str(error))
+    except KingenError as error:
+        channel.send("error", str(error))
+    except BaseException as error:  # a kingen defect: reported by the parent as an internal error
+        channel.send("internal", f"{type(error).__name__}: {error} ({_origin(error)})")
+    finally:
+        connection.close()
+
+
+def _origin(error):
+    frames = traceback.extract_tb(error.__traceback__)
+    return f"{os.path.basename(frames[-1].filename)}:{frames[-1].lineno}" if frames else "unknown place"
+
+
+def _die_with_parent():
+    """Ask Linux to SIGKILL this process when its parent dies, however the parent dies."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def _silence_standard_streams():
+    """What foreign code prints goes nowhere unless a job captures it on purpose: it must
+    not mix into kingen's own output (which may be a JSON stream read by a script)."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 1)
+    os.dup2(null, 2)
+    os.close(null)

@@ -1,0 +1,145 @@
+"""The outcome of a verification and its two file forms: JSON (the CLI's ``--json``)
+and JUnit XML (``--junit``). Both are always well-formed: non-finite numbers are written
+as JSON null, and text is stripped of what XML 1.0 cannot hold."""
+
+import json
+import math
+import xml.etree.ElementTree as ElementTree
+from dataclasses import asdict, dataclass, field
+
+from .text import xml_text
+
+INTERFACE_CHECKS = ("get_kin_config", "kin_check_definition", "refusal", "non-finite T6")
+
+
+@dataclass
+class Check:
+    """One clause of the contract: its name, verdict, the evidence, and diagnoses when it failed."""
+
+    name: str
+    passed: bool
+    detail: str = ""
+    diagnoses: list = field(default_factory=list)
+
+
+@dataclass
+class GoldenResult:
+    """One golden value: published joints against the plugin's and the reference's (YAML units)."""
+
+    source: str
+    pose: list
+    posture: int
+    expected: list
+    plugin: list
+    reference: list
+    tolerance: float
+    passed: bool
+
+
+@dataclass
+class Report:
+    """The outcome of ``verify``; ``as_json`` gives the contract keys of the CLI's --json."""
+
+    robot: str
+    routine: str
+    samples: int
+    seed: int
+    postures: int
+    max_abs_error_mm: float = 0.0
+    max_abs_error_rad: float = 0.0
+    singular_entries: int = 0
+    singular_out_of_bound: int = 0
+    warning_mismatches: int = 0
+    warnings_in_band: int = 0
+    golden: list = field(default_factory=list)
+    checks: list = field(default_factory=list)
+    notices: list = field(default_factory=list)
+    seconds: float = 0.0
+    link_lengths: list = None
+    link_offsets: list = None
+    tolerance_mm: float = 1e-9
+    """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
+    tolerance_rad: float = 1e-9
+
+    @property
+    def golden_checked(self):
+        return len(self.golden)
+
+    @property
+    def golden_failed(self):
+        return sum(1 for result in self.golden if not result.passed)
+
+    @property
+    def passed(self):
+        return all(check.passed for check in self.checks)
+
+    @property
+    def failures(self):
+        return [check for check in self.checks if not check.passed]
+
+    @property
+    def poses_per_second(self):
+        return self.samples / self.seconds if self.seconds > 0 else math.inf
+
+    def as_json(self):
+        """The report as JSON-ready data; NaN and infinities become None (JSON null)."""
+        return _finite({
+            "robot": self.robot,
+            "routine": self.routine,
+            "samples": self.samples,
+            "seed": self.seed,
+            "postures": self.postures,
+            "link_lengths": self.link_lengths,
+            "link_offsets": self.link_offsets,
+            "max_abs_error_mm": self.max_abs_error_mm,
+            "max_abs_error_rad": self.max_abs_error_rad,
+            "tolerance_mm": self.tolerance_mm,
+            "tolerance_rad": self.tolerance_rad,
+            "singular_entries": self.singular_entries,
+            "singular_out_of_bound": self.singular_out_of_bound,
+            "warning_mismatches": self.warning_mismatches,
+            "warnings_in_band": self.warnings_in_band,
+            "golden_checked": self.golden_checked,
+            "golden_failed": self.golden_failed,
+            "golden": [asdict(result) for result in self.golden],
+            "checks": [asdict(check) for check in self.checks],
+            "interface_failures": [check.detail for check in self.failures if check.name in INTERFACE_CHECKS],
+            "diagnoses": [text for check in self.checks for text in check.diagnoses],
+            "notices": list(self.notices),
+            "seconds": round(self.seconds, 6),
+            "poses_per_second": self.poses_per_second,
+            "passed": self.passed,
+        })
+
+
+def _finite(data):
+    if isinstance(data, float):
+        return data if math.isfinite(data) else None
+    if isinstance(data, dict):
+        return {key: _finite(value) for key, value in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [_finite(value) for value in data]
+    return data
+
+
+def json_text(report):
+    """The report as JSON text (strict: no NaN or Infinity literals)."""
+    return json.dumps(report.as_json(), indent=2, allow_nan=False) + "\n"
+
+
+def junit_xml(report):
+    """The report as JUnit XML: one test case per check."""
+    suite = ElementTree.Element("testsuite", {
+        "name": f"kingen verify {report.robot}", "tests": str(len(report.checks)),
+        "failures": str(len(report.failures)), "time": f"{report.seconds:.6f}",
+    })
+    for check in report.checks:
+        case = ElementTree.SubElement(suite, "testcase", {"classname": f"kingen.{report.robot}", "name": check.name})
+        if not check.passed:
+            failure = ElementTree.SubElement(case, "failure", {"message": xml_text(check.detail)})
+            failure.text = xml_text("\n".join([check.detail, *check.diagnoses]))
+        else:
+            ElementTree.SubElement(case, "system-out").text = xml_text(check.detail)
+    if report.notices:
+        ElementTree.SubElement(suite, "system-err").text = xml_text("\n".join(report.notices))
+    return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
