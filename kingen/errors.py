@@ -16,8 +16,13 @@ def located(source, line, field, problem):
 
 
 class PluginDefect(KingenError):
-    """A plugin that breaks the interface before it can be verified (no get_kin_config,
-    impossible counts): a failed verification (exit 1), not bad input."""
+    """A plugin that breaks the interface before it can be verified (it does not load, no
+    get_kin_config, impossible counts): a failed verification (exit 1), not bad input.
+    ``check`` names the verify check it fails."""
+
+    def __init__(self, message, check="get_kin_config"):
+        super().__init__(message)
+        self.check = check
 
 
 class InternalError(Exception):

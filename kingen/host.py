@@ -111,6 +111,10 @@ def _dlopen(path):
         library = ffi.dlopen(str(target), ffi.RTLD_NOW)
     except OSError as error:
         reason = str(error).split(".  Additionally")[0]
+        with open(path, "rb") as stream:
+            shared_object = stream.read(4) == b"\x7fELF"
+        if shared_object:  # a library the host cannot load either (an undefined symbol, say)
+            raise PluginDefect(f"the library cannot be loaded: {reason}", check="load") from None
         raise KingenError(f"{path}: cannot be loaded: {reason}") from None
     _loaded[path] = (identity, library)
     return library
@@ -273,8 +277,9 @@ def captured_output(limit=4096):
     ``text`` (the first ``limit`` bytes, decoded).
     """
     result = {"bytes": 0, "text": ""}
-    sys.stdout.flush()
-    sys.stderr.flush()
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
     host().kingen_host_flush()
     saved = [os.dup(1), os.dup(2)]
     with tempfile.TemporaryFile() as sink:

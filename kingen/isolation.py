@@ -72,7 +72,7 @@ def run_in_child(job, arguments, timeout, on_message=None):
             elif kind == "result":
                 return value, None
             elif kind == "defect":
-                raise PluginDefect(value)
+                raise PluginDefect(*value)
             elif kind == "error":
                 raise KingenError(value)
             elif kind == "internal":
@@ -105,7 +105,7 @@ def _child_main(connection, job, arguments):
     try:
         channel.send("result", job(channel, *arguments))
     except PluginDefect as error:
-        channel.send("defect", str(error))
+        channel.send("defect", (str(error), error.check))
     except KingenError as error:
         channel.send("error", str(error))
     except BaseException as error:  # a kingen defect: reported by the parent as an internal error

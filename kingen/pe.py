@@ -12,7 +12,7 @@ def dll_exports(path):
     data = Path(path).read_bytes()
     try:
         return _exports(data)
-    except (struct.error, IndexError, ValueError) as error:
+    except (struct.error, IndexError, KeyError, ValueError, OverflowError) as error:
         raise KingenError(f"{path}: not a readable Windows DLL ({error})") from None
 
 
@@ -25,6 +25,8 @@ def _exports(data):
     sections, optional_size = struct.unpack_from("<H12xH", data, pe + 6)
     optional = pe + 24
     magic = struct.unpack_from("<H", data, optional)[0]
+    if magic not in (0x10B, 0x20B):
+        raise ValueError(f"unknown optional header magic {magic:#x}")
     directories = optional + {0x10B: 96, 0x20B: 112}[magic]
     export_rva, export_size = struct.unpack_from("<II", data, directories)
     if export_size == 0:

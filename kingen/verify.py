@@ -16,7 +16,6 @@ failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
-import math
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
@@ -205,7 +204,7 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
         report, failure = run_in_child(_verify_job, (robot, library, routine, options), options.timeout, on_message)
     except PluginDefect as defect:
         report, failure = None, None
-        checks = [Check("get_kin_config", False, str(defect))]
+        checks = [Check(defect.check, False, str(defect))]
     if report is not None:
         return report
     report = _empty_report(robot, routine, options)
@@ -301,7 +300,7 @@ def _sample_checks(robot, plugin, report, tally):
                    f"max |error| {report.max_abs_error_mm:.3g} mm, {report.max_abs_error_rad:.3g} rad over "
                    f"{report.samples - tally.aborted} poses x {report.postures} postures{aborted}; "
                    f"{report.singular_entries} entries in a singular band, {report.singular_out_of_bound} beyond "
-                   f"their bound")
+                   f"their bound (bounds {report.tolerance_mm:.3g} mm, {report.tolerance_rad:.3g} rad)")
     if not values_ok:
         values.diagnoses = diagnose(robot, t6, solutions, reference_joints, reference_warnings)
     warnings_check = Check("warnings", report.warning_mismatches == 0,

@@ -4,7 +4,7 @@
  * and the DNBVMAP_* math functions), records how kin_check_definition was called,
  * can be told to refuse, and drives a routine over an array of T6 in one call:
  * kingen_host_run_batch as fast as possible (for benchmarks), kingen_host_run_guarded
- * with every output buffer placed against an inaccessible page, so that a write past
+ * with every output buffer placed between inaccessible zones of 1 MiB, so that a write past
  * (or far before) solutions[][] or warnings[] faults at once and is named, not silently
  * corrupting memory. Loaded with global symbol visibility before any plugin, as the
  * host process is.
@@ -16,6 +16,7 @@
 #include <setjmp.h>
 #include <signal.h>
 #include <sys/mman.h>
+#include <stdlib.h>
 #include <unistd.h>
 #endif
 
@@ -103,14 +104,16 @@ int kingen_host_run_batch(void *routine, int count, double *t6, double *link_len
 #define KINGEN_GUARD_DOUBLE (-7.0e300)
 #define KINGEN_GUARD_INT (-20260001)
 #define KINGEN_PAD_ENTRIES 64
+#define KINGEN_GUARD_BYTES ((size_t)1 << 20) /* inaccessible on each side: 131072 doubles */
 
 typedef struct {
-    char *base;           /* mapping: guard page, pad + data, guard page */
+    char *base;           /* mapping: guard zone, pad + data, guard zone */
     size_t size;
     char *data;           /* first byte of the buffer handed to the routine */
     size_t data_bytes;
-    char *pad;            /* sentinel-filled bytes between the leading guard page and data */
-    char *after;          /* the trailing guard page, right after the last data byte */
+    char *pad;            /* sentinel-filled bytes between the leading guard zone and data */
+    char *after;          /* the trailing guard zone, right after the last data byte */
+    char *reference;      /* what the pad holds when intact */
 } kingen_guarded;
 
 static sigjmp_buf guard_jump;
@@ -119,23 +122,36 @@ static volatile int guard_fault = 0;
 static kingen_guarded *guard_regions[2];
 static struct sigaction previous_segv, previous_bus;
 
-static int guarded_open(kingen_guarded *region, size_t data_bytes)
+static void fill_pad(kingen_guarded *region, int doubles);
+
+static int guarded_open(kingen_guarded *region, size_t data_bytes, int doubles)
 {
     size_t page = (size_t)sysconf(_SC_PAGESIZE);
     size_t body = ((data_bytes + KINGEN_PAD_ENTRIES * sizeof(double) + page - 1) / page) * page;
-    void *base = mmap(NULL, body + 2 * page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    void *base = mmap(NULL, body + 2 * KINGEN_GUARD_BYTES, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
+                      -1, 0);
     if (base == MAP_FAILED)
         return 0;
     region->base = (char *)base;
-    region->size = body + 2 * page;
-    region->after = region->base + page + body;
+    region->size = body + 2 * KINGEN_GUARD_BYTES;
+    region->after = region->base + KINGEN_GUARD_BYTES + body;
     region->data = region->after - data_bytes;
     region->data_bytes = data_bytes;
-    region->pad = region->base + page;
-    if (mprotect(region->base, page, PROT_NONE) != 0 || mprotect(region->after, page, PROT_NONE) != 0) {
+    region->pad = region->base + KINGEN_GUARD_BYTES;
+    if (mprotect(region->base, KINGEN_GUARD_BYTES, PROT_NONE) != 0
+        || mprotect(region->after, KINGEN_GUARD_BYTES, PROT_NONE) != 0) {
         munmap(base, region->size);
+        region->base = NULL;
         return 0;
     }
+    fill_pad(region, doubles);
+    region->reference = (char *)malloc((size_t)(region->data - region->pad) + 1);
+    if (region->reference == NULL) {
+        munmap(base, region->size);
+        region->base = NULL;
+        return 0;
+    }
+    memcpy(region->reference, region->pad, (size_t)(region->data - region->pad));
     return 1;
 }
 
@@ -143,45 +159,30 @@ static void guarded_close(kingen_guarded *region)
 {
     if (region->base != NULL)
         munmap(region->base, region->size);
+    free(region->reference);
     region->base = NULL;
+    region->reference = NULL;
 }
 
 static void on_fault(int signal_number, siginfo_t *info, void *context)
 {
     char *address = (char *)info->si_addr;
-    size_t page = (size_t)sysconf(_SC_PAGESIZE);
     int i;
     (void)context;
     if (guard_armed)
         for (i = 0; i < 2; i++) {
             kingen_guarded *region = guard_regions[i];
-            if (address >= region->base && address < region->base + page) {
+            if (address >= region->base && address < region->base + KINGEN_GUARD_BYTES) {
                 guard_fault = i == 0 ? KINGEN_WROTE_BEFORE_SOLUTIONS : KINGEN_WROTE_BEFORE_WARNINGS;
                 siglongjmp(guard_jump, 1);
             }
-            if (address >= region->after && address < region->after + page) {
+            if (address >= region->after && address < region->after + KINGEN_GUARD_BYTES) {
                 guard_fault = i == 0 ? KINGEN_WROTE_AFTER_SOLUTIONS : KINGEN_WROTE_AFTER_WARNINGS;
                 siglongjmp(guard_jump, 1);
             }
         }
-    /* Not a guard page: a real crash. Restore the default action and let it happen. */
+    /* Not a guard zone: a real crash. Restore the default action and let it happen. */
     signal(signal_number, SIG_DFL);
-}
-
-static int pad_intact(const kingen_guarded *region, int doubles)
-{
-    if (doubles) {
-        const double *value;
-        for (value = (const double *)region->pad; (const char *)value < region->data; value++)
-            if (*value != KINGEN_GUARD_DOUBLE)
-                return 0;
-    } else {
-        const int *value;
-        for (value = (const int *)region->pad; (const char *)value < region->data; value++)
-            if (*value != KINGEN_GUARD_INT)
-                return 0;
-    }
-    return 1;
 }
 
 static void fill_pad(kingen_guarded *region, int doubles)
@@ -195,6 +196,17 @@ static void fill_pad(kingen_guarded *region, int doubles)
         for (value = (int *)region->pad; (char *)value < region->data; value++)
             *value = KINGEN_GUARD_INT;
     }
+}
+
+/* The pad still holds its sentinels (compared with the copy taken when it was filled);
+ * if not, it is filled again for the next call. */
+static int pad_intact(kingen_guarded *region, int doubles)
+{
+    size_t bytes = (size_t)(region->data - region->pad);
+    if (memcmp(region->pad, region->reference, bytes) == 0)
+        return 1;
+    fill_pad(region, doubles);
+    return 0;
 }
 
 /* Call the routine once per T6 with guarded buffers; outputs are copied to the caller's
@@ -219,7 +231,7 @@ int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_l
     not_a_number = zero / zero;
     memset(&solution_region, 0, sizeof solution_region);
     memset(&warning_region, 0, sizeof warning_region);
-    if (!guarded_open(&solution_region, solution_bytes) || !guarded_open(&warning_region, warning_bytes)) {
+    if (!guarded_open(&solution_region, solution_bytes, 1) || !guarded_open(&warning_region, warning_bytes, 0)) {
         guarded_close(&solution_region);
         return -1;
     }
@@ -238,8 +250,6 @@ int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_l
         memcpy(inputs + 16, link_lengths, 6 * sizeof(double));
         memcpy(inputs + 22, link_offsets, 6 * sizeof(double));
         memcpy(copy, inputs, sizeof copy);
-        fill_pad(&solution_region, 1);
-        fill_pad(&warning_region, 0);
         for (k = 0; k < dof * postures; k++)
             solution_data[k] = not_a_number;
         for (k = 0; k < postures; k++)

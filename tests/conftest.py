@@ -1,10 +1,16 @@
 """Shared fixtures: shipped robots, plugins built once per test session."""
 
 import os
+import shutil
 import tempfile
 
 import numpy as np
 import pytest
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, database=None)
+if os.environ.get("CI"):
+    settings.load_profile("ci")  # the same examples on every CI run: a red CI is reproducible
 
 os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache-"))
 
@@ -55,3 +61,13 @@ def random_t6(robot, count, seed):
     region = robot.verification
     poses = np.asarray(region.home) + rng.uniform(-1, 1, (count, 6)) * np.asarray(region.range)
     return poses, t6_from_pose(poses)
+
+
+def require_tool(tool, package):
+    """Skip when ``tool`` is missing, saying what installs it; under
+    KINGEN_REQUIRE_TOOLCHAINS=1 (set by .ci/run) fail instead: a skipped matrix is not green."""
+    if shutil.which(tool) is None:
+        message = f"{tool} is not installed (Debian package {package}; .ci/run installs it)"
+        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
+        pytest.skip(message)

@@ -1,14 +1,13 @@
 """Generated plugins: strict C89 with several compilers, the DELMIA contract, and agreement
 with the reference through kingen's host emulator and through a separate plain-C client."""
 
-import shutil
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import SHIPPED, random_t6
+from conftest import SHIPPED, random_t6, require_tool
 from kingen.abi import WARNINGS
 from kingen.build import STRICT_C89, compiler_command, host_support
 from kingen.conventions import joint_errors, t6_from_pose
@@ -25,8 +24,7 @@ COMPILERS = ["gcc", "clang", "tcc"]
 @pytest.mark.parametrize("name", SHIPPED)
 @pytest.mark.parametrize("debug", [False, True], ids=["release", "debug"])
 def test_source_compiles_as_strict_c89(compiler, name, debug, tmp_path):
-    if shutil.which(compiler) is None:
-        pytest.skip(f"{compiler} is not installed (.ci/run installs it)")
+    require_tool(compiler, compiler)
     (file_name, text), = render(load_robot(name)).items()
     source = tmp_path / file_name
     source.write_text(text)

@@ -2,14 +2,13 @@
 package that drops into DELMIA's DNBUserKinematics folder."""
 
 import re
-import shutil
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import SHIPPED, random_t6
+from conftest import SHIPPED, random_t6, require_tool
 from kingen.build import MINGW, STRICT_C89, build_plugin, compile_c, host_support, windows_host_import_library
 from kingen.conventions import rotation_from_rpy, t6_from_matrix
 from kingen.model import load_robot
@@ -17,8 +16,12 @@ from kingen.package import render_package, write_package
 from kingen.pe import dll_exports
 from kingen.reference import solve
 
-needs_mingw = pytest.mark.skipif(shutil.which(MINGW) is None,
-                                 reason=f"{MINGW} is not installed (Debian: gcc-mingw-w64-x86-64; .ci/run installs it)")
+
+
+@pytest.fixture
+def needs_mingw():
+    require_tool(MINGW, "gcc-mingw-w64-x86-64")
+
 CLIENT = Path(__file__).parent / "c" / "abi_client.c"
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-g"]
 
@@ -47,8 +50,7 @@ def extreme_t6(robot, seed):
 
 @pytest.fixture(scope="module")
 def sanitized_client(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed")
+    require_tool("gcc", "gcc")
     folder = tmp_path_factory.mktemp("asan")
     executable = folder / "abi_client"
     compile_c([CLIENT], executable, ["-std=c99", *SANITIZE, "-rdynamic", "-ldl"], compiler=["gcc"])
@@ -79,7 +81,7 @@ def test_sanitized_plugin_reports_nothing_on_random_extreme_and_non_finite_t6(sa
                                   expected)
 
 
-@needs_mingw
+@pytest.mark.usefixtures("needs_mingw")
 @pytest.mark.parametrize("name", ["tau", "ceart", "hexapod"])
 def test_windows_dll_exports_both_entry_points(tmp_path, name):
     robot = load_robot(name)
@@ -88,7 +90,7 @@ def test_windows_dll_exports_both_entry_points(tmp_path, name):
     assert dll_exports(result.library) == sorted(["get_kin_config", robot.routine])
 
 
-@needs_mingw
+@pytest.mark.usefixtures("needs_mingw")
 def test_pe_reader_agrees_with_objdump(tmp_path):
     result = build_plugin(load_robot("tau"), tmp_path, target="windows")
     dump = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(result.library)], capture_output=True,
@@ -98,7 +100,7 @@ def test_pe_reader_agrees_with_objdump(tmp_path):
     assert sorted(names) == dll_exports(result.library)
 
 
-@needs_mingw
+@pytest.mark.usefixtures("needs_mingw")
 def test_windows_package_builds_with_its_own_makefile_defines_and_def_file(tmp_path):
     robot = load_robot("tau")
     paths = write_package(robot, tmp_path / "package", "windows")

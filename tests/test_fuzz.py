@@ -1,0 +1,155 @@
+"""Property-based fuzzing with hypothesis.
+
+- Random valid robots (every limb model, any scale within the stated geometry range)
+  build, verify and pass: kingen's plugin and reference agree wherever they are.
+- Random mutations of valid robot files, in their text and in their structure, end in
+  exit 0 or 2 within seconds, with one error line, never a traceback, and leave no files.
+"""
+
+import json
+import math
+
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from kingen.build import build_plugin
+from kingen.cli import main
+from kingen.host import Plugin
+from kingen.model import load_robot, robots_dir, shipped_robots
+from kingen.robot_file import read_robot_file
+from kingen.verify import VerifyOptions, verify
+
+FUZZ = settings(deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+unit = st.floats(-1.0, 1.0)
+vector = st.tuples(unit, unit, unit)
+
+
+@st.composite
+def limbs(draw, scale):
+    model = draw(st.sampled_from(["leg", "rail", "crank"]))
+    point = lambda factor=1.0: [scale * factor * c for c in draw(vector)]  # noqa: E731
+    length = lambda low, high: scale * draw(st.floats(low, high))  # noqa: E731
+    if model == "leg":
+        return {"model": "leg", "base_point": point(), "platform_point": point(0.5),
+                "reference_length": length(0.1, 2.0)}
+    if model == "rail":
+        direction = draw(vector.filter(lambda v: math.hypot(*v) > 0.1))
+        norm = math.hypot(*direction)
+        return {"model": "rail", "rail_point": point(), "direction": [c / norm for c in direction],
+                "carriage_offset": point(0.2), "platform_point": point(0.5), "link_length": length(0.5, 2.0)}
+    return {"model": "crank", "pivot": point(), "crank_direction": draw(st.floats(-180.0, 180.0)),
+            "crank_length": length(0.1, 1.0), "rod_length": length(0.5, 2.0), "platform_point": point(0.5)}
+
+
+@st.composite
+def robots(draw):
+    scale = 10.0 ** draw(st.floats(-1.0, 5.7))
+    home = [scale * 0.5 * c for c in draw(vector)]
+    return {
+        "name": "fuzz",
+        "description": "A random robot within the stated geometry range.",
+        "limbs": draw(st.lists(limbs(scale), min_size=1, max_size=6)),
+        "verification": {"home": home + [0.0, 0.0, 0.0],
+                         "range": [scale * 0.2] * 3 + [draw(st.floats(0.0, 30.0)) for _ in range(3)]},
+    }
+
+
+@settings(FUZZ, max_examples=15)
+@given(definition=robots())
+def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition):
+    folder = tmp_path_factory.mktemp("fuzz")
+    path = folder / "fuzz.yaml"
+    path.write_text(json.dumps(definition))
+    robot = load_robot(path)
+    result = build_plugin(robot, folder / "build")
+    report = verify(robot, Plugin(result.library, result.routine), VerifyOptions(samples=2000))
+    assert report.passed, [(check.name, check.detail, check.diagnoses) for check in report.failures]
+
+
+TOKENS = ["&a ", "*a", "[", "]", "{", "}", ": ", "- ", "!!str ", "!x ", "'", '"', "#", "\n", "\t", "---\n",
+          "031", "6:39", "1e400", ".nan", "-1e300", "~", "? ", "|\n", "<<: *a\n", "\\", "\x1b[31m", "\u202e",
+          "\x00", "*/", "??/", "name: int", "name: check_definition", "9" * 400]
+
+
+@st.composite
+def text_mutations(draw, text):
+    for _ in range(draw(st.integers(1, 4))):
+        position = draw(st.integers(0, len(text)))
+        kind = draw(st.sampled_from(["delete", "insert", "token", "duplicate"]))
+        if kind == "delete":
+            text = text[:position] + text[position + draw(st.integers(1, 40)):]
+        elif kind == "insert":
+            text = text[:position] + draw(st.text(max_size=8)) + text[position:]
+        elif kind == "token":
+            text = text[:position] + draw(st.sampled_from(TOKENS)) + text[position:]
+        else:
+            lines = text.splitlines(keepends=True)
+            index = draw(st.integers(0, len(lines) - 1))
+            text = "".join(lines[:index + 1] + lines[index:])
+    return text
+
+
+def assert_exit_0_or_2_and_no_files(capsys, folder, text):
+    path = folder / "robot.yaml"
+    path.write_text(text, encoding="utf-8", errors="surrogatepass")
+    out_dir = folder / "out"
+    code = main(["render", str(path), "-o", str(out_dir)])
+    captured = capsys.readouterr()
+    assert code in (0, 2), captured.err
+    if code == 2:
+        assert captured.err.count("\n") == 1 and captured.err.startswith("kingen: error: "), captured.err
+        assert not out_dir.exists()
+    assert "Traceback" not in captured.err
+
+
+@pytest.mark.parametrize("name", shipped_robots())
+@settings(FUZZ, max_examples=40)
+@given(data=st.data())
+def test_text_mutations_end_in_exit_0_or_2(capsys, tmp_path_factory, name, data):
+    text = data.draw(text_mutations((robots_dir() / f"{name}.yaml").read_text()))
+    assert_exit_0_or_2_and_no_files(capsys, tmp_path_factory.mktemp("mutant"), text)
+
+
+scalars = st.one_of(st.none(), st.booleans(), st.integers(-10 ** 30, 10 ** 30), st.floats(allow_nan=True),
+                    st.text(max_size=20))
+values = st.recursive(scalars, lambda children: st.lists(children, max_size=4) | st.dictionaries(
+    st.text(max_size=8), children, max_size=3), max_leaves=10)
+
+
+def _paths(data, prefix=()):
+    yield prefix
+    if isinstance(data, dict):
+        for key, value in data.items():
+            yield from _paths(value, prefix + (key,))
+    elif isinstance(data, list):
+        for index, value in enumerate(data):
+            yield from _paths(value, prefix + (index,))
+
+
+@st.composite
+def structure_mutations(draw, data):
+    for _ in range(draw(st.integers(1, 3))):
+        path = draw(st.sampled_from(list(_paths(data))[1:]))
+        parent = data
+        for part in path[:-1]:
+            parent = parent[part]
+        kind = draw(st.sampled_from(["replace", "delete", "add"]))
+        if kind == "replace":
+            parent[path[-1]] = draw(values)
+        elif kind == "delete":
+            del parent[path[-1]]
+        elif isinstance(parent, dict):
+            parent[draw(st.text(max_size=8))] = draw(values)
+        else:
+            parent.append(draw(values))
+    return data
+
+
+@pytest.mark.parametrize("name", ["tau", "ceart", "exechon"])
+@settings(FUZZ, max_examples=60)
+@given(data=st.data())
+def test_structure_mutations_end_in_exit_0_or_2(capsys, tmp_path_factory, name, data):
+    document, _, _ = read_robot_file(robots_dir() / f"{name}.yaml")
+    mutant = data.draw(structure_mutations(document))
+    text = json.dumps(mutant, allow_nan=True)
+    assert_exit_0_or_2_and_no_files(capsys, tmp_path_factory.mktemp("mutant"), text)
