@@ -31,6 +31,21 @@ CONSTANTS = {
     "ZERO_TOL": 0.00001,
 }
 
+SINGULAR_TOLERANCE = CONSTANTS["ZERO_TOL"]
+"""Band |D| <= 1e-5 around a limb singularity (D: a limb's normalised radicand): the
+routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5."""
+
+UNWRITTEN_WARNING = -1
+"""Sentinel the host puts in every warning slot before a call: left there, it was never written."""
+UNWRITTEN_JOINT = float("nan")
+"""Sentinel the host puts in every solutions entry before a call."""
+VALUE_TOLERANCE_MM = 1e-9
+VALUE_TOLERANCE_RAD = 1e-9
+"""How close a routine's joints must be to the reference's (prismatic, revolute)."""
+WARNING_BAND = 1e-9
+"""Half-width of the band around a warning threshold (radicand +/- SINGULAR_TOLERANCE:
+relative; travel limits: mm or rad) inside which plugin and reference may disagree."""
+
 KINSTAT_FIELDS = (
     ("int", "dof_count"),
     ("int *", "joint_types"),
@@ -68,16 +83,23 @@ EMULATOR_FUNCTIONS = (
     "int dof, int postures, double *solutions, int *warnings, int *returns, int *faults, void *pData)",
 )
 """Functions only the host emulator offers (state of kin_check_definition, batch drivers)."""
-GUARD_FAULTS = {
-    1: "wrote before solutions[0][0]",
-    2: "wrote past the end of solutions[][]",
-    4: "wrote before warnings[0]",
-    8: "wrote past the end of warnings[]",
-    16: "modified its inputs (T6, link_lengths or link_offsets)",
-}
-"""Bits kingen_host_run_guarded reports per call (its KINGEN_WROTE_* macros). Every bit but
-WROTE_INPUTS means the call was stopped at the faulting write (its outputs are partial)."""
+GUARD_FAULT_BITS = (
+    ("KINGEN_WROTE_BEFORE_SOLUTIONS", 1, "wrote before solutions[0][0]"),
+    ("KINGEN_WROTE_AFTER_SOLUTIONS", 2, "wrote past the end of solutions[][]"),
+    ("KINGEN_WROTE_BEFORE_WARNINGS", 4, "wrote before warnings[0]"),
+    ("KINGEN_WROTE_AFTER_WARNINGS", 8, "wrote past the end of warnings[]"),
+    ("KINGEN_WROTE_INPUTS", 16, "modified its inputs (T6, link_lengths or link_offsets)"),
+)
+"""Bits kingen_host_run_guarded reports per call. Every bit but KINGEN_WROTE_INPUTS means
+the call was stopped at the faulting write (its outputs are partial)."""
+GUARD_FAULTS = {bit: text for _, bit, text in GUARD_FAULT_BITS}
 WROTE_INPUTS = 16
+
+
+def host_defines():
+    """(macro, value) the host emulator is compiled with: sentinels and fault bits, from here."""
+    return [("KINGEN_UNWRITTEN_WARNING", UNWRITTEN_WARNING),
+            *((name, bit) for name, bit, _ in GUARD_FAULT_BITS)]
 
 
 def routine_prototype(routine, solutions):

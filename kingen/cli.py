@@ -21,12 +21,13 @@ import numpy as np
 
 from . import __version__, abi
 from .build import DEFAULT_TIMEOUT, TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
-from .conventions import t6_from_pose
 from .errors import InternalError, KingenError, PluginDefect
 from .host import check_routine_name
-from .model import MAX_MM, REVOLUTE, load_robot, shipped_robots
+from .conventions import branch_of_posture, t6_from_pose
+from .model import load_robot, shipped_robots
 from .package import write_package
 from .report import json_text, junit_xml
+from .schema import MAX_MM
 from .text import printable
 
 EXIT_FAILED = 1
@@ -181,14 +182,15 @@ def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets, timeout
     library, routine = _library(model, out_dir, timeout=timeout)
     calls = _in_child(_solve_job, (library, routine, matrix, link_lengths, link_offsets), timeout)
     expected = reference_solve(model, matrix, link_lengths, link_offsets)
-    scale = np.where(np.array(model.joint_types) == REVOLUTE, 180.0 / np.pi if degrees else 1.0, 1.0)
-    units = ["deg" if (t == REVOLUTE and degrees) else ("rad" if t == REVOLUTE else "mm") for t in model.joint_types]
+    in_yaml_units = [t.wraps and degrees for t in model.joint_types]
+    scale = np.array([1.0 / t.yaml_scale if yaml else 1.0 for t, yaml in zip(model.joint_types, in_yaml_units)])
+    units = [t.yaml_unit if yaml else t.unit for t, yaml in zip(model.joint_types, in_yaml_units)]
     names = [f"{name} ({unit})" for name, unit in zip(model.joint_names, units)]
     header = ["posture", "branches"] + names + ["warning", "| reference"] + names + ["warning"]
     rows = [header]
     digits = [bit for bit in model.branch_bits if bit >= 0]
     for k in range(model.postures):
-        branches = "".join(str((k >> bit) & 1) for bit in digits) or "-"
+        branches = "".join(str(branch_of_posture(k, bit)) for bit in digits) or "-"
         rows.append(
             [str(k), branches]
             + [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k]), "|"]

@@ -9,10 +9,40 @@
 - Posture k: each two-branch limb gives one binary digit, the first such limb
   most significant, branch 0 before branch 1.
 
-All functions are vectorised over leading axes.
+All functions are vectorised over leading axes. docs/conventions.md states all of this
+with the limb models' equations.
 """
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
+
+
+@dataclass(frozen=True)
+class JointType:
+    """A kind of joint and every unit and label that follows from it, defined once."""
+
+    name: str
+    unit: str
+    """Unit of joint values in the plugin, the reference and reports: 'mm' or 'rad'."""
+    yaml_unit: str
+    """Unit in robot files and on the command line: 'mm' or 'deg'."""
+    yaml_scale: float
+    """Factor from the YAML unit to the internal one."""
+    wraps: bool
+    """Values are angles, compared modulo 2 pi (pi equals -pi)."""
+    c_units: str
+    """How generated C comments name the unit."""
+    delmia_type: str
+    """The Actuator Space Map's joint type."""
+    delmia_axis: str
+    kinstat_constant: str
+    """The vendor header's joint-type constant for DLM_Data_KinStat.joint_types."""
+
+
+PRISMATIC = JointType("prismatic", "mm", "mm", 1.0, False, "mm", "Translational", "Trans Z", "TRANSLATIONAL")
+REVOLUTE = JointType("revolute", "rad", "deg", math.pi / 180.0, True, "radians", "Rotational", "Rot Z", "ROTATIONAL")
 
 
 def rotation_from_rpy(roll, pitch, yaw):

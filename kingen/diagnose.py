@@ -10,9 +10,8 @@ import math
 
 import numpy as np
 
-from .abi import WARNINGS
+from .abi import UNWRITTEN_WARNING, WARNINGS
 from .conventions import joint_errors, wrap_difference
-from .host import UNWRITTEN_WARNING
 from .reference import solve
 
 UNREACHABLE_CODE = WARNINGS["WARN_UNREACHABLE"]
@@ -88,7 +87,7 @@ def _posture_permutation(robot, solutions, reference):
 
 def _diagnose_joint(robot, joint, solutions, reference):
     revolute = bool(robot.revolute[joint])
-    unit = "rad" if revolute else "mm"
+    unit = robot.joint_types[joint].unit
     name = f"joint {joint} ({robot.joint_names[joint]})"
     mine, theirs = solutions[:, joint], reference[:, joint]
     difference = _wrapped(mine - theirs, revolute)
@@ -102,16 +101,8 @@ def _diagnose_joint(robot, joint, solutions, reference):
 
     offset = float(np.median(difference))
     if np.abs(difference - offset).max() <= MATCH:
-        text = f"{name} is off by a constant {offset:+.6g} {unit} on every pose and posture"
-        limb = robot.limbs[joint]
-        if limb.model == "leg":
-            text += (f": a wrong reference length (the routine behaves as if L0 = "
-                     f"{limb.reference_length - offset:.6g} mm; the robot says {limb.reference_length:g} mm)")
-        elif revolute:
-            text += f" ({math.degrees(offset):+.6g} deg): a wrong crank zero"
-        else:
-            text += ": a wrong rail origin or carriage offset along the rail"
-        return text
+        return (f"{name} is off by a constant {offset:+.6g} {unit} on every pose and posture: "
+                f"{robot.limbs[joint].explain_offset(offset)}")
 
     if np.abs(_wrapped(mine + theirs, revolute)).max() <= MATCH:
         return f"{name} has its sign flipped: the routine returns minus the reference value"

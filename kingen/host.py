@@ -27,13 +27,10 @@ import numpy as np
 from . import abi
 from .build import host_support
 from .errors import KingenError, PluginDefect
-from .model import REVOLUTE
 
 ffi = cffi.FFI()
 ffi.cdef(abi.cffi_declarations())
 
-UNWRITTEN_WARNING = -1
-"""Sentinel left in a warning slot the routine did not write."""
 MAX_DOF = 64
 MAX_SOLUTIONS = 1 << 16
 """The largest joint and solution counts a get_kin_config answer may give to be called at all."""
@@ -248,8 +245,7 @@ class KinStat:
     def __init__(self, robot, joint_values=None, kin_mode=0):
         lower, upper = robot.travel_limits()
         self.types = ffi.new("int[]", [
-            abi.CONSTANTS["ROTATIONAL"] if t == REVOLUTE else abi.CONSTANTS["TRANSLATIONAL"]
-            for t in robot.joint_types
+            abi.CONSTANTS[t.kinstat_constant] for t in robot.joint_types
         ])
         self.values = ffi.new("double[]", list(joint_values if joint_values is not None else np.zeros(robot.dof)))
         self.lower = ffi.new("double[]", [float(v) if np.isfinite(v) else -1e30 for v in lower])

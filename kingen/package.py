@@ -10,21 +10,25 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from .build import DEFAULT_TIMEOUT, umask, build_plugin, library_name, write_atomic
+from . import abi
+from .build import DEFAULT_TIMEOUT, TARGETS, WINDOWS_DEFINES, build_plugin, library_name, umask, write_atomic
+from .conventions import branch_of_posture
 from .errors import KingenError
-from .model import REVOLUTE, calibration_unit, dialog_label
 from .render import render, template, view_model
+from .schema import dialog_label
 
-TARGETS = ("windows", "linux")
 HOST_IMPORT_LIB_PLACEHOLDER = "DELMIA_HOST_IMPORT_LIB.lib"
 MARKER = ".kingen-package"
 """Marks a folder kingen wrote, so that it may be replaced by a newer package."""
 CRLF_FILES = ("makefile", "BUILD.txt")
 """nmake and Notepad want CRLF line ends; the C source keeps LF (cl reads both)."""
-BRANCHES = {
-    "rail": ("u.w - sqrt(...) (carriage nearer the rail point)", "u.w + sqrt(...)"),
-    "crank": ("phi + acos(K/rho)", "phi - acos(K/rho)"),
+WARNING_MEANINGS = {
+    "WARN_GOOD_SOLUTION": "reachable, regular, within travel",
+    "WARN_JOINT_LIMITS_EXCEEDED": "a joint of this posture is outside its travel limits",
+    "WARN_SINGULAR_SOLUTION": f"a limb within {abi.SINGULAR_TOLERANCE:g} (normalised radicand) of its limb singularity",
+    "WARN_UNREACHABLE": "a limb has no real solution (joints are its closest approach)",
 }
+"""What each warning means from a kingen routine, for the setup sheet (order: precedence last)."""
 
 
 def sheet_view(robot, target):
@@ -33,23 +37,24 @@ def sheet_view(robot, target):
     used = {dialog_field for _, _, dialog_field, _ in robot.calibration()}
     calibration = [
         {"label": dialog_label(dialog_field), "joint": robot.joint_names[index], "parameter": parameter,
-         "unit": calibration_unit(parameter), "built_in": f"{built_in:.10g}"}
+         "unit": robot.limbs[index].calibratable[parameter], "built_in": f"{built_in:.10g}"}
         for index, parameter, dialog_field, built_in in robot.calibration()
     ]
     joints = []
     for index, limb in enumerate(robot.limbs):
-        revolute = limb.joint_type == REVOLUTE
         joints.append({
             "index": index,
             "name": robot.joint_names[index],
-            "kind": "Rotational" if revolute else "Translational",
-            "axis": "Rot Z" if revolute else "Trans Z",
-            "unit": "deg" if revolute else "mm",
+            "kind": limb.joint_type.delmia_type,
+            "axis": limb.joint_type.delmia_axis,
+            "unit": limb.joint_type.yaml_unit,
             "lower": f"{limb.travel[0]:.10g}" if limb.travel else "-",
             "upper": f"{limb.travel[1]:.10g}" if limb.travel else "-",
         })
+    branch_models = {type(robot.limbs[index]): robot.limbs[index].model for index, _ in two_branch}
     return {
         **view_model(robot),
+        "description": robot.description,
         "target": target,
         "library": robot.library,
         "dialog_fields": [
@@ -58,15 +63,18 @@ def sheet_view(robot, target):
         ],
         "calibration": calibration,
         "branch_limbs": [robot.joint_names[index] for index, _ in two_branch],
-        "branch_models": [{"name": model, "branch0": BRANCHES[model][0], "branch1": BRANCHES[model][1]}
-                          for model in robot.models if model in BRANCHES],
+        "branch_models": [{"name": name, "branch0": cls.branch_labels[0], "branch1": cls.branch_labels[1]}
+                          for cls, name in branch_models.items()],
         "configurations": [
-            {"index": k, "digits": "".join(str((k >> bit) & 1) for _, bit in two_branch),
-             "branches": [f"branch {(k >> bit) & 1}" for _, bit in two_branch]}
+            {"index": k, "digits": "".join(str(branch_of_posture(k, bit)) for _, bit in two_branch),
+             "branches": [f"branch {branch_of_posture(k, bit)}" for _, bit in two_branch]}
             for k in range(robot.postures)
         ],
         "joints": joints,
         "any_limits": any(limb.travel for limb in robot.limbs),
+        "warnings": [{"code": abi.WARNINGS[name], "name": name, "meaning": meaning}
+                     for name, meaning in WARNING_MEANINGS.items()],
+        "compiler_defines": " ".join(f"-D{define}" for define in WINDOWS_DEFINES),
     }
 
 

@@ -1,12 +1,14 @@
-"""Reference inverse kinematics in numpy, written from robots.md's equations.
+"""Reference inverse kinematics in numpy, written from docs/conventions.md's equations.
 
-Independent of the C templates: neither is generated from the other. Vectorised
+Independent of the C templates: neither is generated from the other. Each limb
+model's numpy solver lives with its model (:mod:`kingen.limbs`); this module maps
+poses to platform points, assembles postures and decides warnings. Vectorised
 over poses. Inputs are DELMIA T6 arrays (n, 4, 4) in the base frame, mm; outputs
 are every posture's joint values (mm, radians in (-pi, pi]) and warning.
 
 Warnings follow the generated C exactly (README, 'Warnings'):
 ``WARN_UNREACHABLE`` when some limb has no real solution, ``WARN_SINGULAR_SOLUTION``
-when a rail or crank limb's normalised radicand D is within ``SINGULAR_TOLERANCE``
+when some limb's normalised radicand D (rails, cranks) is within ``abi.SINGULAR_TOLERANCE``
 of zero, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;
 unreachable wins over singular, singular over joint limits. A limb without a
 real solution reports the value at the clamped radicand (closest approach), so
@@ -14,25 +16,12 @@ values are always finite. Non-finite T6: all postures unreachable, all joints 0.
 whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0.
 """
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import abi
-from .conventions import wrap_angle
-
-SINGULAR_TOLERANCE = abi.CONSTANTS["ZERO_TOL"]
-"""Band |D| <= 1e-5 around a limb singularity. Rails: D = radicand / l^2 (cos^2 of the
-link-to-rail angle). Cranks: D = (rho^2 - K^2) / rho^2 (sin^2 of the crank-to-rod angle)."""
-
-
-@dataclass(frozen=True)
-class LimbSolution:
-    """One limb over n poses: ``values`` (n, 2) per branch, ``radicand`` D (n,) or None for legs."""
-
-    values: np.ndarray
-    radicand: np.ndarray = None
+from .conventions import branch_of_posture
 
 
 @dataclass(frozen=True)
@@ -57,51 +46,6 @@ def platform_points_in_base(t6, points):
     return np.einsum("nij,mj->nmi", rotation, np.asarray(points, dtype=float)) + t6[:, None, 3, :3]
 
 
-def solve_leg(leg, platform_point):
-    """q = |N - b| - L0 for N (n, 3) in the base frame, mm; same value for both 'branches'."""
-    length = np.linalg.norm(platform_point - np.asarray(leg.base_point), axis=-1)
-    q = length - leg.reference_length
-    return LimbSolution(values=np.stack([q, q], axis=-1))
-
-
-def solve_rail(rail, platform_point):
-    """Carriage position along the rail (mm): u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) - origin."""
-    direction = np.asarray(rail.direction)
-    w = platform_point - np.asarray(rail.rail_point) - np.asarray(rail.carriage_offset)
-    along = w @ direction
-    link_squared = rail.link_length * rail.link_length
-    radicand = link_squared - np.sum(w * w, axis=-1) + along * along
-    root = np.sqrt(np.where(radicand > 0.0, radicand, 0.0))
-    return LimbSolution(
-        values=np.stack([along - root, along + root], axis=-1) - rail.origin,
-        radicand=radicand / link_squared,
-    )
-
-
-def solve_crank(crank, platform_point):
-    """Crank angle (rad, (-pi, pi]): phi +/- acos(K / rho) - zero_offset, robots.md's 6-RUS convention."""
-    beta = np.radians(crank.crank_direction)
-    g = platform_point - np.asarray(crank.pivot)
-    a = g[:, 0] * np.cos(beta) + g[:, 1] * np.sin(beta)
-    b = -g[:, 2]
-    r, rod = crank.crank_length, crank.rod_length
-    k = (np.sum(g * g, axis=-1) + r * r - rod * rod) / (2.0 * r)
-    rho_squared = a * a + b * b
-    with np.errstate(divide="ignore", invalid="ignore"):
-        radicand = np.where(rho_squared > 0.0, (rho_squared - k * k) / rho_squared, -1.0)
-        cosine = np.where(rho_squared > 0.0, k / np.sqrt(rho_squared), 1.0)
-    half = np.arccos(np.clip(cosine, -1.0, 1.0))
-    phi = np.arctan2(b, a)
-    zero = math.radians(crank.zero_offset)
-    return LimbSolution(
-        values=wrap_angle(np.stack([phi + half - zero, phi - half - zero], axis=-1)),
-        radicand=radicand,
-    )
-
-
-SOLVERS = {"leg": solve_leg, "rail": solve_rail, "crank": solve_crank}
-
-
 def solve(robot, t6, link_lengths=None, link_offsets=None):
     """Every posture of ``robot`` for T6 arrays (n, 4, 4); see the module docstring.
 
@@ -122,18 +66,18 @@ def _solve(robot, t6):
     radicands = np.full((count, robot.dof), np.inf)
     overflow = np.zeros((count, robot.dof), dtype=bool)
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
-        limb_solution = SOLVERS[limb.model](limb, points[:, index])
+        limb_solution = limb.solve(points[:, index])
         values = limb_solution.values
         overflow[:, index] = ~np.all(np.isfinite(values), axis=1)
-        branch = (postures >> bit) & 1 if bit >= 0 else np.zeros_like(postures)
+        branch = branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
         joints[:, index, :] = np.where(overflow[:, index, None], 0.0, values[:, branch])
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
 
     lower, upper = robot.travel_limits()
     outside = np.any((joints < lower[None, :, None]) | (joints > upper[None, :, None]), axis=1)
-    unreachable = np.any(~(radicands >= -SINGULAR_TOLERANCE) | overflow, axis=1)
-    singular = np.any(np.abs(radicands) <= SINGULAR_TOLERANCE, axis=1)
+    unreachable = np.any(~(radicands >= -abi.SINGULAR_TOLERANCE) | overflow, axis=1)
+    singular = np.any(np.abs(radicands) <= abi.SINGULAR_TOLERANCE, axis=1)
 
     warnings = np.where(outside, abi.WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], abi.WARNINGS["WARN_GOOD_SOLUTION"])
     warnings = np.where(singular[:, None], abi.WARNINGS["WARN_SINGULAR_SOLUTION"], warnings)

@@ -8,25 +8,38 @@ C tables hold exactly the doubles the reference uses.
 
 import functools
 import math
+import textwrap
 
 import jinja2
 
 from . import __version__, abi
-from .model import REVOLUTE, calibration_unit, dialog_label, field_index
-from .reference import SINGULAR_TOLERANCE
+from .limbs import MODELS, c_double, partial_path
+from .schema import dialog_label, field_index
 from .resources import templates_dir
 from .text import finalizer, markdown
 
 
+BUILD_INFO_MARKER = "kingen-build-info:"
+"""Starts the build-info string compiled into every generated library."""
 TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown"}
 """Which escaping (:func:`kingen.text.finalizer`) a template's substitutions get, by suffix;
 every other template is plain text. The stand-in header has no user text and none."""
 
 
+def _partial_source(name):
+    """Limb model partials ('limbs/<model>.c.j2') from the registry, wherever they live."""
+    model = name[len("limbs/"):-len(".c.j2")] if name.startswith("limbs/") and name.endswith(".c.j2") else None
+    if model not in MODELS:
+        return None
+    path = partial_path(MODELS[model])
+    return path.read_text(), str(path), lambda: True
+
+
 @functools.lru_cache(maxsize=None)
 def _environment(kind):
     return jinja2.Environment(
-        loader=jinja2.FileSystemLoader(str(templates_dir())),
+        loader=jinja2.ChoiceLoader([jinja2.FunctionLoader(_partial_source),
+                                    jinja2.FileSystemLoader(str(templates_dir()))]),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
@@ -46,18 +59,6 @@ def template(name):
     return environment.get_template(name)
 
 
-def c_double(value):
-    """A C double literal that reads back as exactly ``value``."""
-    text = repr(float(value))
-    if not math.isfinite(float(value)):
-        raise ValueError(f"cannot write {text} as a C constant")
-    return text if ("." in text or "e" in text) else text + ".0"
-
-
-def _c_vector(values):
-    return ", ".join(c_double(value) for value in values)
-
-
 def source_name(robot):
     """The generated source's file name, kin_<name>.c, as DELMIA's makefile expects."""
     return f"kin_{robot.name}.c"
@@ -65,8 +66,28 @@ def source_name(robot):
 
 def calibration_line(robot, joint, parameter, dialog_field, built_in):
     """'Length 3 -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners."""
-    return (f"{dialog_label(dialog_field)} -> {robot.joint_names[joint]}.{parameter} "
-            f"({calibration_unit(parameter)}, built-in {built_in:.10g})")
+    unit = robot.limbs[joint].calibratable[parameter]
+    return f"{dialog_label(dialog_field)} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:.10g})"
+
+
+def build_info(robot):
+    """What the library says about itself, compiled in as data (read back by kingen info)."""
+    return (f"{BUILD_INFO_MARKER} robot={robot.name} routine={robot.routine} dof={robot.dof} "
+            f"postures={robot.postures} sha256={robot.sha256} kingen={__version__}")
+
+
+def _model_tables(robot):
+    """Per limb model used, in first-use order: its name, partial, column words and rows."""
+    tables = {}
+    for index, limb in enumerate(robot.limbs):
+        cls = type(limb)
+        table = tables.setdefault(cls, {"name": limb.model, "partial": f"limbs/{limb.model}.c.j2",
+                                        "columns": f"Columns: {cls.c_columns}.", "rows": []})
+        row = {"joint": index, "name": robot.joint_names[index], **limb.c_row()}
+        row.update({f"{parameter}_field": field_index(limb.calibrate[parameter]) if parameter in limb.calibrate
+                    else -1 for parameter in cls.calibratable})
+        table["rows"].append(row)
+    return list(tables.values())
 
 
 def view_model(robot):
@@ -74,47 +95,19 @@ def view_model(robot):
     lower, upper = robot.travel_limits()
     joints = []
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
-        revolute = limb.joint_type == REVOLUTE
         limited = limb.travel is not None
         joints.append({
             "index": index,
             "name": robot.joint_names[index],
             "model": limb.model,
-            "units": "radians" if revolute else "mm",
+            "units": limb.joint_type.c_units,
             "bit": bit,
             "limited": int(limited),
             "lower": c_double(lower[index] if limited else 0.0),
             "upper": c_double(upper[index] if limited else 0.0),
-            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {'deg' if revolute else 'mm'}"
+            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {limb.joint_type.yaml_unit}"
             if limited else "",
         })
-    tables = {"leg": [], "rail": [], "crank": []}
-    for index, limb in enumerate(robot.limbs):
-        row = {"joint": index, "platform_point": _c_vector(limb.platform_point)}
-        row.update({f"{parameter}_field": field_index(limb.calibrate[parameter]) if parameter in limb.calibrate else -1
-                    for parameter in limb.calibratable})
-        if limb.model == "leg":
-            row.update(base_point=_c_vector(limb.base_point), reference_length=c_double(limb.reference_length))
-        elif limb.model == "rail":
-            row.update(
-                rail_point=_c_vector(limb.rail_point),
-                direction=_c_vector(limb.direction),
-                carriage_offset=_c_vector(limb.carriage_offset),
-                link_length=c_double(limb.link_length),
-                origin=c_double(limb.origin),
-            )
-        else:
-            beta = math.radians(limb.crank_direction)
-            row.update(
-                pivot=_c_vector(limb.pivot),
-                cos_direction=c_double(math.cos(beta)),
-                sin_direction=c_double(math.sin(beta)),
-                crank_length=c_double(limb.crank_length),
-                rod_length=c_double(limb.rod_length),
-                zero_offset=c_double(math.radians(limb.zero_offset)),
-            )
-        tables[limb.model].append(row)
-    models = [model for model in ("leg", "rail", "crank") if tables[model]]
     return {
         "version": __version__,
         "header_version": abi.HEADER_VERSION,
@@ -122,21 +115,21 @@ def view_model(robot):
         "source_name": robot.path.name,
         "source_hash": robot.sha256,
         "name": robot.name,
-        "description": " ".join(robot.description.split()),
+        "description_lines": textwrap.wrap(" ".join(robot.description.split()), 88) or [""],
         "library": robot.library,
         "routine": robot.routine,
         "dof": robot.dof,
         "postures": robot.postures,
         "two_branch_count": sum(1 for bit in robot.branch_bits if bit >= 0),
-        "singular_tolerance": c_double(SINGULAR_TOLERANCE),
+        "singular_tolerance": c_double(abi.SINGULAR_TOLERANCE),
         "joints": joints,
-        "legs": tables["leg"],
-        "rails": tables["rail"],
-        "cranks": tables["crank"],
-        "models": models,
-        "table_sizes": [(model, len(tables[model])) for model in models],
+        "any_limits": any(limb.travel is not None for limb in robot.limbs),
+        "any_revolute": any(limb.joint_type.wraps for limb in robot.limbs),
+        "has_radicand": any(limb.has_radicand for limb in robot.limbs),
+        "models": _model_tables(robot),
         "degree": c_double(math.pi / 180.0),
         "calibration": [calibration_line(robot, *entry) for entry in robot.calibration()],
+        "build_info": build_info(robot),
         "get_kin_config": abi.GET_KIN_CONFIG,
         "routine_prototype": abi.routine_prototype(robot.routine, "NUM_SOLUTIONS"),
     }
@@ -160,6 +153,7 @@ def render_header():
         host_check=abi.HOST_CHECK,
         host_math=list(abi.HOST_MATH),
         emulator_functions=list(abi.EMULATOR_FUNCTIONS),
+        host_defines=abi.host_defines(),
     )
 
 

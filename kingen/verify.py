@@ -27,18 +27,14 @@ from .build import DEFAULT_TIMEOUT
 from .conventions import joint_errors, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
 from .errors import PluginDefect
-from .host import UNWRITTEN_WARNING, Plugin, captured_output, host_state
+from .host import Plugin, captured_output, host_state
 from .isolation import run_in_child
-from .reference import SINGULAR_TOLERANCE, solve
+from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
+from .reference import solve
 from .report import Check, GoldenResult, Report
 
-VALUE_TOLERANCE_MM = 1e-9
-VALUE_TOLERANCE_RAD = 1e-9
 RELATIVE_TOLERANCE = 256 * np.finfo(float).eps
 """For robots larger than about 17 m the prismatic bound grows with size: 256 eps x size."""
-WARNING_BAND = 1e-9
-"""Half-width of the band around a warning threshold (radicand +/- tolerance: relative;
-travel limits: mm or rad) inside which plugin and reference may disagree."""
 CONDITIONING_FACTOR = 16.0 * np.finfo(float).eps
 """Inside a limb's singular band its joint is ill-conditioned (a square root of a radicand
 near 0): there it is compared within CONDITIONING_FACTOR * scale / sqrt(max(|D|, eps)),
@@ -90,7 +86,7 @@ def chunk_size(robot):
 def singular_bounds(robot, reference_solution):
     """(n, dof) error bound for joints in their singular band; 0 where the fixed limits apply."""
     radicands = reference_solution.radicands
-    scale = np.array([limb.link_length if limb.model == "rail" else 1.0 for limb in robot.limbs])
+    scale = np.array([limb.singular_scale() for limb in robot.limbs])
     in_band = np.abs(radicands) <= SINGULAR_TOLERANCE + WARNING_BAND
     eps = np.finfo(float).eps
     with np.errstate(invalid="ignore"):

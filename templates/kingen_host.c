@@ -95,12 +95,8 @@ int kingen_host_run_batch(void *routine, int count, double *t6, double *link_len
 }
 
 #ifndef _WIN32
-/* Fault bits of kingen_host_run_guarded, per pose. */
-#define KINGEN_WROTE_BEFORE_SOLUTIONS 1
-#define KINGEN_WROTE_AFTER_SOLUTIONS 2
-#define KINGEN_WROTE_BEFORE_WARNINGS 4
-#define KINGEN_WROTE_AFTER_WARNINGS 8
-#define KINGEN_WROTE_INPUTS 16
+/* KINGEN_WROTE_* (fault bits per pose) and KINGEN_UNWRITTEN_WARNING come from kingen/abi.py
+ * through the stand-in header. */
 #define KINGEN_GUARD_DOUBLE (-7.0e300)
 #define KINGEN_GUARD_INT (-20260001)
 #define KINGEN_PAD_ENTRIES 64
@@ -253,7 +249,7 @@ int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_l
         for (k = 0; k < dof * postures; k++)
             solution_data[k] = not_a_number;
         for (k = 0; k < postures; k++)
-            warning_data[k] = -1;
+            warning_data[k] = KINGEN_UNWRITTEN_WARNING;
         faults[i] = 0;
         returns[i] = -1;
         guard_fault = 0;

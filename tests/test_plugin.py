@@ -11,7 +11,8 @@ from conftest import SHIPPED, random_t6, require_tool
 from kingen.abi import WARNINGS
 from kingen.build import STRICT_C89, compiler_command, host_support
 from kingen.conventions import joint_errors, t6_from_pose
-from kingen.host import UNWRITTEN_WARNING, KinStat, Plugin, host_state
+from kingen.abi import UNWRITTEN_WARNING
+from kingen.host import KinStat, Plugin, host_state
 from kingen.model import load_robot
 from kingen.render import render
 from kingen.reference import solve

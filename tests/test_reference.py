@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6
-from kingen.abi import WARNINGS
+from kingen.abi import SINGULAR_TOLERANCE, WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
-from kingen.reference import SINGULAR_TOLERANCE, platform_points_in_base, solve
+from kingen.reference import platform_points_in_base, solve
 
 GOOD, LIMITS, UNREACHABLE, SINGULAR = (WARNINGS[k] for k in (
     "WARN_GOOD_SOLUTION", "WARN_JOINT_LIMITS_EXCEEDED", "WARN_UNREACHABLE", "WARN_SINGULAR_SOLUTION"))
@@ -27,15 +27,7 @@ def test_exechon_home_is_all_joints_zero():
 
 def limb_residual(limb, point, q):
     """|constraint| of one limb at joint value q, computed forward from the geometry (mm)."""
-    if limb.model == "leg":
-        return abs(np.linalg.norm(point - limb.base_point) - (limb.reference_length + q))
-    if limb.model == "rail":
-        lower_joint = np.asarray(limb.rail_point) + q * np.asarray(limb.direction) + limb.carriage_offset
-        return abs(np.linalg.norm(point - lower_joint) - limb.link_length)
-    beta = np.radians(limb.crank_direction)
-    tip = np.asarray(limb.pivot) + limb.crank_length * np.array(
-        [np.cos(q) * np.cos(beta), np.cos(q) * np.sin(beta), -np.sin(q)])
-    return abs(np.linalg.norm(point - tip) - limb.rod_length)
+    return abs(float(limb.closure_residual(point[None], np.array([q]))[0]))
 
 
 @pytest.mark.parametrize("name", SHIPPED)

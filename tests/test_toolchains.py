@@ -87,7 +87,7 @@ def test_windows_dll_exports_both_entry_points(tmp_path, name):
     robot = load_robot(name)
     result = build_plugin(robot, tmp_path, target="windows")
     assert result.library.name == f"lib{name}.dll"
-    assert dll_exports(result.library) == sorted(["get_kin_config", robot.routine])
+    assert dll_exports(result.library) == sorted(["get_kin_config", robot.routine, "kingen_build_info"])
 
 
 @pytest.mark.usefixtures("needs_mingw")
@@ -118,7 +118,7 @@ def test_windows_package_builds_with_its_own_makefile_defines_and_def_file(tmp_p
     dll = tmp_path / "libtau.dll"
     compile_c([tmp_path / "package" / "kin_tau.c", tmp_path / "package" / "libtau.def", windows_host_import_library()],
               dll, [*STRICT_C89, "-O2", "-shared", f"-I{include}", *defines], compiler=[MINGW])
-    assert dll_exports(dll) == ["get_kin_config", "kin_tau"]
+    assert dll_exports(dll) == ["get_kin_config", "kin_tau", "kingen_build_info"]
 
 
 def test_package_never_ships_a_shlibdefs_h(tmp_path):

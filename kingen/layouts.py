@@ -1,0 +1,109 @@
+"""Layouts: generators of six limbs for parametric robots (``layout:`` in a robot file).
+
+Each layout takes its parameters (mm, degrees) and returns six limbs of one model,
+sharing travel limits and giving each limb its own calibration fields.
+docs/conventions.md states the formulas.
+"""
+
+import math
+from typing import Annotated, ClassVar, Literal, Optional, Union
+
+from pydantic import Field, field_validator
+
+from .limbs import Crank, Leg
+from .schema import MAX_MM, Coordinate, DialogField, Length, SixAngles, Strict, Travel
+
+class _Layout(Strict):
+    """A generator of six limbs of one model; ``calibrate`` maps a parameter to six fields."""
+
+    travel: Optional[Travel] = None
+    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
+    limb_class: ClassVar[type] = None
+
+    @field_validator("calibrate")
+    @classmethod
+    def _check_calibratable(cls, calibrate):
+        for parameter in calibrate:
+            if parameter not in cls.limb_class.calibratable:
+                raise ValueError(f"'{parameter}' cannot be calibrated "
+                                 f"(choose from {', '.join(cls.limb_class.calibratable)})")
+        return calibrate
+
+    def _shared(self, index):
+        """The keys every generated limb takes from the layout: travel and its calibration fields."""
+        return {"travel": self.travel,
+                "calibrate": {parameter: fields[index] for parameter, fields in self.calibrate.items()}}
+
+
+class StewartGoughLayout(_Layout):
+    """Six legs on the controller thesis's parametric layout (points at z = heights)."""
+
+    type: Literal["stewart_gough"]
+    base_radius: Length
+    platform_radius: Length
+    base_pair_angle: Annotated[float, Field(gt=0, lt=120)]
+    platform_pair_angle: Annotated[float, Field(gt=0, lt=120)]
+    base_height: Coordinate = 0.0
+    platform_height: Coordinate = 0.0
+    reference_length: Length
+    limb_class: ClassVar[type] = Leg
+
+    def limbs(self):
+        """The six legs; point angles lambda_1 = 60 - pair/2, lambda_2 = lambda_1 + pair, ... (degrees)."""
+        legs = []
+        for index in range(6):
+            pair, second = divmod(index, 2)
+            centre = 60.0 + 120.0 * pair
+            base_angle = math.radians(centre + (second - 0.5) * self.base_pair_angle)
+            platform_angle = math.radians(centre + (second - 0.5) * self.platform_pair_angle)
+            legs.append(Leg(
+                model="leg",
+                name=f"leg{index + 1}",
+                base_point=[self.base_radius * math.cos(base_angle),
+                            self.base_radius * math.sin(base_angle), self.base_height],
+                platform_point=[self.platform_radius * math.cos(platform_angle),
+                                self.platform_radius * math.sin(platform_angle), self.platform_height],
+                reference_length=self.reference_length,
+                **self._shared(index),
+            ))
+        return legs
+
+
+class Rus6Layout(_Layout):
+    """Six cranks on the 6-RUS flight-simulator layout (docs/conventions.md, '6-RUS layout')."""
+
+    type: Literal["rus6"]
+    base_radius: Length
+    platform_radius: Length
+    base_half_distance: Annotated[float, Field(ge=0, le=MAX_MM)]
+    platform_half_distance: Annotated[float, Field(ge=0, le=MAX_MM)]
+    crank_length: Length
+    rod_length: Length
+    pair_angles: SixAngles
+    crank_directions: SixAngles
+    limb_class: ClassVar[type] = Crank
+
+    def limbs(self):
+        """The six cranks: A_i and c_i from chi_i with m, n = (-1)^(i-1) times the half-distances."""
+        cranks = []
+        for index, (chi_deg, beta) in enumerate(zip(self.pair_angles, self.crank_directions)):
+            chi = math.radians(chi_deg)
+            sign = 1.0 if index % 2 == 0 else -1.0
+            m, n = sign * self.base_half_distance, sign * self.platform_half_distance
+            cranks.append(Crank(
+                model="crank",
+                name=f"crank{index + 1}",
+                pivot=[self.base_radius * math.cos(chi) - m * math.sin(chi),
+                       self.base_radius * math.sin(chi) + m * math.cos(chi), 0.0],
+                crank_direction=beta,
+                crank_length=self.crank_length,
+                rod_length=self.rod_length,
+                platform_point=[self.platform_radius * math.cos(chi) - n * math.sin(chi),
+                                self.platform_radius * math.sin(chi) + n * math.cos(chi), 0.0],
+                **self._shared(index),
+            ))
+        return cranks
+
+
+LAYOUTS = (StewartGoughLayout, Rus6Layout)
+Layout = Annotated[Union[LAYOUTS], Field(discriminator="type")]

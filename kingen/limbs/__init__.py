@@ -1,0 +1,29 @@
+"""The limb models: one module and one template partial each, found through this registry.
+
+``MODELS`` maps each YAML tag (``model: rail``) to its class. Everything that works per
+model (schema, reference solver, C tables, setup sheet words, diagnoses, verify's
+conditioning bound) asks the class; nothing else in kingen names a model. ``register``
+adds a model at run time (tests do, with a toy model).
+"""
+
+from .base import LimbModel, LimbSolution, c_double, c_vector, model_name, partial_path
+from .crank import Crank
+from .leg import Leg
+from .rail import Rail
+
+MODELS = {}
+
+
+def register(cls):
+    """Add limb model class ``cls`` (a LimbModel subclass with a ``model`` literal)."""
+    MODELS[model_name(cls)] = cls
+    from ..model import schema_changed
+    schema_changed()
+    return cls
+
+
+for _cls in (Leg, Rail, Crank):
+    MODELS[model_name(_cls)] = _cls
+
+__all__ = ["MODELS", "LimbModel", "LimbSolution", "register", "c_double", "c_vector", "model_name", "partial_path",
+           "Leg", "Rail", "Crank"]

@@ -1,0 +1,121 @@
+"""What every limb model is: its schema, its numpy solver, its C partial and its words.
+
+A limb model is one class (a pydantic schema) in one module of :mod:`kingen.limbs`, plus
+one template partial ``templates/limbs/<model>.c.j2``. Everything else in kingen iterates
+over the registry and asks the class; nothing names a model. docs/conventions.md has
+the equations; README's 'Adding a limb model' the checklist.
+"""
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar, Optional
+
+import numpy as np
+from pydantic import field_validator
+
+from ..conventions import PRISMATIC, JointType
+from ..resources import templates_dir
+from ..schema import DialogField, Identifier, Strict, Travel
+
+
+@dataclass(frozen=True)
+class LimbSolution:
+    """One limb over n poses: ``values`` (n, 2), the joint of branch 0 and branch 1 (the
+    same twice for one-branch models), mm or rad; ``radicand`` (n,) the normalised radicand D
+    whose sign decides reachability (None for models that are always reachable)."""
+
+    values: np.ndarray
+    radicand: Optional[np.ndarray] = None
+
+
+def c_double(value):
+    """A C double literal that reads back as exactly ``value``."""
+    text = repr(float(value))
+    if not math.isfinite(float(value)):
+        raise ValueError(f"cannot write {text} as a C constant")
+    return text if ("." in text or "e" in text) else text + ".0"
+
+
+def c_vector(values):
+    """Three numbers as the inside of a C initializer: '1.0, 2.5, -3.0'."""
+    return ", ".join(c_double(value) for value in values)
+
+
+class LimbModel(Strict):
+    """The fields every limb has, and what a model class must declare.
+
+    Subclasses declare ``model: Literal["<name>"]`` (the YAML tag) and their geometry
+    fields, and set the class variables below; they implement :meth:`solve`,
+    :meth:`c_row` and :meth:`explain_offset`.
+    """
+
+    name: Optional[Identifier] = None
+    travel: Optional[Travel] = None
+    """[lower, upper] in mm (prismatic) or degrees (revolute); absent: no limits."""
+    calibrate: dict[str, DialogField] = {}
+    """Parameter -> dialog field read at run time; a zero field keeps the built-in value."""
+
+    joint_type: ClassVar[JointType] = PRISMATIC
+    branches: ClassVar[int] = 1
+    has_radicand: ClassVar[bool] = False
+    """Whether :meth:`solve` gives a normalised radicand (and the limb can be unreachable or
+    singular); the C partial then classifies it with kingen_classify."""
+    branch_labels: ClassVar[tuple] = ()
+    """For two-branch models: what branch 0 and branch 1 mean, in words for the setup sheet."""
+    calibratable: ClassVar[dict] = {}
+    """Parameter -> the unit its dialog field is read in ('mm' or 'degrees')."""
+    length_fields: ClassVar[tuple] = ()
+    """Fields in mm (numbers or 3-vectors): the robot's size is the largest of them."""
+    c_columns: ClassVar[str] = ""
+    """The table columns of the C partial, in order, in words (shown above the table)."""
+    partial: ClassVar[Optional[Path]] = None
+    """The template partial; None: templates/limbs/<model>.c.j2."""
+
+    @field_validator("calibrate")
+    @classmethod
+    def _check_calibratable(cls, calibrate):
+        for parameter in calibrate:
+            if parameter not in cls.calibratable:
+                raise ValueError(f"'{parameter}' cannot be calibrated on a {model_name(cls)} "
+                                 f"(choose from {', '.join(cls.calibratable) or 'nothing'})")
+        return calibrate
+
+    def solve(self, platform_point):
+        """The joint of both branches for platform points ``platform_point`` (n, 3) in the
+        base frame, mm: a :class:`LimbSolution`."""
+        raise NotImplementedError
+
+    def closure_residual(self, platform_point, joint):
+        """How far the limb's passive link is from its length (mm) when its joint is at
+        ``joint`` (n,) and its platform point at ``platform_point`` (n, 3), base frame: the
+        geometry put back together forward, independent of :meth:`solve`'s formula."""
+        raise NotImplementedError
+
+    def c_row(self):
+        """This limb's table row for the partial: {column: C text} (numbers via c_double)."""
+        raise NotImplementedError
+
+    def singular_scale(self):
+        """The scale of the joint's ill-conditioning in its singular band (mm or rad per
+        unit of 1/sqrt(D)): verify's conditioning bound is relative to it."""
+        return 1.0
+
+    def explain_offset(self, offset):
+        """Why a routine's joint could be off by a constant ``offset`` (mm or rad): the
+        likely wrong parameter, in words, for diagnoses."""
+        raise NotImplementedError
+
+    def calibration_scale(self, parameter):
+        """Factor from the dialog's unit for ``parameter`` to the routine's unit."""
+        return math.pi / 180.0 if self.calibratable[parameter] == "degrees" else 1.0
+
+
+def model_name(cls):
+    """The YAML tag of a limb model class (its ``model`` literal)."""
+    return cls.model_fields["model"].annotation.__args__[0]
+
+
+def partial_path(cls):
+    """The template partial of a limb model class."""
+    return cls.partial or templates_dir() / "limbs" / f"{model_name(cls)}.c.j2"

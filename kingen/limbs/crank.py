@@ -1,0 +1,81 @@
+"""Crank (R-U-S, R-S-S, 6-RUS, rotary Delta): a crank turning about a horizontal axis
+drives a rod of fixed length to a platform point.
+
+Tip B = A + r (cos(theta) cos(beta), cos(theta) sin(beta), -sin(theta)); with
+g = R c + p - A, a = g.(cos beta, sin beta, 0), b = -g_z, K = (|g|^2 + r^2 - L^2) / (2 r),
+rho^2 = a^2 + b^2: theta = atan2(b, a) +/- acos(K / rho) - zero_offset (rad, (-pi, pi]),
+branch 0 the plus sign; D = (rho^2 - K^2) / rho^2 = sin^2 of the crank-to-rod angle
+(docs/conventions.md, 'Crank').
+"""
+
+import math
+from typing import Literal
+
+import numpy as np
+
+from ..conventions import REVOLUTE, wrap_angle
+from ..schema import Angle, Length, Vec3
+from .base import LimbModel, LimbSolution, c_double, c_vector
+
+
+class Crank(LimbModel):
+    """R-U-S crank: theta = phi +/- acos(K / rho) (radians). Two branches.
+
+    ``crank_direction`` (beta) is in degrees in the YAML.
+    """
+
+    model: Literal["crank"]
+    pivot: Vec3
+    crank_direction: Angle
+    crank_length: Length
+    rod_length: Length
+    platform_point: Vec3
+    zero_offset: Angle = 0.0
+    """Geometric crank angle (degrees) reported as joint 0: theta -= zero_offset."""
+
+    joint_type = REVOLUTE
+    branches = 2
+    has_radicand = True
+    branch_labels = ("phi + acos(K/rho)", "phi - acos(K/rho)")
+    calibratable = {"zero_offset": "degrees", "crank_length": "mm", "rod_length": "mm"}
+    length_fields = ("pivot", "crank_length", "rod_length", "platform_point")
+    c_columns = ("joint, pivot A (mm, base frame), cos(beta), sin(beta), crank length r (mm), "
+                 "rod length L (mm), platform point c (mm, platform frame), zero offset (rad), "
+                 "dialog fields of zero offset, r and L")
+
+    def solve(self, platform_point):
+        beta = math.radians(self.crank_direction)
+        g = platform_point - np.asarray(self.pivot)
+        a = g[:, 0] * math.cos(beta) + g[:, 1] * math.sin(beta)
+        b = -g[:, 2]
+        r, rod = self.crank_length, self.rod_length
+        k = (np.sum(g * g, axis=-1) + r * r - rod * rod) / (2.0 * r)
+        rho_squared = a * a + b * b
+        with np.errstate(divide="ignore", invalid="ignore"):
+            radicand = np.where(rho_squared > 0.0, (rho_squared - k * k) / rho_squared, -1.0)
+            cosine = np.where(rho_squared > 0.0, k / np.sqrt(rho_squared), 1.0)
+        half = np.arccos(np.clip(cosine, -1.0, 1.0))
+        phi = np.arctan2(b, a)
+        zero = math.radians(self.zero_offset)
+        return LimbSolution(values=wrap_angle(np.stack([phi + half - zero, phi - half - zero], axis=-1)),
+                            radicand=radicand)
+
+    def tip(self, joint):
+        """The crank tip B (n, 3), mm, base frame, for joint values ``joint`` (n,) in radians."""
+        beta = math.radians(self.crank_direction)
+        theta = np.asarray(joint) + math.radians(self.zero_offset)
+        direction = np.stack([np.cos(theta) * math.cos(beta), np.cos(theta) * math.sin(beta), -np.sin(theta)], -1)
+        return np.asarray(self.pivot) + self.crank_length * direction
+
+    def closure_residual(self, platform_point, joint):
+        return np.linalg.norm(platform_point - self.tip(joint), axis=-1) - self.rod_length
+
+    def c_row(self):
+        beta = math.radians(self.crank_direction)
+        return {"pivot": c_vector(self.pivot), "cos_direction": c_double(math.cos(beta)),
+                "sin_direction": c_double(math.sin(beta)), "crank_length": c_double(self.crank_length),
+                "rod_length": c_double(self.rod_length), "platform_point": c_vector(self.platform_point),
+                "zero_offset": c_double(math.radians(self.zero_offset))}
+
+    def explain_offset(self, offset):
+        return f"a wrong crank zero ({math.degrees(offset):+.6g} deg)"

@@ -1,0 +1,63 @@
+"""Rail (P-S-S, Gantry-Tau, Hexaglide, linear Delta): a carriage on a rail drives a link
+of fixed length to a platform point.
+
+With w = R n + p - s - d: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) - origin (mm), branch 0
+the minus sign; D = radicand / l^2 = cos^2 of the link-to-rail angle (docs/conventions.md, 'Rail').
+"""
+
+from typing import Literal
+
+import numpy as np
+
+from ..conventions import PRISMATIC
+from ..schema import Coordinate, Length, UnitVec3, Vec3
+from .base import LimbModel, LimbSolution, c_double, c_vector
+
+
+class Rail(LimbModel):
+    """P-S-S carriage on a rail: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) (mm). Two branches."""
+
+    model: Literal["rail"]
+    rail_point: Vec3
+    direction: UnitVec3
+    carriage_offset: Vec3
+    platform_point: Vec3
+    link_length: Length
+    origin: Coordinate = 0.0
+    """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
+
+    joint_type = PRISMATIC
+    branches = 2
+    has_radicand = True
+    branch_labels = ("u.w - sqrt(...) (carriage nearer the rail point)", "u.w + sqrt(...)")
+    calibratable = {"origin": "mm", "link_length": "mm"}
+    length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
+    c_columns = ("joint, rail point s (mm, base frame), direction u (unit), carriage offset d (mm), "
+                 "platform point n (mm, platform frame), link length l (mm), origin (mm), "
+                 "dialog fields of l and origin")
+
+    def solve(self, platform_point):
+        direction = np.asarray(self.direction)
+        w = platform_point - np.asarray(self.rail_point) - np.asarray(self.carriage_offset)
+        along = w @ direction
+        link_squared = self.link_length * self.link_length
+        radicand = link_squared - np.sum(w * w, axis=-1) + along * along
+        root = np.sqrt(np.where(radicand > 0.0, radicand, 0.0))
+        return LimbSolution(values=np.stack([along - root, along + root], axis=-1) - self.origin,
+                            radicand=radicand / link_squared)
+
+    def closure_residual(self, platform_point, joint):
+        carriage_joint = (np.asarray(self.rail_point) + np.asarray(self.carriage_offset)
+                          + (np.asarray(joint) + self.origin)[..., None] * np.asarray(self.direction))
+        return np.linalg.norm(platform_point - carriage_joint, axis=-1) - self.link_length
+
+    def c_row(self):
+        return {"rail_point": c_vector(self.rail_point), "direction": c_vector(self.direction),
+                "carriage_offset": c_vector(self.carriage_offset), "platform_point": c_vector(self.platform_point),
+                "link_length": c_double(self.link_length), "origin": c_double(self.origin)}
+
+    def singular_scale(self):
+        return self.link_length
+
+    def explain_offset(self, offset):
+        return "a wrong rail origin or carriage offset along the rail"
