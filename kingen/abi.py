@@ -3,7 +3,7 @@
 The stand-in ``shlibdefs.h``, the generated plugin's prototypes and the cffi
 declarations used to load plugins are all rendered from these lists, so the C
 side and the Python side cannot drift apart. Values are those of the vendor
-header (../shared/delmia-abi.md).
+header (docs/delmia-abi.md).
 """
 
 HEADER_VERSION = 1

@@ -243,7 +243,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
         report = verify_library(model, library, routine, options, progress)
     _print_report(report, library)
     if json_path is not None:
-        write_atomic(json_path, json_text(report))
+        write_atomic(json_path, json_text(report, options))
     if junit_path is not None:
         write_atomic(junit_path, junit_xml(report))
     return 0 if report.passed else EXIT_FAILED

@@ -55,8 +55,6 @@ class Report:
     checks: list = field(default_factory=list)
     notices: list = field(default_factory=list)
     seconds: float = 0.0
-    link_lengths: list = None
-    link_offsets: list = None
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
@@ -81,16 +79,17 @@ class Report:
     def poses_per_second(self):
         return self.samples / self.seconds if self.seconds > 0 else math.inf
 
-    def as_json(self):
-        """The report as JSON-ready data; NaN and infinities become None (JSON null)."""
+    def as_json(self, options=None):
+        """The report as JSON-ready data, with the dialog fields it was run with (``options``,
+        a VerifyOptions); NaN and infinities become None (JSON null)."""
         return _finite({
             "robot": self.robot,
             "routine": self.routine,
             "samples": self.samples,
             "seed": self.seed,
             "postures": self.postures,
-            "link_lengths": self.link_lengths,
-            "link_offsets": self.link_offsets,
+            "link_lengths": _listed(getattr(options, "link_lengths", None)),
+            "link_offsets": _listed(getattr(options, "link_offsets", None)),
             "max_abs_error_mm": self.max_abs_error_mm,
             "max_abs_error_rad": self.max_abs_error_rad,
             "tolerance_mm": self.tolerance_mm,
@@ -122,9 +121,13 @@ def _finite(data):
     return data
 
 
-def json_text(report):
+def _listed(values):
+    return None if values is None else [float(v) for v in values]
+
+
+def json_text(report, options=None):
     """The report as JSON text (strict: no NaN or Infinity literals)."""
-    return json.dumps(report.as_json(), indent=2, allow_nan=False) + "\n"
+    return json.dumps(report.as_json(options), indent=2, allow_nan=False) + "\n"
 
 
 def junit_xml(report):

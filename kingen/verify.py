@@ -160,7 +160,7 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
     with printed.capture():
         decided(check_interface(robot, plugin))
     if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
-        decided(_compare_samples(robot, plugin, report, progress, printed, phase))
+        decided(_compare_samples(robot, plugin, report, options, progress, printed, phase))
         phase("the golden values")
         with printed.capture():
             report.golden = check_golden(robot, plugin)
@@ -177,8 +177,7 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
 
 def _empty_report(robot, routine, options):
     return Report(robot=robot.name, routine=routine, samples=options.samples, seed=options.seed,
-                  postures=robot.postures, link_lengths=_listed(options.link_lengths),
-                  link_offsets=_listed(options.link_offsets), tolerance_mm=value_tolerance_mm(robot),
+                  postures=robot.postures, tolerance_mm=value_tolerance_mm(robot),
                   tolerance_rad=VALUE_TOLERANCE_RAD)
 
 
@@ -222,11 +221,7 @@ def _verify_job(channel, robot, library, routine, options):
     return report
 
 
-def _listed(values):
-    return None if values is None else [float(v) for v in values]
-
-
-def _compare_samples(robot, plugin, report, progress, printed, phase):
+def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     revolute = robot.revolute
     tally = _Tally()
     start = time.perf_counter()
@@ -235,15 +230,15 @@ def _compare_samples(robot, plugin, report, progress, printed, phase):
         t6 = t6_from_pose(poses)
         plugin.reset_host()
         with printed.capture():
-            calls = plugin.call(t6, report.link_lengths, report.link_offsets)
-        expected = solve(robot, t6, report.link_lengths, report.link_offsets)
+            calls = plugin.call(t6, options.link_lengths, options.link_offsets)
+        expected = solve(robot, t6, options.link_lengths, options.link_offsets)
         _accumulate(robot, report, tally, revolute, t6, calls, expected)
         if progress is not None:
             progress(begin + len(poses))
     report.seconds = time.perf_counter() - start
     phase("the determinism check")
     with printed.capture():
-        return _sample_checks(robot, plugin, report, tally)
+        return _sample_checks(robot, plugin, report, options, tally)
 
 
 def _accumulate(robot, report, tally, revolute, t6, calls, expected):
@@ -283,7 +278,7 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
                        expected.warnings[keep])
 
 
-def _sample_checks(robot, plugin, report, tally):
+def _sample_checks(robot, plugin, report, options, tally):
     buffers = buffers_check(tally.faulty_calls, tally.fault_bits)
     if tally.first is None:
         return [Check(name, False, "not compared: every call was stopped at a write outside its buffers")
@@ -308,7 +303,7 @@ def _sample_checks(robot, plugin, report, tally):
                         f"{tally.returns_wrong} calls return other than 1 when no posture is reachable, 0 otherwise"))
     checks.append(buffers)
     plugin.reset_host()
-    again = plugin.call(t6[:DETERMINISM_POSES], report.link_lengths, report.link_offsets)
+    again = plugin.call(t6[:DETERMINISM_POSES], options.link_lengths, options.link_offsets)
     same = (np.array_equal(again.solutions, solutions[:DETERMINISM_POSES], equal_nan=True)
             and np.array_equal(again.warnings, warnings[:DETERMINISM_POSES]))
     checks.append(Check("determinism", same, "the same T6 gives the same output" if same
@@ -354,7 +349,7 @@ def check_golden(robot, plugin):
 
 
 def check_interface(robot, plugin):
-    """The contract of shared/delmia-abi.md as named checks, each failure in one sentence."""
+    """The interface contract of docs/delmia-abi.md as named checks, each failure in one sentence."""
     config = plugin.config
     problems = []
     if (config.dof, config.solutions) != (robot.dof, robot.postures):

@@ -9,7 +9,7 @@ from conftest import SHIPPED
 from kingen.errors import KingenError
 from kingen.model import load_robot
 
-EXPECTED_SHAPE = {  # (dof, postures, limb model) from robots.md
+EXPECTED_SHAPE = {  # (dof, postures, limb model) from docs/conventions.md
     "hexapod": (6, 1, "leg"), "flexapod": (6, 1, "leg"), "exechon": (3, 1, "leg"), "tau": (3, 8, "rail"),
     "ceart": (6, 64, "crank"), "iwf": (6, 64, "crank"), "rus_optimized": (6, 64, "crank"),
     "stewart_gough_example": (6, 1, "leg"),
@@ -32,7 +32,7 @@ def test_example_robot_says_it_is_an_example():
     assert "EXAMPLE" in text and "not a published machine" in text
 
 
-def test_rus6_layout_matches_robots_md_formula_for_ceart():
+def test_rus6_layout_matches_the_documented_formula_for_ceart():
     robot = load_robot("ceart")
     chi = math.radians(120)
     # leg 2: m = -e_b, n = -e_p

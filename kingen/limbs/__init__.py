@@ -22,8 +22,15 @@ def register(cls):
     return cls
 
 
+def unregister(cls):
+    """Remove limb model class ``cls`` again."""
+    MODELS.pop(model_name(cls), None)
+    from ..model import schema_changed
+    schema_changed()
+
+
 for _cls in (Leg, Rail, Crank):
     MODELS[model_name(_cls)] = _cls
 
-__all__ = ["MODELS", "LimbModel", "LimbSolution", "register", "c_double", "c_vector", "model_name", "partial_path",
+__all__ = ["MODELS", "LimbModel", "LimbSolution", "register", "unregister", "c_double", "c_vector", "model_name", "partial_path",
            "Leg", "Rail", "Crank"]

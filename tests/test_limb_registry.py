@@ -1,0 +1,98 @@
+"""Adding a limb model touches only its own files: a toy model, defined and registered
+here with its partial in tests/limbs/, is validated, rendered, compiled, verified and
+packaged by the unchanged rest of kingen."""
+
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pytest
+
+from kingen import limbs
+from kingen.build import build_plugin
+from kingen.errors import KingenError
+from kingen.host import Plugin
+from kingen.limbs import LimbModel, LimbSolution, c_double, c_vector
+from kingen.model import load_robot
+from kingen.package import render_package
+from kingen.schema import Coordinate, Vec3
+from kingen.verify import VerifyOptions, verify
+
+
+class Plumb(LimbModel):
+    """A toy model: a vertical actuator reaching a platform point, q = (R t + p).z - height."""
+
+    model: Literal["plumb"]
+    platform_point: Vec3
+    height: Coordinate
+
+    calibratable = {"height": "mm"}
+    length_fields = ("platform_point", "height")
+    c_columns = "joint, platform point t (mm, platform frame), height (mm), its dialog field"
+    partial = Path(__file__).parent / "limbs" / "plumb.c.j2"
+
+    def solve(self, platform_point):
+        q = platform_point[:, 2] - self.height
+        return LimbSolution(values=np.stack([q, q], axis=-1))
+
+    def closure_residual(self, platform_point, joint):
+        return platform_point[:, 2] - (self.height + joint)
+
+    def c_row(self):
+        return {"platform_point": c_vector(self.platform_point), "height": c_double(self.height)}
+
+    def explain_offset(self, offset):
+        return f"a wrong height (the routine behaves as if it were {self.height - offset:.6g} mm)"
+
+
+ROBOT = """\
+name: toy
+description: Two plumbs and a leg.
+limbs:
+  - {model: plumb, platform_point: [100, 0, 0], height: -50, calibrate: {height: length1}}
+  - {model: leg, base_point: [0, 300, 0], platform_point: [0, 50, 0], reference_length: 200}
+  - {model: plumb, platform_point: [-100, 0, 0], height: -60, travel: [0, 100]}
+verification: {home: [0, 0, 0, 0, 0, 0], range: [30, 30, 30, 10, 10, 10]}
+"""
+
+
+@pytest.fixture
+def toy(tmp_path):
+    limbs.register(Plumb)
+    path = tmp_path / "toy.yaml"
+    path.write_text(ROBOT)
+    try:
+        yield load_robot(path)
+    finally:
+        limbs.unregister(Plumb)
+
+
+def test_a_registered_model_is_validated_with_located_errors(toy, tmp_path):
+    assert [limb.model for limb in toy.limbs] == ["plumb", "leg", "plumb"]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(ROBOT.replace("height: -50", "height: [1]"))
+    with pytest.raises(KingenError, match=r"bad.yaml:4: limbs\[0\].height: Input should be a valid number"):
+        load_robot(bad)
+
+
+def test_a_registered_model_renders_compiles_and_verifies(toy, tmp_path):
+    result = build_plugin(toy, tmp_path / "build")
+    source = result.source.read_text()
+    assert "kingen_solve_plumb(&kingen_plumbs[i]" in source and "kingen_solve_leg(&kingen_legs[i]" in source
+    report = verify(toy, Plugin(result.library, result.routine), VerifyOptions(samples=2000))
+    assert report.passed, [check.detail for check in report.failures]
+    calibrated = verify(toy, Plugin(result.library, result.routine),
+                        VerifyOptions(samples=500, link_lengths=(-20.0, 0, 0, 0, 0, 0)))
+    assert calibrated.passed
+
+
+def test_a_registered_model_reaches_the_setup_sheet(toy):
+    sheet = render_package(toy, "windows")["SETUP.md"]
+    assert "| Length 1 | joint1.height | mm | -50 |" in sheet
+
+
+def test_an_unregistered_model_is_an_unknown_tag(tmp_path):
+    path = tmp_path / "toy.yaml"
+    path.write_text(ROBOT)
+    with pytest.raises(KingenError, match=r":4: limbs\[0\].model: Input tag 'plumb' found using 'model' does not"):
+        load_robot(path)
