@@ -58,13 +58,13 @@ KINSTAT_FIELDS = (
 
 GET_KIN_CONFIG = "int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)"
 
-HOST_MATH = (
-    ("sqrt", "double DNBVMAP_Sqrt(double x)"),
-    ("asin", "double DNBVMAP_Asin(double x)"),
-    ("acos", "double DNBVMAP_Acos(double x)"),
-    ("atan", "double DNBVMAP_Atan(double x)"),
-    ("atan2", "double DNBVMAP_Atan2(double y, double x)"),
-)
+HOST_MATH = {
+    "sqrt": "double DNBVMAP_Sqrt(double x)",
+    "asin": "double DNBVMAP_Asin(double x)",
+    "acos": "double DNBVMAP_Acos(double x)",
+    "atan": "double DNBVMAP_Atan(double x)",
+    "atan2": "double DNBVMAP_Atan2(double y, double x)",
+}
 """Math functions the vendor header maps to host symbols: (C name, host prototype)."""
 
 HOST_CHECK = "int DNBVMAP_kin_check_definition(int dof_count, int solution_count)"
@@ -137,7 +137,7 @@ def _declared_name(prototype):
 RESERVED_NAMES = frozenset({
     *C_KEYWORDS, *WARNINGS, *WARNING_ALIASES, *CONSTANTS, "DllExport", "DLM_Data_KinStat",
     "kin_check_definition", _declared_name(GET_KIN_CONFIG), _declared_name(HOST_CHECK),
-    *(name for name, _ in HOST_MATH), *(_declared_name(prototype) for _, prototype in HOST_MATH),
+    *HOST_MATH, *(_declared_name(prototype) for prototype in HOST_MATH.values()),
     *(_declared_name(prototype) for prototype in EMULATOR_FUNCTIONS),
     "kin_routine", "kin_dof",
 })

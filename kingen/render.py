@@ -151,7 +151,7 @@ def render_header():
         constants=list(abi.CONSTANTS.items()),
         kinstat_struct=abi.kinstat_struct(),
         host_check=abi.HOST_CHECK,
-        host_math=list(abi.HOST_MATH),
+        host_math=list(abi.HOST_MATH.items()),
         emulator_functions=list(abi.EMULATOR_FUNCTIONS),
         host_defines=abi.host_defines(),
     )

@@ -43,7 +43,15 @@ def test_t6_rows_are_n_o_a_p():
     np.testing.assert_array_equal(t6[0, :3], matrix[:3, 0])
     np.testing.assert_array_equal(t6[2, :3], matrix[:3, 2])
     np.testing.assert_array_equal(t6[:, 3], [0, 0, 0, 1])
-    np.testing.assert_array_equal(matrix_from_t6(t6), matrix)
+
+
+def test_t6_and_matrix_of_a_quarter_turn_written_out_by_hand():
+    """Pose (1, 2, 3) turned 90 degrees about z: x goes to y, y to -x."""
+    t6 = [[0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 1, 0], [1, 2, 3, 1]]
+    matrix = [[0, -1, 0, 1], [1, 0, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]]
+    np.testing.assert_allclose(t6_from_pose([1, 2, 3, 0, 0, 90]), t6, atol=1e-15)
+    np.testing.assert_allclose(matrix_from_pose([1, 2, 3, 0, 0, 90]), matrix, atol=1e-15)
+    np.testing.assert_array_equal(matrix_from_t6(np.array(t6, dtype=float)), matrix)
 
 
 @pytest.mark.parametrize("angle, wrapped", [(np.pi, np.pi), (-np.pi, np.pi), (3 * np.pi, np.pi), (0.5, 0.5), (-4.0, 2 * np.pi - 4.0)])

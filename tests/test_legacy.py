@@ -30,11 +30,11 @@ int *kin_dof;
 int *solution_count;
 int *usrKinDataHint;
 {
-    if (strcmp(kin_routine, "kin_hexapodFullTest") != 0)
+    if (NAME_CHECK)
         return 1;
     *kin_dof = NUM_DOFS;
     *solution_count = NUM_SOLUTIONS;
-    *usrKinDataHint = USR_KIN_DATA_NULL;
+    *usrKinDataHint = HINT;
     return 0;
 }
 
@@ -49,8 +49,10 @@ void *pData;
     int i, j, k;
     long double L0 = REFERENCE_LENGTH;
     long double p[3];
-    if (CHECK_DEFINITION && !kin_check_definition(NUM_DOFS, NUM_SOLUTIONS))
+    if (CHECK_DEFINITION && !kin_check_definition(NUM_DOFS, NUM_SOLUTIONS)) {
+        REFUSE
         return 1;
+    }
     if (CRASH && T6[3][0] > 40.0 && T6[3][0] < 1e6)
         *(volatile int *)0 = 1;
     for (i = 0; i < 4; i++)
@@ -76,6 +78,9 @@ void *pData;
 """
 
 RIGHT = {
+    "NAME_CHECK": 'strcmp(kin_routine, "kin_hexapodFullTest") != 0',
+    "HINT": "USR_KIN_DATA_NULL",
+    "REFUSE": "",
     "ORDER": "0, 1, 2, 3, 4, 5",
     "REFERENCE_LENGTH": "399.413",
     "CHECK_DEFINITION": "1",
@@ -304,6 +309,21 @@ def test_ignoring_kin_check_definition_is_caught(capsys, tmp_path):
     assert code == 1
     assert failed_checks(data) == ["kin_check_definition", "refusal"]
     assert "called 0 times" in " ".join(data["interface_failures"])
+
+
+@pytest.mark.parametrize("mistake, check, words", [
+    ({"NAME_CHECK": 'strncmp(kin_routine, "kin_hexapod", 11) != 0'}, "get_kin_config",
+     "accepts a routine name that is not 'kin_hexapodFullTest'"),
+    ({"HINT": "7"}, "get_kin_config", "answers an unknown data hint 7"),
+    ({"REFUSE": "warnings[0] = WARN_UNREACHABLE;"}, "refusal",
+     "when kin_check_definition refuses, the routine writes solutions or warnings"),
+])
+def test_interface_mistakes_are_named(capsys, tmp_path, mistake, check, words):
+    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(**mistake), "kin_hexapodFullTest",
+                                  samples="200")
+    assert code == 1
+    assert failed_checks(data) == [check]
+    assert words in " ".join(data["interface_failures"])
 
 
 def test_right_tau_passes(capsys, tmp_path):

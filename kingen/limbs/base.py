@@ -16,7 +16,7 @@ from pydantic import field_validator
 
 from ..conventions import PRISMATIC, JointType
 from ..resources import templates_dir
-from ..schema import DialogField, Identifier, Strict, Travel
+from ..schema import DialogField, Identifier, Strict, Travel, Vec3
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,8 @@ class LimbModel(Strict):
     """
 
     name: Optional[Identifier] = None
+    platform_point: Vec3
+    """Where the limb's passive link meets the platform (mm, platform frame): every model has one."""
     travel: Optional[Travel] = None
     """[lower, upper] in mm (prismatic) or degrees (revolute); absent: no limits."""
     calibrate: dict[str, DialogField] = {}
@@ -119,3 +121,11 @@ def model_name(cls):
 def partial_path(cls):
     """The template partial of a limb model class."""
     return cls.partial or templates_dir() / "limbs" / f"{model_name(cls)}.c.j2"
+
+
+class TwoBranchModel(LimbModel):
+    """A model with two branches (one binary digit of the posture number) and a normalised
+    radicand: it can be unreachable or singular."""
+
+    branches: ClassVar[int] = 2
+    has_radicand: ClassVar[bool] = True

@@ -15,10 +15,10 @@ import numpy as np
 
 from ..conventions import REVOLUTE, wrap_angle
 from ..schema import Angle, Length, Vec3
-from .base import LimbModel, LimbSolution, c_double, c_vector
+from .base import LimbSolution, TwoBranchModel, c_double, c_vector
 
 
-class Crank(LimbModel):
+class Crank(TwoBranchModel):
     """R-U-S crank: theta = phi +/- acos(K / rho) (radians). Two branches.
 
     ``crank_direction`` (beta) is in degrees in the YAML.
@@ -29,13 +29,10 @@ class Crank(LimbModel):
     crank_direction: Angle
     crank_length: Length
     rod_length: Length
-    platform_point: Vec3
     zero_offset: Angle = 0.0
     """Geometric crank angle (degrees) reported as joint 0: theta -= zero_offset."""
 
     joint_type = REVOLUTE
-    branches = 2
-    has_radicand = True
     branch_labels = ("phi + acos(K/rho)", "phi - acos(K/rho)")
     calibratable = {"zero_offset": "degrees", "crank_length": "mm", "rod_length": "mm"}
     length_fields = ("pivot", "crank_length", "rod_length", "platform_point")

@@ -17,7 +17,6 @@ class Leg(LimbModel):
 
     model: Literal["leg"]
     base_point: Vec3
-    platform_point: Vec3
     reference_length: Length
 
     joint_type = PRISMATIC

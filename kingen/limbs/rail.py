@@ -11,24 +11,21 @@ import numpy as np
 
 from ..conventions import PRISMATIC
 from ..schema import Coordinate, Length, UnitVec3, Vec3
-from .base import LimbModel, LimbSolution, c_double, c_vector
+from .base import LimbSolution, TwoBranchModel, c_double, c_vector
 
 
-class Rail(LimbModel):
+class Rail(TwoBranchModel):
     """P-S-S carriage on a rail: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) (mm). Two branches."""
 
     model: Literal["rail"]
     rail_point: Vec3
     direction: UnitVec3
     carriage_offset: Vec3
-    platform_point: Vec3
     link_length: Length
     origin: Coordinate = 0.0
     """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
 
     joint_type = PRISMATIC
-    branches = 2
-    has_radicand = True
     branch_labels = ("u.w - sqrt(...) (carriage nearer the rail point)", "u.w + sqrt(...)")
     calibratable = {"origin": "mm", "link_length": "mm"}
     length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")

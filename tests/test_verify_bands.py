@@ -1,0 +1,80 @@
+"""verify's two excuses, each pinned by poses built to lie inside them: a warning that
+differs where the reference's radicand is within WARNING_BAND of the singular threshold,
+and a joint that differs by more than 1e-9 mm inside a limb's singular band but within
+its conditioning bound. Outside the bands the same differences fail."""
+
+import math
+
+import numpy as np
+import pytest
+
+from kingen.abi import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
+from kingen.conventions import t6_from_pose
+from kingen.host import Calls
+from kingen.model import load_robot
+from kingen.reference import solve
+from kingen.report import Report
+from kingen.verify import _accumulate, _Tally, singular_bounds, warnings_in_band
+
+RAIL = """\
+name: one_rail
+description: One rail along -z through the origin, link 100 mm to the platform origin.
+limbs:
+  - {model: rail, rail_point: [0, 0, 0], direction: [0, 0, -1], carriage_offset: [0, 0, 0],
+     platform_point: [0, 0, 0], link_length: 100}
+verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
+"""
+
+
+@pytest.fixture
+def rail(tmp_path):
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    return load_robot(path)
+
+
+def pose_with_radicand(radicand):
+    """The platform x (mm) at which the rail's normalised radicand is ``radicand``: D = 1 - x^2 / l^2."""
+    return t6_from_pose([[100.0 * math.sqrt(1.0 - radicand), 0.0, -50.0, 0.0, 0.0, 0.0]])
+
+
+def flipped(expected, joint_shift=0.0):
+    """Calls equal to the reference, with the warning changed and the joints shifted."""
+    warnings = expected.warnings.copy()
+    warnings[warnings == WARNINGS["WARN_SINGULAR_SOLUTION"]] = -2
+    warnings[warnings == WARNINGS["WARN_GOOD_SOLUTION"]] = WARNINGS["WARN_SINGULAR_SOLUTION"]
+    warnings[warnings == -2] = WARNINGS["WARN_GOOD_SOLUTION"]
+    return Calls(returned=np.zeros(len(warnings), dtype=np.intc), solutions=expected.joints + joint_shift,
+                 warnings=warnings.astype(np.intc), faults=np.zeros(len(warnings), dtype=np.intc))
+
+
+def accumulate(robot, t6, calls, expected):
+    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    _accumulate(robot, report, _Tally(), robot.revolute, t6, calls, expected)
+    return report
+
+
+@pytest.mark.parametrize("offset, excused", [(WARNING_BAND / 3, True), (-WARNING_BAND / 3, True),
+                                             (30 * WARNING_BAND, False), (-30 * WARNING_BAND, False)])
+def test_a_warning_may_differ_only_inside_the_band(rail, offset, excused):
+    t6 = pose_with_radicand(SINGULAR_TOLERANCE + offset)
+    expected = solve(rail, t6)
+    assert abs(expected.radicands[0, 0] - (SINGULAR_TOLERANCE + offset)) < WARNING_BAND / 10
+    assert bool(warnings_in_band(rail, expected)[0, 0]) == excused
+    report = accumulate(rail, t6, flipped(expected), expected)
+    assert (report.warnings_in_band, report.warning_mismatches) == ((2, 0) if excused else (0, 2))
+
+
+@pytest.mark.parametrize("radicand, shift, within", [(1e-12, 1e-8, True), (1e-12, 1e-6, False),
+                                                     (0.25, 1e-8, None)])
+def test_a_joint_may_differ_only_within_its_singular_bound(rail, radicand, shift, within):
+    t6 = pose_with_radicand(radicand)
+    expected = solve(rail, t6)
+    bound = singular_bounds(rail, expected)[0, 0]
+    report = accumulate(rail, t6, flipped(expected, shift), expected)
+    if within is None:  # outside the singular band: the fixed 1e-9 mm holds
+        assert bound == 0.0 and report.singular_entries == 0 and report.max_abs_error_mm == pytest.approx(shift)
+        return
+    assert bound == pytest.approx(16 * np.finfo(float).eps * 100 / math.sqrt(radicand), rel=1e-3)
+    assert report.singular_entries == 2 and report.max_abs_error_mm == 0.0
+    assert report.singular_out_of_bound == (0 if within else 2)
