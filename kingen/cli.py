@@ -9,6 +9,7 @@ process (:mod:`kingen.isolation`), bounded by ``--timeout``.
 """
 
 import contextlib
+import json
 import math
 import os
 import signal
@@ -169,9 +170,11 @@ def package(robot, out_dir, target, timeout):
 @click.option("--t6", nargs=16, type=float, metavar="16 NUMBERS",
               help="DELMIA's T6, row by row: n, o, a, p rows, each with its 0/1 last entry.")
 @click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write every posture (joints in mm and rad, warnings, indices) as JSON.")
 @calibration_options
 @TIMEOUT
-def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets, timeout):
+def solve(robot, out_dir, pose, t6, degrees, json_path, link_lengths, link_offsets, timeout):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
     from .reference import solve as reference_solve
 
@@ -181,12 +184,16 @@ def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets, timeout
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
     library, routine = _library(model, out_dir, timeout=timeout)
     calls = _in_child(_solve_job, (library, routine, matrix, link_lengths, link_offsets), timeout)
-    expected = reference_solve(model, matrix, link_lengths, link_offsets)
+    expected = reference_solve(model, matrix, link_lengths, link_offsets, indices=True)
+    direct = expected.direct_index[0] if expected.direct_index is not None else [None] * model.postures
+    inverse = float(expected.min_inverse_index[0])
+    inverse_text = f"{inverse:.6g}" if np.isfinite(inverse) else "n/a"
     in_yaml_units = [t.wraps and degrees for t in model.joint_types]
     scale = np.array([1.0 / t.yaml_scale if yaml else 1.0 for t, yaml in zip(model.joint_types, in_yaml_units)])
     units = [t.yaml_unit if yaml else t.unit for t, yaml in zip(model.joint_types, in_yaml_units)]
     names = [f"{name} ({unit})" for name, unit in zip(model.joint_names, units)]
-    header = ["posture", "branches"] + names + ["warning", "| reference"] + names + ["warning"]
+    header = (["posture", "branches"] + names + ["warning", "| reference"] + names
+              + ["warning", "direct index (mm)", "min inverse index"])
     rows = [header]
     digits = [bit for bit in model.branch_bits if bit >= 0]
     for k in range(model.postures):
@@ -195,13 +202,54 @@ def solve(robot, out_dir, pose, t6, degrees, link_lengths, link_offsets, timeout
             [str(k), branches]
             + [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k]), "|"]
             + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale] + [_warning_name(expected.warnings[0, k])]
+            + [_index_text(direct[k]), inverse_text]
         )
     _print_table(rows)
     _say(f"routine returned {calls.returned[0]}")
+    _say(_indices_note(model))
+    if json_path is not None:
+        write_atomic(json_path, json.dumps(_finite({
+            "robot": model.name, "routine": routine, "t6": matrix[0].tolist(), "returned": int(calls.returned[0]),
+            "joint_units": [t.unit for t in model.joint_types], "direct_index_min_mm": model.direct_index_min,
+            "postures": [{
+                "posture": k, "joints": calls.solutions[0, :, k].tolist(), "warning": _warning_name(calls.warnings[0, k]),
+                "reference_joints": expected.joints[0, :, k].tolist(),
+                "reference_warning": _warning_name(expected.warnings[0, k]),
+                "direct_index_mm": None if direct[k] is None else float(direct[k]),
+                "min_inverse_index": inverse,
+            } for k in range(model.postures)],
+        }), indent=2, allow_nan=False) + "\n")
     if calls.faults[0]:
         _say(f"the routine {'; '.join(t for b, t in abi.GUARD_FAULTS.items() if calls.faults[0] & b)}")
         return EXIT_FAILED
     return 0
+
+
+def _index_text(value):
+    if value is None:
+        return "n/a"
+    return "unreachable" if not np.isfinite(value) else f"{value:.6g}"
+
+
+def _indices_note(model):
+    """What the index columns mean for this robot, in one line."""
+    inverse = "min inverse index: the smallest normalised radicand D over the limbs (1 - 1/Inv_I; 0 at a limb singularity)"
+    if not model.has_direct_index:
+        return (f"direct index: not available ({model.dof} limbs: the constraints that complete the platform "
+                f"are not modelled); {inverse}")
+    threshold = (f"below {model.direct_index_min:g} mm the routine answers WARN_SINGULAR_SOLUTION"
+                 if model.direct_index_min is not None else "no threshold set (singularity: direct_index_min)")
+    return f"direct index: 0 at a direct (platform) singularity; {threshold}; {inverse}"
+
+
+def _finite(data):
+    if isinstance(data, float):
+        return data if np.isfinite(data) else None
+    if isinstance(data, dict):
+        return {key: _finite(value) for key, value in data.items()}
+    if isinstance(data, list):
+        return [_finite(value) for value in data]
+    return data
 
 
 def _solve_job(channel, library, routine, matrix, link_lengths, link_offsets):

@@ -24,7 +24,8 @@ from .layouts import LAYOUTS, Layout
 from .limbs import MODELS
 from .resources import robots_dir
 from .robot_file import dotted, read_robot_file
-from .schema import MAX_MM, Coordinate, Identifier, Pose, Strict, dialog_value
+from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict, dialog_value
+from .singularity import SIX
 
 MAX_GOLDEN = 1000
 MAX_LIMBS = 64
@@ -66,6 +67,13 @@ class Golden(Strict):
     """In the units of ``joints``: half a unit of the last published digit is typical."""
 
 
+class Singularity(Strict):
+    """``singularity:`` in a robot file: when to call a pose a direct singularity."""
+
+    direct_index_min: Length
+    """mm: postures whose direct index is at most this answer WARN_SINGULAR_SOLUTION."""
+
+
 @functools.lru_cache(maxsize=None)
 def robot_file_schema():
     """The YAML schema over the registered limb models (rebuilt when one is registered);
@@ -80,6 +88,7 @@ def robot_file_schema():
         layout: Optional[Layout] = None
         verification: Region
         golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = []
+        singularity: Optional[Singularity] = None
 
     return RobotFile
 
@@ -100,6 +109,14 @@ class Robot:
     limbs: tuple
     verification: Region
     golden: tuple
+    direct_index_min: Optional[float] = None
+    """mm, or None: no direct-singularity warning."""
+
+    @property
+    def has_direct_index(self):
+        """Whether the direct index is defined: six force lines, one per platform DOF. Robots
+        with fewer limbs have constraints kingen does not model (Exechon, Gantry-Tau)."""
+        return self.dof == SIX
 
     @property
     def routine(self):
@@ -229,8 +246,12 @@ def load_robot(spec):
         limbs=tuple(limbs),
         verification=document.verification,
         golden=tuple(document.golden),
+        direct_index_min=document.singularity.direct_index_min if document.singularity else None,
     )
     _check_golden(robot, locate)
+    if robot.direct_index_min is not None and not robot.has_direct_index:
+        raise locate.error(["singularity", "direct_index_min"],
+                           f"the direct index needs six force lines; this robot has {robot.dof} limbs")
     return robot
 
 

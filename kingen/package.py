@@ -72,10 +72,18 @@ def sheet_view(robot, target):
         ],
         "joints": joints,
         "any_limits": any(limb.travel for limb in robot.limbs),
-        "warnings": [{"code": abi.WARNINGS[name], "name": name, "meaning": meaning}
+        "warnings": [{"code": abi.WARNINGS[name], "name": name, "meaning": _meaning(robot, name, meaning)}
                      for name, meaning in WARNING_MEANINGS.items()],
+        "direct_index_available": robot.has_direct_index,
+        "direct_index_min": robot.direct_index_min,
         "compiler_defines": " ".join(f"-D{define}" for define in WINDOWS_DEFINES),
     }
+
+
+def _meaning(robot, name, meaning):
+    if name == "WARN_SINGULAR_SOLUTION" and robot.direct_index_min is not None:
+        return f"{meaning}, or the posture's direct index at most {robot.direct_index_min:g} mm (section 7)"
+    return meaning
 
 
 def render_package(robot, target):

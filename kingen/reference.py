@@ -9,7 +9,7 @@ are every posture's joint values (mm, radians in (-pi, pi]) and warning.
 Warnings follow the generated C exactly (README, 'Warnings'):
 ``WARN_UNREACHABLE`` when some limb has no real solution, ``WARN_SINGULAR_SOLUTION``
 when some limb's normalised radicand D (rails, cranks) is within ``abi.SINGULAR_TOLERANCE``
-of zero, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;
+of zero or the posture's direct index is at most the robot's ``direct_index_min``, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;
 unreachable wins over singular, singular over joint limits. A limb without a
 real solution reports the value at the clamped radicand (closest approach), so
 values are always finite. Non-finite T6: all postures unreachable, all joints 0. A limb
@@ -22,6 +22,7 @@ import numpy as np
 
 from . import abi
 from .conventions import branch_of_posture
+from .singularity import direct_index, limb_wrenches, posture_grams
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,16 @@ class Solution:
     warnings: np.ndarray
     radicands: np.ndarray
     finite: np.ndarray
+    points: np.ndarray = None
+    """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
+    direct_index: np.ndarray = None
+    """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
+    (robots without six force lines, or not asked for)."""
+
+    @property
+    def min_inverse_index(self):
+        """(n,) the smallest normalised radicand D over the limbs (inf: no limb has one)."""
+        return np.min(self.radicands, axis=1)
 
 
 def platform_points_in_base(t6, points):
@@ -46,16 +57,19 @@ def platform_points_in_base(t6, points):
     return np.einsum("nij,mj->nmi", rotation, np.asarray(points, dtype=float)) + t6[:, None, 3, :3]
 
 
-def solve(robot, t6, link_lengths=None, link_offsets=None):
+def solve(robot, t6, link_lengths=None, link_offsets=None, indices=False):
     """Every posture of ``robot`` for T6 arrays (n, 4, 4); see the module docstring.
 
     ``link_lengths`` / ``link_offsets`` (6 each, the dialog's Length i / Offset i) replace
-    the parameters the robot marks as calibrated, where non-zero."""
+    the parameters the robot marks as calibrated, where non-zero. The direct index is
+    computed when the robot's warnings need it (``direct_index_min``) or ``indices`` asks
+    for it, for robots with six force lines."""
     with np.errstate(all="ignore"):
-        return _solve(robot.calibrated(link_lengths, link_offsets), np.asarray(t6, dtype=float).reshape(-1, 4, 4))
+        return _solve(robot.calibrated(link_lengths, link_offsets), np.asarray(t6, dtype=float).reshape(-1, 4, 4),
+                      indices)
 
 
-def _solve(robot, t6):
+def _solve(robot, t6, indices):
     count = t6.shape[0]
     finite = np.all(np.isfinite(t6[:, :, :3]), axis=(1, 2))
     safe_t6 = np.where(finite[:, None, None], t6, 0.0)
@@ -79,8 +93,19 @@ def _solve(robot, t6):
     unreachable = np.any(~(radicands >= -abi.SINGULAR_TOLERANCE) | overflow, axis=1)
     singular = np.any(np.abs(radicands) <= abi.SINGULAR_TOLERANCE, axis=1)
 
+    unreachable = unreachable[:, None] | ~finite[:, None]
+    singular = np.broadcast_to(singular[:, None], outside.shape)
+    index = None
+    if robot.has_direct_index and (indices or robot.direct_index_min is not None):
+        wrenches, _ = limb_wrenches(robot, points, joints)
+        index = np.where(unreachable, np.nan, direct_index(posture_grams(robot, wrenches),
+                                                           None if indices else robot.direct_index_min))
+        if robot.direct_index_min is not None:
+            singular = singular | (index <= robot.direct_index_min)
+
     warnings = np.where(outside, abi.WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], abi.WARNINGS["WARN_GOOD_SOLUTION"])
-    warnings = np.where(singular[:, None], abi.WARNINGS["WARN_SINGULAR_SOLUTION"], warnings)
-    warnings = np.where(unreachable[:, None] | ~finite[:, None], abi.WARNINGS["WARN_UNREACHABLE"], warnings)
+    warnings = np.where(singular, abi.WARNINGS["WARN_SINGULAR_SOLUTION"], warnings)
+    warnings = np.where(unreachable, abi.WARNINGS["WARN_UNREACHABLE"], warnings)
     joints[~finite] = 0.0
-    return Solution(joints=joints, warnings=warnings.astype(np.int32), radicands=radicands, finite=finite)
+    return Solution(joints=joints, warnings=warnings.astype(np.int32), radicands=radicands, finite=finite,
+                    points=points, direct_index=index)

@@ -90,6 +90,52 @@ def _model_tables(robot):
     return list(tables.values())
 
 
+def ldl_test_lines(size=6, shifted=(3, 4, 5)):
+    """Straight-line C (C89 declarations first) that returns 1 from the enclosing function
+    unless ``first + second - KINGEN_DIRECT_MIN^2 I`` on the ``shifted`` diagonal entries is
+    positive definite: an LDL^T factorisation unrolled at generation time (u = l d kept, one
+    division per pivot), stopping at the first pivot <= 0. ``first`` and ``second`` are packed
+    lower triangles, row by row."""
+    names = [f"a{r}{c}" for r in range(size) for c in range(r + 1)]
+    below = [(r, c) for c in range(size) for r in range(c + 1, size)]
+    lines = [f"double {', '.join(names)};",
+             f"double {', '.join(f'd{j}' for j in range(size))}, {', '.join(f'r{j}' for j in range(size - 1))};",
+             f"double {', '.join(f'u{r}{c}, l{r}{c}' for r, c in below)};"]
+    lines += [f"{name} = first[{k}] + second[{k}];" for k, name in enumerate(names)]
+    lines += [f"a{j}{j} -= KINGEN_DIRECT_MIN * KINGEN_DIRECT_MIN;" for j in shifted]
+    for j in range(size):
+        lines += [f"d{j} = {' - '.join([f'a{j}{j}'] + [f'u{j}{k} * l{j}{k}' for k in range(j)])};",
+                  f"if (!(d{j} > 0.0))", "    return 1;"]
+        if j + 1 < size:
+            lines.append(f"r{j} = 1.0 / d{j};")
+        for r in range(j + 1, size):
+            lines += [f"u{r}{j} = {' - '.join([f'a{r}{j}'] + [f'u{r}{k} * l{j}{k}' for k in range(j)])};",
+                      f"l{r}{j} = u{r}{j} * r{j};"]
+    return lines
+
+
+def gram_lines():
+    """C statements filling gram[21], the packed lower triangle of w w^T, from w0 .. w5."""
+    return [f"gram[{k}] = w{r} * w{c};" for k, (r, c) in enumerate((r, c) for r in range(6) for c in range(r + 1))]
+
+
+def partial_sums(robot):
+    """The C sums (over grams[limb][branch][k]) of the two partial Gram tables: 'low' per
+    combination of the low posture digits (their limbs), 'high' per combination of the
+    other digits (with every one-branch limb); posture k's M is high[k >> low_bits] +
+    low[k & (2^low_bits - 1)]."""
+    low_bits = sum(1 for bit in robot.branch_bits if bit >= 0) // 2
+    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
+    high_limbs = [i for i in range(robot.dof) if i not in low_limbs]
+
+    def sums(limbs, postures):
+        return [" + ".join(f"grams[{i}][{robot.posture_branches(k)[i]}][k]" for i in limbs) or "0.0"
+                for k in postures]
+
+    return {"low": sums(low_limbs, range(1 << low_bits)),
+            "high": sums(high_limbs, range(0, robot.postures, 1 << low_bits))}
+
+
 def view_model(robot):
     """Everything the plugin template substitutes, already formatted as C."""
     lower, upper = robot.travel_limits()
@@ -127,6 +173,12 @@ def view_model(robot):
         "any_revolute": any(limb.joint_type.wraps for limb in robot.limbs),
         "has_radicand": any(limb.has_radicand for limb in robot.limbs),
         "models": _model_tables(robot),
+        "direct_index": robot.direct_index_min is not None,
+        "low_bits": sum(1 for bit in robot.branch_bits if bit >= 0) // 2,
+        "ldl_lines": ldl_test_lines(),
+        "gram_lines": gram_lines(),
+        "partial_sums": partial_sums(robot),
+        "direct_index_min": c_double(robot.direct_index_min or 0.0),
         "degree": c_double(math.pi / 180.0),
         "calibration": [calibration_line(robot, *entry) for entry in robot.calibration()],
         "build_info": build_info(robot),

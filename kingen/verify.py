@@ -18,7 +18,7 @@ becomes a failed check instead of a dead, silent or stuck kingen.
 
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from .host import Plugin, captured_output, host_state
 from .isolation import run_in_child
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
+from .singularity import finite_difference_jacobian, jacobian, posture_wrenches
 from .report import Check, GoldenResult, Report
 
 RELATIVE_TOLERANCE = 256 * np.finfo(float).eps
@@ -43,6 +44,20 @@ CHUNK_ENTRIES = 400000
 """Joint entries (poses x dof x postures) per batch: keeps arrays small enough to stay in cache."""
 DIAGNOSIS_POSES = 2000
 DETERMINISM_POSES = 1000
+CLOSURE_TOLERANCE = 1e-9
+"""Relative to the passive link's length."""
+JACOBIAN_POSES = 200
+JACOBIAN_STEP = 1e-6
+"""Central-difference steps: this fraction of the robot's size (mm), and this many radians:
+small enough for the curvature near (not in) a singular band, large against rounding."""
+JACOBIAN_TOLERANCE = 1e-6
+"""Relative to the largest entry of the joint's Jacobian row (rotations weighed as mm of arc
+at the robot's size); central differences with these steps agree with the analytic
+Jacobian to about 1e-8 on every shipped robot."""
+JACOBIAN_MIN_TRANSMISSION = 0.05
+JACOBIAN_MIN_RADICAND = 1e-3
+"""Only regular postures are compared: away from limb singularities, where differences
+of an ill-conditioned joint would measure the conditioning, not the formula."""
 UNREACHABLE = abi.WARNINGS["WARN_UNREACHABLE"]
 
 
@@ -95,29 +110,37 @@ def singular_bounds(robot, reference_solution):
 
 
 def warnings_in_band(robot, reference_solution):
-    """(n, postures) True where the reference's warning is within WARNING_BAND of a threshold."""
+    """(n, postures) True where the reference's warning is within WARNING_BAND of a threshold:
+    a radicand within it of +/-SINGULAR_TOLERANCE, a joint within it of a travel limit (mm or
+    rad), or a direct index within WARNING_BAND relative of the robot's direct_index_min."""
     radicands = reference_solution.radicands
     near_radicand = np.any(
         (np.abs(radicands - SINGULAR_TOLERANCE) < WARNING_BAND) | (np.abs(radicands + SINGULAR_TOLERANCE) < WARNING_BAND),
         axis=1,
     )
+    near = np.broadcast_to(near_radicand[:, None], reference_solution.warnings.shape)
     lower, upper = robot.travel_limits()
-    if not np.any(np.isfinite(lower) | np.isfinite(upper)):
-        return np.broadcast_to(near_radicand[:, None], reference_solution.warnings.shape)
-    joints = reference_solution.joints
-    near_limit = np.any(
-        (np.abs(joints - lower[None, :, None]) < WARNING_BAND) | (np.abs(joints - upper[None, :, None]) < WARNING_BAND),
-        axis=1,
-    )
-    return near_radicand[:, None] | near_limit
+    if np.any(np.isfinite(lower) | np.isfinite(upper)):
+        joints = reference_solution.joints
+        near = near | np.any((np.abs(joints - lower[None, :, None]) < WARNING_BAND)
+                             | (np.abs(joints - upper[None, :, None]) < WARNING_BAND), axis=1)
+    if robot.direct_index_min is not None:
+        with np.errstate(invalid="ignore"):
+            near = near | (np.abs(reference_solution.direct_index - robot.direct_index_min)
+                           <= WARNING_BAND * robot.direct_index_min)
+    return near
 
 
 @dataclass
 class _Tally:
     """Running totals over the chunks of one verification."""
 
+    calibrated: object = None
+    """The robot with the dialog's fields applied, for the closure check."""
     returns_wrong: int = 0
     aborted: int = 0
+    closure_worst: float = 0.0
+    closure_checked: int = 0
     faulty_calls: int = 0
     fault_bits: int = 0
     first: tuple = None
@@ -223,7 +246,7 @@ def _verify_job(channel, robot, library, routine, options):
 
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     revolute = robot.revolute
-    tally = _Tally()
+    tally = _Tally(calibrated=robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
     for begin, poses in pose_chunks(robot, report.samples, report.seed, chunk_size(robot)):
         phase(f"poses {begin} to {begin + len(poses) - 1} of seed {report.seed}")
@@ -247,11 +270,7 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
     aborted = (calls.faults & ~abi.WROTE_INPUTS) != 0
     if np.any(aborted):  # judged by the buffers check; its outputs are partial
         tally.aborted += int(np.count_nonzero(aborted))
-        kept = ~aborted
-        t6, expected = t6[kept], replace(expected, **{name: getattr(expected, name)[kept]
-                                                      for name in ("joints", "warnings", "radicands", "finite")})
-        calls = replace(calls, **{name: getattr(calls, name)[kept]
-                                  for name in ("returned", "solutions", "warnings", "faults")})
+        t6, expected, calls = t6[~aborted], _rows(expected, ~aborted), _rows(calls, ~aborted)
         if not len(t6):
             return
     errors = joint_errors(calls.solutions, expected.joints, revolute)
@@ -272,10 +291,71 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
     report.warnings_in_band += int(np.count_nonzero(excused))
     none_reachable = np.all(expected.warnings == UNREACHABLE, axis=1)
     tally.returns_wrong += int(np.count_nonzero(calls.returned != np.where(none_reachable, 1, 0)))
+    tally.closure_worst = max(tally.closure_worst, closure_error(tally.calibrated, expected, calls.solutions))
+    tally.closure_checked += int(np.count_nonzero(~unreachable)) * robot.dof
     if tally.first is None:
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
                        expected.warnings[keep])
+
+
+def _rows(result, keep):
+    """A copy of ``result`` (a Solution or Calls) with only the poses ``keep`` (n,) selects."""
+    count = len(keep)
+    return replace(result, **{item.name: getattr(result, item.name)[keep] for item in fields(result)
+                              if isinstance(getattr(result, item.name), np.ndarray)
+                              and getattr(result, item.name).shape[:1] == (count,)})
+
+
+def closure_error(robot, expected, solutions):
+    """The largest |closure residual| / passive-link length over the postures the reference
+    calls reachable: each joint the routine returned, put back into its limb's geometry
+    (``robot`` calibrated as for the call). NaN joints count as infinitely wrong."""
+    reachable = expected.warnings != UNREACHABLE
+    worst = 0.0
+    for index, limb in enumerate(robot.limbs):
+        joints = solutions[:, index, :]
+        points = np.broadcast_to(expected.points[:, index, None, :], joints.shape + (3,))
+        with np.errstate(all="ignore"):
+            relative = np.abs(limb.closure_residual(points, joints)) / np.abs(limb.passive_length(joints))
+        relative = np.where(np.isfinite(relative), relative, np.inf)
+        if np.any(reachable):
+            worst = max(worst, float(np.max(np.where(reachable, relative, 0.0))))
+    return worst
+
+
+def jacobian_check(robot, plugin, options, t6):
+    """Finite differences of the routine's own joints along the six unit twists, against
+    the analytic Jacobian of the limbs' constraint geometry (kingen.singularity), on the
+    reachable, regular postures of ``t6``: catches a formula mistake the routine and the
+    reference share."""
+    calibrated = robot.calibrated(options.link_lengths, options.link_offsets)
+    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    plugin.reset_host()
+    center = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
+    wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
+    analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
+
+    def joints_of(moved):
+        plugin.reset_host()
+        return plugin.call(moved, options.link_lengths, options.link_offsets).solutions
+
+    numeric = finite_difference_jacobian(joints_of, t6, JACOBIAN_STEP * robot.size_mm, JACOBIAN_STEP, robot.revolute)
+    regular = ((expected.warnings == abi.WARNINGS["WARN_GOOD_SOLUTION"])[:, None, :]
+               & (np.abs(np.swapaxes(transmissions, 1, 2)) > JACOBIAN_MIN_TRANSMISSION)
+               & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None, None])
+    # Rotations in mm of arc at the robot's size, so that all six twists weigh alike.
+    units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
+    with np.errstate(all="ignore"):
+        relative = (np.max(np.abs(numeric - analytic) * units, axis=-1)
+                    / np.max(np.abs(analytic) * units, axis=-1))
+    relative = np.where(regular, np.where(np.isfinite(relative), relative, np.inf), 0.0)
+    worst, compared = float(relative.max(initial=0.0)), int(np.count_nonzero(regular))
+    passed = worst <= JACOBIAN_TOLERANCE
+    detail = (f"finite differences of the routine's joints against the analytic Jacobian on {compared} "
+              f"regular joint-postures of {len(t6)} poses: max relative difference {worst:.3g} "
+              f"(at most {JACOBIAN_TOLERANCE:g})")
+    return Check("jacobian", passed, detail)
 
 
 def _sample_checks(robot, plugin, report, options, tally):
@@ -302,6 +382,11 @@ def _sample_checks(robot, plugin, report, options, tally):
     checks.append(Check("return value", tally.returns_wrong == 0,
                         f"{tally.returns_wrong} calls return other than 1 when no posture is reachable, 0 otherwise"))
     checks.append(buffers)
+    checks.append(Check("closure", tally.closure_worst <= CLOSURE_TOLERANCE,
+                        f"every reachable posture's joints put back into the limb geometry: worst relative "
+                        f"residual {tally.closure_worst:.3g} over {tally.closure_checked} joints "
+                        f"(at most {CLOSURE_TOLERANCE:g} of the link length)"))
+    checks.append(jacobian_check(robot, plugin, options, t6[:JACOBIAN_POSES]))
     plugin.reset_host()
     again = plugin.call(t6[:DETERMINISM_POSES], options.link_lengths, options.link_offsets)
     same = (np.array_equal(again.solutions, solutions[:DETERMINISM_POSES], equal_nan=True)

@@ -50,7 +50,7 @@ def flipped(expected, joint_shift=0.0):
 
 def accumulate(robot, t6, calls, expected):
     report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
-    _accumulate(robot, report, _Tally(), robot.revolute, t6, calls, expected)
+    _accumulate(robot, report, _Tally(calibrated=robot), robot.revolute, t6, calls, expected)
     return report
 
 

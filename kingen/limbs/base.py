@@ -88,11 +88,41 @@ class LimbModel(Strict):
         base frame, mm: a :class:`LimbSolution`."""
         raise NotImplementedError
 
-    def closure_residual(self, platform_point, joint):
-        """How far the limb's passive link is from its length (mm) when its joint is at
-        ``joint`` (n,) and its platform point at ``platform_point`` (n, 3), base frame: the
-        geometry put back together forward, independent of :meth:`solve`'s formula."""
+    def base_side_point(self, platform_point, joint):
+        """Where the passive link starts on the base side (n, 3), mm, base frame, for joint
+        values ``joint`` (n,) (mm or rad, as reported) and platform points (n, 3): the force
+        line of the limb runs from here through the platform point."""
         raise NotImplementedError
+
+    def passive_length(self, joint):
+        """The passive link's length (mm) at joint values ``joint`` (n,)."""
+        raise NotImplementedError
+
+    def base_side_velocity(self, joint):
+        """d(base-side point)/d(joint) (n, 3), base frame: mm per mm, or mm per rad."""
+        return np.zeros(np.shape(joint) + (3,))
+
+    link_length_rate: ClassVar[float] = 0.0
+    """d(link length)/d(joint): 1 for a prismatic leg whose joint is its length, else 0."""
+
+    def closure_residual(self, platform_point, joint):
+        """How far the passive link is from its length (mm) when the joint is at ``joint`` (n,)
+        and the platform point at ``platform_point`` (n, 3), base frame: the geometry put back
+        together forward, independent of :meth:`solve`'s formula."""
+        return np.linalg.norm(platform_point - self.base_side_point(platform_point, joint), axis=-1) \
+            - self.passive_length(joint)
+
+    def force_direction(self, platform_point, joint):
+        """The unit direction f (n, 3) of the force the limb transmits to the platform: along
+        its passive link, from the base side to the platform point (docs/conventions.md,
+        'Force lines and the direct index')."""
+        line = platform_point - self.base_side_point(platform_point, joint)
+        return line / np.linalg.norm(line, axis=-1, keepdims=True)
+
+    def transmission(self, direction, joint):
+        """f . dP/dq + dl/dq (n,): a platform point velocity v moves the joint at
+        (f . v) / transmission. Zero at the limb's own (inverse) singularity."""
+        return np.sum(direction * self.base_side_velocity(joint), axis=-1) + self.link_length_rate
 
     def c_row(self):
         """This limb's table row for the partial: {column: C text} (numbers via c_double)."""

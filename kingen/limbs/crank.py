@@ -57,15 +57,21 @@ class Crank(TwoBranchModel):
         return LimbSolution(values=wrap_angle(np.stack([phi + half - zero, phi - half - zero], axis=-1)),
                             radicand=radicand)
 
-    def tip(self, joint):
-        """The crank tip B (n, 3), mm, base frame, for joint values ``joint`` (n,) in radians."""
+    def base_side_point(self, platform_point, joint):
+        """The crank tip B(theta)."""
         beta = math.radians(self.crank_direction)
         theta = np.asarray(joint) + math.radians(self.zero_offset)
         direction = np.stack([np.cos(theta) * math.cos(beta), np.cos(theta) * math.sin(beta), -np.sin(theta)], -1)
         return np.asarray(self.pivot) + self.crank_length * direction
 
-    def closure_residual(self, platform_point, joint):
-        return np.linalg.norm(platform_point - self.tip(joint), axis=-1) - self.rod_length
+    def passive_length(self, joint):
+        return np.full(np.shape(joint), self.rod_length)
+
+    def base_side_velocity(self, joint):
+        beta = math.radians(self.crank_direction)
+        theta = np.asarray(joint) + math.radians(self.zero_offset)
+        return self.crank_length * np.stack(
+            [-np.sin(theta) * math.cos(beta), -np.sin(theta) * math.sin(beta), -np.cos(theta)], -1)
 
     def c_row(self):
         beta = math.radians(self.crank_direction)

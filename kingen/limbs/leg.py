@@ -30,9 +30,13 @@ class Leg(LimbModel):
         q = length - self.reference_length
         return LimbSolution(values=np.stack([q, q], axis=-1))
 
-    def closure_residual(self, platform_point, joint):
-        length = np.linalg.norm(platform_point - np.asarray(self.base_point), axis=-1)
-        return length - (self.reference_length + joint)
+    link_length_rate = 1.0
+
+    def base_side_point(self, platform_point, joint):
+        return np.broadcast_to(np.asarray(self.base_point, dtype=float), np.shape(platform_point))
+
+    def passive_length(self, joint):
+        return self.reference_length + np.asarray(joint)
 
     def c_row(self):
         return {"base_point": c_vector(self.base_point), "platform_point": c_vector(self.platform_point),

@@ -43,10 +43,15 @@ class Rail(TwoBranchModel):
         return LimbSolution(values=np.stack([along - root, along + root], axis=-1) - self.origin,
                             radicand=radicand / link_squared)
 
-    def closure_residual(self, platform_point, joint):
-        carriage_joint = (np.asarray(self.rail_point) + np.asarray(self.carriage_offset)
-                          + (np.asarray(joint) + self.origin)[..., None] * np.asarray(self.direction))
-        return np.linalg.norm(platform_point - carriage_joint, axis=-1) - self.link_length
+    def base_side_point(self, platform_point, joint):
+        return (np.asarray(self.rail_point) + np.asarray(self.carriage_offset)
+                + (np.asarray(joint) + self.origin)[..., None] * np.asarray(self.direction))
+
+    def passive_length(self, joint):
+        return np.full(np.shape(joint), self.link_length)
+
+    def base_side_velocity(self, joint):
+        return np.broadcast_to(np.asarray(self.direction, dtype=float), np.shape(joint) + (3,))
 
     def c_row(self):
         return {"rail_point": c_vector(self.rail_point), "direction": c_vector(self.direction),

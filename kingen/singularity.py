@@ -1,0 +1,190 @@
+"""Force lines, the direct (platform) singularity index and the analytic Jacobian, in numpy.
+
+Every limb transmits a pure force to the platform along its passive link, through its
+platform point C (base frame): from the base point (leg), the carriage joint (rail) or the
+crank tip (crank) to C. Its unit wrench is w = [f; C x f], f the unit direction, moments in
+mm. The line depends on the posture through the limb's branch. docs/conventions.md
+('Force lines and the direct index') states the definitions; the limb models give the
+geometry (``base_side_point``, ``transmission``), so nothing here names a model.
+
+- Direct index: with M = sum_i w_i w_i^T split into force (v) and moment (w) blocks, the
+  square root of the smallest eigenvalue of the Schur complement M_ww - M_wv M_vv^-1 M_vw,
+  in mm: the least power sum_i (w_i . t)^2 over twists t = [v; omega] with |omega| = 1.
+  Frame-independent; 0 at a direct singularity, and 0 when M_vv is singular (a
+  pure-translation singularity). Defined for robots with six force lines only.
+- Jacobian: joint rates from a platform twist [v; omega] (v: the velocity of the platform
+  point at the base origin, mm/s; omega: rad/s, base frame): row i is w_i^T / t_i with
+  t_i the limb's transmission (f . dP/dq + dl/dq), derived from the closure, not from the
+  inverse-kinematics formula.
+"""
+
+import numpy as np
+
+from .conventions import branch_of_posture
+
+SIX = 6
+"""Force lines a robot needs for the direct index: one per platform degree of freedom."""
+TRANSLATION_SINGULAR = 1e-12
+"""M_vv (force block) counts as singular when its determinant is at most this fraction of
+(trace / 3)^3, the determinant it would have with equal eigenvalues."""
+
+
+def branch_table(robot):
+    """(postures, dof) int array: the branch each limb takes in each posture."""
+    postures = np.arange(robot.postures)
+    return np.stack([branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
+                     for bit in robot.branch_bits], axis=1)
+
+
+EXACT_WINDOW = 1e-4
+"""Around a threshold the closed-form eigenvalue is replaced by LAPACK's: far wider than the
+closed form's error (at most about 1e-7 relative on the shipped robots)."""
+
+
+def limb_wrenches(robot, points, joints):
+    """Unit wrenches (n, dof, 2, 6) and transmissions (n, dof, 2) of each limb's two force
+    lines (branch 0 and 1; the same twice for one-branch limbs), from platform points
+    (n, dof, 3) and joints (n, dof, postures). A limb has at most two lines: everything
+    per posture is assembled from these."""
+    count = points.shape[0]
+    table = branch_table(robot)
+    wrenches = np.empty((count, robot.dof, 2, 6))
+    transmissions = np.empty((count, robot.dof, 2))
+    for index, limb in enumerate(robot.limbs):
+        point = points[:, index]
+        for branch in (0, 1):
+            postures = np.nonzero(table[:, index] == branch)[0]
+            joint = joints[:, index, postures[0] if len(postures) else 0]
+            direction = limb.force_direction(point, joint)
+            wrenches[:, index, branch] = np.concatenate([direction, np.cross(point, direction)], axis=-1)
+            transmissions[:, index, branch] = limb.transmission(direction, joint)
+    return wrenches, transmissions
+
+
+def posture_wrenches(robot, points, joints):
+    """Unit wrenches (n, postures, dof, 6) and transmissions (n, postures, dof) of every
+    limb in every posture."""
+    wrenches, transmissions = limb_wrenches(robot, points, joints)
+    table = branch_table(robot)
+    limbs = np.arange(robot.dof)
+    return wrenches[:, limbs, table], transmissions[:, limbs, table]
+
+
+def posture_grams(robot, wrenches):
+    """M = sum_i w_i w_i^T (n, postures, 6, 6) of every posture from the limbs' line wrenches
+    (n, dof, 2, 6). The posture digits are split in two halves: M is the sum of one partial
+    sum over each half's limbs, so each outer product is formed once per pose."""
+    outer = np.einsum("nibx,niby->nibxy", wrenches, wrenches)
+    table = branch_table(robot)
+    digits = sum(1 for bit in robot.branch_bits if bit >= 0)
+    low_bits = digits // 2
+    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
+    high_limbs = [i for i in range(robot.dof) if i not in low_limbs]
+
+    def partial_sums(limbs, postures):
+        """(n, len(postures), 6, 6): per posture, the sum over ``limbs`` of their branch's w w^T."""
+        limbs = np.asarray(limbs, dtype=int)
+        return outer[:, limbs[None, :], table[postures][:, limbs]].sum(axis=2)
+
+    low = partial_sums(low_limbs, np.arange(1 << low_bits))
+    high = partial_sums(high_limbs, np.arange(0, robot.postures, 1 << low_bits))
+    postures = np.arange(robot.postures)
+    return high[:, postures >> low_bits] + low[:, postures & ((1 << low_bits) - 1)] if low_limbs else high
+
+
+def direct_index(gram, exact_near=None):
+    """The direct index (mm) from M (..., 6, 6): see the module docstring.
+
+    Computed component by component (vectorised): the force block inverted by its
+    adjugate, the smallest eigenvalue of the 3x3 Schur complement in closed form (relative
+    error about eps x its largest eigenvalue). Where that value lies within EXACT_WINDOW
+    (relative) of ``exact_near`` (mm; everywhere when None) it is recomputed with
+    numpy.linalg.eigvalsh, so every decision at a threshold rests on LAPACK."""
+    gram = np.asarray(gram, dtype=float)
+    finite = np.all(np.isfinite(gram), axis=(-1, -2))
+    gram = np.where(finite[..., None, None], gram, 0.0)
+    f = {(i, j): gram[..., i, j] for i in range(3) for j in range(i, 3)}
+    adjugate = _symmetric_adjugate(f)
+    determinant = f[0, 0] * adjugate[0, 0] + f[0, 1] * adjugate[0, 1] + f[0, 2] * adjugate[0, 2]
+    scale = (f[0, 0] + f[1, 1] + f[2, 2]) / 3.0
+    translation_singular = ~finite | ~(determinant > TRANSLATION_SINGULAR * scale ** 3)
+    with np.errstate(all="ignore"):
+        inverse_determinant = np.where(translation_singular, 0.0, 1.0 / determinant)
+    coupling = [[gram[..., i, 3 + j] for j in range(3)] for i in range(3)]
+    solved = [[sum(adjugate[min(i, k), max(i, k)] * coupling[k][j] for k in range(3)) for j in range(3)]
+              for i in range(3)]
+    schur = {(i, j): gram[..., 3 + i, 3 + j] - inverse_determinant
+             * sum(coupling[k][i] * solved[k][j] for k in range(3)) for i in range(3) for j in range(i, 3)}
+    smallest = _smallest_eigenvalue(schur)
+    near = np.ones(smallest.shape, dtype=bool) if exact_near is None else (
+        np.abs(np.sqrt(np.maximum(smallest, 0.0)) - exact_near) <= EXACT_WINDOW * exact_near)
+    near &= ~translation_singular
+    if np.any(near):
+        matrix = np.stack([np.stack([schur[min(i, j), max(i, j)][near] for j in range(3)], -1) for i in range(3)], -2)
+        smallest[near] = np.linalg.eigvalsh(matrix)[..., 0]
+    return np.where(translation_singular, 0.0, np.sqrt(np.maximum(smallest, 0.0)))
+
+
+def _symmetric_adjugate(a):
+    """The adjugate of symmetric 3x3 matrices given by their upper entries {(i, j): array}."""
+    return {(0, 0): a[1, 1] * a[2, 2] - a[1, 2] * a[1, 2], (0, 1): a[0, 2] * a[1, 2] - a[0, 1] * a[2, 2],
+            (0, 2): a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1], (1, 1): a[0, 0] * a[2, 2] - a[0, 2] * a[0, 2],
+            (1, 2): a[0, 1] * a[0, 2] - a[0, 0] * a[1, 2], (2, 2): a[0, 0] * a[1, 1] - a[0, 1] * a[0, 1]}
+
+
+def _smallest_eigenvalue(a):
+    """Smallest eigenvalue of symmetric 3x3 matrices {(i, j): array}, in closed form."""
+    off = a[0, 1] ** 2 + a[0, 2] ** 2 + a[1, 2] ** 2
+    mean = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
+    spread = np.sqrt(((a[0, 0] - mean) ** 2 + (a[1, 1] - mean) ** 2 + (a[2, 2] - mean) ** 2 + 2.0 * off) / 6.0)
+    with np.errstate(all="ignore"):
+        shifted = {(i, j): (a[i, j] - (mean if i == j else 0.0)) / spread for (i, j) in a}
+        adjugate = _symmetric_adjugate(shifted)
+        half_determinant = (shifted[0, 0] * adjugate[0, 0] + shifted[0, 1] * adjugate[0, 1]
+                            + shifted[0, 2] * adjugate[0, 2]) / 2.0
+    angle = np.arccos(np.clip(np.nan_to_num(half_determinant), -1.0, 1.0)) / 3.0
+    return np.where(spread > 0.0, mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0), mean)
+
+
+def jacobian(wrenches, transmissions):
+    """Joint rates per unit twist (..., dof, 6): row i = w_i / t_i; inf where t_i = 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return wrenches / transmissions[..., None]
+
+
+def twist_poses(t6, step_mm, step_rad):
+    """T6 (n, 12, 4, 4): each pose moved by -/+ one step along each unit twist: translations
+    along base x, y, z (``step_mm``), then rotations about base x, y, z through the base
+    origin (``step_rad``). Order: twist 0 minus, twist 0 plus, twist 1 minus, ..."""
+    t6 = np.asarray(t6, dtype=float)
+    moved = np.repeat(t6[:, None], 12, axis=1)
+    for axis in range(3):
+        for sign, column in ((-1.0, 2 * axis), (1.0, 2 * axis + 1)):
+            moved[:, column, 3, axis] += sign * step_mm
+            rotation = _axis_rotation(axis, sign * step_rad)
+            # H' = Rot H: rows of T6 (n, o, a, p) are columns of H, each rotated.
+            moved[:, 6 + column, :, :3] = t6[:, :, :3] @ rotation.T
+    return moved
+
+
+def _axis_rotation(axis, angle):
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    rotation = np.eye(3)
+    rotation[i, i] = rotation[j, j] = c
+    rotation[i, j], rotation[j, i] = -s, s
+    return rotation
+
+
+def finite_difference_jacobian(joints_of, t6, step_mm, step_rad, wraps):
+    """Central differences (n, dof, postures, 6) of ``joints_of(t6)`` (a function of (m, 4, 4)
+    T6 giving (m, dof, postures) joints) along the six unit twists; ``wraps`` (dof,) marks
+    angles, differenced modulo 2 pi."""
+    count = len(t6)
+    moved = twist_poses(t6, step_mm, step_rad).reshape(-1, 4, 4)
+    joints = joints_of(moved)
+    joints = joints.reshape(count, 6, 2, *joints.shape[1:])
+    difference = joints[:, :, 1] - joints[:, :, 0]
+    difference[:, :, wraps] = difference[:, :, wraps] - 2 * np.pi * np.rint(difference[:, :, wraps] / (2 * np.pi))
+    steps = np.array([step_mm] * 3 + [step_rad] * 3)
+    return np.moveaxis(difference / (2.0 * steps[None, :, None, None]), 1, -1)
