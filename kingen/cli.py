@@ -27,7 +27,7 @@ from .host import check_routine_name
 from .conventions import branch_of_posture, t6_from_pose
 from .model import load_robot, shipped_robots
 from .package import write_package
-from .report import json_text, junit_xml
+from .report import json_text, junit_xml, statistics_lines
 from .schema import MAX_MM
 from .text import printable
 
@@ -271,10 +271,12 @@ def _solve_job(channel, library, routine, matrix, link_lengths, link_offsets):
               callback=_output_file, help="Write the report as JSON to this file (null: not a finite number).")
 @click.option("--junit", "junit_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write the report as JUnit XML (one test case per check) to this file.")
+@click.option("--golden", "snapshot_path", type=click.Path(dir_okay=False, exists=True, path_type=Path), default=None,
+              help="Also check the routine against this recorded snapshot (kingen golden record).")
 @calibration_options
 @TIMEOUT
-def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, link_lengths, link_offsets,
-           timeout):
+def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path,
+           link_lengths, link_offsets, timeout):
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
     By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
@@ -283,10 +285,13 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     """
     from .verify import VerifyOptions, chunk_size, verify_library
 
+    from .snapshot import load as load_snapshot
+
     model = load_robot(robot)
+    snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
     library, routine = _library(model, out_dir, library, source, routine, timeout)
     options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
-                            timeout=timeout)
+                            timeout=timeout, snapshot=snapshot)
     with _progress(samples, chunk_size(model)) as progress:
         report = verify_library(model, library, routine, options, progress)
     _print_report(report, library)
@@ -314,6 +319,61 @@ def bench(robot, out_dir, library, source, routine, calls, timeout):
     _say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
     _say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
     _say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s")
+
+
+@cli.group()
+def golden():
+    """Recorded snapshots of poses, joints and warnings (checked by verify --golden)."""
+
+
+@golden.command("record")
+@ROBOT
+@plugin_options
+@click.option("--samples", type=click.IntRange(min=1, max=100000), default=100, show_default=True,
+              help="Poses to record.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the poses.")
+@click.option("-o", "--output", "output", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              callback=_output_file, help="The snapshot file to write (rewritten whole).")
+@TIMEOUT
+def golden_record(robot, library, source, routine, samples, seed, output, timeout):
+    """Record a snapshot from the reference, or from a trusted plugin (--plugin/--source)."""
+    from .snapshot import record, sample_t6
+
+    model = load_robot(robot)
+    t6 = sample_t6(model, samples, seed)
+    if library is None and source is None:
+        if routine is not None:
+            raise click.UsageError("--routine needs --plugin or --source")
+        from .reference import solve as reference_solve
+
+        expected = reference_solve(model, t6)
+        joints, warnings, recorded_from = expected.joints, expected.warnings, "the reference"
+    else:
+        library, routine = _library(model, None, library, source, routine, timeout)
+        calls = _in_child(_solve_job, (library, routine, t6, None, None), timeout)
+        joints, warnings, recorded_from = calls.solutions, calls.warnings, f"plugin {Path(library).name} ({routine})"
+    write_atomic(output, record(model, t6, joints, warnings, recorded_from, samples, seed))
+    _say(f"{output}: {samples} poses x {model.postures} postures recorded from {recorded_from}")
+
+
+@cli.command()
+@click.argument("library", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+def info(library):
+    """What a compiled library says about itself (read from its bytes, never loaded)."""
+    from .library_info import binary_format, build_info
+
+    details = build_info(library)
+    _say(f"library: {library}")
+    _say(f"format: {binary_format(library)}")
+    if details is None:
+        _say("kingen build information: none (not built by kingen)")
+        return 0
+    _say(f"robot: {details.get('robot', '?')}")
+    _say(f"routine: {details.get('routine', '?')}")
+    _say(f"dof: {details.get('dof', '?')}, postures: {details.get('postures', '?')}")
+    _say(f"definition sha256: {details.get('sha256', '?')}")
+    _say(f"kingen version: {details.get('kingen', '?')}")
+    return 0
 
 
 def _bench_job(channel, model, library, routine, calls):
@@ -369,6 +429,8 @@ def _print_report(report, library):
         _say(f"  {'ok' if check.passed else 'FAILED':6} {check.name}: {check.detail}")
         for diagnosis in check.diagnoses:
             _say(f"         diagnosis: {diagnosis}")
+    for line in statistics_lines(report):
+        _say(f"  {line}")
     for notice in report.notices:
         _say(f"  notice: {notice}")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"

@@ -111,6 +111,16 @@ class Robot:
     golden: tuple
     direct_index_min: Optional[float] = None
     """mm, or None: no direct-singularity warning."""
+    lines: tuple = ()
+    """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
+
+    def line_of(self, *path):
+        """The robot file's line of the field at ``path`` (or of its nearest parent), else 1."""
+        lines = dict(self.lines)
+        for cut in range(len(path), 0, -1):
+            if tuple(path[:cut]) in lines:
+                return lines[tuple(path[:cut])]
+        return 1
 
     @property
     def has_direct_index(self):
@@ -247,6 +257,7 @@ def load_robot(spec):
         verification=document.verification,
         golden=tuple(document.golden),
         direct_index_min=document.singularity.direct_index_min if document.singularity else None,
+        lines=tuple(lines.items()),
     )
     _check_golden(robot, locate)
     if robot.direct_index_min is not None and not robot.has_direct_index:

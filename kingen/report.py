@@ -58,6 +58,10 @@ class Report:
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
+    posture_statistics: list = field(default_factory=list)
+    """Per posture: {posture, right, wrong, unreachable_wrongly, missed, worst_error_mm,
+    worst_error_rad}: poses solved right, solved wrong (joints beyond their bound), reported
+    unreachable where the reference solves them, and solved where the reference finds none."""
 
     @property
     def golden_checked(self):
@@ -101,6 +105,7 @@ class Report:
             "golden_checked": self.golden_checked,
             "golden_failed": self.golden_failed,
             "golden": [asdict(result) for result in self.golden],
+            "posture_statistics": self.posture_statistics,
             "checks": [asdict(check) for check in self.checks],
             "interface_failures": [check.detail for check in self.failures if check.name in INTERFACE_CHECKS],
             "diagnoses": [text for check in self.checks for text in check.diagnoses],
@@ -146,3 +151,24 @@ def junit_xml(report):
     if report.notices:
         ElementTree.SubElement(suite, "system-err").text = xml_text("\n".join(report.notices))
     return ElementTree.tostring(suite, encoding="unicode", xml_declaration=True) + "\n"
+
+
+def statistics_lines(report, most=8):
+    """The per-posture solution statistics as text lines: every posture for robots with at
+    most ``most`` postures, else the totals and the ``most`` postures with the most failures."""
+    rows = report.posture_statistics
+    if not rows:
+        return []
+    failures = lambda row: row["wrong"] + row["unreachable_wrongly"] + row["missed"]  # noqa: E731
+    shown = rows if len(rows) <= most else sorted(rows, key=lambda row: -failures(row))[:most]
+    shown = [row for row in shown if len(rows) <= most or failures(row)]
+    total = {key: sum(row[key] for row in rows) for key in ("right", "wrong", "unreachable_wrongly", "missed")}
+    lines = [f"solutions per posture: right / wrong / unreachable wrongly / missed, worst error "
+             f"(all {len(rows)} postures: {total['right']} / {total['wrong']} / {total['unreachable_wrongly']} / "
+             f"{total['missed']})"]
+    for row in shown:
+        worst = ", ".join(f"{row[key]:.3g} {unit}" for key, unit in (("worst_error_mm", "mm"), ("worst_error_rad", "rad"))
+                          if row[key] is not None)
+        lines.append(f"posture {row['posture']}: {row['right']} / {row['wrong']} / {row['unreachable_wrongly']} / "
+                     f"{row['missed']}, worst {worst or '-'}")
+    return lines

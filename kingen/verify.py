@@ -29,9 +29,11 @@ from .diagnose import diagnose, diagnose_warnings
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
 from .isolation import run_in_child
+from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
 from .singularity import finite_difference_jacobian, jacobian, posture_wrenches
+from .snapshot import check as snapshot_check
 from .report import Check, GoldenResult, Report
 
 RELATIVE_TOLERANCE = 256 * np.finfo(float).eps
@@ -70,6 +72,8 @@ class VerifyOptions:
     link_lengths: tuple = None
     link_offsets: tuple = None
     timeout: float = DEFAULT_TIMEOUT
+    snapshot: object = None
+    """A loaded kingen.snapshot.Snapshot to check the routine against (check ``snapshot``)."""
 
 
 def value_tolerance_mm(robot):
@@ -141,6 +145,10 @@ class _Tally:
     aborted: int = 0
     closure_worst: float = 0.0
     closure_checked: int = 0
+    posture_counts: np.ndarray = None
+    """(4, postures): right, wrong, unreachable wrongly, missed."""
+    posture_worst: list = None
+    """[mm (postures,), rad (postures,)] worst errors where both solve."""
     faulty_calls: int = 0
     fault_bits: int = 0
     first: tuple = None
@@ -188,6 +196,10 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
         with printed.capture():
             report.golden = check_golden(robot, plugin)
         decided(Check(f"golden[{i}]", result.passed, _golden_detail(result)) for i, result in enumerate(report.golden))
+        if options.snapshot is not None:
+            phase("the snapshot")
+            with printed.capture():
+                decided([snapshot_check(robot, options.snapshot, _calls(plugin, options))])
     else:
         decided([Check("values", False, "not compared: the routine's joint or posture count differs")])
     if printed.bytes:
@@ -210,7 +222,7 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
     call, gives a report whose last check is ``crash`` or ``timeout`` naming the stage;
     a plugin that breaks the interface before it can be called fails ``get_kin_config``.
     Bad input (no such file, not a library, unknown routine) raises KingenError."""
-    checks = []
+    checks = [definition_check(robot, library)]
 
     def on_message(kind, value):
         if kind == "progress" and progress is not None:
@@ -224,12 +236,38 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
         report, failure = None, None
         checks = [Check(defect.check, False, str(defect))]
     if report is not None:
+        report.checks.insert(0, checks[0])
         return report
     report = _empty_report(robot, routine, options)
     report.checks.extend(checks)
     if failure is not None:
         report.checks.append(Check(failure.kind, False, failure.detail))
     return report
+
+
+def _calls(plugin, options):
+    def call(t6):
+        plugin.reset_host()
+        calls = plugin.call(t6, options.link_lengths, options.link_offsets)
+        return calls.solutions, calls.warnings
+
+    return call
+
+
+def definition_check(robot, library):
+    """``definition``: whether the library was built from this robot file (the sha256 it
+    carries), from another one, or not by kingen (then the check passes, saying so)."""
+    info = build_info(library)
+    if info is None:
+        return Check("definition", True, "the library carries no kingen build information (not built by kingen): "
+                                         "its definition cannot be traced")
+    if info.get("sha256") == robot.sha256:
+        return Check("definition", True, f"built by kingen {info.get('kingen', '?')} from this robot file "
+                                         f"(sha256 {robot.sha256[:16]})")
+    return Check("definition", False, f"built by kingen {info.get('kingen', '?')} from another definition of "
+                                      f"'{info.get('robot', '?')}': the library says sha256 "
+                                      f"{info.get('sha256', '?')[:16]}, {robot.path.name} has {robot.sha256[:16]}: "
+                                      "rebuild it from the reviewed file")
 
 
 def _verify_job(channel, robot, library, routine, options):
@@ -246,7 +284,9 @@ def _verify_job(channel, robot, library, routine, options):
 
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     revolute = robot.revolute
-    tally = _Tally(calibrated=robot.calibrated(options.link_lengths, options.link_offsets))
+    tally = _Tally(calibrated=robot.calibrated(options.link_lengths, options.link_offsets),
+                   posture_counts=np.zeros((4, robot.postures), dtype=np.int64),
+                   posture_worst=[np.zeros(robot.postures), np.zeros(robot.postures)])
     start = time.perf_counter()
     for begin, poses in pose_chunks(robot, report.samples, report.seed, chunk_size(robot)):
         phase(f"poses {begin} to {begin + len(poses) - 1} of seed {report.seed}")
@@ -259,6 +299,7 @@ def _compare_samples(robot, plugin, report, options, progress, printed, phase):
         if progress is not None:
             progress(begin + len(poses))
     report.seconds = time.perf_counter() - start
+    report.posture_statistics = _posture_statistics(robot, tally)
     phase("the determinism check")
     with printed.capture():
         return _sample_checks(robot, plugin, report, options, tally)
@@ -281,6 +322,7 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
     report.singular_entries += int(np.count_nonzero(singular))
     report.singular_out_of_bound += int(np.count_nonzero(singular & (errors > bounds)))
     regular = np.where(singular, 0.0, errors)
+    _count_postures(tally, report, revolute, calls, expected, errors, singular, bounds)
     if np.any(~revolute):
         report.max_abs_error_mm = max(report.max_abs_error_mm, float(regular[:, ~revolute].max()))
     if np.any(revolute):
@@ -297,6 +339,30 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
                        expected.warnings[keep])
+
+
+def _count_postures(tally, report, revolute, calls, expected, errors, singular, bounds):
+    """Per posture: poses solved right, solved wrong, unreachable wrongly, missed; worst errors."""
+    tolerance = np.where(revolute, report.tolerance_rad, report.tolerance_mm)[None, :, None]
+    bad = np.any(np.where(singular, errors > bounds, errors > tolerance), axis=1)
+    reference_solves = expected.warnings != UNREACHABLE
+    plugin_solves = calls.warnings != UNREACHABLE
+    counts = np.stack([reference_solves & plugin_solves & ~bad, reference_solves & plugin_solves & bad,
+                       reference_solves & ~plugin_solves, ~reference_solves & plugin_solves])
+    tally.posture_counts += np.count_nonzero(counts, axis=1)
+    solved = np.where((reference_solves & plugin_solves)[:, None, :] & ~singular, errors, 0.0)
+    for unit, mask in ((0, ~revolute), (1, revolute)):
+        if np.any(mask) and len(solved):
+            tally.posture_worst[unit] = np.maximum(tally.posture_worst[unit], solved[:, mask].max(axis=(0, 1)))
+
+
+def _posture_statistics(robot, tally):
+    has = {0: bool(np.any(~robot.revolute)), 1: bool(np.any(robot.revolute))}
+    return [{"posture": k, "right": int(tally.posture_counts[0, k]), "wrong": int(tally.posture_counts[1, k]),
+             "unreachable_wrongly": int(tally.posture_counts[2, k]), "missed": int(tally.posture_counts[3, k]),
+             "worst_error_mm": float(tally.posture_worst[0][k]) if has[0] else None,
+             "worst_error_rad": float(tally.posture_worst[1][k]) if has[1] else None}
+            for k in range(robot.postures)]
 
 
 def _rows(result, keep):

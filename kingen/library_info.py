@@ -1,0 +1,58 @@
+"""What a compiled library says about itself, read from its bytes, never by loading it.
+
+Every library kingen generates carries the exported string ``kingen_build_info``
+("kingen-build-info: robot=... routine=... dof=... postures=... sha256=... kingen=...");
+:func:`build_info` finds and parses it, :func:`binary_format` names the file's format and
+machine from its header. Nothing here runs the library's code.
+"""
+
+import re
+import struct
+from pathlib import Path
+
+from .errors import KingenError
+from .render import BUILD_INFO_MARKER
+
+MAX_LIBRARY_BYTES = 256 << 20
+_INFO = re.compile(re.escape(BUILD_INFO_MARKER.encode()) + rb"([ -~]{1,1000})\x00")
+_ELF_MACHINES = {3: "i386", 40: "arm", 62: "x86-64", 183: "aarch64"}
+_PE_MACHINES = {0x14C: "i386", 0x8664: "x86-64", 0xAA64: "aarch64"}
+
+
+def _read(path):
+    path = Path(path)
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(MAX_LIBRARY_BYTES + 1)
+    except OSError as error:
+        raise KingenError(f"{path}: cannot be read: {error.strerror}") from None
+    if len(data) > MAX_LIBRARY_BYTES:
+        raise KingenError(f"{path}: larger than {MAX_LIBRARY_BYTES >> 20} MB; not a plugin library")
+    return data
+
+
+def build_info(path):
+    """The library's build information as {robot, routine, dof, postures, sha256, kingen},
+    or None when it carries none (not built by kingen)."""
+    match = _INFO.search(_read(path))
+    if match is None:
+        return None
+    return dict(item.split("=", 1) for item in match.group(1).decode("ascii").split() if "=" in item)
+
+
+def binary_format(path):
+    """'ELF 64-bit shared object, x86-64', 'PE32+ DLL, x86-64', ... or 'not a library'."""
+    data = _read(path)
+    if data[:4] == b"\x7fELF" and len(data) >= 20:
+        bits = {1: "32-bit", 2: "64-bit"}.get(data[4], "?-bit")
+        endian = "<" if data[5] == 1 else ">"
+        kind, machine = struct.unpack_from(endian + "HH", data, 16)
+        shape = {2: "executable", 3: "shared object"}.get(kind, "object")
+        return f"ELF {bits} {shape}, {_ELF_MACHINES.get(machine, f'machine {machine}')}"
+    if data[:2] == b"MZ" and len(data) >= 0x40:
+        offset = struct.unpack_from("<I", data, 0x3C)[0]
+        if data[offset:offset + 4] == b"PE\0\0" and len(data) >= offset + 26:
+            machine = struct.unpack_from("<H", data, offset + 4)[0]
+            magic = struct.unpack_from("<H", data, offset + 24)[0]
+            return f"{'PE32+' if magic == 0x20B else 'PE32'} DLL, {_PE_MACHINES.get(machine, f'machine {machine:#x}')}"
+    return "not a library"
