@@ -15,6 +15,20 @@ def located(source, line, field, problem):
     return KingenError(text)
 
 
+def read_limited(path, limit, what):
+    """The bytes of the file at ``path``; KingenError when it cannot be read or is larger
+    than ``limit`` bytes (``what`` says what such a file is, for the message)."""
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(limit + 1)
+    except OSError as error:
+        raise located(path, None, None, f"cannot be read: {error.strerror}") from None
+    if len(data) > limit:
+        size = f"{limit >> 20} MB" if limit >= 1 << 20 else f"{limit // 1000} kB"
+        raise located(path, None, None, f"larger than {size}; {what}")
+    return data
+
+
 class PluginDefect(KingenError):
     """A plugin that breaks the interface before it can be verified (it does not load, no
     get_kin_config, impossible counts): a failed verification (exit 1), not bad input.

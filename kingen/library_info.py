@@ -8,9 +8,8 @@ machine from its header. Nothing here runs the library's code.
 
 import re
 import struct
-from pathlib import Path
 
-from .errors import KingenError
+from .errors import read_limited
 from .render import BUILD_INFO_MARKER
 
 MAX_LIBRARY_BYTES = 256 << 20
@@ -20,15 +19,7 @@ _PE_MACHINES = {0x14C: "i386", 0x8664: "x86-64", 0xAA64: "aarch64"}
 
 
 def _read(path):
-    path = Path(path)
-    try:
-        with open(path, "rb") as stream:
-            data = stream.read(MAX_LIBRARY_BYTES + 1)
-    except OSError as error:
-        raise KingenError(f"{path}: cannot be read: {error.strerror}") from None
-    if len(data) > MAX_LIBRARY_BYTES:
-        raise KingenError(f"{path}: larger than {MAX_LIBRARY_BYTES >> 20} MB; not a plugin library")
-    return data
+    return read_limited(path, MAX_LIBRARY_BYTES, "not a plugin library")
 
 
 def build_info(path):

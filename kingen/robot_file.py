@@ -22,7 +22,7 @@ from ruamel.yaml.comments import CommentedMap, CommentedSeq
 from ruamel.yaml.error import MarkedYAMLError, YAMLError
 from ruamel.yaml.events import AliasEvent, CollectionEndEvent, CollectionStartEvent, MappingStartEvent, ScalarEvent
 
-from .errors import located
+from .errors import located, read_limited
 from .text import unprintable
 
 MAX_FILE_BYTES = 1_000_000
@@ -37,13 +37,7 @@ def read_robot_file(path):
     """(data, lines) for the robot file at ``path``: plain dicts, lists, str, int, float,
     bool and None, and {field path tuple: 1-based line}. Raises KingenError."""
     shown = str(path)
-    try:
-        with open(path, "rb") as stream:
-            raw = stream.read(MAX_FILE_BYTES + 1)
-    except OSError as error:
-        raise located(shown, None, None, f"cannot be read: {error.strerror}") from None
-    if len(raw) > MAX_FILE_BYTES:
-        raise located(shown, None, None, f"larger than {MAX_FILE_BYTES // 1000} kB; a robot file is a few kB")
+    raw = read_limited(path, MAX_FILE_BYTES, "a robot file is a few kB")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as error:

@@ -15,7 +15,7 @@ from pydantic import Field, ValidationError
 
 from . import __version__, abi
 from .conventions import t6_from_pose
-from .errors import KingenError, located
+from .errors import located, read_limited
 from .report import Check
 from .schema import Strict
 
@@ -91,13 +91,7 @@ def sample_t6(robot, samples, seed):
 def load(path, robot):
     """The snapshot at ``path`` for ``robot``; KingenError naming the file and field otherwise."""
     path = Path(path)
-    try:
-        with open(path, "rb") as stream:
-            raw = stream.read(MAX_SNAPSHOT_BYTES + 1)
-    except OSError as error:
-        raise KingenError(f"{path}: cannot be read: {error.strerror}") from None
-    if len(raw) > MAX_SNAPSHOT_BYTES:
-        raise located(path, None, None, f"larger than {MAX_SNAPSHOT_BYTES >> 20} MB")
+    raw = read_limited(path, MAX_SNAPSHOT_BYTES, "not a kingen snapshot")
     try:
         snapshot = Snapshot.model_validate(json.loads(raw))
     except (ValueError, RecursionError) as error:

@@ -149,6 +149,13 @@ class _Tally:
     """(4, postures): right, wrong, unreachable wrongly, missed."""
     posture_worst: list = None
     """[mm (postures,), rad (postures,)] worst errors where both solve."""
+
+    @classmethod
+    def start(cls, calibrated):
+        """Empty totals for ``calibrated`` (the robot with the dialog's fields applied)."""
+        postures = calibrated.postures
+        return cls(calibrated=calibrated, posture_counts=np.zeros((4, postures), dtype=np.int64),
+                   posture_worst=[np.zeros(postures), np.zeros(postures)])
     faulty_calls: int = 0
     fault_bits: int = 0
     first: tuple = None
@@ -284,9 +291,7 @@ def _verify_job(channel, robot, library, routine, options):
 
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     revolute = robot.revolute
-    tally = _Tally(calibrated=robot.calibrated(options.link_lengths, options.link_offsets),
-                   posture_counts=np.zeros((4, robot.postures), dtype=np.int64),
-                   posture_worst=[np.zeros(robot.postures), np.zeros(robot.postures)])
+    tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
     for begin, poses in pose_chunks(robot, report.samples, report.seed, chunk_size(robot)):
         phase(f"poses {begin} to {begin + len(poses) - 1} of seed {report.seed}")

@@ -50,9 +50,7 @@ def flipped(expected, joint_shift=0.0):
 
 def accumulate(robot, t6, calls, expected):
     report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
-    tally = _Tally(calibrated=robot, posture_counts=np.zeros((4, robot.postures), dtype=np.int64),
-                   posture_worst=[np.zeros(robot.postures), np.zeros(robot.postures)])
-    _accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+    _accumulate(robot, report, _Tally.start(robot), robot.revolute, t6, calls, expected)
     return report
 
 
