@@ -24,7 +24,7 @@ from . import __version__, abi
 from .build import DEFAULT_TIMEOUT, TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
 from .errors import InternalError, KingenError, PluginDefect
 from .host import check_routine_name
-from .conventions import branch_of_posture, t6_from_pose
+from .conventions import branch_of_posture, pose_from_t6, t6_from_pose, wrap_angle
 from .model import load_robot, shipped_robots
 from .package import write_package
 from .report import json_text, junit_xml, statistics_lines
@@ -172,9 +172,11 @@ def package(robot, out_dir, target, timeout):
 @click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write every posture (joints in mm and rad, warnings, indices) as JSON.")
+@click.option("--switch", nargs=2, type=click.IntRange(min=0), default=None, metavar="A B",
+              help="Predict a switch from posture A to B: B's joints, their assembly modes and the TCP jump.")
 @calibration_options
 @TIMEOUT
-def solve(robot, out_dir, pose, t6, degrees, json_path, link_lengths, link_offsets, timeout):
+def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, link_offsets, timeout):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
     from .reference import solve as reference_solve
 
@@ -207,6 +209,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, link_lengths, link_offse
     _print_table(rows)
     _say(f"routine returned {calls.returned[0]}")
     _say(_indices_note(model))
+    if switch is not None:
+        _predict_switch(model, matrix[0], expected.joints[0], switch, scale, units)
     if json_path is not None:
         write_atomic(json_path, json.dumps(_finite({
             "robot": model.name, "routine": routine, "t6": matrix[0].tolist(), "returned": int(calls.returned[0]),
@@ -223,6 +227,36 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, link_lengths, link_offse
         _say(f"the routine {'; '.join(t for b, t in abi.GUARD_FAULTS.items() if calls.faults[0] & b)}")
         return EXIT_FAILED
     return 0
+
+
+def _predict_switch(model, t6, joints, switch, scale, units):
+    """What a host that recomputes the TCP from posture B's joints may do after A -> B."""
+    from .forward import assemblies
+
+    first, second = switch
+    if max(first, second) >= model.postures:
+        raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--switch")
+    if not model.has_forward:
+        _say(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)")
+        return
+    pose = pose_from_t6(t6)
+    commanded = np.concatenate([pose[:3], np.radians(pose[3:])])
+    change = joints[:, second] - joints[:, first]
+    change = np.where(model.revolute, wrap_angle(change), change)
+    moved = ", ".join(f"{name} {value * s:+.6f} {unit}" for name, value, s, unit in
+                      zip(model.joint_names, change, scale, units))
+    _say(f"switch {first} -> {second}: the joints move by {moved}")
+    found = assemblies(model, joints[:, second], commanded)
+    if not found:
+        _say(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP")
+        return
+    for number, assembly in enumerate(found):
+        distance = float(np.linalg.norm(assembly.pose[:3] - commanded[:3]))
+        pose = ", ".join(f"{v:.3f}" for v in np.concatenate([assembly.pose[:3], np.degrees(assembly.pose[3:])]))
+        _say(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP")
+    worst = max(float(np.linalg.norm(a.pose[:3] - commanded[:3])) for a in found)
+    _say(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {worst:.3f} mm "
+         f"({len(found)} assembly modes)")
 
 
 def _index_text(value):
@@ -319,6 +353,56 @@ def bench(robot, out_dir, library, source, routine, calls, timeout):
     _say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
     _say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
     _say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s")
+
+
+@cli.command(context_settings={"ignore_unknown_options": True})
+@ROBOT
+@click.option("--joints", required=True, type=str, metavar="Q1 .. Qn",
+              help="The joints, mm (prismatic) and degrees (revolute), space-separated in one argument "
+                   "or as the remaining arguments.")
+@click.argument("more_joints", nargs=-1, type=click.UNPROCESSED, metavar="")
+@click.option("--near", nargs=6, type=float, default=None, metavar="X Y Z ROLL PITCH YAW",
+              help="The pose to measure distances from and to take non-free coordinates from "
+                   "[default: the verification home].")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the assembly modes as JSON.")
+def fk(robot, joints, more_joints, near, json_path):
+    """Forward kinematics: every platform pose (assembly mode) the joints admit.
+
+    Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
+    from .forward import assemblies, best_residual
+
+    model = load_robot(robot)
+    try:
+        values = [float(v) for v in joints.replace(",", " ").split()] + [float(v) for v in more_joints]
+    except ValueError:
+        raise click.BadParameter("numbers expected", param_hint="--joints") from None
+    if len(values) != model.dof or not all(math.isfinite(v) for v in values):
+        raise click.BadParameter(f"{model.name} has {model.dof} joints; give {model.dof} finite numbers",
+                                 param_hint="--joints")
+    if not model.has_forward:
+        raise KingenError(f"{model.path}: forward: forward kinematics needs free pose coordinates for a robot "
+                          f"with {model.dof} limbs: declare them, for example forward: {{free: [x, y, z]}}")
+    internal = np.array(values) * model.joint_scale()
+    near_pose = np.array(near if near is not None else model.verification.home, dtype=float)
+    near_internal = np.concatenate([near_pose[:3], np.radians(near_pose[3:])])
+    found = assemblies(model, internal, near_internal)
+    rows = [("mode", "x (mm)", "y (mm)", "z (mm)", "roll (deg)", "pitch (deg)", "yaw (deg)", "residual (mm)",
+             "from near (mm)")]
+    solutions = []
+    for number, assembly in enumerate(found):
+        pose = np.concatenate([assembly.pose[:3], np.degrees(assembly.pose[3:])])
+        distance = float(np.linalg.norm(assembly.pose[:3] - near_internal[:3]))
+        solutions.append({"pose": pose.tolist(), "residual_mm": assembly.residual_mm, "distance_from_near_mm": distance})
+        rows.append((str(number), *(f"{v:.6f}" for v in pose), f"{assembly.residual_mm:.3g}", f"{distance:.3f}"))
+    if json_path is not None:
+        write_atomic(json_path, json.dumps({"robot": model.name, "joints": values, "solutions": solutions},
+                                           indent=2, allow_nan=False) + "\n")
+    if not found:
+        _say(f"no pose found for these joints (best residual {best_residual(model, internal, near_internal):.3g} mm)")
+        return EXIT_FAILED
+    _print_table(rows)
+    return 0
 
 
 @cli.group()

@@ -90,6 +90,17 @@ def t6_from_pose(pose):
     return t6_from_matrix(matrix_from_pose(pose))
 
 
+def pose_from_t6(t6):
+    """Poses (..., 6) x y z in mm and roll pitch yaw in degrees from DELMIA's T6 (..., 4, 4);
+    pitch in [-90, 90] degrees (the inverse of t6_from_pose away from pitch = +/-90)."""
+    t6 = np.asarray(t6, dtype=float)
+    rotation = np.swapaxes(t6[..., :3, :3], -1, -2)
+    roll = np.arctan2(rotation[..., 2, 1], rotation[..., 2, 2])
+    pitch = np.arcsin(np.clip(-rotation[..., 2, 0], -1.0, 1.0))
+    yaw = np.arctan2(rotation[..., 1, 0], rotation[..., 0, 0])
+    return np.concatenate([t6[..., 3, :3], np.degrees(np.stack([roll, pitch, yaw], -1))], axis=-1)
+
+
 def wrap_angle(angle):
     """Angles in radians mapped to (-pi, pi]; an angle already there is returned unchanged."""
     angle = np.asarray(angle, dtype=float)

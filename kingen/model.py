@@ -12,7 +12,7 @@ import hashlib
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Annotated, Optional, Union
+from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 from pydantic import AfterValidator, Field, ValidationError
@@ -74,6 +74,12 @@ class Singularity(Strict):
     """mm: postures whose direct index is at most this answer WARN_SINGULAR_SOLUTION."""
 
 
+class Forward(Strict):
+    """``forward:`` in a robot file: which pose coordinates forward kinematics solves for."""
+
+    free: Annotated[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]], Field(min_length=1, max_length=6)]
+
+
 @functools.lru_cache(maxsize=None)
 def robot_file_schema():
     """The YAML schema over the registered limb models (rebuilt when one is registered);
@@ -89,6 +95,7 @@ def robot_file_schema():
         verification: Region
         golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = []
         singularity: Optional[Singularity] = None
+        forward: Optional[Forward] = None
 
     return RobotFile
 
@@ -111,6 +118,8 @@ class Robot:
     golden: tuple
     direct_index_min: Optional[float] = None
     """mm, or None: no direct-singularity warning."""
+    forward_free: tuple = ()
+    """The pose coordinates forward kinematics solves for; empty: all six."""
     lines: tuple = ()
     """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
 
@@ -121,6 +130,11 @@ class Robot:
             if tuple(path[:cut]) in lines:
                 return lines[tuple(path[:cut])]
         return 1
+
+    @property
+    def has_forward(self):
+        """Whether forward kinematics is defined: six limbs, or free coordinates declared."""
+        return self.dof == 6 or bool(self.forward_free)
 
     @property
     def has_direct_index(self):
@@ -257,9 +271,13 @@ def load_robot(spec):
         verification=document.verification,
         golden=tuple(document.golden),
         direct_index_min=document.singularity.direct_index_min if document.singularity else None,
+        forward_free=tuple(document.forward.free) if document.forward else (),
         lines=tuple(lines.items()),
     )
     _check_golden(robot, locate)
+    free = robot.forward_free
+    if free and (len(set(free)) != len(free) or len(free) != robot.dof):
+        raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb")
     if robot.direct_index_min is not None and not robot.has_direct_index:
         raise locate.error(["singularity", "direct_index_min"],
                            f"the direct index needs six force lines; this robot has {robot.dof} limbs")

@@ -24,8 +24,9 @@ import numpy as np
 
 from . import abi
 from .build import DEFAULT_TIMEOUT
-from .conventions import joint_errors, t6_from_pose
+from .conventions import joint_errors, pose_from_t6, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
+from .forward import free_mask, newton, t6_of
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
 from .isolation import run_in_child
@@ -49,6 +50,7 @@ DETERMINISM_POSES = 1000
 CLOSURE_TOLERANCE = 1e-9
 """Relative to the passive link's length."""
 JACOBIAN_POSES = 200
+ROUND_TRIP_POSES = 1000
 JACOBIAN_STEP = 1e-6
 """Central-difference steps: this fraction of the robot's size (mm), and this many radians:
 small enough for the curvature near (not in) a singular band, large against rounding."""
@@ -74,6 +76,11 @@ class VerifyOptions:
     timeout: float = DEFAULT_TIMEOUT
     snapshot: object = None
     """A loaded kingen.snapshot.Snapshot to check the routine against (check ``snapshot``)."""
+
+
+def report_tolerance_mm(robot):
+    """The prismatic bound verify reports for ``robot`` (see value_tolerance_mm)."""
+    return value_tolerance_mm(robot)
 
 
 def value_tolerance_mm(robot):
@@ -429,6 +436,37 @@ def jacobian_check(robot, plugin, options, t6):
     return Check("jacobian", passed, detail)
 
 
+def round_trip_check(robot, plugin, options, t6):
+    """Forward kinematics seeded at each sampled pose, from the routine's joints of every
+    regular posture, must return that pose: within the value bound (mm) and 1e-9 rad."""
+    if not robot.has_forward:
+        return Check("round trip", True, f"not available: forward kinematics needs free pose coordinates for a "
+                                         f"robot with {robot.dof} limbs (forward: {{free: [...]}})")
+    calibrated = robot.calibrated(options.link_lengths, options.link_offsets)
+    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    plugin.reset_host()
+    joints = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
+    wrenches, transmissions = posture_wrenches(calibrated, expected.points, joints)
+    regular = ((expected.warnings == abi.WARNINGS["WARN_GOOD_SOLUTION"])
+               & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
+               & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
+    pose_index, posture = np.nonzero(regular)
+    if not len(pose_index):
+        return Check("round trip", True, "no regular posture among the sampled poses to go round")
+    sampled = pose_from_t6(t6)
+    start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)[pose_index]
+    found, residuals = newton(calibrated, start, joints[pose_index, :, posture], free_mask(calibrated))
+    position = np.max(np.abs(found[:, :3] - start[:, :3]), axis=1)
+    rotation = np.max(np.abs(t6_of(found)[:, :3, :3] - t6_of(start)[:, :3, :3]), axis=(1, 2))
+    worst_mm, worst_rad = float(np.max(position)), float(np.max(rotation))
+    passed = worst_mm <= report_tolerance_mm(robot) and worst_rad <= VALUE_TOLERANCE_RAD
+    return Check("round trip", passed,
+                 f"forward kinematics from the routine's joints of {len(pose_index)} regular postures of {len(t6)} "
+                 f"poses returns each pose within {worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds "
+                 f"{report_tolerance_mm(robot):.3g} mm, {VALUE_TOLERANCE_RAD:g} rad; postures near a singularity, "
+                 f"where the pose is ill-conditioned, are left out)")
+
+
 def _sample_checks(robot, plugin, report, options, tally):
     buffers = buffers_check(tally.faulty_calls, tally.fault_bits)
     if tally.first is None:
@@ -458,6 +496,7 @@ def _sample_checks(robot, plugin, report, options, tally):
                         f"residual {tally.closure_worst:.3g} over {tally.closure_checked} joints "
                         f"(at most {CLOSURE_TOLERANCE:g} of the link length)"))
     checks.append(jacobian_check(robot, plugin, options, t6[:JACOBIAN_POSES]))
+    checks.append(round_trip_check(robot, plugin, options, t6[:ROUND_TRIP_POSES]))
     plugin.reset_host()
     again = plugin.call(t6[:DETERMINISM_POSES], options.link_lengths, options.link_offsets)
     same = (np.array_equal(again.solutions, solutions[:DETERMINISM_POSES], equal_nan=True)

@@ -1,0 +1,201 @@
+"""Forward kinematics: every platform pose that given joints admit (the assembly modes).
+
+The unknowns are the robot's free pose coordinates (all six for six limbs; a robot with
+fewer limbs declares them, ``forward: {free: [x, y, z]}``), the others held at the pose
+the search starts near. Each limb closes when its passive link has its length,
+|C_i(pose) - P_i(q_i)| = l_i(q_i) (docs/conventions.md); the residuals' derivative with
+respect to a platform twist is the limb's unit wrench, so Newton-Raphson needs no
+finite differences. A translating platform with three limbs is solved in closed form
+(three spheres: at most two poses). Poses are (x, y, z) in mm and (roll, pitch, yaw) in
+radians here; the command line shows degrees.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .conventions import matrix_from_pose, t6_from_matrix
+from .reference import platform_points_in_base
+
+COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
+ITERATIONS = 60
+STARTS = 256
+"""Deterministic starts drawn over twice the verification region (and the given ones)."""
+CONVERGED = 1e-13
+"""Newton stops when no step exceeds this fraction of the robot's size (mm) or of a radian."""
+SAME_POSE_MM = 1e-6
+SAME_POSE_RAD = 1e-8
+
+
+@dataclass(frozen=True)
+class Assembly:
+    """One pose the joints admit: ``pose`` (6,) mm and radians, ``residual_mm`` the largest
+    |closure residual| there."""
+
+    pose: np.ndarray
+    residual_mm: float
+
+
+def t6_of(poses):
+    """T6 (n, 4, 4) of poses (n, 6) in mm and radians."""
+    poses = np.asarray(poses, dtype=float)
+    return t6_from_matrix(matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1)))
+
+
+def closure(robot, poses, joints):
+    """Residuals (n, dof) mm of every limb at poses (n, 6) for joints (n, dof), and the unit
+    wrenches (n, dof, 6) of the force lines there (the residuals' twist derivative)."""
+    points = platform_points_in_base(t6_of(poses), [limb.platform_point for limb in robot.limbs])
+    residuals = np.empty(points.shape[:2])
+    wrenches = np.empty(points.shape[:2] + (6,))
+    for index, limb in enumerate(robot.limbs):
+        point, joint = points[:, index], joints[:, index]
+        residuals[:, index] = limb.closure_residual(point, joint)
+        direction = limb.force_direction(point, joint)
+        wrenches[:, index] = np.concatenate([direction, np.cross(point, direction)], axis=-1)
+    return residuals, wrenches
+
+
+def pose_jacobian(poses):
+    """d(twist)/d(pose) (n, 6, 6): twist [v; omega] per unit rate of x, y, z, roll, pitch, yaw,
+    with R = Rz(yaw) Ry(pitch) Rx(roll) and v the velocity of the platform point at the base
+    origin (v = p_dot - omega x p)."""
+    poses = np.asarray(poses, dtype=float)
+    pitch, yaw = poses[:, 4], poses[:, 5]
+    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+    axes = np.stack([np.stack([cy * cp, sy * cp, -sp], -1),          # roll: Rz Ry e_x
+                     np.stack([-sy, cy, np.zeros_like(yaw)], -1),     # pitch: Rz e_y
+                     np.broadcast_to([0.0, 0.0, 1.0], poses[:, :3].shape)], axis=1)  # yaw: e_z
+    jacobian = np.zeros((len(poses), 6, 6))
+    jacobian[:, :3, :3] = np.eye(3)
+    jacobian[:, 3:, 3:] = np.swapaxes(axes, 1, 2)
+    jacobian[:, :3, 3:] = -np.swapaxes(np.cross(axes, poses[:, None, :3]), 1, 2)
+    return jacobian
+
+
+def newton(robot, starts, joints, free):
+    """Newton-Raphson from every start (n, 6) towards the joints (n, dof): the converged
+    poses (n, 6) and their largest residuals (n,). ``free`` (6,) bool: the coordinates solved
+    for; the others keep the start's values."""
+    poses = np.array(starts, dtype=float)
+    with np.errstate(all="ignore"):
+        for _ in range(ITERATIONS):
+            residual, wrenches = closure(robot, poses, joints)
+            matrix = (wrenches @ pose_jacobian(poses))[:, :, free]
+            step = _least_squares(matrix, -residual)
+            step = np.where(np.isfinite(step), step, 0.0)
+            step = _limited(step, robot.size_mm, free)
+            poses[:, free] += step
+            if np.all(np.abs(step) <= CONVERGED * np.array([robot.size_mm] * 3 + [1.0] * 3)[free]):
+                break
+        residual, _ = closure(robot, poses, joints)
+    return poses, np.where(np.all(np.isfinite(residual), axis=1), np.max(np.abs(residual), axis=1), np.inf)
+
+
+def _least_squares(matrix, right):
+    """Batched least squares through the normal equations with a tiny Tikhonov term."""
+    normal = np.swapaxes(matrix, 1, 2) @ matrix
+    normal += 1e-14 * np.trace(normal, axis1=1, axis2=2)[:, None, None] * np.eye(normal.shape[-1])
+    return np.linalg.solve(normal, (np.swapaxes(matrix, 1, 2) @ right[..., None]))[..., 0]
+
+
+def _limited(step, size_mm, free):
+    """Newton steps no larger than a fifth of the robot's size and a fifth of a turn."""
+    limits = np.array([size_mm / 5.0] * 3 + [np.pi * 0.4] * 3)[free]
+    scale = np.max(np.abs(step) / limits, axis=1, keepdims=True)
+    return step / np.maximum(scale, 1.0)
+
+
+def free_mask(robot):
+    """(6,) bool: the pose coordinates forward kinematics solves for (all six by default)."""
+    free = robot.forward_free or COORDINATES
+    return np.array([name in free for name in COORDINATES])
+
+
+def starts(robot, near):
+    """Deterministic starts: ``near`` first, the verification home, then seeded poses over
+    twice the verification region (mm, radians)."""
+    region = robot.verification
+    home = np.concatenate([region.home[:3], np.radians(region.home[3:])])
+    half = np.concatenate([region.range[:3], np.radians(region.range[3:])]) * 2.0
+    half[3:] = np.minimum(half[3:], np.pi)
+    rng = np.random.default_rng(20261122)
+    drawn = home + rng.uniform(-1.0, 1.0, (STARTS, 6)) * half
+    return np.vstack([near, home, drawn])
+
+
+def assemblies(robot, joints, near):
+    """Every assembly mode for ``joints`` (dof,) (mm, rad) as Assembly objects, nearest
+    first; ``near`` (6,) (mm, rad) also gives the values of coordinates that are not free."""
+    joints = np.asarray(joints, dtype=float)
+    near = np.asarray(near, dtype=float)
+    free = free_mask(robot)
+    if robot.dof == 3 and list(free) == [True, True, True, False, False, False]:
+        candidates = _translation_closed_form(robot, joints, near)
+    else:
+        begin = starts(robot, near)
+        begin[:, ~free] = near[~free]
+        candidates, _ = newton(robot, begin, np.tile(joints, (len(begin), 1)), free)
+    candidates = np.asarray(candidates, dtype=float).reshape(-1, 6)
+    if not len(candidates):
+        return []
+    polished, residuals = newton(robot, candidates, np.tile(joints, (len(candidates), 1)), free)
+    tolerance = 1e-9 * robot.size_mm
+    found = []
+    for pose, residual in sorted(zip(polished, residuals), key=lambda item: np.linalg.norm(item[0][:3] - near[:3])):
+        if residual <= tolerance and not any(_same(pose, other.pose) for other in found):
+            found.append(Assembly(pose=pose, residual_mm=float(residual)))
+    return found
+
+
+def best_residual(robot, joints, near):
+    """The smallest residual Newton reaches from the starts (mm): how close it came."""
+    begin = starts(robot, near)
+    free = free_mask(robot)
+    begin[:, ~free] = np.asarray(near)[~free]
+    _, residuals = newton(robot, begin, np.tile(np.asarray(joints, float), (len(begin), 1)), free)
+    return float(np.min(residuals))
+
+
+def _same(pose, other):
+    rotation = matrix_from_pose(np.concatenate([pose[:3], np.degrees(pose[3:])]))[:3, :3]
+    other_rotation = matrix_from_pose(np.concatenate([other[:3], np.degrees(other[3:])]))[:3, :3]
+    return (np.max(np.abs(pose[:3] - other[:3])) <= SAME_POSE_MM
+            and np.max(np.abs(rotation - other_rotation)) <= SAME_POSE_RAD)
+
+
+def _translation_closed_form(robot, joints, near):
+    """A translating platform (rotation held at ``near``'s) with three limbs: each limb puts
+    its platform point on a sphere, so the position is on three spheres: 0, 1 or 2 poses."""
+    rotation = matrix_from_pose(np.concatenate([[0.0, 0.0, 0.0], np.degrees(near[3:])]))[:3, :3]
+    centres, radii = [], []
+    for limb, joint in zip(robot.limbs, joints):
+        base_side = limb.base_side_point(np.zeros((1, 3)), np.array([joint]))[0]
+        centres.append(base_side - rotation @ np.asarray(limb.platform_point))
+        radii.append(float(limb.passive_length(np.array([joint]))[0]))
+    positions = _three_spheres(np.array(centres), np.array(radii))
+    return [np.concatenate([position, near[3:]]) for position in positions]
+
+
+def _three_spheres(centres, radii):
+    """The points at distances ``radii`` from three ``centres``: trilateration."""
+    ex = centres[1] - centres[0]
+    d = np.linalg.norm(ex)
+    if d == 0.0:
+        return []
+    ex = ex / d
+    i = ex @ (centres[2] - centres[0])
+    ey = centres[2] - centres[0] - i * ex
+    if np.linalg.norm(ey) == 0.0:
+        return []
+    ey = ey / np.linalg.norm(ey)
+    ez = np.cross(ex, ey)
+    j = ey @ (centres[2] - centres[0])
+    x = (radii[0] ** 2 - radii[1] ** 2 + d ** 2) / (2 * d)
+    y = (radii[0] ** 2 - radii[2] ** 2 + i ** 2 + j ** 2) / (2 * j) - i * x / j
+    squared = radii[0] ** 2 - x ** 2 - y ** 2
+    if squared < -1e-9 * radii[0] ** 2:
+        return []
+    z = np.sqrt(max(squared, 0.0))
+    base = centres[0] + x * ex + y * ey
+    return [base + z * ez, base - z * ez] if z > 0 else [base]
