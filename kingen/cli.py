@@ -405,6 +405,62 @@ def fk(robot, joints, more_joints, near, json_path):
     return 0
 
 
+@cli.command()
+@ROBOT
+@click.option("--posture", type=click.IntRange(min=0), default=None,
+              help="The posture (assembly mode) to analyse [default: the robot's working_posture].")
+@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: build/<name>/analysis].")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Also write analysis.json to this file.")
+def analyze(robot, posture, out_dir, json_path):
+    """Tilt limits, sweeps and workspace slices of one posture: analysis.json, PNG figures
+    and a self-contained report.html."""
+    import time
+
+    from .analysis import analyze as run_analysis
+    from .figures import figures, report_html
+
+    model = load_robot(robot)
+    if posture is not None and posture >= model.postures:
+        raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
+    out_dir = out_dir or default_out_dir(model) / "analysis"
+    start = time.perf_counter()
+    with _steps(["tilt limits", "sweeps", "workspace slices", "figures"]) as step:
+        analysis = run_analysis(model, posture, progress=step)
+        step("figures")
+        pngs = figures(analysis)
+    seconds = time.perf_counter() - start
+    text = json.dumps(_finite(analysis), indent=1, allow_nan=False) + "\n"
+    outputs = {"analysis.json": text, **pngs, "report.html": report_html(model, analysis, pngs, seconds)}
+    for name, data in outputs.items():
+        write_atomic(out_dir / name, data)
+    if json_path is not None:
+        write_atomic(json_path, text)
+    limits = analysis["tilt_limits"]
+    about = {0: "X", 90: "Y", 180: "-X", 270: "-Y"}
+    summary = ", ".join(f"about {about[int(row['azimuth_deg'])]} {row['max_tilt_deg']} deg ({row['cause']})"
+                        for row in limits if int(row["azimuth_deg"]) in about)
+    _say(f"analyze {model.name}, posture {analysis['posture']}: {summary}")
+    for name in outputs:
+        _say(str(out_dir / name))
+    _say(f"in {seconds:.1f} s")
+
+
+def _steps(names):
+    """A progress bar over named steps on a terminal; a no-op callable otherwise."""
+    if sys.stderr is None or not sys.stderr.isatty():
+        return contextlib.nullcontext(lambda text: None)
+    bar = click.progressbar(length=len(names), label="analysing", file=sys.stderr)
+
+    @contextlib.contextmanager
+    def running():
+        with bar:
+            yield lambda text: bar.update(1)
+
+    return running()
+
+
 @cli.group()
 def golden():
     """Recorded snapshots of poses, joints and warnings (checked by verify --golden)."""

@@ -80,6 +80,15 @@ class Forward(Strict):
     free: Annotated[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]], Field(min_length=1, max_length=6)]
 
 
+class Collision(Strict):
+    """``collision:`` in a robot file: radii (mm) of the cylinders passive links and cranks
+    are modelled as; analyze reports clearances below them as collisions."""
+
+    leg_radius: Optional[Length] = None
+    rod_radius: Optional[Length] = None
+    crank_radius: Optional[Length] = None
+
+
 @functools.lru_cache(maxsize=None)
 def robot_file_schema():
     """The YAML schema over the registered limb models (rebuilt when one is registered);
@@ -96,6 +105,8 @@ def robot_file_schema():
         golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = []
         singularity: Optional[Singularity] = None
         forward: Optional[Forward] = None
+        working_posture: Annotated[int, Field(ge=0)] = 0
+        collision: Optional[Collision] = None
 
     return RobotFile
 
@@ -118,6 +129,10 @@ class Robot:
     golden: tuple
     direct_index_min: Optional[float] = None
     """mm, or None: no direct-singularity warning."""
+    working_posture: int = 0
+    """The assembly mode the machine is built in (analyze's default posture)."""
+    collision: Optional[dict] = None
+    """{leg_radius, rod_radius, crank_radius} (mm) given in the robot file, or None."""
     forward_free: tuple = ()
     """The pose coordinates forward kinematics solves for; empty: all six."""
     lines: tuple = ()
@@ -272,9 +287,14 @@ def load_robot(spec):
         golden=tuple(document.golden),
         direct_index_min=document.singularity.direct_index_min if document.singularity else None,
         forward_free=tuple(document.forward.free) if document.forward else (),
+        working_posture=document.working_posture,
+        collision=document.collision.model_dump(exclude_none=True) if document.collision else None,
         lines=tuple(lines.items()),
     )
     _check_golden(robot, locate)
+    if robot.working_posture >= robot.postures:
+        raise locate.error(["working_posture"], f"posture {robot.working_posture} does not exist "
+                                                f"(the robot has {robot.postures})")
     free = robot.forward_free
     if free and (len(set(free)) != len(free) or len(free) != robot.dof):
         raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb")

@@ -21,9 +21,10 @@ from .text import finalizer, markdown
 
 BUILD_INFO_MARKER = "kingen-build-info:"
 """Starts the build-info string compiled into every generated library."""
-TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown"}
-"""Which escaping (:func:`kingen.text.finalizer`) a template's substitutions get, by suffix;
-every other template is plain text. The stand-in header has no user text and none."""
+TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown", ".html.j2": "html"}
+"""Which escaping (:func:`kingen.text.finalizer`) a template's substitutions get, by suffix
+(HTML: jinja2's autoescape); every other template is plain text. The stand-in header has no
+user text and none."""
 
 
 def _partial_source(name):
@@ -44,8 +45,8 @@ def _environment(kind):
         trim_blocks=True,
         lstrip_blocks=True,
         keep_trailing_newline=True,
-        autoescape=False,
-        finalize=finalizer(kind) if kind else None,
+        autoescape=kind == "html",
+        finalize=finalizer(kind) if kind not in (None, "html") else None,
     )
 
 

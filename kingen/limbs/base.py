@@ -105,6 +105,13 @@ class LimbModel(Strict):
     link_length_rate: ClassVar[float] = 0.0
     """d(link length)/d(joint): 1 for a prismatic leg whose joint is its length, else 0."""
 
+    passive_radius: ClassVar[str] = "rod_radius"
+    """Which ``collision`` radius the passive link is modelled with."""
+
+    def actuator_segment(self, joint):
+        """(start, end) (n, 3) of a moving actuator arm to keep clear of others, or None."""
+        return None
+
     def closure_residual(self, platform_point, joint):
         """How far the passive link is from its length (mm) when the joint is at ``joint`` (n,)
         and the platform point at ``platform_point`` (n, 3), base frame: the geometry put back

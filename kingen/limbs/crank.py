@@ -64,6 +64,11 @@ class Crank(TwoBranchModel):
         direction = np.stack([np.cos(theta) * math.cos(beta), np.cos(theta) * math.sin(beta), -np.sin(theta)], -1)
         return np.asarray(self.pivot) + self.crank_length * direction
 
+    def actuator_segment(self, joint):
+        """The crank itself, from its pivot to its tip."""
+        tip = self.base_side_point(None, joint)
+        return np.broadcast_to(np.asarray(self.pivot, dtype=float), tip.shape), tip
+
     def passive_length(self, joint):
         return np.full(np.shape(joint), self.rod_length)
 

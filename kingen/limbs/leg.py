@@ -31,6 +31,7 @@ class Leg(LimbModel):
         return LimbSolution(values=np.stack([q, q], axis=-1))
 
     link_length_rate = 1.0
+    passive_radius = "leg_radius"
 
     def base_side_point(self, platform_point, joint):
         return np.broadcast_to(np.asarray(self.base_point, dtype=float), np.shape(platform_point))
