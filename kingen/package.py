@@ -75,6 +75,7 @@ def sheet_view(robot, target):
         "warnings": [{"code": abi.WARNINGS[name], "name": name, "meaning": _meaning(robot, name, meaning)}
                      for name, meaning in WARNING_MEANINGS.items()],
         "direct_index_available": robot.has_direct_index,
+        "working_posture": robot.working_posture,
         "direct_index_min": robot.direct_index_min,
         "compiler_defines": " ".join(f"-D{define}" for define in WINDOWS_DEFINES),
     }
