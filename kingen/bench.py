@@ -5,6 +5,7 @@ printed, never asserted: speed targets live here, not in unit tests.
 Memory is bounded whatever the call count: the routine is timed over a pool of at most
 ``POOL_POSES`` distinct poses, passed over repeatedly until ``calls`` calls are made."""
 
+import statistics
 import time
 
 from .conventions import t6_from_pose
@@ -15,6 +16,8 @@ from .verify import VerifyOptions, sample_poses, verify
 PER_CALL_LIMIT = 20000
 """The per-call cffi path is slow; it is timed on at most this many poses."""
 POOL_POSES = 20000
+ROUNDS = 9
+"""Rounds of timings in turns when routines are compared."""
 VERIFY_LIMIT = 200000
 """verify's poses per second are measured on at most this many poses."""
 
@@ -56,3 +59,25 @@ def benchmark(robot, plugin, calls=200000, seed=0, repeats=3, tick=None):
         "verify_poses_per_second": report.poses_per_second,
         "verify_passed": report.passed,
     }
+
+
+def compare(robot, plugins, calls=200000, seed=0, repeats=ROUNDS, tick=None):
+    """ns per call of each of ``plugins`` (label -> Plugin) on the same ``calls`` poses
+    through the C batch driver, timed in turns (one timing of each per round, ``repeats``
+    rounds) so that the machine's drift hits all alike. Returns label -> {"min", "median"}
+    in ns per call; the first label is the one the others are compared with."""
+    pool = min(calls, POOL_POSES)
+    passes = -(-calls // pool)
+    t6 = t6_from_pose(sample_poses(robot, pool, seed))
+    runners = {}
+    for label, plugin in plugins.items():
+        plugin.reset_host()
+        runners[label] = plugin.batch_runner(t6)
+    timings = {label: [] for label in plugins}
+    with captured_output():
+        for label, run in runners.items():  # warm caches and page in the code once
+            run()
+        for _ in range(repeats):
+            for label, run in runners.items():
+                timings[label].append(_best_seconds(run, 1, passes, tick) / (pool * passes) * 1e9)
+    return {label: {"min": min(values), "median": statistics.median(values)} for label, values in timings.items()}

@@ -342,17 +342,33 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
 @plugin_options
 @click.option("--calls", type=click.IntRange(min=1, max=MAX_BENCH_CALLS), default=200000, show_default=True,
               help="Routine calls per timing (the per-call path uses at most 20000).")
+@click.option("--floor", "floor_source", type=click.Path(dir_okay=False, exists=True, path_type=Path), default=None,
+              help="A hand-written C routine for ROBOT (benchmarks/floors/): time it against the routine, "
+                   "in turns, and print the ratio.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the figures as JSON to this file.")
 @TIMEOUT
-def bench(robot, out_dir, library, source, routine, calls, timeout):
+def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, timeout):
     """Print ns per routine call (C batch driver, per-call cffi) and poses per second."""
     model = load_robot(robot)
     library, routine = _library(model, out_dir, library, source, routine, timeout)
-    figures = _in_child(_bench_job, (model, library, routine, calls), timeout)
+    floor = None
+    if floor_source is not None:
+        floor = build_legacy(floor_source, (out_dir or default_out_dir(model)) / "floor", timeout=timeout)
+    figures = _in_child(_bench_job, (model, library, routine, calls, floor), timeout)
     _say(f"bench {model.name} ({routine}, {model.postures} postures, {figures['calls']} calls)")
     _say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
     _say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
     _say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
     _say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s")
+    if floor is not None:
+        against = figures["against_floor"]
+        _say(f"  against the floor {floor_source} ({against['rounds']} rounds in turns, ns/call):")
+        for label in ("floor", "routine"):
+            _say(f"    {label + ':':9} min {against[label]['min']:9.1f}, median {against[label]['median']:9.1f}")
+        _say(f"    ratio:    min {against['ratio_min']:9.3f}, median {against['ratio_median']:9.3f}")
+    if json_path is not None:
+        write_atomic(json_path, json.dumps(figures, indent=2, allow_nan=False) + "\n")
 
 
 @cli.command(context_settings={"ignore_unknown_options": True})
@@ -516,13 +532,23 @@ def info(library):
     return 0
 
 
-def _bench_job(channel, model, library, routine, calls):
-    from .bench import benchmark
+def _bench_job(channel, model, library, routine, calls, floor):
+    from .bench import ROUNDS, benchmark, compare
     from .host import Plugin
 
     plugin = Plugin(library, routine)
     channel.stage("the timings")
-    return benchmark(model, plugin, calls=calls, tick=lambda: channel.send("progress", None))
+    tick = lambda: channel.send("progress", None)  # noqa: E731
+    figures = benchmark(model, plugin, calls=calls, tick=tick)
+    if floor is not None:
+        channel.stage("the timings against the floor")
+        timings = compare(model, {"floor": Plugin(floor, model.routine), "routine": plugin}, calls=calls, tick=tick)
+        figures["against_floor"] = {
+            **timings, "rounds": ROUNDS,
+            "ratio_min": timings["routine"]["min"] / timings["floor"]["min"],
+            "ratio_median": timings["routine"]["median"] / timings["floor"]["median"],
+        }
+    return figures
 
 
 def _in_child(job, arguments, timeout):

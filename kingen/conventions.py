@@ -102,11 +102,19 @@ def pose_from_t6(t6):
 
 
 def wrap_angle(angle):
-    """Angles in radians mapped to (-pi, pi]; an angle already there is returned unchanged."""
+    """Angles in radians mapped to (-pi, pi], as the generated C does it: an angle already
+    there is returned unchanged, one within one turn of it moved by one 2 pi step, any
+    other reduced by floored modulo."""
     angle = np.asarray(angle, dtype=float)
-    wrapped = np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
+
+    def inside(value):
+        return (value > -np.pi) & (value <= np.pi)
+
+    stepped = np.where(angle > np.pi, angle - 2.0 * np.pi, angle + 2.0 * np.pi)
+    with np.errstate(invalid="ignore"):
+        wrapped = np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
     wrapped = np.where(wrapped == -np.pi, np.pi, wrapped)
-    return np.where((angle > -np.pi) & (angle <= np.pi), angle, wrapped)
+    return np.where(inside(angle), angle, np.where(inside(stepped), stepped, wrapped))
 
 
 def angle_difference(a, b):

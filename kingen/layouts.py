@@ -10,7 +10,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Field, field_validator
 
-from .limbs import Crank, Leg
+from .limbs import Crank, Leg, model_name
 from .schema import MAX_MM, Coordinate, DialogField, Length, SixAngles, Strict, Travel
 
 class _Layout(Strict):
@@ -57,7 +57,7 @@ class StewartGoughLayout(_Layout):
             base_angle = math.radians(centre + (second - 0.5) * self.base_pair_angle)
             platform_angle = math.radians(centre + (second - 0.5) * self.platform_pair_angle)
             legs.append(Leg(
-                model="leg",
+                model=model_name(Leg),
                 name=f"leg{index + 1}",
                 base_point=[self.base_radius * math.cos(base_angle),
                             self.base_radius * math.sin(base_angle), self.base_height],
@@ -91,7 +91,7 @@ class Rus6Layout(_Layout):
             sign = 1.0 if index % 2 == 0 else -1.0
             m, n = sign * self.base_half_distance, sign * self.platform_half_distance
             cranks.append(Crank(
-                model="crank",
+                model=model_name(Crank),
                 name=f"crank{index + 1}",
                 pivot=[self.base_radius * math.cos(chi) - m * math.sin(chi),
                        self.base_radius * math.sin(chi) + m * math.cos(chi), 0.0],

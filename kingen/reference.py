@@ -53,8 +53,10 @@ class Solution:
 def platform_points_in_base(t6, points):
     """Platform-frame points (m, 3) mapped to the base frame for each T6: shape (n, m, 3), mm."""
     t6 = np.asarray(t6, dtype=float)
-    rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
-    return np.einsum("nij,mj->nmi", rotation, np.asarray(points, dtype=float)) + t6[:, None, 3, :3]
+    points = np.asarray(points, dtype=float)
+    # Written out in the generated C's order: T6[0][i] x + T6[1][i] y + T6[2][i] z + T6[3][i].
+    return (t6[:, None, 0, :3] * points[None, :, 0, None] + t6[:, None, 1, :3] * points[None, :, 1, None]
+            + t6[:, None, 2, :3] * points[None, :, 2, None]) + t6[:, None, 3, :3]
 
 
 def solve(robot, t6, link_lengths=None, link_offsets=None, indices=False):

@@ -137,6 +137,15 @@ def partial_sums(robot):
             "high": sums(high_limbs, range(0, robot.postures, 1 << low_bits))}
 
 
+def joint_sum(robot):
+    """The C sum of every joint value the routine computed (both branches of two-branch
+    limbs): finite exactly when all of them are, unless the sum itself overflows."""
+    terms = []
+    for index, bit in enumerate(robot.branch_bits):
+        terms += [f"joints[{index}].value[{branch}]" for branch in ((0, 1) if bit >= 0 else (0,))]
+    return " + ".join(terms)
+
+
 def view_model(robot):
     """Everything the plugin template substitutes, already formatted as C."""
     lower, upper = robot.travel_limits()
@@ -168,6 +177,7 @@ def view_model(robot):
         "dof": robot.dof,
         "postures": robot.postures,
         "two_branch_count": sum(1 for bit in robot.branch_bits if bit >= 0),
+        "joint_sum": joint_sum(robot),
         "singular_tolerance": c_double(abi.SINGULAR_TOLERANCE),
         "joints": joints,
         "any_limits": any(limb.travel is not None for limb in robot.limbs),

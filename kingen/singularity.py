@@ -52,12 +52,14 @@ def limb_wrenches(robot, points, joints):
     transmissions = np.empty((count, robot.dof, 2))
     for index, limb in enumerate(robot.limbs):
         point = points[:, index]
-        for branch in (0, 1):
+        for branch in range(limb.branches):
             postures = np.nonzero(table[:, index] == branch)[0]
             joint = joints[:, index, postures[0] if len(postures) else 0]
             direction = limb.force_direction(point, joint)
             wrenches[:, index, branch] = np.concatenate([direction, np.cross(point, direction)], axis=-1)
             transmissions[:, index, branch] = limb.transmission(direction, joint)
+        if limb.branches == 1:
+            wrenches[:, index, 1], transmissions[:, index, 1] = wrenches[:, index, 0], transmissions[:, index, 0]
     return wrenches, transmissions
 
 
@@ -72,24 +74,10 @@ def posture_wrenches(robot, points, joints):
 
 def posture_grams(robot, wrenches):
     """M = sum_i w_i w_i^T (n, postures, 6, 6) of every posture from the limbs' line wrenches
-    (n, dof, 2, 6). The posture digits are split in two halves: M is the sum of one partial
-    sum over each half's limbs, so each outer product is formed once per pose."""
-    outer = np.einsum("nibx,niby->nibxy", wrenches, wrenches)
+    (n, dof, 2, 6): W^T W with W the posture's wrench rows, one batched product."""
     table = branch_table(robot)
-    digits = sum(1 for bit in robot.branch_bits if bit >= 0)
-    low_bits = digits // 2
-    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
-    high_limbs = [i for i in range(robot.dof) if i not in low_limbs]
-
-    def partial_sums(limbs, postures):
-        """(n, len(postures), 6, 6): per posture, the sum over ``limbs`` of their branch's w w^T."""
-        limbs = np.asarray(limbs, dtype=int)
-        return outer[:, limbs[None, :], table[postures][:, limbs]].sum(axis=2)
-
-    low = partial_sums(low_limbs, np.arange(1 << low_bits))
-    high = partial_sums(high_limbs, np.arange(0, robot.postures, 1 << low_bits))
-    postures = np.arange(robot.postures)
-    return high[:, postures >> low_bits] + low[:, postures & ((1 << low_bits) - 1)] if low_limbs else high
+    rows = wrenches[:, np.arange(robot.dof)[None, :], table]
+    return np.swapaxes(rows, -1, -2) @ rows
 
 
 def direct_index(gram, exact_near=None):

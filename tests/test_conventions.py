@@ -61,3 +61,11 @@ def test_wrap_angle_maps_into_half_open_interval(angle, wrapped):
 
 def test_angle_difference_knows_pi_equals_minus_pi():
     assert abs(angle_difference(np.pi - 1e-12, -np.pi + 1e-12)) < 1e-11
+
+
+def test_wrap_angle_takes_one_turn_exactly_as_the_generated_c():
+    near = np.array([3.5, -3.5, 2 * np.pi + 1.0, -2 * np.pi - 1.0])
+    assert np.array_equal(wrap_angle(near), near - np.sign(near) * 2.0 * np.pi)
+    far = np.array([10.0, -10.0, 1e6])
+    assert np.array_equal(wrap_angle(far), np.mod(far + np.pi, 2.0 * np.pi) - np.pi)
+    assert np.all(np.isnan(wrap_angle(np.array([np.nan, np.inf, -np.inf]))))

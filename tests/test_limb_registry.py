@@ -85,7 +85,7 @@ def test_a_registered_model_is_validated_with_located_errors(toy, tmp_path):
 def test_a_registered_model_renders_compiles_and_verifies(toy, tmp_path):
     result = build_plugin(toy, tmp_path / "build")
     source = result.source.read_text()
-    assert "kingen_solve_plumb(&kingen_plumbs[i]" in source and "kingen_solve_leg(&kingen_legs[i]" in source
+    assert "kingen_solve_plumb(&kingen_plumbs[0]" in source and "kingen_solve_leg(&kingen_legs[0]" in source
     report = verify(toy, Plugin(result.library, result.routine), VerifyOptions(samples=2000))
     assert report.passed, [check.detail for check in report.failures]
     calibrated = verify(toy, Plugin(result.library, result.routine),

@@ -44,7 +44,7 @@ def test_generated_source_is_tables_plus_one_helper_per_model(name):
     (_, text), = render(robot).items()
     assert "do not edit" in text and robot.sha256 in text
     for model in robot.models:
-        assert text.count(f"static void kingen_solve_{model}(") == 1
+        assert text.count(f"static KINGEN_INLINE void kingen_solve_{model}(") == 1
         assert f"static const kingen_{model} kingen_{model}s[] = {{" in text
     for model in {"leg", "rail", "crank"} - set(robot.models):
         assert f"kingen_solve_{model}" not in text

@@ -1,0 +1,63 @@
+/* Floor for robots/hexapod.yaml: six S-P-S legs, q = |R t + p - b| - L0 (mm), one posture,
+ * no calibration fields, no travel limits, direct index at most 6.5 mm is singular. */
+#include "floor.h"
+
+#define DOF 6
+#define DIRECT_MIN 6.5
+
+static const double base[DOF][3] = {
+    { 31.0, 118.156, 40.205 }, { -31.0, 118.156, 40.205 }, { -117.826, -32.231, 40.205 },
+    { -86.826, -85.925, 40.205 }, { 86.826, -85.925, 40.205 }, { 117.826, -32.231, 40.205 }
+};
+static const double platform[DOF][3] = {
+    { 31.0, 48.799, -31.45 }, { -31.0, 48.799, -31.45 }, { -57.761, 2.447, -31.45 },
+    { -26.761, -51.246, -31.45 }, { 26.761, -51.246, -31.45 }, { 57.761, 2.447, -31.45 }
+};
+#define REFERENCE_LENGTH 399.413
+
+DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
+{
+    if (kin_routine == NULL || strcmp(kin_routine, "kin_hexapod") != 0)
+        return 1;
+    *kin_dof = DOF;
+    *solution_count = 1;
+    *usrKinDataHint = USR_KIN_DATA_NULL;
+    return 0;
+}
+
+DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T6[4][4],
+                          double solutions[][1], int warnings[], void *pData)
+{
+    double m[21] = { 0.0 };
+    int i, finite = 1;
+    (void)link_lengths; (void)link_offsets; (void)pData;
+    if (!kin_check_definition(DOF, 1))
+        return 1;
+    for (i = 0; i < DOF; i++) {
+        const double *t = platform[i];
+        double c[3], f[3], length, q;
+        c[0] = T6[0][0] * t[0] + T6[1][0] * t[1] + T6[2][0] * t[2] + T6[3][0];
+        c[1] = T6[0][1] * t[0] + T6[1][1] * t[1] + T6[2][1] * t[2] + T6[3][1];
+        c[2] = T6[0][2] * t[0] + T6[1][2] * t[1] + T6[2][2] * t[2] + T6[3][2];
+        f[0] = c[0] - base[i][0];
+        f[1] = c[1] - base[i][1];
+        f[2] = c[2] - base[i][2];
+        length = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+        q = length - REFERENCE_LENGTH;
+        if (!FLOOR_FINITE(q)) {
+            finite = 0;
+            q = 0.0;
+        }
+        solutions[i][0] = q;
+        f[0] /= length; f[1] /= length; f[2] /= length;
+        floor_add_line(m, c, f);
+    }
+    if (!finite) {
+        for (i = 0; i < DOF; i++)
+            solutions[i][0] = 0.0;
+        warnings[0] = WARN_UNREACHABLE;
+        return 1;
+    }
+    warnings[0] = floor_direct_singular(m, DIRECT_MIN) ? WARN_SINGULAR_SOLUTION : WARN_GOOD_SOLUTION;
+    return 0;
+}

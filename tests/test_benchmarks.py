@@ -1,0 +1,42 @@
+"""The hand-written floors of benchmarks/ honour the contract the generated routines do
+(so comparing them is fair), and `kingen bench --floor` reports the comparison. Speeds
+are printed by benchmarks/run.py, never asserted here."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from kingen.cli import main
+
+FLOORS = Path(__file__).resolve().parent.parent / "benchmarks" / "floors"
+ROBOTS = sorted(path.stem for path in FLOORS.glob("*.c"))
+
+
+def test_every_limb_family_has_a_floor():
+    assert ROBOTS == ["ceart", "exechon", "hexapod", "tau"]
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_the_floor_passes_verify(robot, capsys, tmp_path):
+    code = main(["verify", robot, "--source", str(FLOORS / f"{robot}.c"), "-o", str(tmp_path), "--samples", "3000"])
+    assert code == 0, capsys.readouterr().out
+
+
+def test_the_floor_passes_verify_with_calibration(capsys, tmp_path):
+    code = main(["verify", "tau", "--source", str(FLOORS / "tau.c"), "-o", str(tmp_path), "--samples", "3000",
+                 "--link-lengths", "1500.5", "1499", "0", "0", "0", "0", "--link-offsets", "3", "-2", "1", "0", "0", "0"])
+    assert code == 0, capsys.readouterr().out
+
+
+def test_bench_against_a_floor_prints_and_writes_the_ratio(capsys, tmp_path):
+    figures = tmp_path / "bench.json"
+    code = main(["bench", "exechon", "--floor", str(FLOORS / "exechon.c"), "-o", str(tmp_path / "build"),
+                 "--calls", "2000", "--json", str(figures)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "against the floor" in out and "ratio:" in out
+    against = json.loads(figures.read_text())["against_floor"]
+    for label in ("floor", "routine"):
+        assert 0 < against[label]["min"] <= against[label]["median"]
+    assert against["ratio_min"] == pytest.approx(against["routine"]["min"] / against["floor"]["min"])
