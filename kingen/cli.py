@@ -23,11 +23,8 @@ import numpy as np
 from . import __version__, abi
 from .build import DEFAULT_TIMEOUT, TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
 from .errors import InternalError, KingenError, PluginDefect
-from .host import check_routine_name
 from .conventions import branch_of_posture, pose_from_t6, t6_from_pose, wrap_angle
 from .model import load_robot, shipped_robots
-from .package import write_package
-from .report import json_text, junit_xml, statistics_lines
 from .schema import MAX_MM
 from .text import printable
 
@@ -53,6 +50,8 @@ def _dialog_fields(context, parameter, values):
 def _routine_name(context, parameter, value):
     if value is not None:
         try:
+            from .host import check_routine_name
+
             check_routine_name(value)
         except KingenError as error:
             raise click.BadParameter(str(error)) from None
@@ -157,6 +156,8 @@ def package(robot, out_dir, target, timeout):
     The folder is written whole or not at all; an existing folder is replaced only when
     kingen wrote it."""
     model = load_robot(robot)
+    from .package import write_package
+
     paths = write_package(model, out_dir or default_out_dir(model) / f"package-{target}", target, timeout=timeout)
     for path in paths:
         _say(str(path))
@@ -330,8 +331,12 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
         report = verify_library(model, library, routine, options, progress)
     _print_report(report, library)
     if json_path is not None:
+        from .report import json_text
+
         write_atomic(json_path, json_text(report, options))
     if junit_path is not None:
+        from .report import junit_xml
+
         write_atomic(junit_path, junit_xml(report))
     return 0 if report.passed else EXIT_FAILED
 
@@ -595,6 +600,8 @@ def _print_report(report, library):
         _say(f"  {'ok' if check.passed else 'FAILED':6} {check.name}: {check.detail}")
         for diagnosis in check.diagnoses:
             _say(f"         diagnosis: {diagnosis}")
+    from .report import statistics_lines
+
     for line in statistics_lines(report):
         _say(f"  {line}")
     for notice in report.notices:

@@ -54,7 +54,9 @@ def run_in_child(job, arguments, timeout, on_message=None):
     loading); any other exception there is a kingen defect, raised as InternalError."""
     context = multiprocessing.get_context("fork")
     receiver, sender = context.Pipe(duplex=False)
-    child = context.Process(target=_child_main, args=(sender, job, arguments), daemon=True)
+    # Not a daemon, so that the job may fork helpers (verify's reference process); it is
+    # always stopped and reaped below, and it dies with this process (PR_SET_PDEATHSIG).
+    child = context.Process(target=_child_main, args=(sender, job, arguments), daemon=False)
     child.start()
     sender.close()
     stage = FIRST_STAGE
@@ -96,7 +98,7 @@ def _end(child):
 
 
 def _child_main(connection, job, arguments):
-    _die_with_parent()
+    die_with_parent()
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     faulthandler.disable()
@@ -119,7 +121,7 @@ def _origin(error):
     return f"{os.path.basename(frames[-1].filename)}:{frames[-1].lineno}" if frames else "unknown place"
 
 
-def _die_with_parent():
+def die_with_parent():
     """Ask Linux to SIGKILL this process when its parent dies, however the parent dies."""
     try:
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG

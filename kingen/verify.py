@@ -16,7 +16,11 @@ failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
+import collections
+import multiprocessing
+import os
 import time
+from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
 
@@ -29,11 +33,11 @@ from .diagnose import diagnose, diagnose_warnings
 from .forward import free_mask, newton, t6_of
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
-from .isolation import run_in_child
+from .isolation import die_with_parent, run_in_child
 from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
-from .singularity import finite_difference_jacobian, jacobian, posture_wrenches
+from .singularity import branch_table, finite_difference_jacobian, jacobian, posture_wrenches
 from .snapshot import check as snapshot_check
 from .report import Check, GoldenResult, Report
 
@@ -43,8 +47,10 @@ CONDITIONING_FACTOR = 16.0 * np.finfo(float).eps
 """Inside a limb's singular band its joint is ill-conditioned (a square root of a radicand
 near 0): there it is compared within CONDITIONING_FACTOR * scale / sqrt(max(|D|, eps)),
 scale = link length (mm) for rails, 1 rad for cranks. Everywhere else the fixed limits hold."""
-CHUNK_ENTRIES = 400000
-"""Joint entries (poses x dof x postures) per batch: keeps arrays small enough to stay in cache."""
+CHUNK_ENTRIES = 2000000
+"""Joint entries (poses x dof x postures) per batch, within 1000 and MAX_CHUNK_POSES poses:
+large enough for numpy to work in long runs, small enough for flat memory."""
+MAX_CHUNK_POSES = 8192
 DIAGNOSIS_POSES = 2000
 DETERMINISM_POSES = 1000
 CLOSURE_TOLERANCE = 1e-9
@@ -102,6 +108,45 @@ def pose_chunks(robot, count, seed, chunk):
         yield begin, home + rng.uniform(-1.0, 1.0, size=(min(chunk, count - begin), 6)) * half_widths
 
 
+REFERENCE_AHEAD = 3
+"""Chunks the reference process may solve ahead of the routine's calls."""
+LOCAL_SHARE = 3
+"""With a reference process, this process still solves every LOCAL_SHARE-th chunk itself
+(besides calling the routine and comparing on every chunk): about equal work for both."""
+_reference_job = None
+"""(robot, options) of the reference process: set before it is forked, so that only poses
+travel to it."""
+
+
+def _solve_chunk(poses):
+    robot, options = _reference_job
+    return solve(robot, t6_from_pose(poses), options.link_lengths, options.link_offsets)
+
+
+def solved_chunks(robot, options, count, seed, chunk):
+    """(first index, poses, the reference's Solution) chunk by chunk, as pose_chunks. With
+    two cores and more than one chunk, a second process (forked, numpy only: it never
+    touches plugin code) solves most chunks' reference ahead, while this one calls the
+    routine and compares."""
+    global _reference_job
+    _reference_job = (robot, options)
+    chunks = pose_chunks(robot, count, seed, chunk)
+    if count <= chunk or (os.cpu_count() or 1) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+        for begin, poses in chunks:
+            yield begin, poses, _solve_chunk(poses)
+        return
+    pending = collections.deque()
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"), initializer=die_with_parent) as pool:
+        for number, (begin, poses) in enumerate(chunks):
+            pending.append((begin, poses, None if number % LOCAL_SHARE == 0 else pool.submit(_solve_chunk, poses)))
+            while len(pending) > REFERENCE_AHEAD or (pending and pending[0][2] is None):
+                begin, poses, solved = pending.popleft()
+                yield begin, poses, _solve_chunk(poses) if solved is None else solved.result()
+        while pending:
+            begin, poses, solved = pending.popleft()
+            yield begin, poses, _solve_chunk(poses) if solved is None else solved.result()
+
+
 def sample_poses(robot, count, seed):
     """``count`` poses (mm, degrees) uniform in the robot's verification region, seeded."""
     return np.concatenate([poses for _, poses in pose_chunks(robot, count, seed, max(count, 1))])
@@ -113,7 +158,7 @@ def chunk_size(robot):
     entries = robot.dof * robot.postures
     if robot.direct_index_min is not None:
         entries += 36 * (2 * robot.dof + robot.postures)
-    return max(1000, CHUNK_ENTRIES // entries)
+    return min(MAX_CHUNK_POSES, max(1000, CHUNK_ENTRIES // entries))
 
 
 def singular_bounds(robot, reference_solution):
@@ -307,13 +352,12 @@ def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     revolute = robot.revolute
     tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
-    for begin, poses in pose_chunks(robot, report.samples, report.seed, chunk_size(robot)):
+    for begin, poses, expected in solved_chunks(robot, options, report.samples, report.seed, chunk_size(robot)):
         phase(f"poses {begin} to {begin + len(poses) - 1} of seed {report.seed}")
         t6 = t6_from_pose(poses)
         plugin.reset_host()
         with printed.capture():
             calls = plugin.call(t6, options.link_lengths, options.link_offsets)
-        expected = solve(robot, t6, options.link_lengths, options.link_offsets)
         _accumulate(robot, report, tally, revolute, t6, calls, expected)
         if progress is not None:
             progress(begin + len(poses))
@@ -352,8 +396,9 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
     report.warnings_in_band += int(np.count_nonzero(excused))
     none_reachable = np.all(expected.warnings == UNREACHABLE, axis=1)
     tally.returns_wrong += int(np.count_nonzero(calls.returned != np.where(none_reachable, 1, 0)))
-    tally.closure_worst = max(tally.closure_worst, closure_error(tally.calibrated, expected, calls.solutions))
-    tally.closure_checked += int(np.count_nonzero(~unreachable)) * robot.dof
+    closure_worst, closure_checked = closure_error(tally.calibrated, expected, calls.solutions)
+    tally.closure_worst = max(tally.closure_worst, closure_worst)
+    tally.closure_checked += closure_checked
     if tally.first is None:
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
@@ -393,24 +438,29 @@ def _rows(result, keep):
 
 
 def closure_error(robot, expected, solutions):
-    """The largest |closure residual| / passive-link length over the postures the reference
-    calls reachable: each joint the routine returned, put back into its limb's geometry
-    (``robot`` calibrated as for the call). NaN joints count as infinitely wrong. Limbs in
-    their singular band are left out: there, with -1e-5 <= D < 0, the joint is the limb's
-    closest approach, which misses closing by design (by up to D l / 2)."""
+    """(largest |closure residual| / passive-link length, joints judged): each limb's joint
+    of each of its branches, as the routine returned it in the first posture taking that
+    branch, put back into the limb's geometry (``robot`` calibrated as for the call); the
+    values check holds every other posture to the same reference. Only postures the
+    reference calls reachable count; NaN joints count as infinitely wrong. Limbs in their
+    singular band are left out: there, with -1e-5 <= D < 0, the joint is the limb's closest
+    approach, which misses closing by design (by up to D l / 2)."""
+    table = branch_table(robot)
     reachable = expected.warnings != UNREACHABLE
     closing = np.abs(expected.radicands) > SINGULAR_TOLERANCE + WARNING_BAND
-    worst = 0.0
+    worst, judged_count = 0.0, 0
     for index, limb in enumerate(robot.limbs):
-        joints = solutions[:, index, :]
+        postures = [int(np.argmax(table[:, index] == branch)) for branch in range(limb.branches)]
+        joints = solutions[:, index, postures]
         points = np.broadcast_to(expected.points[:, index, None, :], joints.shape + (3,))
         with np.errstate(all="ignore"):
             relative = np.abs(limb.closure_residual(points, joints)) / np.abs(limb.passive_length(joints))
         relative = np.where(np.isfinite(relative), relative, np.inf)
-        judged = reachable & closing[:, index, None]
+        judged = reachable[:, postures] & closing[:, index, None]
+        judged_count += int(np.count_nonzero(judged))
         if np.any(judged):
             worst = max(worst, float(np.max(np.where(judged, relative, 0.0))))
-    return worst
+    return worst, judged_count
 
 
 def jacobian_check(robot, plugin, options, t6):
@@ -523,7 +573,7 @@ def _sample_checks(robot, plugin, report, options, tally):
                         f"{tally.returns_wrong} calls return other than 1 when no posture is reachable, 0 otherwise"))
     checks.append(buffers)
     checks.append(Check("closure", tally.closure_worst <= CLOSURE_TOLERANCE,
-                        f"every reachable posture's joints put back into the limb geometry: worst relative "
+                        f"each limb's joint of each branch put back into the limb geometry: worst relative "
                         f"residual {tally.closure_worst:.3g} over {tally.closure_checked} joints "
                         f"(at most {CLOSURE_TOLERANCE:g} of the link length)"))
     checks.append(jacobian_check(robot, plugin, options, t6[:JACOBIAN_POSES]))

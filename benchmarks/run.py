@@ -1,0 +1,85 @@
+"""Speed figures of kingen, printed as Markdown (for the README's 'Speed' section).
+
+    python benchmarks/run.py [--calls N] [--verify-samples N] [--robots hexapod,tau,...]
+
+1. Each hand-written floor (benchmarks/floors/<robot>.c) must pass `kingen verify --source`.
+2. `kingen bench <robot> --floor ...` times the generated routine against its floor in
+   turns (C batch driver, ns per call, minimum and median of the rounds).
+3. `kingen verify <robot> --samples N` wall time and peak memory (of kingen and its
+   children), and the start-up of `kingen --version`.
+
+Figures are printed, never asserted: the machine they ran on is printed with them.
+"""
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+FLOORS = HERE / "floors"
+KINGEN = [sys.executable, "-m", "kingen.cli"]
+
+
+def run(arguments):
+    """(exit code, stdout, wall seconds, peak resident MiB of the command and its children)."""
+    start = time.perf_counter()
+    process = subprocess.Popen([*KINGEN, *arguments], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    output = process.stdout.read()
+    _, status, usage = os.wait4(process.pid, 0)
+    seconds = time.perf_counter() - start
+    process.returncode = os.waitstatus_to_exitcode(status)
+    return process.returncode, output, seconds, usage.ru_maxrss / 1024.0
+
+
+def machine():
+    model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
+                  if line.startswith("model name")), platform.processor())
+    compiler = subprocess.run([os.environ.get("CC", "cc"), "--version"], capture_output=True, text=True).stdout
+    return (f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}; "
+            f"{compiler.splitlines()[0] if compiler else 'cc'}; Python {platform.python_version()}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=200000)
+    parser.add_argument("--verify-samples", type=int, default=1000000)
+    parser.add_argument("--robots", default=",".join(sorted(path.stem for path in FLOORS.glob("*.c"))))
+    options = parser.parse_args()
+    robots = options.robots.split(",")
+    print(f"Machine: {machine()}\n")
+    print("| robot | floor passes verify | floor ns/call (min / median) | generated ns/call (min / median) "
+          "| ratio (min / median) |")
+    print("| --- | --- | --- | --- | --- |")
+    with tempfile.TemporaryDirectory() as scratch:
+        for robot in robots:
+            floor = FLOORS / f"{robot}.c"
+            code, _, _, _ = run(["verify", robot, "--source", str(floor), "-o", f"{scratch}/{robot}-floor"])
+            figures = Path(scratch) / f"{robot}.json"
+            run(["bench", robot, "--floor", str(floor), "--calls", str(options.calls), "-o", f"{scratch}/{robot}",
+                 "--json", str(figures)])
+            against = json.loads(figures.read_text())["against_floor"]
+            print(f"| {robot} | {'yes' if code == 0 else 'NO'} "
+                  f"| {against['floor']['min']:.1f} / {against['floor']['median']:.1f} "
+                  f"| {against['routine']['min']:.1f} / {against['routine']['median']:.1f} "
+                  f"| {against['ratio_min']:.3f} / {against['ratio_median']:.3f} |", flush=True)
+        print(f"\n| command | exit | wall s | peak MiB |")
+        print("| --- | --- | --- | --- |")
+        for robot in robots:
+            run(["build", robot, "-o", f"{scratch}/{robot}-verify"])
+            code, _, seconds, memory = run(["verify", robot, "--samples", str(options.verify_samples),
+                                            "-o", f"{scratch}/{robot}-verify"])
+            print(f"| kingen verify {robot} --samples {options.verify_samples} | {code} | {seconds:.2f} "
+                  f"| {memory:.0f} |", flush=True)
+        starts = [run(["--version"])[2] for _ in range(5)]
+        print(f"| kingen --version (median of 5) | 0 | {statistics.median(starts):.2f} | |")
+
+
+if __name__ == "__main__":
+    main()
