@@ -16,7 +16,7 @@ import numpy as np
 from .abi import WARNINGS
 from .conventions import matrix_from_pose, t6_from_matrix
 from .reference import solve
-from .singularity import direct_index, limb_wrenches, posture_grams
+from .singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
 
 CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none")
 TILT_AZIMUTHS = tuple(range(0, 360, 15))
@@ -43,7 +43,8 @@ def evaluate(robot, t6, posture):
     reachable = warning != WARNINGS["WARN_UNREACHABLE"]
     if robot.has_direct_index and np.any(reachable):
         wrenches, _ = limb_wrenches(plain, expected.points[reachable], expected.joints[reachable])
-        index[reachable] = direct_index(posture_grams(plain, wrenches)[:, posture], robot.direct_index_min)
+        index[reachable] = direct_index_of_entries(posture_gram_entries(plain, wrenches)[:, :, posture],
+                                                   robot.direct_index_min)
     rods, cranks = clearances(robot, expected.points, joints)
     cause = np.full(count, CAUSES.index("none"))
     candidates = [

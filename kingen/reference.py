@@ -22,7 +22,7 @@ import numpy as np
 
 from . import abi
 from .conventions import branch_of_posture
-from .singularity import direct_index, limb_wrenches, posture_grams
+from .singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
 
 
 @dataclass(frozen=True)
@@ -100,8 +100,8 @@ def _solve(robot, t6, indices):
     index = None
     if robot.has_direct_index and (indices or robot.direct_index_min is not None):
         wrenches, _ = limb_wrenches(robot, points, joints)
-        index = np.where(unreachable, np.nan, direct_index(posture_grams(robot, wrenches),
-                                                           None if indices else robot.direct_index_min))
+        index = np.where(unreachable, np.nan, direct_index_of_entries(posture_gram_entries(robot, wrenches),
+                                                                      None if indices else robot.direct_index_min))
         if robot.direct_index_min is not None:
             singular = singular | (index <= robot.direct_index_min)
 

@@ -72,36 +72,72 @@ def posture_wrenches(robot, points, joints):
     return wrenches[:, limbs, table], transmissions[:, limbs, table]
 
 
-def posture_grams(robot, wrenches):
-    """M = sum_i w_i w_i^T (n, postures, 6, 6) of every posture from the limbs' line wrenches
-    (n, dof, 2, 6): W^T W with W the posture's wrench rows, one batched product."""
+PACKED = [(i, j) for i in range(SIX) for j in range(i + 1)]
+"""The entries of a symmetric 6 x 6 matrix in packed order (lower triangle, row by row)."""
+_PACKED_INDEX = {pair: k for k, pair in enumerate(PACKED)}
+
+
+def posture_gram_entries(robot, wrenches):
+    """M of every posture as its 21 packed entries (21, n, postures), from the limbs' line
+    wrenches (n, dof, 2, 6): each line's w w^T once, summed in two partial sums (the limbs
+    of the low half of the posture digits, and the others), as the generated C does."""
+    rows, columns = np.array(PACKED).T
+    lines = {}
+    for index, limb in enumerate(robot.limbs):
+        for branch in range(limb.branches):
+            rates = np.ascontiguousarray(wrenches[:, index, branch].T)  # (6, n)
+            lines[index, branch] = rates[rows] * rates[columns]  # (21, n)
     table = branch_table(robot)
-    rows = wrenches[:, np.arange(robot.dof)[None, :], table]
-    return np.swapaxes(rows, -1, -2) @ rows
+    low_bits = sum(1 for bit in robot.branch_bits if bit >= 0) // 2
+    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
+    high_limbs = [i for i in range(robot.dof) if i not in low_limbs]
+
+    def partial_sums(limbs, postures):
+        """(21, n, len(postures)): per posture, the sum over ``limbs`` of their branch's w w^T."""
+        return np.stack([sum(lines[limb, table[posture, limb]] for limb in limbs) for posture in postures], axis=-1)
+
+    high = partial_sums(high_limbs, range(0, robot.postures, 1 << low_bits))
+    if not low_limbs:
+        return high
+    low = partial_sums(low_limbs, range(1 << low_bits))
+    count = wrenches.shape[0]
+    return (high[:, :, :, None] + low[:, :, None, :]).reshape(len(PACKED), count, robot.postures)
 
 
 def direct_index(gram, exact_near=None):
-    """The direct index (mm) from M (..., 6, 6): see the module docstring.
+    """The direct index (mm) from M (..., 6, 6): see the module docstring and
+    direct_index_of_entries."""
+    gram = np.asarray(gram, dtype=float)
+    return direct_index_of_entries(np.stack([gram[..., i, j] for i, j in PACKED]), exact_near)
+
+
+def direct_index_of_entries(entries, exact_near=None):
+    """The direct index (mm) from M given as its 21 packed entries (21, ...).
 
     Computed component by component (vectorised): the force block inverted by its
     adjugate, the smallest eigenvalue of the 3x3 Schur complement in closed form (relative
     error about eps x its largest eigenvalue). Where that value lies within EXACT_WINDOW
     (relative) of ``exact_near`` (mm; everywhere when None) it is recomputed with
     numpy.linalg.eigvalsh, so every decision at a threshold rests on LAPACK."""
-    gram = np.asarray(gram, dtype=float)
-    finite = np.all(np.isfinite(gram), axis=(-1, -2))
-    gram = np.where(finite[..., None, None], gram, 0.0)
-    f = {(i, j): gram[..., i, j] for i in range(3) for j in range(i, 3)}
+    entries = np.asarray(entries, dtype=float)
+    finite = np.all(np.isfinite(entries), axis=0)
+    if not np.all(finite):
+        entries = np.where(finite, entries, 0.0)
+
+    def entry(i, j):
+        return entries[_PACKED_INDEX[max(i, j), min(i, j)]]
+
+    f = {(i, j): entry(i, j) for i in range(3) for j in range(i, 3)}
     adjugate = _symmetric_adjugate(f)
     determinant = f[0, 0] * adjugate[0, 0] + f[0, 1] * adjugate[0, 1] + f[0, 2] * adjugate[0, 2]
     scale = (f[0, 0] + f[1, 1] + f[2, 2]) / 3.0
     translation_singular = ~finite | ~(determinant > TRANSLATION_SINGULAR * scale ** 3)
     with np.errstate(all="ignore"):
         inverse_determinant = np.where(translation_singular, 0.0, 1.0 / determinant)
-    coupling = [[gram[..., i, 3 + j] for j in range(3)] for i in range(3)]
+    coupling = [[entry(i, 3 + j) for j in range(3)] for i in range(3)]
     solved = [[sum(adjugate[min(i, k), max(i, k)] * coupling[k][j] for k in range(3)) for j in range(3)]
               for i in range(3)]
-    schur = {(i, j): gram[..., 3 + i, 3 + j] - inverse_determinant
+    schur = {(i, j): entry(3 + i, 3 + j) - inverse_determinant
              * sum(coupling[k][i] * solved[k][j] for k in range(3)) for i in range(3) for j in range(i, 3)}
     smallest = _smallest_eigenvalue(schur)
     near = np.ones(smallest.shape, dtype=bool) if exact_near is None else (

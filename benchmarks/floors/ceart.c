@@ -29,15 +29,9 @@ static const double platform[DOF][3] = {
     { 202.57599108564975, -453.8180910460344, 0.0 }, { 291.73, -402.345, 0.0 }
 };
 
-DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
-{
-    if (kin_routine == NULL || strcmp(kin_routine, "kin_ceart") != 0)
-        return 1;
-    *kin_dof = DOF;
-    *solution_count = POSTURES;
-    *usrKinDataHint = USR_KIN_DATA_NULL;
-    return 0;
-}
+FLOOR_KIN_CONFIG("kin_ceart", DOF, POSTURES)
+
+static const double floor_origin[3] = { 0.0, 0.0, 0.0 };
 
 DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[4][4],
                         double solutions[][POSTURES], int warnings[], void *pData)
@@ -48,12 +42,10 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
     if (!kin_check_definition(DOF, POSTURES))
         return 1;
     for (i = 0; i < DOF; i++) {
-        const double *t = platform[i], cb = direction[i][0], sb = direction[i][1];
+        const double cb = direction[i][0], sb = direction[i][1];
         double c[3], g[3], a, b, kk, rho2, radicand, cosine, half, phi, zero;
         int status;
-        c[0] = T6[0][0] * t[0] + T6[1][0] * t[1] + T6[2][0] * t[2] + T6[3][0];
-        c[1] = T6[0][1] * t[0] + T6[1][1] * t[1] + T6[2][1] * t[2] + T6[3][1];
-        c[2] = T6[0][2] * t[0] + T6[1][2] * t[1] + T6[2][2] * t[2] + T6[3][2];
+        floor_point(T6, platform[i], floor_origin, c);
         g[0] = c[0] - pivot[i][0];
         g[1] = c[1] - pivot[i][1];
         g[2] = c[2] - pivot[i][2];

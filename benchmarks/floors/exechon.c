@@ -10,15 +10,7 @@ static const double reference_length[DOF] = { 803.887, 803.887, 886.021 };
 static const double lower[DOF] = { -150.0, -150.0, -225.0 };
 static const double upper[DOF] = { 595.0, 595.0, 520.0 };
 
-DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
-{
-    if (kin_routine == NULL || strcmp(kin_routine, "kin_exechon") != 0)
-        return 1;
-    *kin_dof = DOF;
-    *solution_count = 1;
-    *usrKinDataHint = USR_KIN_DATA_NULL;
-    return 0;
-}
+FLOOR_KIN_CONFIG("kin_exechon", DOF, 1)
 
 DllExport int kin_exechon(double link_lengths[], double link_offsets[], double T6[4][4],
                           double solutions[][1], int warnings[], void *pData)
@@ -28,11 +20,9 @@ DllExport int kin_exechon(double link_lengths[], double link_offsets[], double T
     if (!kin_check_definition(DOF, 1))
         return 1;
     for (i = 0; i < DOF; i++) {
-        const double *t = platform[i];
-        double x = T6[0][0] * t[0] + T6[1][0] * t[1] + T6[2][0] * t[2] + T6[3][0] - base[i][0];
-        double y = T6[0][1] * t[0] + T6[1][1] * t[1] + T6[2][1] * t[2] + T6[3][1] - base[i][1];
-        double z = T6[0][2] * t[0] + T6[1][2] * t[1] + T6[2][2] * t[2] + T6[3][2] - base[i][2];
-        double q = sqrt(x * x + y * y + z * z) - floor_field(link_lengths, i, 1.0, reference_length[i]);
+        double d[3], q;
+        floor_point(T6, platform[i], base[i], d);
+        q = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - floor_field(link_lengths, i, 1.0, reference_length[i]);
         if (!FLOOR_FINITE(q)) {
             q = 0.0;
             worst = FLOOR_UNREACHABLE;

@@ -28,6 +28,26 @@ static int floor_classify(double radicand)
     return radicand <= FLOOR_SINGULAR_TOL ? FLOOR_SINGULAR : FLOOR_OK;
 }
 
+/* get_kin_config answering routine `name` with `dof` joints and `postures` solutions. */
+#define FLOOR_KIN_CONFIG(name, dof, postures)                                                       \
+    DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint) \
+    {                                                                                               \
+        if (kin_routine == NULL || strcmp(kin_routine, name) != 0)                                  \
+            return 1;                                                                               \
+        *kin_dof = dof;                                                                             \
+        *solution_count = postures;                                                                 \
+        *usrKinDataHint = USR_KIN_DATA_NULL;                                                        \
+        return 0;                                                                                   \
+    }
+
+/* c = R t + p - origin (mm, base frame) from the transposed T6. */
+static void floor_point(double T6[4][4], const double t[3], const double origin[3], double c[3])
+{
+    c[0] = T6[0][0] * t[0] + T6[1][0] * t[1] + T6[2][0] * t[2] + T6[3][0] - origin[0];
+    c[1] = T6[0][1] * t[0] + T6[1][1] * t[1] + T6[2][1] * t[2] + T6[3][1] - origin[1];
+    c[2] = T6[0][2] * t[0] + T6[1][2] * t[1] + T6[2][2] * t[2] + T6[3][2] - origin[2];
+}
+
 /* A dialog value (0 or non-finite: keep the built-in one) times scale. */
 static double floor_field(const double *values, int index, double scale, double built_in)
 {

@@ -14,16 +14,9 @@ static const double platform[DOF][3] = {
     { -26.761, -51.246, -31.45 }, { 26.761, -51.246, -31.45 }, { 57.761, 2.447, -31.45 }
 };
 #define REFERENCE_LENGTH 399.413
+static const double floor_origin[3] = { 0.0, 0.0, 0.0 };
 
-DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
-{
-    if (kin_routine == NULL || strcmp(kin_routine, "kin_hexapod") != 0)
-        return 1;
-    *kin_dof = DOF;
-    *solution_count = 1;
-    *usrKinDataHint = USR_KIN_DATA_NULL;
-    return 0;
-}
+FLOOR_KIN_CONFIG("kin_hexapod", DOF, 1)
 
 DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T6[4][4],
                           double solutions[][1], int warnings[], void *pData)
@@ -34,11 +27,8 @@ DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T
     if (!kin_check_definition(DOF, 1))
         return 1;
     for (i = 0; i < DOF; i++) {
-        const double *t = platform[i];
         double c[3], f[3], length, q;
-        c[0] = T6[0][0] * t[0] + T6[1][0] * t[1] + T6[2][0] * t[2] + T6[3][0];
-        c[1] = T6[0][1] * t[0] + T6[1][1] * t[1] + T6[2][1] * t[2] + T6[3][1];
-        c[2] = T6[0][2] * t[0] + T6[1][2] * t[1] + T6[2][2] * t[2] + T6[3][2];
+        floor_point(T6, platform[i], floor_origin, c);
         f[0] = c[0] - base[i][0];
         f[1] = c[1] - base[i][1];
         f[2] = c[2] - base[i][2];

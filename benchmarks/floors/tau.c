@@ -18,15 +18,7 @@ static const double platform[DOF][3] = {
 };
 static const double link[DOF] = { 1500.0, 1500.0, 1499.775 };
 
-DllExport int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)
-{
-    if (kin_routine == NULL || strcmp(kin_routine, "kin_tau") != 0)
-        return 1;
-    *kin_dof = DOF;
-    *solution_count = POSTURES;
-    *usrKinDataHint = USR_KIN_DATA_NULL;
-    return 0;
-}
+FLOOR_KIN_CONFIG("kin_tau", DOF, POSTURES)
 
 DllExport int kin_tau(double link_lengths[], double link_offsets[], double T6[4][4],
                       double solutions[][POSTURES], int warnings[], void *pData)
@@ -37,16 +29,15 @@ DllExport int kin_tau(double link_lengths[], double link_offsets[], double T6[4]
     if (!kin_check_definition(DOF, POSTURES))
         return 1;
     for (i = 0; i < DOF; i++) {
-        const double *n = platform[i];
         double l = floor_field(link_lengths, i, 1.0, link[i]);
         double origin = floor_field(link_offsets, i, 1.0, 0.0);
-        double w0 = T6[0][0] * n[0] + T6[1][0] * n[1] + T6[2][0] * n[2] + T6[3][0] - foot[i][0];
-        double w1 = T6[0][1] * n[0] + T6[1][1] * n[1] + T6[2][1] * n[2] + T6[3][1] - foot[i][1];
-        double w2 = T6[0][2] * n[0] + T6[1][2] * n[1] + T6[2][2] * n[2] + T6[3][2] - foot[i][2];
-        double along = -w2, radicand = l * l - w0 * w0 - w1 * w1;
-        double root = radicand > 0.0 ? sqrt(radicand) : 0.0;
-        int status = floor_classify(radicand / (l * l));
-        int branch;
+        double w[3], along, radicand, root;
+        int status, branch;
+        floor_point(T6, platform[i], foot[i], w);
+        along = -w[2];
+        radicand = l * l - w[0] * w[0] - w[1] * w[1];
+        root = radicand > 0.0 ? sqrt(radicand) : 0.0;
+        status = floor_classify(radicand / (l * l));
         value[i][0] = along - root - origin;
         value[i][1] = along + root - origin;
         if (!FLOOR_FINITE(value[i][0]) || !FLOOR_FINITE(value[i][1])) {
