@@ -21,6 +21,7 @@ import multiprocessing
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
 
@@ -108,43 +109,114 @@ def pose_chunks(robot, count, seed, chunk):
         yield begin, home + rng.uniform(-1.0, 1.0, size=(min(chunk, count - begin), 6)) * half_widths
 
 
-REFERENCE_AHEAD = 3
-"""Chunks the reference process may solve ahead of the routine's calls."""
-LOCAL_SHARE = 3
-"""With a reference process, this process still solves every LOCAL_SHARE-th chunk itself
-(besides calling the routine and comparing on every chunk): about equal work for both."""
-_reference_job = None
-"""(robot, options) of the reference process: set before it is forked, so that only poses
-travel to it."""
+CHUNKS_AHEAD = 3
+"""Chunks the second process may compare ahead of the one being merged."""
+LOCAL_SHARE = 2
+"""With a second process, this one compares every LOCAL_SHARE-th chunk itself (and merges
+all of them): about equal work for both."""
+REPORT_COUNTS = ("singular_entries", "singular_out_of_bound", "warning_mismatches", "warnings_in_band")
+REPORT_WORST = ("max_abs_error_mm", "max_abs_error_rad")
+_chunk_job = None
+"""(robot, plugin, options) of the comparing processes: set before the second one is forked,
+so that only poses travel to it."""
 
 
-def _solve_chunk(poses):
-    robot, options = _reference_job
-    return solve(robot, t6_from_pose(poses), options.link_lengths, options.link_offsets)
+@dataclass
+class _Part:
+    """One chunk's comparison: the report's counters, the running totals, what was printed."""
+
+    counts: dict
+    tally: object
+    printed_bytes: int
+    printed_first_line: str
 
 
-def solved_chunks(robot, options, count, seed, chunk):
-    """(first index, poses, the reference's Solution) chunk by chunk, as pose_chunks. With
-    two cores and more than one chunk, a second process (forked, numpy only: it never
-    touches plugin code) solves most chunks' reference ahead, while this one calls the
-    routine and compares."""
-    global _reference_job
-    _reference_job = (robot, options)
-    chunks = pose_chunks(robot, count, seed, chunk)
-    if count <= chunk or (os.cpu_count() or 1) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+def _compare_chunk(poses, first=False):
+    """Call the routine on ``poses`` (m, 6), solve the reference and compare: a _Part (with
+    the poses kept for diagnoses only for the ``first`` chunk; nothing else heavy, so
+    that it travels between processes cheaply)."""
+    robot, plugin, options = _chunk_job
+    report = _empty_report(robot, plugin.routine, options)
+    tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
+    printed = _Printed()
+    t6 = t6_from_pose(poses)
+    plugin.reset_host()
+    with printed.capture():
+        calls = plugin.call(t6, options.link_lengths, options.link_offsets)
+    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    _accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+    counts = {name: getattr(report, name) for name in REPORT_COUNTS + REPORT_WORST}
+    tally.calibrated = None
+    if not first:
+        tally.first = None
+    return _Part(counts, tally, printed.bytes, printed.first_line)
+
+
+def compared_chunks(robot, plugin, options, chunk, phase):
+    """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With two
+    cores and more than one chunk, a forked second process compares most other chunks
+    ahead. If it dies (the routine crashed or exited there), its chunks are compared here
+    again, so that a crash is named by this process's stage as always."""
+    global _chunk_job
+    _chunk_job = (robot, plugin, options)
+
+    def stage(begin, poses):
+        phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
+
+    chunks = pose_chunks(robot, options.samples, options.seed, chunk)
+    if options.samples <= chunk or (os.cpu_count() or 1) < 2 or "fork" not in multiprocessing.get_all_start_methods():
         for begin, poses in chunks:
-            yield begin, poses, _solve_chunk(poses)
+            stage(begin, poses)
+            yield begin, len(poses), _compare_chunk(poses, first=begin == 0)
         return
+
+    def finished(begin, poses, future):
+        stage(begin, poses)
+        if future is not None:
+            try:
+                return future.result()
+            except BrokenProcessPool:
+                pass
+        return _compare_chunk(poses, first=begin == 0)
+
     pending = collections.deque()
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"), initializer=die_with_parent) as pool:
         for number, (begin, poses) in enumerate(chunks):
-            pending.append((begin, poses, None if number % LOCAL_SHARE == 0 else pool.submit(_solve_chunk, poses)))
-            while len(pending) > REFERENCE_AHEAD or (pending and pending[0][2] is None):
-                begin, poses, solved = pending.popleft()
-                yield begin, poses, _solve_chunk(poses) if solved is None else solved.result()
+            local = number % LOCAL_SHARE == 0
+            pending.append((begin, poses, None if local else _submit(pool, poses)))
+            while len(pending) > CHUNKS_AHEAD or (pending and pending[0][2] is None):
+                begin, poses, future = pending.popleft()
+                yield begin, len(poses), finished(begin, poses, future)
         while pending:
-            begin, poses, solved = pending.popleft()
-            yield begin, poses, _solve_chunk(poses) if solved is None else solved.result()
+            begin, poses, future = pending.popleft()
+            yield begin, len(poses), finished(begin, poses, future)
+
+
+def _submit(pool, poses):
+    """A future of _compare_chunk(poses) in ``pool``, or None when the pool has died."""
+    try:
+        return pool.submit(_compare_chunk, poses)
+    except BrokenProcessPool:
+        return None
+
+
+def _merge(report, tally, printed, part):
+    """Add one chunk's _Part to the verification's report, totals and printed output."""
+    for name in REPORT_COUNTS:
+        setattr(report, name, getattr(report, name) + part.counts[name])
+    for name in REPORT_WORST:
+        setattr(report, name, max(getattr(report, name), part.counts[name]))
+    other = part.tally
+    for name in ("returns_wrong", "aborted", "closure_checked", "faulty_calls"):
+        setattr(tally, name, getattr(tally, name) + getattr(other, name))
+    tally.fault_bits |= other.fault_bits
+    tally.closure_worst = max(tally.closure_worst, other.closure_worst)
+    tally.posture_counts += other.posture_counts
+    tally.posture_worst = [np.maximum(mine, theirs) for mine, theirs in zip(tally.posture_worst, other.posture_worst)]
+    if tally.first is None:
+        tally.first = other.first
+    printed.bytes += part.printed_bytes
+    printed.first_line = printed.first_line or part.printed_first_line
 
 
 def sample_poses(robot, count, seed):
@@ -349,18 +421,12 @@ def _verify_job(channel, robot, library, routine, options):
 
 
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
-    revolute = robot.revolute
     tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
-    for begin, poses, expected in solved_chunks(robot, options, report.samples, report.seed, chunk_size(robot)):
-        phase(f"poses {begin} to {begin + len(poses) - 1} of seed {report.seed}")
-        t6 = t6_from_pose(poses)
-        plugin.reset_host()
-        with printed.capture():
-            calls = plugin.call(t6, options.link_lengths, options.link_offsets)
-        _accumulate(robot, report, tally, revolute, t6, calls, expected)
+    for begin, count, part in compared_chunks(robot, plugin, options, chunk_size(robot), phase):
+        _merge(report, tally, printed, part)
         if progress is not None:
-            progress(begin + len(poses))
+            progress(begin + count)
     report.seconds = time.perf_counter() - start
     report.posture_statistics = _posture_statistics(robot, tally)
     phase("the determinism check")

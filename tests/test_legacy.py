@@ -387,6 +387,20 @@ def test_crank_angles_in_degrees_are_named(capsys, tmp_path):
     assert "joint 0 (crank1) is scaled by 57.2957795 (degrees instead of radians)" in diagnoses(data)
 
 
+def test_a_crash_in_verifys_second_process_is_named_as_in_the_first(capsys, tmp_path):
+    """verify compares every other chunk in a forked second process: a routine that crashes
+    there (here on its 6000th call, in the second chunk) is run again on that chunk in the
+    first process, so the crash is named with its poses as always."""
+    from kingen.model import load_robot
+    from kingen.verify import chunk_size
+    chunk = chunk_size(load_robot("hexapod"))
+    text = "static int calls = 0;\n" + hexapod_source(CRASH=f"(++calls > {chunk + 1000})")
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", samples=str(5 * chunk))
+    assert code == 1
+    assert failed_checks(data) == ["crash"]
+    assert f"(signal SIGSEGV) during poses {chunk} to {2 * chunk - 1} of seed 0" in out
+
+
 def test_a_routine_that_crashes_is_a_failed_check_not_a_dead_process(capsys, tmp_path):
     code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(CRASH="1"), "kin_hexapodFullTest")
     assert code == 1
