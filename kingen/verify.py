@@ -86,6 +86,9 @@ class VerifyOptions:
     timeout: float = DEFAULT_TIMEOUT
     snapshot: object = None
     """A loaded kingen.snapshot.Snapshot to check the routine against (check ``snapshot``)."""
+    processes: int = 1
+    """Processes comparing the sampled poses: 2 forks a second one (as verify_library's child
+    does on a machine with two cores); 1 keeps everything in the calling process."""
 
 
 def report_tolerance_mm(robot):
@@ -153,9 +156,9 @@ def _compare_chunk(poses, first=False):
 
 
 def compared_chunks(robot, plugin, options, chunk, phase):
-    """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With two
-    cores and more than one chunk, a forked second process compares most other chunks
-    ahead. If it dies (the routine crashed or exited there), its chunks are compared here
+    """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With
+    ``options.processes`` 2 and more than one chunk, a forked second process compares every
+    other chunk ahead. If it dies (the routine crashed or exited there), its chunks are compared here
     again, so that a crash is named by this process's stage as always."""
     global _chunk_job
     _chunk_job = (robot, plugin, options)
@@ -164,7 +167,7 @@ def compared_chunks(robot, plugin, options, chunk, phase):
         phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
 
     chunks = pose_chunks(robot, options.samples, options.seed, chunk)
-    if options.samples <= chunk or (os.cpu_count() or 1) < 2 or "fork" not in multiprocessing.get_all_start_methods():
+    if options.processes < 2 or options.samples <= chunk or "fork" not in multiprocessing.get_all_start_methods():
         for begin, poses in chunks:
             stage(begin, poses)
             yield begin, len(poses), _compare_chunk(poses, first=begin == 0)
@@ -412,6 +415,7 @@ def _verify_job(channel, robot, library, routine, options):
     printed = _Printed()
     with printed.capture():
         plugin = Plugin(library, routine)
+    options = replace(options, processes=min(2, os.cpu_count() or 1))
     report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
                     phase=channel.stage, on_check=lambda check: channel.send("check", check))
     if printed.bytes:
