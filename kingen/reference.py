@@ -99,7 +99,7 @@ def _solve(robot, t6, indices):
     singular = np.broadcast_to(singular[:, None], outside.shape)
     index = None
     if robot.has_direct_index and (indices or robot.direct_index_min is not None):
-        wrenches, _ = limb_wrenches(robot, points, joints)
+        wrenches, _ = limb_wrenches(robot, points, joints, with_transmissions=False)
         index = np.where(unreachable, np.nan, direct_index_of_entries(posture_gram_entries(robot, wrenches),
                                                                       None if indices else robot.direct_index_min))
         if robot.direct_index_min is not None:

@@ -41,25 +41,29 @@ EXACT_WINDOW = 1e-4
 closed form's error (at most about 1e-7 relative on the shipped robots)."""
 
 
-def limb_wrenches(robot, points, joints):
-    """Unit wrenches (n, dof, 2, 6) and transmissions (n, dof, 2) of each limb's two force
-    lines (branch 0 and 1; the same twice for one-branch limbs), from platform points
-    (n, dof, 3) and joints (n, dof, postures). A limb has at most two lines: everything
-    per posture is assembled from these."""
+def limb_wrenches(robot, points, joints, with_transmissions=True):
+    """Unit wrenches (n, dof, 2, 6) and transmissions (n, dof, 2; None unless
+    ``with_transmissions``) of each limb's two force lines (branch 0 and 1; the same twice
+    for one-branch limbs), from platform points (n, dof, 3) and joints (n, dof, postures).
+    A limb has at most two lines: everything per posture is assembled from these."""
     count = points.shape[0]
     table = branch_table(robot)
     wrenches = np.empty((count, robot.dof, 2, 6))
-    transmissions = np.empty((count, robot.dof, 2))
+    transmissions = np.empty((count, robot.dof, 2)) if with_transmissions else None
     for index, limb in enumerate(robot.limbs):
         point = points[:, index]
         for branch in range(limb.branches):
             postures = np.nonzero(table[:, index] == branch)[0]
             joint = joints[:, index, postures[0] if len(postures) else 0]
             direction = limb.force_direction(point, joint)
-            wrenches[:, index, branch] = np.concatenate([direction, np.cross(point, direction)], axis=-1)
-            transmissions[:, index, branch] = limb.transmission(direction, joint)
+            wrenches[:, index, branch, :3] = direction
+            wrenches[:, index, branch, 3:] = np.cross(point, direction)
+            if with_transmissions:
+                transmissions[:, index, branch] = limb.transmission(direction, joint)
         if limb.branches == 1:
-            wrenches[:, index, 1], transmissions[:, index, 1] = wrenches[:, index, 0], transmissions[:, index, 0]
+            wrenches[:, index, 1] = wrenches[:, index, 0]
+            if with_transmissions:
+                transmissions[:, index, 1] = transmissions[:, index, 0]
     return wrenches, transmissions
 
 
