@@ -138,12 +138,11 @@ def partial_sums(robot):
 
 
 def joint_sum(robot):
-    """The C sum of every joint value the routine computed (both branches of two-branch
-    limbs): finite exactly when all of them are, unless the sum itself overflows."""
-    terms = []
-    for index, bit in enumerate(robot.branch_bits):
-        terms += [f"joints[{index}].value[{branch}]" for branch in ((0, 1) if bit >= 0 else (0,))]
-    return " + ".join(terms)
+    """The terms, one per joint, of the C sum of every joint value the routine computed (both
+    branches of two-branch limbs): finite exactly when all of them are, unless the sum
+    itself overflows."""
+    return [" + ".join(f"joints[{index}].value[{branch}]" for branch in ((0, 1) if bit >= 0 else (0,)))
+            for index, bit in enumerate(robot.branch_bits)]
 
 
 def view_model(robot):
