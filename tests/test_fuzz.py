@@ -64,9 +64,22 @@ def coincident_platform_points():
             "verification": {"home": [0.0] * 6, "range": [2e4] * 3 + [0.0] * 3}}
 
 
+def small_crank_beside_legs():
+    """Found by this test: a 10 mm crank robot whose plain central differences missed the
+    analytic Jacobian by 2.4e-6 (curvature near its singular band); verify extrapolates."""
+    leg = {"model": "leg", "base_point": [0.0, 0.0, 0.0], "platform_point": [0.0, 0.0, 0.0],
+           "reference_length": 10.0}
+    crank = {"model": "crank", "pivot": [0.0, 10.0, -6.25], "crank_direction": 0.0, "crank_length": 5.0,
+             "rod_length": 10.0, "platform_point": [0.0, 0.0, 0.0]}
+    return {"name": "fuzz", "description": "Four legs and a crank meeting at one platform point.",
+            "limbs": [leg] * 4 + [crank],
+            "verification": {"home": [0.0, 0.0, 1.875, 0.0, 0.0, 0.0], "range": [2.0] * 3 + [0.0] * 3}}
+
+
 @settings(FUZZ, max_examples=15)
 @given(definition=robots())
 @example(definition=coincident_platform_points())
+@example(definition=small_crank_beside_legs())
 def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition):
     folder = tmp_path_factory.mktemp("fuzz")
     path = folder / "fuzz.yaml"
