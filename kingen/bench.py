@@ -5,6 +5,7 @@ printed, never asserted: speed targets live here, not in unit tests.
 Memory is bounded whatever the call count: the routine is timed over a pool of at most
 ``POOL_POSES`` distinct poses, passed over repeatedly until ``calls`` calls are made."""
 
+import os
 import statistics
 import time
 
@@ -47,7 +48,8 @@ def benchmark(robot, plugin, calls=200000, seed=0, repeats=3, tick=None):
         single = _best_seconds(plugin.each_runner(few), repeats, 1, tick)
     reference = _best_seconds(lambda: solve(robot, t6), repeats, 1, tick)
     verified = min(calls, VERIFY_LIMIT)
-    report = verify(robot, plugin, VerifyOptions(samples=verified, seed=seed), progress=tick and (lambda _: tick()))
+    options = VerifyOptions(samples=verified, seed=seed, processes=min(2, os.cpu_count() or 1))
+    report = verify(robot, plugin, options, progress=tick and (lambda _: tick()))
     return {
         "robot": robot.name,
         "routine": plugin.routine,
