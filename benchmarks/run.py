@@ -69,7 +69,7 @@ def main():
                   f"| {against['floor']['min']:.1f} / {against['floor']['median']:.1f} "
                   f"| {against['routine']['min']:.1f} / {against['routine']['median']:.1f} "
                   f"| {against['ratio_min']:.3f} / {against['ratio_median']:.3f} |", flush=True)
-        print(f"\n| command | exit | wall s | peak MiB |")
+        print("\n| command | exit | wall s | peak MiB |")
         print("| --- | --- | --- | --- |")
         for robot in robots:
             run(["build", robot, "-o", f"{scratch}/{robot}-verify"])

@@ -5,14 +5,13 @@ printed, never asserted: speed targets live here, not in unit tests.
 Memory is bounded whatever the call count: the routine is timed over a pool of at most
 ``POOL_POSES`` distinct poses, passed over repeatedly until ``calls`` calls are made."""
 
-import os
 import statistics
 import time
 
 from .conventions import t6_from_pose
 from .host import captured_output
 from .reference import solve
-from .verify import VerifyOptions, sample_poses, verify
+from .verify import VerifyOptions, comparing_processes, sample_poses, verify
 
 PER_CALL_LIMIT = 20000
 """The per-call cffi path is slow; it is timed on at most this many poses."""
@@ -48,7 +47,7 @@ def benchmark(robot, plugin, calls=200000, seed=0, repeats=3, tick=None):
         single = _best_seconds(plugin.each_runner(few), repeats, 1, tick)
     reference = _best_seconds(lambda: solve(robot, t6), repeats, 1, tick)
     verified = min(calls, VERIFY_LIMIT)
-    options = VerifyOptions(samples=verified, seed=seed, processes=min(2, os.cpu_count() or 1))
+    options = VerifyOptions(samples=verified, seed=seed, processes=comparing_processes())
     report = verify(robot, plugin, options, progress=tick and (lambda _: tick()))
     return {
         "robot": robot.name,
@@ -67,7 +66,7 @@ def compare(robot, plugins, calls=200000, seed=0, repeats=ROUNDS, tick=None):
     """ns per call of each of ``plugins`` (label -> Plugin) on the same ``calls`` poses
     through the C batch driver, timed in turns (one timing of each per round, ``repeats``
     rounds) so that the machine's drift hits all alike. Returns label -> {"min", "median"}
-    in ns per call; the first label is the one the others are compared with."""
+    in ns per call."""
     pool = min(calls, POOL_POSES)
     passes = -(-calls // pool)
     t6 = t6_from_pose(sample_poses(robot, pool, seed))

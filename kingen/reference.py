@@ -91,10 +91,9 @@ def _solve(robot, t6, indices):
             radicands[:, index] = limb_solution.radicand
 
     lower, upper = robot.travel_limits()
-    if np.all(np.isinf(lower) & np.isinf(upper)):
-        outside = np.zeros((count, robot.postures), dtype=bool)
-    else:
-        outside = np.any((joints < lower[None, :, None]) | (joints > upper[None, :, None]), axis=1)
+    limited = np.isfinite(lower) | np.isfinite(upper)  # only those joints are compared
+    outside = np.any((joints[:, limited] < lower[None, limited, None])
+                     | (joints[:, limited] > upper[None, limited, None]), axis=1)
     unreachable = np.any(~(radicands >= -abi.SINGULAR_TOLERANCE) | overflow, axis=1)
     singular = np.any(np.abs(radicands) <= abi.SINGULAR_TOLERANCE, axis=1)
 

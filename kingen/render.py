@@ -15,6 +15,7 @@ import jinja2
 from . import __version__, abi
 from .limbs import MODELS, c_double, partial_path
 from .schema import dialog_label, field_index
+from .singularity import PACKED, partial_sum_split
 from .resources import templates_dir
 from .text import finalizer, markdown
 
@@ -117,17 +118,14 @@ def ldl_test_lines(size=6, shifted=(3, 4, 5)):
 
 def gram_lines():
     """C statements filling gram[21], the packed lower triangle of w w^T, from w0 .. w5."""
-    return [f"gram[{k}] = w{r} * w{c};" for k, (r, c) in enumerate((r, c) for r in range(6) for c in range(r + 1))]
+    return [f"gram[{k}] = w{r} * w{c};" for k, (r, c) in enumerate(PACKED)]
 
 
 def partial_sums(robot):
-    """The C sums (over grams[limb][branch][k]) of the two partial Gram tables: 'low' per
-    combination of the low posture digits (their limbs), 'high' per combination of the
-    other digits (with every one-branch limb); posture k's M is high[k >> low_bits] +
-    low[k & (2^low_bits - 1)]."""
-    low_bits = sum(1 for bit in robot.branch_bits if bit >= 0) // 2
-    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
-    high_limbs = [i for i in range(robot.dof) if i not in low_limbs]
+    """The C sums (over grams[limb][branch][k]) of the two partial Gram tables of
+    singularity.partial_sum_split: 'low' per combination of the low posture digits (their
+    limbs), 'high' per combination of the other digits (with every one-branch limb)."""
+    low_bits, low_limbs, high_limbs = partial_sum_split(robot)
 
     def sums(limbs, postures):
         return [" + ".join(f"grams[{i}][{robot.posture_branches(k)[i]}][k]" for i in limbs) or "0.0"
@@ -184,7 +182,7 @@ def view_model(robot):
         "has_radicand": any(limb.has_radicand for limb in robot.limbs),
         "models": _model_tables(robot),
         "direct_index": robot.direct_index_min is not None,
-        "low_bits": sum(1 for bit in robot.branch_bits if bit >= 0) // 2,
+        "low_bits": partial_sum_split(robot)[0],
         "ldl_lines": ldl_test_lines(),
         "gram_lines": gram_lines(),
         "partial_sums": partial_sums(robot),

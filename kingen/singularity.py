@@ -81,10 +81,20 @@ PACKED = [(i, j) for i in range(SIX) for j in range(i + 1)]
 _PACKED_INDEX = {pair: k for k, pair in enumerate(PACKED)}
 
 
+def partial_sum_split(robot):
+    """(low_bits, low limbs, high limbs): how a posture's M is split in two partial sums,
+    one over the limbs whose posture digit is below low_bits (half the two-branch limbs),
+    one over all others; posture k's M is high[k >> low_bits] + low[k & (2^low_bits - 1)].
+    The generated C and posture_gram_entries both sum this way."""
+    low_bits = sum(1 for bit in robot.branch_bits if bit >= 0) // 2
+    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
+    return low_bits, low_limbs, [i for i in range(robot.dof) if i not in low_limbs]
+
+
 def posture_gram_entries(robot, wrenches):
     """M of every posture as its 21 packed entries (21, n, postures), from the limbs' line
-    wrenches (n, dof, 2, 6): each line's w w^T once, summed in two partial sums (the limbs
-    of the low half of the posture digits, and the others), as the generated C does."""
+    wrenches (n, dof, 2, 6): each line's w w^T once, summed in the two partial sums of
+    partial_sum_split, as the generated C does."""
     rows, columns = np.array(PACKED).T
     lines = {}
     for index, limb in enumerate(robot.limbs):
@@ -92,9 +102,7 @@ def posture_gram_entries(robot, wrenches):
             rates = np.ascontiguousarray(wrenches[:, index, branch].T)  # (6, n)
             lines[index, branch] = rates[rows] * rates[columns]  # (21, n)
     table = branch_table(robot)
-    low_bits = sum(1 for bit in robot.branch_bits if bit >= 0) // 2
-    low_limbs = [i for i, bit in enumerate(robot.branch_bits) if 0 <= bit < low_bits]
-    high_limbs = [i for i in range(robot.dof) if i not in low_limbs]
+    low_bits, low_limbs, high_limbs = partial_sum_split(robot)
 
     def partial_sums(limbs, postures):
         """(21, n, len(postures)): per posture, the sum over ``limbs`` of their branch's w w^T."""

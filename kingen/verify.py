@@ -120,8 +120,8 @@ all of them): about equal work for both."""
 REPORT_COUNTS = ("singular_entries", "singular_out_of_bound", "warning_mismatches", "warnings_in_band")
 REPORT_WORST = ("max_abs_error_mm", "max_abs_error_rad")
 _chunk_job = None
-"""(robot, plugin, options) of the comparing processes: set before the second one is forked,
-so that only poses travel to it."""
+"""(robot, calibrated robot, plugin, options) of the comparing processes: set before the
+second one is forked, so that only poses travel to it."""
 
 
 @dataclass
@@ -138,9 +138,9 @@ def _compare_chunk(poses, first=False):
     """Call the routine on ``poses`` (m, 6), solve the reference and compare: a _Part (with
     the poses kept for diagnoses only for the ``first`` chunk; nothing else heavy, so
     that it travels between processes cheaply)."""
-    robot, plugin, options = _chunk_job
+    robot, calibrated, plugin, options = _chunk_job
     report = _empty_report(robot, plugin.routine, options)
-    tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
+    tally = _Tally.start(calibrated)
     printed = _Printed()
     t6 = t6_from_pose(poses)
     plugin.reset_host()
@@ -155,44 +155,41 @@ def _compare_chunk(poses, first=False):
     return _Part(counts, tally, printed.bytes, printed.first_line)
 
 
-def compared_chunks(robot, plugin, options, chunk, phase):
+def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
     """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With
     ``options.processes`` 2 and more than one chunk, a forked second process compares every
-    other chunk ahead. If it dies (the routine crashed or exited there), its chunks are compared here
-    again, so that a crash is named by this process's stage as always."""
+    other chunk ahead. If it dies (the routine crashed or exited there), its chunks are
+    compared here again, so that a crash is named by this process's stage as always."""
     global _chunk_job
-    _chunk_job = (robot, plugin, options)
+    _chunk_job = (robot, calibrated, plugin, options)
 
-    def stage(begin, poses):
+    def finished(begin, poses, future):
         phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
+        if future is not None:
+            try:
+                return begin, len(poses), future.result()
+            except BrokenProcessPool:
+                pass
+        return begin, len(poses), _compare_chunk(poses, first=begin == 0)
 
     chunks = pose_chunks(robot, options.samples, options.seed, chunk)
     if options.processes < 2 or options.samples <= chunk or "fork" not in multiprocessing.get_all_start_methods():
         for begin, poses in chunks:
-            stage(begin, poses)
-            yield begin, len(poses), _compare_chunk(poses, first=begin == 0)
+            yield finished(begin, poses, None)
         return
-
-    def finished(begin, poses, future):
-        stage(begin, poses)
-        if future is not None:
-            try:
-                return future.result()
-            except BrokenProcessPool:
-                pass
-        return _compare_chunk(poses, first=begin == 0)
-
     pending = collections.deque()
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"), initializer=die_with_parent) as pool:
         for number, (begin, poses) in enumerate(chunks):
-            local = number % LOCAL_SHARE == 0
-            pending.append((begin, poses, None if local else _submit(pool, poses)))
-            while len(pending) > CHUNKS_AHEAD or (pending and pending[0][2] is None):
-                begin, poses, future = pending.popleft()
-                yield begin, len(poses), finished(begin, poses, future)
+            pending.append((begin, poses, None if number % LOCAL_SHARE == 0 else _submit(pool, poses)))
+            while pending and (len(pending) > CHUNKS_AHEAD or pending[0][2] is None):
+                yield finished(*pending.popleft())
         while pending:
-            begin, poses, future = pending.popleft()
-            yield begin, len(poses), finished(begin, poses, future)
+            yield finished(*pending.popleft())
+
+
+def comparing_processes():
+    """Processes a verification may compare with: two on a machine with two cores or more."""
+    return min(2, os.cpu_count() or 1)
 
 
 def _submit(pool, poses):
@@ -209,15 +206,7 @@ def _merge(report, tally, printed, part):
         setattr(report, name, getattr(report, name) + part.counts[name])
     for name in REPORT_WORST:
         setattr(report, name, max(getattr(report, name), part.counts[name]))
-    other = part.tally
-    for name in ("returns_wrong", "aborted", "closure_checked", "faulty_calls"):
-        setattr(tally, name, getattr(tally, name) + getattr(other, name))
-    tally.fault_bits |= other.fault_bits
-    tally.closure_worst = max(tally.closure_worst, other.closure_worst)
-    tally.posture_counts += other.posture_counts
-    tally.posture_worst = [np.maximum(mine, theirs) for mine, theirs in zip(tally.posture_worst, other.posture_worst)]
-    if tally.first is None:
-        tally.first = other.first
+    tally.add(part.tally)
     printed.bytes += part.printed_bytes
     printed.first_line = printed.first_line or part.printed_first_line
 
@@ -284,15 +273,27 @@ class _Tally:
     posture_worst: list = None
     """[mm (postures,), rad (postures,)] worst errors where both solve."""
 
+    faulty_calls: int = 0
+    fault_bits: int = 0
+    first: tuple = None
+
     @classmethod
     def start(cls, calibrated):
         """Empty totals for ``calibrated`` (the robot with the dialog's fields applied)."""
         postures = calibrated.postures
         return cls(calibrated=calibrated, posture_counts=np.zeros((4, postures), dtype=np.int64),
                    posture_worst=[np.zeros(postures), np.zeros(postures)])
-    faulty_calls: int = 0
-    fault_bits: int = 0
-    first: tuple = None
+
+    def add(self, other):
+        """Add the totals of a later chunk (its ``first`` counts only when none is kept yet)."""
+        for name in ("returns_wrong", "aborted", "closure_checked", "faulty_calls"):
+            setattr(self, name, getattr(self, name) + getattr(other, name))
+        self.fault_bits |= other.fault_bits
+        self.closure_worst = max(self.closure_worst, other.closure_worst)
+        self.posture_counts += other.posture_counts
+        self.posture_worst = [np.maximum(mine, theirs) for mine, theirs in zip(self.posture_worst, other.posture_worst)]
+        if self.first is None:
+            self.first = other.first
 
 
 class _Printed:
@@ -415,7 +416,7 @@ def _verify_job(channel, robot, library, routine, options):
     printed = _Printed()
     with printed.capture():
         plugin = Plugin(library, routine)
-    options = replace(options, processes=min(2, os.cpu_count() or 1))
+    options = replace(options, processes=comparing_processes())
     report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
                     phase=channel.stage, on_check=lambda check: channel.send("check", check))
     if printed.bytes:
@@ -427,7 +428,7 @@ def _verify_job(channel, robot, library, routine, options):
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
-    for begin, count, part in compared_chunks(robot, plugin, options, chunk_size(robot), phase):
+    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, chunk_size(robot), phase):
         _merge(report, tally, printed, part)
         if progress is not None:
             progress(begin + count)
