@@ -40,3 +40,20 @@ def test_bench_against_a_floor_prints_and_writes_the_ratio(capsys, tmp_path):
     for label in ("floor", "routine"):
         assert 0 < against[label]["min"] <= against[label]["median"]
     assert against["ratio_min"] == pytest.approx(against["routine"]["min"] / against["floor"]["min"])
+
+
+@pytest.mark.parametrize("text, code, message", [
+    (None, 2, "Invalid value for '--floor'"),
+    ("int broken(\n", 2, "does not compile"),
+    ('#include "shlibdefs.h"\nint nothing;\n', 1, "does not export get_kin_config"),
+])
+def test_a_bad_floor_is_one_line_and_no_figures(text, code, message, capsys, tmp_path):
+    floor = tmp_path / "floor.c"
+    if text is not None:
+        floor.write_text(text)
+    figures = tmp_path / "bench.json"
+    assert main(["bench", "exechon", "--floor", str(floor), "-o", str(tmp_path / "build"), "--calls", "1000",
+                 "--json", str(figures)]) == code
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not figures.exists()
