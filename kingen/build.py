@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import __version__
+from .defaults import DEFAULT_TIMEOUT
 from .errors import KingenError
 from .pe import dll_exports
 from .render import render, render_header, host_source, source_name
@@ -33,7 +34,6 @@ SHARED_FLAGS = ("-O2", "-fPIC", "-shared")
 WINDOWS_DEFINES = ("WINDOWS_SHELL", "_DNBUSERLIB", "WINDOWS_SOURCE", "NDEBUG", "WIN32", "WINNT", "WINDOWS_NT")
 """The vendor makefile's defines (plus WINDOWS_SOURCE, which turns DllExport into dllexport)."""
 MINGW = "x86_64-w64-mingw32-gcc"
-TARGETS = ("linux", "windows")
 
 
 class CompileError(KingenError):
@@ -50,8 +50,6 @@ class BuildResult:
     compiled: bool
 
 
-DEFAULT_TIMEOUT = 300.0
-"""Seconds a compiler run may take (``--timeout``, ``$KINGEN_TIMEOUT``) before it is killed."""
 COMPILER_MEMORY = 4 << 30
 COMPILER_FILE_SIZE = 256 << 20
 """Address space and largest file a compiler run may use: a source that includes /dev/zero

@@ -18,14 +18,10 @@ import traceback
 from pathlib import Path
 
 import click
-import numpy as np
 
 from . import __version__, abi
-from .build import DEFAULT_TIMEOUT, TARGETS, build_legacy, build_plugin, default_out_dir, write_atomic, write_source
+from .defaults import DEFAULT_TIMEOUT, MAX_MM, TARGETS
 from .errors import InternalError, KingenError, PluginDefect
-from .conventions import branch_of_posture, pose_from_t6, t6_from_pose, wrap_angle
-from .model import load_robot, shipped_robots
-from .schema import MAX_MM
 from .text import printable
 
 EXIT_FAILED = 1
@@ -111,9 +107,11 @@ def cli():
 @cli.command("list")
 def list_robots():
     """The shipped robots with DOF, postures and limb models."""
+    from .model import shipped_robots
+
     rows = [("robot", "dof", "postures", "limbs", "description")]
     for name in shipped_robots():
-        robot = load_robot(name)
+        robot = _robot(name)
         counts = ", ".join(f"{sum(l.model == m for l in robot.limbs)} {m}" for m in robot.models)
         rows.append((name, str(robot.dof), str(robot.postures), counts, _shorten(robot.description, 60)))
     _print_table(rows)
@@ -124,7 +122,9 @@ def list_robots():
 @OUT_DIR
 def render(robot, out_dir):
     """Write kin_<name>.c into the output folder."""
-    model = load_robot(robot)
+    from .build import default_out_dir, write_source
+
+    model = _robot(robot)
     path = write_source(model, out_dir or default_out_dir(model))
     _say(str(path))
 
@@ -138,7 +138,9 @@ def render(robot, out_dir):
 @TIMEOUT
 def build(robot, out_dir, debug, target, timeout):
     """Render and compile the plugin, host symbols left to the host, as for DELMIA."""
-    model = load_robot(robot)
+    from .build import build_plugin
+
+    model = _robot(robot)
     result = build_plugin(model, out_dir, defines=("KINGEN_DEBUG",) if debug else (), target=target, timeout=timeout)
     state = "compiled" if result.compiled else "up to date"
     _say(f"{result.library} ({state}; routine {result.routine}, source {result.source})")
@@ -155,8 +157,10 @@ def package(robot, out_dir, target, timeout):
 
     The folder is written whole or not at all; an existing folder is replaced only when
     kingen wrote it."""
-    model = load_robot(robot)
+    from .build import default_out_dir
     from .package import write_package
+
+    model = _robot(robot)
 
     paths = write_package(model, out_dir or default_out_dir(model) / f"package-{target}", target, timeout=timeout)
     for path in paths:
@@ -179,18 +183,22 @@ def package(robot, out_dir, target, timeout):
 @TIMEOUT
 def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, link_offsets, timeout):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
+    import numpy as np
+
+    from .build import write_atomic
+    from .conventions import branch_of_posture, t6_from_pose
     from .reference import solve as reference_solve
 
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
-    model = load_robot(robot)
+    model = _robot(robot)
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
     library, routine = _library(model, out_dir, timeout=timeout)
     calls = _in_child(_solve_job, (library, routine, matrix, link_lengths, link_offsets), timeout)
     expected = reference_solve(model, matrix, link_lengths, link_offsets, indices=True)
     direct = expected.direct_index[0] if expected.direct_index is not None else [None] * model.postures
     inverse = float(expected.min_inverse_index[0])
-    inverse_text = f"{inverse:.6g}" if np.isfinite(inverse) else "n/a"
+    inverse_text = f"{inverse:.6g}" if math.isfinite(inverse) else "n/a"
     in_yaml_units = [t.wraps and degrees for t in model.joint_types]
     scale = np.array([1.0 / t.yaml_scale if yaml else 1.0 for t, yaml in zip(model.joint_types, in_yaml_units)])
     units = [t.yaml_unit if yaml else t.unit for t, yaml in zip(model.joint_types, in_yaml_units)]
@@ -232,6 +240,9 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
 
 def _predict_switch(model, t6, joints, switch, scale, units):
     """What a host that recomputes the TCP from posture B's joints may do after A -> B."""
+    import numpy as np
+
+    from .conventions import pose_from_t6, wrap_angle
     from .forward import assemblies
 
     first, second = switch
@@ -263,7 +274,7 @@ def _predict_switch(model, t6, joints, switch, scale, units):
 def _index_text(value):
     if value is None:
         return "n/a"
-    return "unreachable" if not np.isfinite(value) else f"{value:.6g}"
+    return "unreachable" if not math.isfinite(value) else f"{value:.6g}"
 
 
 def _indices_note(model):
@@ -279,7 +290,7 @@ def _indices_note(model):
 
 def _finite(data):
     if isinstance(data, float):
-        return data if np.isfinite(data) else None
+        return data if math.isfinite(data) else None
     if isinstance(data, dict):
         return {key: _finite(value) for key, value in data.items()}
     if isinstance(data, list):
@@ -318,11 +329,11 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     that follows the DELMIA interface, hand-written ones included. Plugin code runs in a
     child process, so a routine that crashes, exits or hangs becomes a failed check.
     """
+    from .build import write_atomic
+    from .snapshot import load as load_snapshot
     from .verify import VerifyOptions, chunk_size, verify_library
 
-    from .snapshot import load as load_snapshot
-
-    model = load_robot(robot)
+    model = _robot(robot)
     snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
     library, routine = _library(model, out_dir, library, source, routine, timeout)
     options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
@@ -355,7 +366,9 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
 @TIMEOUT
 def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, timeout):
     """Print ns per routine call (C batch driver, per-call cffi) and poses per second."""
-    model = load_robot(robot)
+    from .build import build_legacy, default_out_dir, write_atomic
+
+    model = _robot(robot)
     library, routine = _library(model, out_dir, library, source, routine, timeout)
     floor = None
     if floor_source is not None:
@@ -391,9 +404,12 @@ def fk(robot, joints, more_joints, near, json_path):
     """Forward kinematics: every platform pose (assembly mode) the joints admit.
 
     Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
+    import numpy as np
+
+    from .build import write_atomic
     from .forward import assemblies, best_residual
 
-    model = load_robot(robot)
+    model = _robot(robot)
     try:
         values = [float(v) for v in joints.replace(",", " ").split()] + [float(v) for v in more_joints]
     except ValueError:
@@ -440,9 +456,10 @@ def analyze(robot, posture, out_dir, json_path):
     import time
 
     from .analysis import analyze as run_analysis
+    from .build import default_out_dir, write_atomic
     from .figures import figures, report_html
 
-    model = load_robot(robot)
+    model = _robot(robot)
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
     out_dir = out_dir or default_out_dir(model) / "analysis"
@@ -498,9 +515,10 @@ def golden():
 @TIMEOUT
 def golden_record(robot, library, source, routine, samples, seed, output, timeout):
     """Record a snapshot from the reference, or from a trusted plugin (--plugin/--source)."""
+    from .build import write_atomic
     from .snapshot import record, sample_t6
 
-    model = load_robot(robot)
+    model = _robot(robot)
     t6 = sample_t6(model, samples, seed)
     if library is None and source is None:
         if routine is not None:
@@ -568,6 +586,8 @@ def _in_child(job, arguments, timeout):
 
 def _library(model, out_dir, library=None, source=None, routine=None, timeout=DEFAULT_TIMEOUT):
     """(library path, routine) to check: kingen's own build, a given library, or a compiled legacy source."""
+    from .build import build_legacy, build_plugin, default_out_dir
+
     if library is not None and source is not None:
         raise click.UsageError("give at most one of --plugin and --source")
     if library is None and source is None:
@@ -578,6 +598,18 @@ def _library(model, out_dir, library=None, source=None, routine=None, timeout=DE
     if source is not None:
         library = build_legacy(source, out_dir or default_out_dir(model) / "legacy", timeout=timeout)
     return library, routine or model.routine
+
+
+def _robot(robot):
+    """The validated robot named by a shipped name or a YAML path (see kingen.model). Every
+    command that computes starts here, so numpy's floating-point warnings are turned off
+    here too: kingen judges NaN and inf itself, and the warnings would only be noise."""
+    import numpy as np
+
+    from .model import load_robot
+
+    np.seterr(all="ignore")
+    return load_robot(robot)
 
 
 def _progress(total, chunk):
@@ -658,7 +690,6 @@ def _terminate(signal_number, frame):
 def main(argv=None):
     """Entry point: runs the CLI and maps every outcome to one stderr line and an exit code."""
     signal.signal(signal.SIGTERM, _terminate)
-    np.seterr(all="ignore")
     try:
         outcome = cli.main(args=argv, prog_name="kingen", standalone_mode=False)
     except PluginDefect as error:

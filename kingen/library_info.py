@@ -10,8 +10,9 @@ import re
 import struct
 
 from .errors import read_limited
-from .render import BUILD_INFO_MARKER
 
+BUILD_INFO_MARKER = "kingen-build-info:"
+"""Starts the build-info string compiled into every generated library (kingen.render writes it)."""
 MAX_LIBRARY_BYTES = 256 << 20
 _INFO = re.compile(re.escape(BUILD_INFO_MARKER.encode()) + rb"([ -~]{1,1000})\x00")
 _ELF_MACHINES = {3: "i386", 40: "arm", 62: "x86-64", 183: "aarch64"}

@@ -11,8 +11,9 @@ import tempfile
 from pathlib import Path
 
 from . import abi
-from .build import DEFAULT_TIMEOUT, TARGETS, WINDOWS_DEFINES, build_plugin, library_name, umask, write_atomic
+from .build import WINDOWS_DEFINES, build_plugin, library_name, umask, write_atomic
 from .conventions import branch_of_posture
+from .defaults import DEFAULT_TIMEOUT, TARGETS
 from .errors import KingenError
 from .render import render, template, view_model
 from .schema import dialog_label

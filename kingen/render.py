@@ -13,6 +13,7 @@ import textwrap
 import jinja2
 
 from . import __version__, abi
+from .library_info import BUILD_INFO_MARKER
 from .limbs import MODELS, c_double, partial_path
 from .schema import dialog_label, field_index
 from .singularity import PACKED, partial_sum_split
@@ -20,8 +21,6 @@ from .resources import templates_dir
 from .text import finalizer, markdown
 
 
-BUILD_INFO_MARKER = "kingen-build-info:"
-"""Starts the build-info string compiled into every generated library."""
 TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown", ".html.j2": "html"}
 """Which escaping (:func:`kingen.text.finalizer`) a template's substitutions get, by suffix
 (HTML: jinja2's autoescape); every other template is plain text. The stand-in header has no

@@ -9,9 +9,8 @@ from typing import Annotated
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
-MAX_MM = 1e6
-"""Coordinates and lengths are within +/- 1 km (mm): the stated geometry range, inside which
-double precision keeps plugin and reference within verify's bound (see verify.value_tolerance_mm)."""
+from .defaults import MAX_MM
+
 MIN_LENGTH_MM = 1e-3
 MAX_DEGREES = 720.0
 """Angles in robot files (directions, offsets, poses) are within +/- two turns."""

@@ -28,7 +28,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from . import abi
-from .build import DEFAULT_TIMEOUT
+from .defaults import DEFAULT_TIMEOUT
 from .conventions import joint_errors, pose_from_t6, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
 from .forward import free_mask, newton, t6_of

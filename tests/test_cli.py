@@ -25,6 +25,16 @@ def test_list_shows_every_shipped_robot(capsys):
     assert any(line.split()[:5] == ["tau", "3", "8", "3", "rail"] for line in out.splitlines())
 
 
+@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["info", "--help"]])
+def test_help_and_version_load_no_heavy_module(argv):
+    """Start-up: the command line loads numpy, pydantic, jinja2 and cffi only for commands
+    that use them."""
+    probe = ("import sys; from kingen.cli import main; code = main(sys.argv[1:]); "
+             "print(sorted(m for m in ('numpy', 'pydantic', 'jinja2', 'cffi', 'ruamel.yaml') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", probe, *argv], capture_output=True, text=True, check=True)
+    assert done.stdout.splitlines()[-1] == "[]"
+
+
 def test_render_writes_only_the_source(capsys, tmp_path):
     code, out, _ = run(capsys, "render", "tau", "-o", str(tmp_path))
     assert code == 0

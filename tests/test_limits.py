@@ -258,8 +258,8 @@ def test_std_streams_closed_or_cut_short_keep_the_exit_code(tmp_path):
 
 
 def test_internal_errors_exit_3_with_one_line(capsys, monkeypatch):
-    import kingen.cli
-    monkeypatch.setattr(kingen.cli, "shipped_robots", lambda: 1 / 0)
+    import kingen.model
+    monkeypatch.setattr(kingen.model, "shipped_robots", lambda: 1 / 0)
     monkeypatch.delenv("KINGEN_DEBUG", raising=False)
     code, _, err = run(capsys, "list")
     assert code == 3 and err.count("\n") == 1
