@@ -42,7 +42,7 @@ def evaluate(robot, t6, posture):
     index = np.full(count, np.nan)
     reachable = warning != WARNINGS["WARN_UNREACHABLE"]
     if robot.has_direct_index and np.any(reachable):
-        wrenches, _ = limb_wrenches(plain, expected.points[reachable], expected.joints[reachable],
+        wrenches, _ = limb_wrenches(plain, expected.points[reachable], expected.branch_joints[reachable],
                                     with_transmissions=False)
         index[reachable] = direct_index_of_entries(posture_gram_entries(plain, wrenches)[:, :, posture],
                                                    robot.direct_index_min)

@@ -16,33 +16,43 @@ values are always finite. Non-finite T6: all postures unreachable, all joints 0.
 whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0.
 """
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import abi
-from .conventions import branch_of_posture
-from .singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
+from .singularity import branch_table, direct_index_of_entries, limb_wrenches, posture_gram_entries
 
 
 @dataclass(frozen=True)
 class Solution:
     """Every posture over n poses.
 
-    joints: (n, dof, postures), mm or rad. warnings: (n, postures) WARN_* codes.
+    branch_joints: (n, dof, 2) each limb's joint in its branch 0 and 1 (the same twice for
+    one-branch limbs), mm or rad; ``joints`` spreads them over the postures.
+    warnings: (n, postures) WARN_* codes.
     radicands: (n, dof) normalised radicand D per limb (+inf for legs).
     finite: (n,) whether the T6 was finite.
     """
 
-    joints: np.ndarray
+    branch_joints: np.ndarray
     warnings: np.ndarray
     radicands: np.ndarray
     finite: np.ndarray
+    posture_branches: tuple
+    """Per posture, the branch each limb takes (kingen.singularity.branch_table as tuples)."""
     points: np.ndarray = None
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
     direct_index: np.ndarray = None
     """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
     (robots without six force lines, or not asked for)."""
+
+    @functools.cached_property
+    def joints(self):
+        """(n, dof, postures) every posture's joints, mm or rad."""
+        table = np.array(self.posture_branches)
+        return np.swapaxes(self.branch_joints[:, np.arange(table.shape[1]), table], 1, 2)
 
     @property
     def min_inverse_index(self):
@@ -71,29 +81,43 @@ def solve(robot, t6, link_lengths=None, link_offsets=None, indices=False):
                       indices)
 
 
+BLOCK_POSTURES = 8192
+"""Postures whose direct index is computed at once: about 20 arrays of them stay in the cache."""
+
+
+def _blocks(count, postures):
+    """Slices of ``count`` poses holding about BLOCK_POSTURES postures each."""
+    step = max(1, BLOCK_POSTURES // postures)
+    return [slice(begin, begin + step) for begin in range(0, count, step)]
+
+
 def _solve(robot, t6, indices):
     count = t6.shape[0]
     finite = np.all(np.isfinite(t6[:, :, :3]), axis=(1, 2))
     safe_t6 = np.where(finite[:, None, None], t6, 0.0)
     points = platform_points_in_base(safe_t6, [limb.platform_point for limb in robot.limbs])
 
-    postures = np.arange(robot.postures)
-    joints = np.empty((count, robot.dof, robot.postures))
+    branch_joints = np.empty((count, robot.dof, 2))
     radicands = np.full((count, robot.dof), np.inf)
     overflow = np.zeros((count, robot.dof), dtype=bool)
-    for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
+    for index, limb in enumerate(robot.limbs):
         limb_solution = limb.solve(points[:, index])
         values = limb_solution.values
         overflow[:, index] = ~np.all(np.isfinite(values), axis=1)
-        branch = branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
-        joints[:, index, :] = np.where(overflow[:, index, None], 0.0, values[:, branch])
+        branch_joints[:, index, :] = np.where(overflow[:, index, None], 0.0, values)
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
+    branch_joints[~finite] = 0.0
 
+    table = branch_table(robot)
+    limbs = np.arange(robot.dof)
     lower, upper = robot.travel_limits()
-    limited = np.isfinite(lower) | np.isfinite(upper)  # only those joints are compared
-    outside = np.any((joints[:, limited] < lower[None, limited, None])
-                     | (joints[:, limited] > upper[None, limited, None]), axis=1)
+    limited = np.isfinite(lower) | np.isfinite(upper)
+    if np.any(limited):  # each limb's branches against its limits, then spread over the postures
+        beyond = (branch_joints < lower[None, :, None]) | (branch_joints > upper[None, :, None])
+        outside = np.any(beyond[:, limbs, table], axis=2)
+    else:
+        outside = np.zeros((count, robot.postures), dtype=bool)
     unreachable = np.any(~(radicands >= -abi.SINGULAR_TOLERANCE) | overflow, axis=1)
     singular = np.any(np.abs(radicands) <= abi.SINGULAR_TOLERANCE, axis=1)
 
@@ -101,15 +125,19 @@ def _solve(robot, t6, indices):
     singular = np.broadcast_to(singular[:, None], outside.shape)
     index = None
     if robot.has_direct_index and (indices or robot.direct_index_min is not None):
-        wrenches, _ = limb_wrenches(robot, points, joints, with_transmissions=False)
-        index = np.where(unreachable, np.nan, direct_index_of_entries(posture_gram_entries(robot, wrenches),
-                                                                      None if indices else robot.direct_index_min))
+        wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
+        index = np.empty((count, robot.postures))
+        for block in _blocks(count, robot.postures):
+            index[block] = direct_index_of_entries(posture_gram_entries(robot, wrenches[block]),
+                                                   None if indices else robot.direct_index_min)
+        np.copyto(index, np.nan, where=unreachable)
         if robot.direct_index_min is not None:
             singular = singular | (index <= robot.direct_index_min)
 
-    warnings = np.where(outside, abi.WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], abi.WARNINGS["WARN_GOOD_SOLUTION"])
-    warnings = np.where(singular, abi.WARNINGS["WARN_SINGULAR_SOLUTION"], warnings)
-    warnings = np.where(unreachable, abi.WARNINGS["WARN_UNREACHABLE"], warnings)
-    joints[~finite] = 0.0
-    return Solution(joints=joints, warnings=warnings.astype(np.int32), radicands=radicands, finite=finite,
-                    points=points, direct_index=index)
+    warnings = np.full((count, robot.postures), abi.WARNINGS["WARN_GOOD_SOLUTION"], dtype=np.int32)
+    for flags, code in ((outside, "WARN_JOINT_LIMITS_EXCEEDED"), (singular, "WARN_SINGULAR_SOLUTION"),
+                        (unreachable, "WARN_UNREACHABLE")):  # each later one wins
+        np.copyto(warnings, abi.WARNINGS[code], where=flags)
+    return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands,
+                    finite=finite, posture_branches=tuple(map(tuple, table.tolist())), points=points,
+                    direct_index=index)

@@ -41,20 +41,34 @@ EXACT_WINDOW = 1e-4
 closed form's error (at most about 1e-7 relative on the shipped robots)."""
 
 
-def limb_wrenches(robot, points, joints, with_transmissions=True):
+def representative_postures(robot):
+    """(dof, 2) int array: for each limb, the first posture taking its branch 0 and its branch 1
+    (branch 0's again for one-branch limbs). A routine's value there stands for that branch."""
+    table = branch_table(robot)
+    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(robot.dof)]
+    return np.array([row if limb.branches == 2 else [row[0], row[0]] for row, limb in zip(first, robot.limbs)])
+
+
+def branch_values(robot, per_posture):
+    """(..., dof, 2) each limb's value in its branch 0 and 1 from values per posture
+    (..., dof, postures), read at representative_postures."""
+    return np.take_along_axis(per_posture, np.broadcast_to(
+        representative_postures(robot), per_posture.shape[:-1] + (2,)), axis=-1)
+
+
+def limb_wrenches(robot, points, branch_joints, with_transmissions=True):
     """Unit wrenches (n, dof, 2, 6) and transmissions (n, dof, 2; None unless
     ``with_transmissions``) of each limb's two force lines (branch 0 and 1; the same twice
-    for one-branch limbs), from platform points (n, dof, 3) and joints (n, dof, postures).
-    A limb has at most two lines: everything per posture is assembled from these."""
+    for one-branch limbs), from platform points (n, dof, 3) and each limb's joint per branch
+    (n, dof, 2; see branch_values). A limb has at most two lines: everything per posture
+    is assembled from these."""
     count = points.shape[0]
-    table = branch_table(robot)
     wrenches = np.empty((count, robot.dof, 2, 6))
     transmissions = np.empty((count, robot.dof, 2)) if with_transmissions else None
     for index, limb in enumerate(robot.limbs):
         point = points[:, index]
         for branch in range(limb.branches):
-            postures = np.nonzero(table[:, index] == branch)[0]
-            joint = joints[:, index, postures[0] if len(postures) else 0]
+            joint = branch_joints[:, index, branch]
             direction = limb.force_direction(point, joint)
             wrenches[:, index, branch, :3] = direction
             wrenches[:, index, branch, 3:] = np.cross(point, direction)
@@ -69,8 +83,8 @@ def limb_wrenches(robot, points, joints, with_transmissions=True):
 
 def posture_wrenches(robot, points, joints):
     """Unit wrenches (n, postures, dof, 6) and transmissions (n, postures, dof) of every
-    limb in every posture."""
-    wrenches, transmissions = limb_wrenches(robot, points, joints)
+    limb in every posture, from platform points (n, dof, 3) and joints (n, dof, postures)."""
+    wrenches, transmissions = limb_wrenches(robot, points, branch_values(robot, joints))
     table = branch_table(robot)
     limbs = np.arange(robot.dof)
     return wrenches[:, limbs, table], transmissions[:, limbs, table]
@@ -105,15 +119,16 @@ def posture_gram_entries(robot, wrenches):
     low_bits, low_limbs, high_limbs = partial_sum_split(robot)
 
     def partial_sums(limbs, postures):
-        """(21, n, len(postures)): per posture, the sum over ``limbs`` of their branch's w w^T."""
-        return np.stack([sum(lines[limb, table[posture, limb]] for limb in limbs) for posture in postures], axis=-1)
+        """(21, len(postures), n): per posture, the sum over ``limbs`` of their branch's w w^T."""
+        return np.stack([sum(lines[limb, table[posture, limb]] for limb in limbs) for posture in postures], axis=1)
 
+    # Poses last, so that numpy's loops run along them; the result is a (21, n, postures) view.
     high = partial_sums(high_limbs, range(0, robot.postures, 1 << low_bits))
-    if not low_limbs:
-        return high
-    low = partial_sums(low_limbs, range(1 << low_bits))
-    count = wrenches.shape[0]
-    return (high[:, :, :, None] + low[:, :, None, :]).reshape(len(PACKED), count, robot.postures)
+    if low_limbs:
+        low = partial_sums(low_limbs, range(1 << low_bits))
+        count = wrenches.shape[0]
+        high = (high[:, :, None, :] + low[:, None, :, :]).reshape(len(PACKED), robot.postures, count)
+    return np.moveaxis(high, -1, 1)
 
 
 def direct_index(gram, exact_near=None):
@@ -126,60 +141,65 @@ def direct_index(gram, exact_near=None):
 def direct_index_of_entries(entries, exact_near=None):
     """The direct index (mm) from M given as its 21 packed entries (21, ...).
 
-    Computed component by component (vectorised): the force block inverted by its
-    adjugate, the smallest eigenvalue of the 3x3 Schur complement in closed form (relative
-    error about eps x its largest eigenvalue). Where that value lies within EXACT_WINDOW
-    (relative) of ``exact_near`` (mm; everywhere when None) it is recomputed with
-    numpy.linalg.eigvalsh, so every decision at a threshold rests on LAPACK."""
+    Computed component by component (vectorised): the Schur complement from the force
+    block's LDL^T, then its smallest eigenvalue in closed form (relative error about eps x
+    its largest eigenvalue). Where that value lies within EXACT_WINDOW (relative) of
+    ``exact_near`` (mm; everywhere when None) it is recomputed with numpy.linalg.eigvalsh,
+    so every decision at a threshold rests on LAPACK."""
     entries = np.asarray(entries, dtype=float)
-    finite = np.all(np.isfinite(entries), axis=0)
+    shape = entries.shape[1:]
+    entries = entries.reshape(len(PACKED), -1)
+    finite = np.isfinite(entries.sum(axis=0))  # the entries are at most 6 (size)^2: a sum cannot overflow
     if not np.all(finite):
         entries = np.where(finite, entries, 0.0)
 
     def entry(i, j):
         return entries[_PACKED_INDEX[max(i, j), min(i, j)]]
 
-    f = {(i, j): entry(i, j) for i in range(3) for j in range(i, 3)}
-    adjugate = _symmetric_adjugate(f)
-    determinant = f[0, 0] * adjugate[0, 0] + f[0, 1] * adjugate[0, 1] + f[0, 2] * adjugate[0, 2]
-    scale = (f[0, 0] + f[1, 1] + f[2, 2]) / 3.0
-    translation_singular = ~finite | ~(determinant > TRANSLATION_SINGULAR * scale ** 3)
-    with np.errstate(all="ignore"):
-        inverse_determinant = np.where(translation_singular, 0.0, 1.0 / determinant)
-    coupling = [[entry(i, 3 + j) for j in range(3)] for i in range(3)]
-    solved = [[sum(adjugate[min(i, k), max(i, k)] * coupling[k][j] for k in range(3)) for j in range(3)]
-              for i in range(3)]
-    schur = {(i, j): entry(3 + i, 3 + j) - inverse_determinant
-             * sum(coupling[k][i] * solved[k][j] for k in range(3)) for i in range(3) for j in range(i, 3)}
-    smallest = _smallest_eigenvalue(schur)
-    near = np.ones(smallest.shape, dtype=bool) if exact_near is None else (
-        np.abs(np.sqrt(np.maximum(smallest, 0.0)) - exact_near) <= EXACT_WINDOW * exact_near)
+    with np.errstate(all="ignore"):  # a zero pivot is a translation singularity, decided below
+        # M_vv = L D L^T (L unit lower triangular, pivots d), so that
+        # S = M_ww - M_wv M_vv^-1 M_vw = M_ww - sum_k y_k^T y_k / d_k with the rows y_k of L^-1 M_vw.
+        pivot0 = entry(0, 0)
+        l10, l20 = entry(1, 0) / pivot0, entry(2, 0) / pivot0
+        pivot1 = entry(1, 1) - l10 * entry(1, 0)
+        reduced21 = entry(2, 1) - l20 * entry(1, 0)
+        l21 = reduced21 / pivot1
+        pivot2 = entry(2, 2) - l20 * entry(2, 0) - l21 * reduced21
+        rows = [[entry(0, 3 + j) for j in range(3)]]
+        rows.append([entry(1, 3 + j) - l10 * rows[0][j] for j in range(3)])
+        rows.append([entry(2, 3 + j) - l20 * rows[0][j] - l21 * rows[1][j] for j in range(3)])
+        scaled = [[value / pivot for value in row] for row, pivot in zip(rows, (pivot0, pivot1, pivot2))]
+        schur = {(i, j): entry(3 + i, 3 + j) - (scaled[0][i] * rows[0][j] + scaled[1][i] * rows[1][j]
+                                                + scaled[2][i] * rows[2][j]) for i in range(3) for j in range(i, 3)}
+        scale = (entry(0, 0) + entry(1, 1) + entry(2, 2)) / 3.0
+        translation_singular = ~finite | ~(pivot0 * pivot1 * pivot2 > TRANSLATION_SINGULAR * scale ** 3)
+        smallest = _smallest_eigenvalue(schur)
+        near = np.ones(smallest.shape, dtype=bool) if exact_near is None else (
+            np.abs(np.sqrt(np.maximum(smallest, 0.0)) - exact_near) <= EXACT_WINDOW * exact_near)
     near &= ~translation_singular
     if np.any(near):
         matrix = np.stack([np.stack([schur[min(i, j), max(i, j)][near] for j in range(3)], -1) for i in range(3)], -2)
         smallest[near] = np.linalg.eigvalsh(matrix)[..., 0]
-    return np.where(translation_singular, 0.0, np.sqrt(np.maximum(smallest, 0.0)))
-
-
-def _symmetric_adjugate(a):
-    """The adjugate of symmetric 3x3 matrices given by their upper entries {(i, j): array}."""
-    return {(0, 0): a[1, 1] * a[2, 2] - a[1, 2] * a[1, 2], (0, 1): a[0, 2] * a[1, 2] - a[0, 1] * a[2, 2],
-            (0, 2): a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1], (1, 1): a[0, 0] * a[2, 2] - a[0, 2] * a[0, 2],
-            (1, 2): a[0, 1] * a[0, 2] - a[0, 0] * a[1, 2], (2, 2): a[0, 0] * a[1, 1] - a[0, 1] * a[0, 1]}
+    index = np.sqrt(np.maximum(smallest, 0.0))
+    np.copyto(index, 0.0, where=translation_singular)
+    return index.reshape(shape)
 
 
 def _smallest_eigenvalue(a):
-    """Smallest eigenvalue of symmetric 3x3 matrices {(i, j): array}, in closed form."""
+    """Smallest eigenvalue of symmetric 3x3 matrices {(i, j): array}, in closed form:
+    mean + 2 spread cos(acos(det(B) / 2) / 3 + 2 pi / 3), B = (A - mean I) / spread."""
     off = a[0, 1] ** 2 + a[0, 2] ** 2 + a[1, 2] ** 2
     mean = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
-    spread = np.sqrt(((a[0, 0] - mean) ** 2 + (a[1, 1] - mean) ** 2 + (a[2, 2] - mean) ** 2 + 2.0 * off) / 6.0)
+    b00, b11, b22 = a[0, 0] - mean, a[1, 1] - mean, a[2, 2] - mean
+    spread = np.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0)
+    determinant = (b00 * (b11 * b22 - a[1, 2] * a[1, 2]) - a[0, 1] * (a[0, 1] * b22 - a[1, 2] * a[0, 2])
+                   + a[0, 2] * (a[0, 1] * a[1, 2] - b11 * a[0, 2]))
     with np.errstate(all="ignore"):
-        shifted = {(i, j): (a[i, j] - (mean if i == j else 0.0)) / spread for (i, j) in a}
-        adjugate = _symmetric_adjugate(shifted)
-        half_determinant = (shifted[0, 0] * adjugate[0, 0] + shifted[0, 1] * adjugate[0, 1]
-                            + shifted[0, 2] * adjugate[0, 2]) / 2.0
-    angle = np.arccos(np.clip(np.nan_to_num(half_determinant), -1.0, 1.0)) / 3.0
-    return np.where(spread > 0.0, mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0), mean)
+        half_determinant = determinant / (2.0 * spread * spread * spread)
+    # A multiple of the identity (spread 0) gives 0 / 0 above: fmin/fmax turn the NaN into 1,
+    # so that the cosine stays finite and the result is the mean.
+    angle = np.arccos(np.fmax(np.fmin(half_determinant, 1.0), -1.0)) / 3.0
+    return mean + 2.0 * spread * np.cos(angle + 2.0 * np.pi / 3.0)
 
 
 def jacobian(wrenches, transmissions):

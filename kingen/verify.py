@@ -38,7 +38,7 @@ from .isolation import die_with_parent, run_in_child
 from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
-from .singularity import branch_table, finite_difference_jacobian, jacobian, posture_wrenches
+from .singularity import branch_table, branch_values, finite_difference_jacobian, jacobian, posture_wrenches
 from .snapshot import check as snapshot_check
 from .report import Check, GoldenResult, Report
 
@@ -448,15 +448,15 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
         t6, expected, calls = t6[~aborted], _rows(expected, ~aborted), _rows(calls, ~aborted)
         if not len(t6):
             return
-    errors = joint_errors(calls.solutions, expected.joints, revolute)
-    unreachable = expected.warnings == UNREACHABLE
-    errors = np.where(unreachable[:, None, :] & np.isfinite(calls.solutions), 0.0, errors)
+    columns = _compared_columns(robot, calls, expected)
+    errors = joint_errors(columns.plugin, columns.reference, revolute)
+    errors = np.where(~columns.reference_solves[:, None, :] & np.isfinite(columns.plugin), 0.0, errors)
     bounds = singular_bounds(robot, expected)[:, :, None]
     singular = np.broadcast_to(bounds > 0, errors.shape)
-    report.singular_entries += int(np.count_nonzero(singular))
-    report.singular_out_of_bound += int(np.count_nonzero(singular & (errors > bounds)))
+    report.singular_entries += int(np.count_nonzero(bounds)) * robot.postures
+    report.singular_out_of_bound += columns.postures_of(singular & (errors > bounds))
     regular = np.where(singular, 0.0, errors)
-    _count_postures(tally, report, revolute, calls, expected, errors, singular, bounds)
+    _count_postures(tally, report, revolute, calls, expected, columns, errors, singular, bounds)
     if np.any(~revolute):
         report.max_abs_error_mm = max(report.max_abs_error_mm, float(regular[:, ~revolute].max()))
     if np.any(revolute):
@@ -476,19 +476,87 @@ def _accumulate(robot, report, tally, revolute, t6, calls, expected):
                        expected.warnings[keep])
 
 
-def _count_postures(tally, report, revolute, calls, expected, errors, singular, bounds):
+@dataclass
+class _Columns:
+    """The joints one chunk compares, column by column: every posture, or, when the routine's
+    postures repeat each limb's branch values bit for bit and it reaches exactly the postures
+    the reference reaches, each limb's two branches, each standing for the postures taking it.
+    Either way every entry the routine wrote is judged; the second way is cheaper by the
+    posture count over two."""
+
+    plugin: np.ndarray
+    """(n, dof, columns) the routine's joints."""
+    reference: np.ndarray
+    """(n, dof, columns) the reference's joints."""
+    reference_solves: np.ndarray
+    """(n, columns) where the reference reaches the column's postures."""
+    both_solve: np.ndarray
+    """(n, columns) where the reference and the routine both reach them."""
+    column_of: np.ndarray
+    """(postures, dof) the column holding each posture's joint of each limb."""
+    weights: np.ndarray
+    """(dof, columns) how many postures each column stands for."""
+
+    def postures_of(self, flags):
+        """How many (pose, limb, posture) entries the (n, dof, columns) ``flags`` stand for."""
+        return int(np.sum(np.count_nonzero(flags, axis=0) * self.weights))
+
+    def per_posture(self, flags):
+        """(n, postures) whether any limb's column of each posture is flagged in ``flags`` (n, dof, columns)."""
+        return np.any(flags[:, np.arange(self.column_of.shape[1]), self.column_of], axis=2)
+
+
+def _compared_columns(robot, calls, expected):
+    """The _Columns of one chunk: by branch when the routine allows it and the robot has more
+    than two postures, else by posture."""
+    reference_solves = expected.warnings != UNREACHABLE
+    same_reach = (np.array_equal(calls.warnings != UNREACHABLE, reference_solves)
+                  and np.array_equal(reference_solves, np.broadcast_to(reference_solves[:, :1], reference_solves.shape)))
+    table = branch_table(robot)
+    if robot.postures > 2 and same_reach and _repeats_branches(robot, calls.solutions):
+        weights = np.array([[np.count_nonzero(table[:, index] == branch) for branch in range(2)]
+                            for index in range(robot.dof)])
+        reach = np.repeat(reference_solves[:, :1], 2, axis=1)
+        return _Columns(branch_values(robot, calls.solutions), expected.branch_joints, reach, reach, table, weights)
+    postures = np.arange(robot.postures)
+    return _Columns(calls.solutions, expected.joints, reference_solves,
+                    reference_solves & (calls.warnings != UNREACHABLE),
+                    np.repeat(postures[:, None], robot.dof, axis=1), np.ones((robot.dof, robot.postures), dtype=int))
+
+
+def _repeats_branches(robot, solutions):
+    """Whether each limb's joint (solutions (n, dof, postures)) is, in every posture, equal to
+    its value in the first posture taking the same branch (NaN never is): compared through
+    reshaped views, posture k = (higher digits, the limb's digit, lower digits)."""
+    count, postures = len(solutions), robot.postures
+    for index, bit in enumerate(robot.branch_bits):
+        values = solutions[:, index, :]
+        if bit < 0:
+            same = values == values[:, :1]
+        else:
+            blocks = values.reshape(count, postures >> (bit + 1), 2, 1 << bit)
+            same = blocks == blocks[:, :1, :, :1]
+        if not np.all(same):
+            return False
+    return True
+
+
+def _count_postures(tally, report, revolute, calls, expected, columns, errors, singular, bounds):
     """Per posture: poses solved right, solved wrong, unreachable wrongly, missed; worst errors."""
     tolerance = np.where(revolute, report.tolerance_rad, report.tolerance_mm)[None, :, None]
-    bad = np.any(np.where(singular, errors > bounds, errors > tolerance), axis=1)
+    bad = columns.per_posture(np.where(singular, errors > bounds, errors > tolerance))
     reference_solves = expected.warnings != UNREACHABLE
     plugin_solves = calls.warnings != UNREACHABLE
     counts = np.stack([reference_solves & plugin_solves & ~bad, reference_solves & plugin_solves & bad,
                        reference_solves & ~plugin_solves, ~reference_solves & plugin_solves])
     tally.posture_counts += np.count_nonzero(counts, axis=1)
-    solved = np.where((reference_solves & plugin_solves)[:, None, :] & ~singular, errors, 0.0)
+    if not len(errors):
+        return
+    solved = np.where(columns.both_solve[:, None, :] & ~singular, errors, 0.0).max(axis=0)  # (dof, columns)
+    per_posture = solved[np.arange(solved.shape[0]), columns.column_of]  # (postures, dof)
     for unit, mask in ((0, ~revolute), (1, revolute)):
-        if np.any(mask) and len(solved):
-            tally.posture_worst[unit] = np.maximum(tally.posture_worst[unit], solved[:, mask].max(axis=(0, 1)))
+        if np.any(mask):
+            tally.posture_worst[unit] = np.maximum(tally.posture_worst[unit], per_posture[:, mask].max(axis=1))
 
 
 def _posture_statistics(robot, tally):

@@ -83,7 +83,7 @@ def test_posture_gram_entries_equal_the_sum_over_each_postures_lines(name):
     robot = load_robot(name)
     _, t6 = random_t6(robot, 20, seed=9)
     expected = solve(robot, t6)
-    lines, _ = limb_wrenches(robot, expected.points, expected.joints)
+    lines, _ = limb_wrenches(robot, expected.points, expected.branch_joints)
     per_posture, _ = posture_wrenches(robot, expected.points, expected.joints)
     direct = np.einsum("nkia,nkib->nkab", per_posture, per_posture)
     packed = np.stack([direct[..., i, j] for i, j in PACKED])

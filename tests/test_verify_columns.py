@@ -1,0 +1,70 @@
+"""verify compares by limb branch when the routine's postures repeat each branch's values:
+the report must be the one comparing every posture gives, entry for entry."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from kingen import verify
+from kingen.abi import WARNINGS
+from kingen.host import Calls
+from kingen.model import load_robot
+from kingen.reference import solve
+from kingen.report import Report
+from kingen.singularity import branch_table
+from kingen.verify import _accumulate, _compared_columns, _Tally, sample_poses
+from kingen.conventions import t6_from_pose
+
+UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
+
+
+def routine_like(expected, joints):
+    return Calls(returned=np.zeros(len(joints), dtype=np.intc), solutions=joints,
+                 warnings=expected.warnings.astype(np.intc).copy(), faults=np.zeros(len(joints), dtype=np.intc))
+
+
+def shifted_branch(robot, expected, limb, branch, shift):
+    """The reference's joints with ``shift`` added to one limb's branch in every posture taking it."""
+    joints = expected.joints.copy()
+    joints[:, limb, branch_table(robot)[:, limb] == branch] += shift
+    return joints
+
+
+def report_and_tally(robot, t6, calls, expected):
+    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    tally = _Tally.start(robot)
+    _accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+    return report, tally
+
+
+def summary(report, tally):
+    return (dataclasses.asdict(report), tally.posture_counts.tolist(), [w.tolist() for w in tally.posture_worst],
+            tally.closure_worst, tally.closure_checked)
+
+
+@pytest.mark.parametrize("name", ["ceart", "tau", "exechon", "hexapod", "iwf"])
+@pytest.mark.parametrize("case", ["exact", "one branch off", "one entry off", "unreached posture"])
+def test_comparing_by_branch_reports_what_comparing_every_posture_does(name, case, monkeypatch):
+    robot = load_robot(name)
+    t6 = t6_from_pose(sample_poses(robot, 300, 4))
+    expected = solve(robot, t6)
+    limb = robot.dof - 1
+    joints = expected.joints.copy()
+    if case == "one branch off":
+        joints = shifted_branch(robot, expected, limb, robot.limbs[limb].branches - 1, 1e-6)
+    elif case == "one entry off":
+        joints[7, limb, -1] += 1e-6
+    calls = routine_like(expected, joints)
+    if case == "unreached posture":
+        calls.warnings[11, -1] = UNREACHABLE
+    by_branch = _compared_columns(robot, calls, expected).weights.max() > 1
+    assert by_branch == (case in ("exact", "one branch off") and robot.postures > 2)
+    fast = report_and_tally(robot, t6, calls, expected)
+    monkeypatch.setattr(verify, "_repeats_branches", lambda robot, solutions: False)
+    every_posture = report_and_tally(robot, t6, calls, expected)
+    assert summary(*fast) == summary(*every_posture)
+    worst = max(fast[0].max_abs_error_mm, fast[0].max_abs_error_rad)
+    assert worst == (pytest.approx(1e-6, rel=1e-3) if "off" in case else 0.0)
+    wrongly_unreached = int(fast[1].posture_counts[2].sum())
+    assert wrongly_unreached == (1 if case == "unreached posture" else 0)
