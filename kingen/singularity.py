@@ -71,7 +71,10 @@ def limb_wrenches(robot, points, branch_joints, with_transmissions=True):
             joint = branch_joints[:, index, branch]
             direction = limb.force_direction(point, joint)
             wrenches[:, index, branch, :3] = direction
-            wrenches[:, index, branch, 3:] = np.cross(point, direction)
+            for axis in range(3):  # C x f, written out: numpy.cross is several times slower on rows
+                first, second = (axis + 1) % 3, (axis + 2) % 3
+                wrenches[:, index, branch, 3 + axis] = (point[:, first] * direction[:, second]
+                                                        - point[:, second] * direction[:, first])
             if with_transmissions:
                 transmissions[:, index, branch] = limb.transmission(direction, joint)
         if limb.branches == 1:
