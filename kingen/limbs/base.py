@@ -19,13 +19,6 @@ from ..resources import templates_dir
 from ..schema import DialogField, Identifier, Strict, Travel, Vec3
 
 
-def lengths(vectors):
-    """|v| (...) of vectors (..., 3), mm: numpy's einsum sums the three squares in one pass,
-    several times faster than numpy.linalg.norm along a last axis of three."""
-    vectors = np.asarray(vectors, dtype=float)
-    return np.sqrt(np.einsum("...i,...i->...", vectors, vectors))
-
-
 @dataclass(frozen=True)
 class LimbSolution:
     """One limb over n poses: ``values`` (n, 2), the joint of branch 0 and branch 1 (the
@@ -123,14 +116,15 @@ class LimbModel(Strict):
         """How far the passive link is from its length (mm) when the joint is at ``joint`` (n,)
         and the platform point at ``platform_point`` (n, 3), base frame: the geometry put back
         together forward, independent of :meth:`solve`'s formula."""
-        return lengths(platform_point - self.base_side_point(platform_point, joint)) - self.passive_length(joint)
+        return np.linalg.norm(platform_point - self.base_side_point(platform_point, joint), axis=-1) \
+            - self.passive_length(joint)
 
     def force_direction(self, platform_point, joint):
         """The unit direction f (n, 3) of the force the limb transmits to the platform: along
         its passive link, from the base side to the platform point (docs/conventions.md,
         'Force lines and the direct index')."""
         line = platform_point - self.base_side_point(platform_point, joint)
-        return line / lengths(line)[..., None]
+        return line / np.linalg.norm(line, axis=-1, keepdims=True)
 
     def transmission(self, direction, joint):
         """f . dP/dq + dl/dq (n,): a platform point velocity v moves the joint at

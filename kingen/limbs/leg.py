@@ -9,7 +9,7 @@ import numpy as np
 
 from ..conventions import PRISMATIC
 from ..schema import Length, Vec3
-from .base import LimbModel, LimbSolution, c_double, c_vector, lengths
+from .base import LimbModel, LimbSolution, c_double, c_vector
 
 
 class Leg(LimbModel):
@@ -26,7 +26,7 @@ class Leg(LimbModel):
                  "reference length L0 (mm), its dialog field")
 
     def solve(self, platform_point):
-        length = lengths(platform_point - np.asarray(self.base_point))
+        length = np.linalg.norm(platform_point - np.asarray(self.base_point), axis=-1)
         q = length - self.reference_length
         return LimbSolution(values=np.stack([q, q], axis=-1))
 
