@@ -129,6 +129,24 @@ def die_with_parent():
         pass
 
 
+HEAP_KEEP_BYTES = 32 << 20
+"""Blocks up to this size come from the heap, and this much freed heap stays mapped."""
+
+
+def keep_freed_memory():
+    """Ask glibc to serve numpy's large temporaries from the heap and keep them mapped once
+    freed (M_MMAP_THRESHOLD, M_TRIM_THRESHOLD), instead of unmapping each one: a verify
+    allocates the same chunk-sized arrays thousands of times, and each fresh mapping costs
+    page faults (on the 2-core machine, 1.8 s of system time in a million-pose hexapod
+    verify, 0.3 s with this). Memory stays bounded by the largest chunk; no-op without glibc."""
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return
+    mallopt(-3, HEAP_KEEP_BYTES)  # M_MMAP_THRESHOLD
+    mallopt(-1, HEAP_KEEP_BYTES)  # M_TRIM_THRESHOLD
+
+
 def _silence_standard_streams():
     """What foreign code prints goes nowhere unless a job captures it on purpose: it must
     not mix into kingen's own output (which may be a JSON stream read by a script)."""

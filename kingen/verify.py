@@ -34,7 +34,7 @@ from .diagnose import diagnose, diagnose_warnings
 from .forward import free_mask, newton, t6_of
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
-from .isolation import die_with_parent, run_in_child
+from .isolation import die_with_parent, keep_freed_memory, run_in_child
 from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
@@ -413,6 +413,7 @@ def definition_check(robot, library):
 
 
 def _verify_job(channel, robot, library, routine, options):
+    keep_freed_memory()
     printed = _Printed()
     with printed.capture():
         plugin = Plugin(library, routine)
