@@ -558,7 +558,9 @@ def info(library):
 def _bench_job(channel, model, library, routine, calls, floor):
     from .bench import ROUNDS, benchmark, compare
     from .host import Plugin
+    from .isolation import keep_freed_memory
 
+    keep_freed_memory()  # as verify's child does, so that its poses per second are verify's
     plugin = Plugin(library, routine)
     channel.stage("the timings")
     tick = lambda: channel.send("progress", None)  # noqa: E731
