@@ -38,7 +38,8 @@ from .isolation import die_with_parent, keep_freed_memory, run_in_child
 from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
-from .singularity import branch_table, branch_values, finite_difference_jacobian, jacobian, posture_wrenches
+from .singularity import (branch_table, branch_values, finite_difference_jacobian, jacobian, posture_wrenches,
+                          representative_postures)
 from .snapshot import check as snapshot_check
 from .report import Check, GoldenResult, Report
 
@@ -585,12 +586,12 @@ def closure_error(robot, expected, solutions):
     reference calls reachable count; NaN joints count as infinitely wrong. Limbs in their
     singular band are left out: there, with -1e-5 <= D < 0, the joint is the limb's closest
     approach, which misses closing by design (by up to D l / 2)."""
-    table = branch_table(robot)
+    representative = representative_postures(robot)
     reachable = expected.warnings != UNREACHABLE
     closing = np.abs(expected.radicands) > SINGULAR_TOLERANCE + WARNING_BAND
     worst, judged_count = 0.0, 0
     for index, limb in enumerate(robot.limbs):
-        postures = [int(np.argmax(table[:, index] == branch)) for branch in range(limb.branches)]
+        postures = representative[index, :limb.branches]
         joints = solutions[:, index, postures]
         points = np.broadcast_to(expected.points[:, index, None, :], joints.shape + (3,))
         with np.errstate(all="ignore"):
