@@ -61,12 +61,18 @@ class Solution:
 
 
 def platform_points_in_base(t6, points):
-    """Platform-frame points (m, 3) mapped to the base frame for each T6: shape (n, m, 3), mm."""
+    """Platform-frame points (m, 3) mapped to the base frame for each T6: shape (n, m, 3), mm.
+
+    The result is a view of (m, 3, n) memory, so that every coordinate of a point is one
+    contiguous row over the poses: numpy's element-wise operations on it (the limb models',
+    the force lines') keep that layout and run along the poses."""
     t6 = np.asarray(t6, dtype=float)
     points = np.asarray(points, dtype=float)
+    rows = np.ascontiguousarray(np.moveaxis(t6[:, :, :3], 0, -1))  # (4, 3, n): T6[r][i] over the poses
     # Written out in the generated C's order: T6[0][i] x + T6[1][i] y + T6[2][i] z + T6[3][i].
-    return (t6[:, None, 0, :3] * points[None, :, 0, None] + t6[:, None, 1, :3] * points[None, :, 1, None]
-            + t6[:, None, 2, :3] * points[None, :, 2, None]) + t6[:, None, 3, :3]
+    base = (rows[None, 0] * points[:, 0, None, None] + rows[None, 1] * points[:, 1, None, None]
+            + rows[None, 2] * points[:, 2, None, None]) + rows[None, 3]
+    return np.moveaxis(base, -1, 0)
 
 
 def solve(robot, t6, link_lengths=None, link_offsets=None, indices=False):

@@ -61,27 +61,29 @@ def limb_wrenches(robot, points, branch_joints, with_transmissions=True):
     ``with_transmissions``) of each limb's two force lines (branch 0 and 1; the same twice
     for one-branch limbs), from platform points (n, dof, 3) and each limb's joint per branch
     (n, dof, 2; see branch_values). A limb has at most two lines: everything per posture
-    is assembled from these."""
+    is assembled from these. Both are views of memory with the poses last (dof, 2, 6, n), so
+    that each component is one contiguous row over the poses."""
     count = points.shape[0]
-    wrenches = np.empty((count, robot.dof, 2, 6))
-    transmissions = np.empty((count, robot.dof, 2)) if with_transmissions else None
+    wrenches = np.empty((robot.dof, 2, 6, count))
+    transmissions = np.empty((robot.dof, 2, count)) if with_transmissions else None
     for index, limb in enumerate(robot.limbs):
         point = points[:, index]
         for branch in range(limb.branches):
             joint = branch_joints[:, index, branch]
             direction = limb.force_direction(point, joint)
-            wrenches[:, index, branch, :3] = direction
+            wrench = wrenches[index, branch]
+            wrench[:3] = direction.T
             for axis in range(3):  # C x f, written out: numpy.cross is several times slower on rows
                 first, second = (axis + 1) % 3, (axis + 2) % 3
-                wrenches[:, index, branch, 3 + axis] = (point[:, first] * direction[:, second]
-                                                        - point[:, second] * direction[:, first])
+                np.subtract(point[:, first] * direction[:, second], point[:, second] * direction[:, first],
+                            out=wrench[3 + axis])
             if with_transmissions:
-                transmissions[:, index, branch] = limb.transmission(direction, joint)
+                transmissions[index, branch] = limb.transmission(direction, joint)
         if limb.branches == 1:
-            wrenches[:, index, 1] = wrenches[:, index, 0]
+            wrenches[index, 1] = wrenches[index, 0]
             if with_transmissions:
-                transmissions[:, index, 1] = transmissions[:, index, 0]
-    return wrenches, transmissions
+                transmissions[index, 1] = transmissions[index, 0]
+    return np.moveaxis(wrenches, -1, 0), None if transmissions is None else np.moveaxis(transmissions, -1, 0)
 
 
 def posture_wrenches(robot, points, joints):
@@ -111,25 +113,35 @@ def partial_sum_split(robot):
 def posture_gram_entries(robot, wrenches):
     """M of every posture as its 21 packed entries (21, n, postures), from the limbs' line
     wrenches (n, dof, 2, 6): each line's w w^T once, summed in the two partial sums of
-    partial_sum_split, as the generated C does."""
-    rows, columns = np.array(PACKED).T
+    partial_sum_split, as the generated C does. The result is a view of memory with the
+    poses last (21, postures, n)."""
+    count = wrenches.shape[0]
     lines = {}
     for index, limb in enumerate(robot.limbs):
         for branch in range(limb.branches):
             rates = np.ascontiguousarray(wrenches[:, index, branch].T)  # (6, n)
-            lines[index, branch] = rates[rows] * rates[columns]  # (21, n)
+            product = np.empty((len(PACKED), count))
+            for row in range(SIX):  # packed row ``row``: entries (row, 0) .. (row, row)
+                start = row * (row + 1) // 2
+                np.multiply(rates[row], rates[:row + 1], out=product[start:start + row + 1])
+            lines[index, branch] = product
     table = branch_table(robot)
     low_bits, low_limbs, high_limbs = partial_sum_split(robot)
 
     def partial_sums(limbs, postures):
         """(21, len(postures), n): per posture, the sum over ``limbs`` of their branch's w w^T."""
-        return np.stack([sum(lines[limb, table[posture, limb]] for limb in limbs) for posture in postures], axis=1)
+        sums = np.empty((len(PACKED), len(postures), count))
+        for column, posture in enumerate(postures):
+            first, *others = limbs
+            total = sums[:, column]
+            np.copyto(total, lines[first, table[posture, first]])
+            for limb in others:
+                total += lines[limb, table[posture, limb]]
+        return sums
 
-    # Poses last, so that numpy's loops run along them; the result is a (21, n, postures) view.
     high = partial_sums(high_limbs, range(0, robot.postures, 1 << low_bits))
     if low_limbs:
         low = partial_sums(low_limbs, range(1 << low_bits))
-        count = wrenches.shape[0]
         high = (high[:, :, None, :] + low[:, None, :, :]).reshape(len(PACKED), robot.postures, count)
     return np.moveaxis(high, -1, 1)
 
@@ -150,8 +162,9 @@ def direct_index_of_entries(entries, exact_near=None):
     ``exact_near`` (mm; everywhere when None) it is recomputed with numpy.linalg.eigvalsh,
     so every decision at a threshold rests on LAPACK."""
     entries = np.asarray(entries, dtype=float)
-    shape = entries.shape[1:]
-    entries = entries.reshape(len(PACKED), -1)
+    single = entries.ndim == 1
+    if single:
+        entries = entries[:, None]
     finite = np.isfinite(entries.sum(axis=0))  # the entries are at most 6 (size)^2: a sum cannot overflow
     if not np.all(finite):
         entries = np.where(finite, entries, 0.0)
@@ -185,7 +198,7 @@ def direct_index_of_entries(entries, exact_near=None):
         smallest[near] = np.linalg.eigvalsh(matrix)[..., 0]
     index = np.sqrt(np.maximum(smallest, 0.0))
     np.copyto(index, 0.0, where=translation_singular)
-    return index.reshape(shape)
+    return index[0] if single else index
 
 
 def _smallest_eigenvalue(a):
