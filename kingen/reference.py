@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import abi
-from .singularity import branch_table, direct_index_of_entries, limb_wrenches, posture_gram_entries
+from .singularity import (branch_table, direct_index_of_entries, direct_index_side, gram_entries_of, gram_partial_sums,
+                          limb_wrenches)
 
 
 @dataclass(frozen=True)
@@ -46,7 +47,9 @@ class Solution:
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
     direct_index: np.ndarray = None
     """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
-    (robots without six force lines, or not asked for)."""
+    (robots without six force lines, or not asked for). Computed for the warnings only (not
+    ``indices``), it is exact within EXACT_WINDOW of direct_index_min and elsewhere only says
+    its side, +inf or -inf (kingen.singularity.direct_index_side)."""
 
     @functools.cached_property
     def joints(self):
@@ -133,9 +136,11 @@ def _solve(robot, t6, indices):
     if robot.has_direct_index and (indices or robot.direct_index_min is not None):
         wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
         index = np.empty((count, robot.postures))
+        partial_sums = gram_partial_sums(robot, wrenches)
         for block in _blocks(count, robot.postures):
-            index[block] = direct_index_of_entries(posture_gram_entries(robot, wrenches[block]),
-                                                   None if indices else robot.direct_index_min)
+            entries = gram_entries_of(partial_sums, block)
+            index[block] = (direct_index_of_entries(entries) if indices
+                            else direct_index_side(entries, robot.direct_index_min))
         np.copyto(index, np.nan, where=unreachable)
         if robot.direct_index_min is not None:
             singular = singular | (index <= robot.direct_index_min)

@@ -115,6 +115,14 @@ def posture_gram_entries(robot, wrenches):
     wrenches (n, dof, 2, 6): each line's w w^T once, summed in the two partial sums of
     partial_sum_split, as the generated C does. The result is a view of memory with the
     poses last (21, postures, n)."""
+    return gram_entries_of(gram_partial_sums(robot, wrenches))
+
+
+def gram_partial_sums(robot, wrenches):
+    """(high, low): the two partial sums of partial_sum_split as packed entries with the poses
+    last, high (21, postures >> low_bits, n) and low (21, 2^low_bits, n) (None when no limb
+    is split off), from the limbs' line wrenches (n, dof, 2, 6): each line's w w^T once.
+    Per pose, not per posture: gram_entries_of adds them up for the postures."""
     count = wrenches.shape[0]
     lines = {}
     for index, limb in enumerate(robot.limbs):
@@ -140,9 +148,17 @@ def posture_gram_entries(robot, wrenches):
         return sums
 
     high = partial_sums(high_limbs, range(0, robot.postures, 1 << low_bits))
-    if low_limbs:
-        low = partial_sums(low_limbs, range(1 << low_bits))
-        high = (high[:, :, None, :] + low[:, None, :, :]).reshape(len(PACKED), robot.postures, count)
+    return high, partial_sums(low_limbs, range(1 << low_bits)) if low_limbs else None
+
+
+def gram_entries_of(partial_sums, poses=slice(None)):
+    """M of every posture (21, m, postures) for the poses ``poses`` (a slice) of the partial
+    sums from gram_partial_sums, posture k's high[k >> low_bits] + low[k & (2^low_bits - 1)]:
+    a view of memory with the poses last (21, postures, m)."""
+    high, low = partial_sums
+    high = high[..., poses]
+    if low is not None:
+        high = (high[:, :, None, :] + low[:, None, :, poses]).reshape(len(PACKED), -1, high.shape[-1])
     return np.moveaxis(high, -1, 1)
 
 
@@ -161,17 +177,64 @@ def direct_index_of_entries(entries, exact_near=None):
     its largest eigenvalue). Where that value lies within EXACT_WINDOW (relative) of
     ``exact_near`` (mm; everywhere when None) it is recomputed with numpy.linalg.eigvalsh,
     so every decision at a threshold rests on LAPACK."""
-    entries = np.asarray(entries, dtype=float)
-    single = entries.ndim == 1
-    if single:
-        entries = entries[:, None]
-    finite = np.isfinite(entries.sum(axis=0))  # the entries are at most 6 (size)^2: a sum cannot overflow
-    if not np.all(finite):
-        entries = np.where(finite, entries, 0.0)
+    entries, single = _packed_columns(entries)
+    schur, translation_singular = _schur_complement(entries)
+    with np.errstate(all="ignore"):
+        smallest = _smallest_eigenvalue(schur)
+        near = np.ones(smallest.shape, dtype=bool) if exact_near is None else (
+            np.abs(np.sqrt(np.maximum(smallest, 0.0)) - exact_near) <= EXACT_WINDOW * exact_near)
+    near &= ~translation_singular
+    if np.any(near):
+        smallest[near] = _exact_smallest_eigenvalue(schur, near)
+    index = np.sqrt(np.maximum(smallest, 0.0))
+    np.copyto(index, 0.0, where=translation_singular)
+    return index[0] if single else index
 
+
+def direct_index_side(entries, threshold):
+    """The direct index (mm) from M's 21 packed entries (21, ...) where it lies within
+    EXACT_WINDOW (relative) of ``threshold`` (mm), from numpy.linalg.eigvalsh; elsewhere only
+    its side: +inf above, -inf below (0 where M_vv is singular, as direct_index_of_entries).
+    All a warning needs, and cheaper: the side is decided by Sylvester's criterion on
+    S - (threshold (1 +/- EXACT_WINDOW))^2 I (positive definite exactly when the index lies
+    above), whose rounding is far below the window, with no eigenvalue computed."""
+    entries, single = _packed_columns(entries)
+    schur, translation_singular = _schur_complement(entries)
+    with np.errstate(all="ignore"):
+        above = _positive_definite(schur, (threshold * (1.0 + EXACT_WINDOW)) ** 2)
+        index = np.where(above, np.inf, -np.inf)
+        undecided = ~above & ~translation_singular
+        if np.any(undecided):
+            subset = {key: value[undecided] for key, value in schur.items()}
+            near = _positive_definite(subset, (threshold * (1.0 - EXACT_WINDOW)) ** 2)
+            if np.any(near):
+                values = index[undecided]
+                values[near] = np.sqrt(np.maximum(_exact_smallest_eigenvalue(subset, near), 0.0))
+                index[undecided] = values
+    np.copyto(index, 0.0, where=translation_singular)
+    return index[0] if single else index
+
+
+def _packed_columns(entries):
+    """(entries as a float array (21, ...) with at least one column, whether it had none)."""
+    entries = np.asarray(entries, dtype=float)
+    return (entries[:, None], True) if entries.ndim == 1 else (entries, False)
+
+
+def _schur_complement(entries):
+    """(S, translation_singular) from M's packed entries (21, ...): the Schur complement
+    M_ww - M_wv M_vv^-1 M_vw as {(i, j): array} for i <= j, and where M_vv is singular
+    (or M not finite), there S is meaningless."""
     def entry(i, j):
         return entries[_PACKED_INDEX[max(i, j), min(i, j)]]
 
+    force_trace = entry(0, 0) + entry(1, 1) + entry(2, 2)
+    # Every entry is finite when the trace is: |M_ij| <= (M_ii + M_jj) / 2, and each M_ii a sum
+    # of squares. The entries are at most 6 (size)^2, so the trace cannot overflow.
+    finite = np.isfinite(force_trace + entry(3, 3) + entry(4, 4) + entry(5, 5))
+    if not np.all(finite):
+        entries = np.where(finite, entries, 0.0)
+        force_trace = np.where(finite, force_trace, 0.0)
     with np.errstate(all="ignore"):  # a zero pivot is a translation singularity, decided below
         # M_vv = L D L^T (L unit lower triangular, pivots d), so that
         # S = M_ww - M_wv M_vv^-1 M_vw = M_ww - sum_k y_k^T y_k / d_k with the rows y_k of L^-1 M_vw.
@@ -187,18 +250,25 @@ def direct_index_of_entries(entries, exact_near=None):
         scaled = [[value / pivot for value in row] for row, pivot in zip(rows, (pivot0, pivot1, pivot2))]
         schur = {(i, j): entry(3 + i, 3 + j) - (scaled[0][i] * rows[0][j] + scaled[1][i] * rows[1][j]
                                                 + scaled[2][i] * rows[2][j]) for i in range(3) for j in range(i, 3)}
-        scale = (entry(0, 0) + entry(1, 1) + entry(2, 2)) / 3.0
-        translation_singular = ~finite | ~(pivot0 * pivot1 * pivot2 > TRANSLATION_SINGULAR * scale ** 3)
-        smallest = _smallest_eigenvalue(schur)
-        near = np.ones(smallest.shape, dtype=bool) if exact_near is None else (
-            np.abs(np.sqrt(np.maximum(smallest, 0.0)) - exact_near) <= EXACT_WINDOW * exact_near)
-    near &= ~translation_singular
-    if np.any(near):
-        matrix = np.stack([np.stack([schur[min(i, j), max(i, j)][near] for j in range(3)], -1) for i in range(3)], -2)
-        smallest[near] = np.linalg.eigvalsh(matrix)[..., 0]
-    index = np.sqrt(np.maximum(smallest, 0.0))
-    np.copyto(index, 0.0, where=translation_singular)
-    return index[0] if single else index
+        translation_singular = ~finite | ~(pivot0 * pivot1 * pivot2 > TRANSLATION_SINGULAR * (force_trace / 3.0) ** 3)
+    return schur, translation_singular
+
+
+def _positive_definite(a, shift):
+    """Whether A - shift I is positive definite, for symmetric 3x3 matrices {(i, j): array}:
+    Sylvester's criterion, its three leading principal minors positive (False for NaN)."""
+    a00, a11, a22 = a[0, 0] - shift, a[1, 1] - shift, a[2, 2] - shift
+    minor2 = a00 * a11 - a[0, 1] * a[0, 1]
+    minor3 = (a00 * (a11 * a22 - a[1, 2] * a[1, 2]) - a[0, 1] * (a[0, 1] * a22 - a[1, 2] * a[0, 2])
+              + a[0, 2] * (a[0, 1] * a[1, 2] - a11 * a[0, 2]))
+    return (a00 > 0.0) & (minor2 > 0.0) & (minor3 > 0.0)
+
+
+def _exact_smallest_eigenvalue(a, where):
+    """numpy.linalg.eigvalsh's smallest eigenvalue of the symmetric 3x3 matrices
+    {(i, j): array} at the True entries of ``where``."""
+    matrix = np.stack([np.stack([a[min(i, j), max(i, j)][where] for j in range(3)], -1) for i in range(3)], -2)
+    return np.linalg.eigvalsh(matrix)[..., 0]
 
 
 def _smallest_eigenvalue(a):

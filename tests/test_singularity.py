@@ -15,7 +15,8 @@ from kingen.errors import KingenError
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.singularity import (
-    PACKED, direct_index, finite_difference_jacobian, jacobian, limb_wrenches, posture_gram_entries, posture_wrenches,
+    EXACT_WINDOW, PACKED, direct_index, direct_index_of_entries, direct_index_side, finite_difference_jacobian,
+    jacobian, limb_wrenches, posture_gram_entries, posture_wrenches,
 )
 
 SINGULAR, UNREACHABLE = WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]
@@ -88,6 +89,32 @@ def test_posture_gram_entries_equal_the_sum_over_each_postures_lines(name):
     direct = np.einsum("nkia,nkib->nkab", per_posture, per_posture)
     packed = np.stack([direct[..., i, j] for i, j in PACKED])
     np.testing.assert_allclose(posture_gram_entries(robot, lines), packed, rtol=1e-12, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["iwf", "hexapod", "ceart"])
+def test_the_side_of_the_threshold_agrees_with_the_index_and_is_exact_near_it(name):
+    """direct_index_side (what the warnings use) against direct_index_of_entries (LAPACK
+    everywhere), on sampled poses and with thresholds put right at sampled indices (inside
+    the exact window) and just outside the window on either side."""
+    robot = load_robot(name)
+    _, t6 = random_t6(robot, 200, seed=12)
+    expected = solve(robot, t6)
+    lines, _ = limb_wrenches(robot, expected.points, expected.branch_joints, with_transmissions=False)
+    entries = posture_gram_entries(robot, lines)
+    exact = direct_index_of_entries(entries)
+    assert np.all(exact >= 0.0)
+    values = np.sort(exact[exact > 0.0])
+    samples = values[[len(values) // 10, len(values) // 2, len(values) * 9 // 10]]
+    for threshold in [robot.direct_index_min, *samples, *(samples * (1 + 3 * EXACT_WINDOW)),
+                      *(samples * (1 - 3 * EXACT_WINDOW))]:
+        at_a_sample = threshold in samples
+        side = direct_index_side(entries, threshold)
+        near = np.abs(exact - threshold) <= 0.5 * EXACT_WINDOW * threshold
+        far = np.abs(exact - threshold) >= 2.0 * EXACT_WINDOW * threshold
+        np.testing.assert_array_equal(side <= threshold, exact <= threshold)
+        np.testing.assert_array_equal(side[near], exact[near])
+        assert np.all(np.isinf(side[far & (exact > 0.0)]))
+        assert np.any(near) or not at_a_sample
 
 
 def test_the_crank_inverse_index_of_the_thesis_is_one_over_one_minus_d():
