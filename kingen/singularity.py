@@ -18,6 +18,8 @@ geometry (``base_side_point``, ``transmission``), so nothing here names a model.
   inverse-kinematics formula.
 """
 
+import functools
+
 import numpy as np
 
 from .conventions import branch_of_posture
@@ -30,10 +32,17 @@ TRANSLATION_SINGULAR = 1e-12
 
 
 def branch_table(robot):
-    """(postures, dof) int array: the branch each limb takes in each posture."""
-    postures = np.arange(robot.postures)
-    return np.stack([branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
-                     for bit in robot.branch_bits], axis=1)
+    """(postures, dof) int array (read-only): the branch each limb takes in each posture."""
+    return _branch_table(robot.branch_bits)
+
+
+@functools.lru_cache(maxsize=64)
+def _branch_table(branch_bits):
+    postures = np.arange(2 ** sum(1 for bit in branch_bits if bit >= 0))
+    table = np.stack([branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
+                      for bit in branch_bits], axis=1)
+    table.flags.writeable = False
+    return table
 
 
 EXACT_WINDOW = 1e-4
@@ -42,11 +51,19 @@ closed form's error (at most about 1e-7 relative on the shipped robots)."""
 
 
 def representative_postures(robot):
-    """(dof, 2) int array: for each limb, the first posture taking its branch 0 and its branch 1
-    (branch 0's again for one-branch limbs). A routine's value there stands for that branch."""
-    table = branch_table(robot)
-    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(robot.dof)]
-    return np.array([row if limb.branches == 2 else [row[0], row[0]] for row, limb in zip(first, robot.limbs)])
+    """(dof, 2) int array (read-only): for each limb, the first posture taking its branch 0 and
+    its branch 1 (branch 0's again for one-branch limbs). A routine's value there stands for
+    that branch."""
+    return _representative_postures(robot.branch_bits)
+
+
+@functools.lru_cache(maxsize=64)
+def _representative_postures(branch_bits):
+    table = _branch_table(branch_bits)
+    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(len(branch_bits))]
+    representative = np.array([row if bit >= 0 else [row[0], row[0]] for row, bit in zip(first, branch_bits)])
+    representative.flags.writeable = False
+    return representative
 
 
 def branch_values(robot, per_posture):

@@ -505,6 +505,8 @@ class _Columns:
 
     def per_posture(self, flags):
         """(n, postures) whether any limb's column of each posture is flagged in ``flags`` (n, dof, columns)."""
+        if not np.any(flags):
+            return np.zeros((flags.shape[0], self.column_of.shape[0]), dtype=bool)
         return np.any(flags[:, np.arange(self.column_of.shape[1]), self.column_of], axis=2)
 
 
@@ -528,19 +530,24 @@ def _compared_columns(robot, calls, expected):
 
 def _repeats_branches(robot, solutions):
     """Whether each limb's joint (solutions (n, dof, postures)) is, in every posture, equal to
-    its value in the first posture taking the same branch (NaN never is): compared through
-    reshaped views, posture k = (higher digits, the limb's digit, lower digits)."""
-    count, postures = len(solutions), robot.postures
-    for index, bit in enumerate(robot.branch_bits):
-        values = solutions[:, index, :]
-        if bit < 0:
-            same = values == values[:, :1]
-        else:
-            blocks = values.reshape(count, postures >> (bit + 1), 2, 1 << bit)
-            same = blocks == blocks[:, :1, :, :1]
-        if not np.all(same):
-            return False
-    return True
+    its value in the representative posture of the same branch (NaN never is): one
+    comparison with the values gathered from there."""
+    flat = solutions.reshape(len(solutions), -1)
+    return np.array_equal(flat, np.take(flat, _representative_columns(robot), axis=1))
+
+
+_REPRESENTATIVE_COLUMNS = {}
+"""robot.branch_bits: _representative_columns' result."""
+
+
+def _representative_columns(robot):
+    """(dof * postures,) for each flat (limb, posture) entry of a routine's solutions, the flat
+    entry of the same limb in the representative posture of its branch."""
+    if robot.branch_bits not in _REPRESENTATIVE_COLUMNS:
+        table, representative = branch_table(robot), representative_postures(robot)
+        limbs = np.arange(robot.dof)[:, None]
+        _REPRESENTATIVE_COLUMNS[robot.branch_bits] = (limbs * robot.postures + representative[limbs, table.T]).ravel()
+    return _REPRESENTATIVE_COLUMNS[robot.branch_bits]
 
 
 def _count_postures(tally, report, revolute, calls, expected, columns, errors, singular, bounds):
@@ -591,16 +598,15 @@ def closure_error(robot, expected, solutions):
     closing = np.abs(expected.radicands) > SINGULAR_TOLERANCE + WARNING_BAND
     worst, judged_count = 0.0, 0
     for index, limb in enumerate(robot.limbs):
-        postures = representative[index, :limb.branches]
-        joints = solutions[:, index, postures]
-        points = np.broadcast_to(expected.points[:, index, None, :], joints.shape + (3,))
-        with np.errstate(all="ignore"):
-            relative = np.abs(limb.closure_residual(points, joints)) / np.abs(limb.passive_length(joints))
-        relative = np.where(np.isfinite(relative), relative, np.inf)
-        judged = reachable[:, postures] & closing[:, index, None]
-        judged_count += int(np.count_nonzero(judged))
-        if np.any(judged):
-            worst = max(worst, float(np.max(np.where(judged, relative, 0.0))))
+        point = expected.points[:, index]
+        for posture in representative[index, :limb.branches]:
+            joint = solutions[:, index, posture]
+            with np.errstate(all="ignore"):
+                relative = np.abs(limb.closure_residual(point, joint)) / np.abs(limb.passive_length(joint))
+            judged = reachable[:, posture] & closing[:, index]
+            judged_count += int(np.count_nonzero(judged))
+            if np.any(judged):
+                worst = max(worst, float(np.max(np.where(judged, np.where(np.isfinite(relative), relative, np.inf), 0.0))))
     return worst, judged_count
 
 

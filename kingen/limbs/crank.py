@@ -58,11 +58,18 @@ class Crank(TwoBranchModel):
                             radicand=radicand)
 
     def base_side_point(self, platform_point, joint):
-        """The crank tip B(theta)."""
+        """The crank tip B(theta): pivot + r (cos theta cos beta, cos theta sin beta, -sin theta)."""
+        return np.asarray(self.pivot) + self.crank_length * self._direction(joint, derivative=False)
+
+    def _direction(self, joint, derivative):
+        """(c cos beta, c sin beta, s) (..., 3) with c, s = cos theta, -sin theta (or, for the
+        derivative, -sin theta, -cos theta), theta = joint + zero offset: a view of memory with
+        the components first, so that numpy's loops over it run along the joints."""
         beta = math.radians(self.crank_direction)
         theta = np.asarray(joint) + math.radians(self.zero_offset)
-        direction = np.stack([np.cos(theta) * math.cos(beta), np.cos(theta) * math.sin(beta), -np.sin(theta)], -1)
-        return np.asarray(self.pivot) + self.crank_length * direction
+        cosine, sine = np.cos(theta), np.sin(theta)
+        first, third = (-sine, -cosine) if derivative else (cosine, -sine)
+        return np.moveaxis(np.stack([first * math.cos(beta), first * math.sin(beta), third]), 0, -1)
 
     def actuator_segment(self, joint):
         """The crank itself, from its pivot to its tip."""
@@ -73,10 +80,7 @@ class Crank(TwoBranchModel):
         return np.full(np.shape(joint), self.rod_length)
 
     def base_side_velocity(self, joint):
-        beta = math.radians(self.crank_direction)
-        theta = np.asarray(joint) + math.radians(self.zero_offset)
-        return self.crank_length * np.stack(
-            [-np.sin(theta) * math.cos(beta), -np.sin(theta) * math.sin(beta), -np.cos(theta)], -1)
+        return self.crank_length * self._direction(joint, derivative=True)
 
     def c_row(self):
         beta = math.radians(self.crank_direction)
