@@ -249,9 +249,11 @@ def warnings_in_band(robot, reference_solution):
     near = np.broadcast_to(near_radicand[:, None], reference_solution.warnings.shape)
     lower, upper = robot.travel_limits()
     if np.any(np.isfinite(lower) | np.isfinite(upper)):
-        joints = reference_solution.joints
-        near = near | np.any((np.abs(joints - lower[None, :, None]) < WARNING_BAND)
-                             | (np.abs(joints - upper[None, :, None]) < WARNING_BAND), axis=1)
+        joints = reference_solution.branch_joints  # (n, dof, 2): each limb's branches, then spread over the postures
+        near_limit = ((np.abs(joints - lower[None, :, None]) < WARNING_BAND)
+                      | (np.abs(joints - upper[None, :, None]) < WARNING_BAND))
+        if np.any(near_limit):
+            near = near | np.any(near_limit[:, np.arange(robot.dof), branch_table(robot)], axis=2)
     if robot.direct_index_min is not None:
         with np.errstate(invalid="ignore"):
             near = near | (np.abs(reference_solution.direct_index - robot.direct_index_min)
@@ -556,9 +558,9 @@ def _count_postures(tally, report, revolute, calls, expected, columns, errors, s
     bad = columns.per_posture(np.where(singular, errors > bounds, errors > tolerance))
     reference_solves = expected.warnings != UNREACHABLE
     plugin_solves = calls.warnings != UNREACHABLE
-    counts = np.stack([reference_solves & plugin_solves & ~bad, reference_solves & plugin_solves & bad,
-                       reference_solves & ~plugin_solves, ~reference_solves & plugin_solves])
-    tally.posture_counts += np.count_nonzero(counts, axis=1)
+    counts = np.stack([flags.T for flags in (reference_solves & plugin_solves & ~bad, reference_solves & plugin_solves & bad,
+                                             reference_solves & ~plugin_solves, ~reference_solves & plugin_solves)])
+    tally.posture_counts += np.count_nonzero(counts, axis=2)  # counted along the poses, which (4, postures, n) puts last
     if not len(errors):
         return
     solved = np.where(columns.both_solve[:, None, :] & ~singular, errors, 0.0).max(axis=0)  # (dof, columns)

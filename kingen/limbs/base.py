@@ -29,6 +29,12 @@ class LimbSolution:
     radicand: Optional[np.ndarray] = None
 
 
+def components_last(components):
+    """(..., 3) from three (...) arrays: a view of memory with the components first, so that
+    numpy's loops over the result (and over what is computed from it) run along the poses."""
+    return np.moveaxis(np.stack(components), 0, -1)
+
+
 def c_double(value):
     """A C double literal that reads back as exactly ``value``."""
     text = repr(float(value))

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..conventions import REVOLUTE, wrap_angle
 from ..schema import Angle, Length, Vec3
-from .base import LimbSolution, TwoBranchModel, c_double, c_vector
+from .base import LimbSolution, TwoBranchModel, c_double, c_vector, components_last
 
 
 class Crank(TwoBranchModel):
@@ -63,13 +63,12 @@ class Crank(TwoBranchModel):
 
     def _direction(self, joint, derivative):
         """(c cos beta, c sin beta, s) (..., 3) with c, s = cos theta, -sin theta (or, for the
-        derivative, -sin theta, -cos theta), theta = joint + zero offset: a view of memory with
-        the components first, so that numpy's loops over it run along the joints."""
+        derivative, -sin theta, -cos theta), theta = joint + zero offset (components_last)."""
         beta = math.radians(self.crank_direction)
         theta = np.asarray(joint) + math.radians(self.zero_offset)
         cosine, sine = np.cos(theta), np.sin(theta)
         first, third = (-sine, -cosine) if derivative else (cosine, -sine)
-        return np.moveaxis(np.stack([first * math.cos(beta), first * math.sin(beta), third]), 0, -1)
+        return components_last([first * math.cos(beta), first * math.sin(beta), third])
 
     def actuator_segment(self, joint):
         """The crank itself, from its pivot to its tip."""

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..conventions import PRISMATIC
 from ..schema import Coordinate, Length, UnitVec3, Vec3
-from .base import LimbSolution, TwoBranchModel, c_double, c_vector
+from .base import LimbSolution, TwoBranchModel, c_double, c_vector, components_last
 
 
 class Rail(TwoBranchModel):
@@ -44,8 +44,9 @@ class Rail(TwoBranchModel):
                             radicand=radicand / link_squared)
 
     def base_side_point(self, platform_point, joint):
-        return (np.asarray(self.rail_point) + np.asarray(self.carriage_offset)
-                + (np.asarray(joint) + self.origin)[..., None] * np.asarray(self.direction))
+        start = np.asarray(self.rail_point) + np.asarray(self.carriage_offset)
+        along = np.asarray(joint) + self.origin
+        return components_last([start[axis] + along * self.direction[axis] for axis in range(3)])
 
     def passive_length(self, joint):
         return np.full(np.shape(joint), self.link_length)
