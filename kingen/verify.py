@@ -38,8 +38,8 @@ from .isolation import die_with_parent, keep_freed_memory, run_in_child
 from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
-from .singularity import (branch_table, branch_values, finite_difference_jacobian, jacobian, posture_wrenches,
-                          representative_postures)
+from .singularity import (PACKED, branch_table, branch_values, finite_difference_jacobian, jacobian,
+                          partial_sum_split, posture_wrenches, representative_postures)
 from .snapshot import check as snapshot_check
 from .report import Check, GoldenResult, Report
 
@@ -219,10 +219,13 @@ def sample_poses(robot, count, seed):
 
 def chunk_size(robot):
     """Poses per batch for ``robot``: about CHUNK_ENTRIES joint entries, fewer when the direct
-    index's 6 x 6 matrices (per limb line and per posture) are computed too."""
+    index's packed 6 x 6 matrices (21 entries per limb line and per partial sum, each pose)
+    are computed too; its per-posture ones take a fixed block (reference.BLOCK_POSTURES)."""
     entries = robot.dof * robot.postures
     if robot.direct_index_min is not None:
-        entries += 36 * (2 * robot.dof + robot.postures)
+        low_bits, low_limbs, _ = partial_sum_split(robot)
+        partial_sums = (robot.postures >> low_bits) + ((1 << low_bits) if low_limbs else 0)
+        entries += len(PACKED) * (2 * robot.dof + partial_sums)
     return min(MAX_CHUNK_POSES, max(1000, CHUNK_ENTRIES // entries))
 
 
