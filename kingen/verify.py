@@ -59,6 +59,9 @@ CLOSURE_TOLERANCE = 1e-9
 """Relative to the passive link's length."""
 JACOBIAN_POSES = 200
 ROUND_TRIP_POSES = 1000
+ROUND_TRIP_POSTURES = 4096
+"""At most about this many regular (pose, posture) pairs of those poses go round: every one for
+robots with few postures, a diagonal selection covering every posture for many (CEART: 64)."""
 ROUND_TRIP_MIN_CONDITIONING = 1e-4
 """Postures whose wrench matrix (moments per mm of the robot's size) has a smallest singular
 value below this are near a direct singularity: their pose is not determined by the joints."""
@@ -653,8 +656,8 @@ def jacobian_check(robot, plugin, options, t6):
 
 
 def round_trip_check(robot, plugin, options, t6):
-    """Forward kinematics seeded at each sampled pose, from the routine's joints of every
-    regular posture, must return that pose: within the value bound (mm) and 1e-9 rad, or
+    """Forward kinematics seeded at each sampled pose, from the routine's joints of its
+    regular postures (about ROUND_TRIP_POSTURES in all), must return that pose: within the value bound (mm) and 1e-9 rad, or
     within what rounding the joints explains when the posture is ill-conditioned
     (CONDITIONING_FACTOR x size / conditioning)."""
     if not robot.has_forward:
@@ -665,12 +668,16 @@ def round_trip_check(robot, plugin, options, t6):
     plugin.reset_host()
     joints = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, joints)
-    conditioning = wrench_conditioning(robot, wrenches)
-    regular = ((expected.warnings == abi.WARNINGS["WARN_GOOD_SOLUTION"])
-               & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
-               & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None]
-               & (conditioning > ROUND_TRIP_MIN_CONDITIONING))
-    pose_index, posture = np.nonzero(regular)
+    candidates = ((expected.warnings == abi.WARNINGS["WARN_GOOD_SOLUTION"])
+                  & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
+                  & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
+    # About ROUND_TRIP_POSTURES of them, along diagonals of (pose, posture), so that every posture takes part.
+    stride = max(1, -(-int(np.count_nonzero(candidates)) // ROUND_TRIP_POSTURES))
+    pose_number, posture_number = np.indices(candidates.shape)
+    pose_index, posture = np.nonzero(candidates & ((pose_number + posture_number) % stride == 0))
+    conditioning = wrench_conditioning(robot, wrenches[pose_index, posture])
+    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    pose_index, posture, conditioning = pose_index[regular], posture[regular], conditioning[regular]
     if not len(pose_index):
         return Check("round trip", True, "no regular posture among the sampled poses to go round")
     sampled = pose_from_t6(t6)
@@ -678,7 +685,7 @@ def round_trip_check(robot, plugin, options, t6):
     found, residuals = newton(calibrated, start, joints[pose_index, :, posture], free_mask(calibrated))
     position = np.max(np.abs(found[:, :3] - start[:, :3]), axis=1)
     rotation = np.max(np.abs(t6_of(found)[:, :3, :3] - t6_of(start)[:, :3, :3]), axis=(1, 2))
-    rounding = CONDITIONING_FACTOR / conditioning[pose_index, posture]
+    rounding = CONDITIONING_FACTOR / conditioning
     allowed_mm = np.maximum(report_tolerance_mm(robot), rounding * robot.size_mm)
     allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, rounding)
     passed = bool(np.all(position <= allowed_mm) and np.all(rotation <= allowed_rad))
