@@ -1,12 +1,13 @@
 """Speed figures of kingen, printed as Markdown (for the README's 'Speed' section).
 
-    python benchmarks/run.py [--calls N] [--verify-samples N] [--robots hexapod,tau,...]
+    python benchmarks/run.py [--calls N] [--verify-samples N] [--memory-samples N] [--robots ceart,hexapod,...]
 
 1. Each hand-written floor (benchmarks/floors/<robot>.c) must pass `kingen verify --source`.
 2. `kingen bench <robot> --floor ...` times the generated routine against its floor in
    turns (C batch driver, ns per call, minimum and median of the rounds).
 3. `kingen verify <robot> --samples N` wall time and peak memory (of kingen and its
-   children), and the start-up of `kingen --version`.
+   children; with --memory-samples, the first robot once more with that many poses), and
+   the start-up of `kingen --version` and of a command that reads a robot (`kingen render`).
 
 Figures are printed, never asserted: the machine they ran on is printed with them.
 """
@@ -51,6 +52,8 @@ def main():
     parser.add_argument("--calls", type=int, default=200000)
     parser.add_argument("--verify-samples", type=int, default=1000000)
     parser.add_argument("--robots", default=",".join(sorted(path.stem for path in FLOORS.glob("*.c"))))
+    parser.add_argument("--memory-samples", type=int, default=0,
+                        help="Also verify the first robot with this many poses (peak memory, e.g. 4000000).")
     options = parser.parse_args()
     robots = options.robots.split(",")
     print(f"Machine: {machine()}\n")
@@ -77,8 +80,14 @@ def main():
                                             "-o", f"{scratch}/{robot}-verify"])
             print(f"| kingen verify {robot} --samples {options.verify_samples} | {code} | {seconds:.2f} "
                   f"| {memory:.0f} |", flush=True)
-        starts = [run(["--version"])[2] for _ in range(5)]
-        print(f"| kingen --version (median of 5) | 0 | {statistics.median(starts):.2f} | |")
+        if options.memory_samples:
+            code, _, seconds, memory = run(["verify", robots[0], "--samples", str(options.memory_samples),
+                                            "-o", f"{scratch}/{robots[0]}-verify"])
+            print(f"| kingen verify {robots[0]} --samples {options.memory_samples} | {code} | {seconds:.2f} "
+                  f"| {memory:.0f} |", flush=True)
+        for arguments in (["--version"], ["render", robots[0], "-o", f"{scratch}/{robots[0]}-render"]):
+            starts = [run(arguments)[2] for _ in range(5)]
+            print(f"| kingen {' '.join(arguments[:2])} (start-up, median of 5) | 0 | {statistics.median(starts):.2f} | |")
 
 
 if __name__ == "__main__":
