@@ -538,24 +538,20 @@ def _compared_columns(robot, calls, expected):
 
 def _repeats_branches(robot, solutions):
     """Whether each limb's joint (solutions (n, dof, postures)) is, in every posture, equal to
-    its value in the representative posture of the same branch (NaN never is): one
-    comparison with the values gathered from there."""
-    flat = solutions.reshape(len(solutions), -1)
-    return np.array_equal(flat, np.take(flat, _representative_columns(robot), axis=1))
-
-
-_REPRESENTATIVE_COLUMNS = {}
-"""robot.branch_bits: _representative_columns' result."""
-
-
-def _representative_columns(robot):
-    """(dof * postures,) for each flat (limb, posture) entry of a routine's solutions, the flat
-    entry of the same limb in the representative posture of its branch."""
-    if robot.branch_bits not in _REPRESENTATIVE_COLUMNS:
-        table, representative = branch_table(robot), representative_postures(robot)
-        limbs = np.arange(robot.dof)[:, None]
-        _REPRESENTATIVE_COLUMNS[robot.branch_bits] = (limbs * robot.postures + representative[limbs, table.T]).ravel()
-    return _REPRESENTATIVE_COLUMNS[robot.branch_bits]
+    its value in the first posture taking the same branch (NaN never is), for robots with
+    more than two postures (the only ones compared by branch: there every entry takes part
+    in a comparison). Posture k takes branch (k >> bit) & 1 of the limb with that digit, in
+    runs of 2^bit postures: compared through shifted views (contiguous, no gather), each
+    run's entries with their neighbour and each posture with the one two runs before it."""
+    for index, bit in enumerate(robot.branch_bits):
+        values = solutions[:, index, :]
+        run = robot.postures if bit < 0 else 1 << bit
+        period = 2 * run
+        if not (np.array_equal(values[:, 1:run], values[:, :run - 1])
+                and np.array_equal(values[:, run + 1:period], values[:, run:period - 1])
+                and np.array_equal(values[:, period:], values[:, :-period])):
+            return False
+    return True
 
 
 def _count_postures(tally, report, revolute, calls, expected, columns, errors, singular, bounds):

@@ -68,3 +68,25 @@ def test_comparing_by_branch_reports_what_comparing_every_posture_does(name, cas
     assert worst == (pytest.approx(1e-6, rel=1e-3) if "off" in case else 0.0)
     wrongly_unreached = int(fast[1].posture_counts[2].sum())
     assert wrongly_unreached == (1 if case == "unreached posture" else 0)
+
+
+@pytest.mark.parametrize("name", ["ceart", "tau", "iwf"])
+def test_the_branch_repeat_check_finds_every_single_entry_that_breaks_it(name):
+    """_repeats_branches (shifted views) against its definition, each posture's joint equal to
+    the one in the first posture taking the same branch: for every (limb, posture) entry
+    changed alone, and for a NaN there (robots with more than two postures)."""
+    robot = load_robot(name)
+    table = branch_table(robot)
+    first = [[int(np.argmax(table[:, limb] == branch)) for branch in range(2)] for limb in range(robot.dof)]
+    branch_joints = np.random.default_rng(5).normal(size=(3, robot.dof, 2))
+    joints = np.stack([branch_joints[:, limb, table[:, limb]] for limb in range(robot.dof)], axis=1)
+    assert verify._repeats_branches(robot, joints)
+    for limb in range(robot.dof):
+        for posture in range(robot.postures):
+            for value in (1e-12, np.nan):
+                changed = joints.copy()
+                changed[1, limb, posture] = value if np.isnan(value) else changed[1, limb, posture] + value
+                representative = changed[:, limb, first[limb][table[posture, limb]]]
+                by_definition = all(np.array_equal(changed[:, limb, k], representative)
+                                    for k in range(robot.postures) if table[k, limb] == table[posture, limb])
+                assert verify._repeats_branches(robot, changed) == by_definition, (limb, posture, value)
