@@ -31,7 +31,7 @@ from . import abi
 from .defaults import DEFAULT_TIMEOUT
 from .conventions import joint_errors, pose_from_t6, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
-from .forward import free_mask, newton, t6_of
+from .forward import free_mask, newton, pose_jacobian, t6_of
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
 from .isolation import die_with_parent, keep_freed_memory, run_in_child
@@ -63,8 +63,9 @@ ROUND_TRIP_POSTURES = 4096
 """At most about this many regular (pose, posture) pairs of those poses go round: every one for
 robots with few postures, a diagonal selection covering every posture for many (CEART: 64)."""
 ROUND_TRIP_MIN_CONDITIONING = 1e-4
-"""Postures whose wrench matrix (moments per mm of the robot's size) has a smallest singular
-value below this are near a direct singularity: their pose is not determined by the joints."""
+"""Postures whose closure derivative with respect to the free pose coordinates (rotations per
+mm of arc at the robot's size) has a smallest singular value below this are near a
+singularity: their pose is not determined by the joints (pose_conditioning)."""
 JACOBIAN_STEP = 1e-6
 """Central-difference steps: this fraction of the robot's size (mm), and this many radians:
 small enough for the curvature near (not in) a singular band, large against rounding."""
@@ -653,9 +654,12 @@ def jacobian_check(robot, plugin, options, t6):
 
 def round_trip_check(robot, plugin, options, t6):
     """Forward kinematics seeded at each sampled pose, from the routine's joints of its
-    regular postures (about ROUND_TRIP_POSTURES in all), must return that pose: within the value bound (mm) and 1e-9 rad, or
-    within what rounding the joints explains when the posture is ill-conditioned
-    (CONDITIONING_FACTOR x size / conditioning)."""
+    regular postures (about ROUND_TRIP_POSTURES in all), must return that pose: within the
+    value bound (mm) and 1e-9 rad, or within what the joints explain through the posture's
+    conditioning (pose_conditioning): their closure residual at that pose, as far as the
+    closure check accepts it (CLOSURE_TOLERANCE), plus rounding (CONDITIONING_FACTOR x
+    size), over the conditioning. Joints a few units in the last place from the reference's
+    thus go round as well as its own; joints the closure check refuses do not."""
     if not robot.has_forward:
         return Check("round trip", True, f"not available: forward kinematics needs free pose coordinates for a "
                                          f"robot with {robot.dof} limbs (forward: {{free: [...]}})")
@@ -671,36 +675,50 @@ def round_trip_check(robot, plugin, options, t6):
     stride = max(1, -(-int(np.count_nonzero(candidates)) // ROUND_TRIP_POSTURES))
     pose_number, posture_number = np.indices(candidates.shape)
     pose_index, posture = np.nonzero(candidates & ((pose_number + posture_number) % stride == 0))
-    conditioning = wrench_conditioning(robot, wrenches[pose_index, posture])
-    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
-    pose_index, posture, conditioning = pose_index[regular], posture[regular], conditioning[regular]
-    if not len(pose_index):
-        return Check("round trip", True, "no regular posture among the sampled poses to go round")
     sampled = pose_from_t6(t6)
     start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)[pose_index]
-    found, residuals = newton(calibrated, start, joints[pose_index, :, posture], free_mask(calibrated))
+    free = free_mask(calibrated)
+    conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free)
+    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    pose_index, posture, conditioning, start = pose_index[regular], posture[regular], conditioning[regular], start[regular]
+    if not len(pose_index):
+        return Check("round trip", True, "no regular posture among the sampled poses to go round")
+    routine_joints = joints[pose_index, :, posture]
+    residual = np.zeros(len(pose_index))  # the joints' closure residual, as far as the closure check accepts it
+    for index, limb in enumerate(calibrated.limbs):
+        point, joint = expected.points[pose_index, index], routine_joints[:, index]
+        with np.errstate(all="ignore"):
+            accepted = np.fmin(np.abs(limb.closure_residual(point, joint)),
+                               CLOSURE_TOLERANCE * np.abs(limb.passive_length(joint)))
+        residual = np.fmax(residual, accepted)
+    found, _ = newton(calibrated, start, routine_joints, free)
     position = np.max(np.abs(found[:, :3] - start[:, :3]), axis=1)
     rotation = np.max(np.abs(t6_of(found)[:, :3, :3] - t6_of(start)[:, :3, :3]), axis=(1, 2))
-    rounding = CONDITIONING_FACTOR / conditioning
-    allowed_mm = np.maximum(report_tolerance_mm(robot), rounding * robot.size_mm)
-    allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, rounding)
+    explained_mm = 2.0 * (np.sqrt(robot.dof) * residual + CONDITIONING_FACTOR * robot.size_mm) / conditioning
+    allowed_mm = np.maximum(report_tolerance_mm(robot), explained_mm)
+    allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, explained_mm / robot.size_mm)
     passed = bool(np.all(position <= allowed_mm) and np.all(rotation <= allowed_rad))
     worst_mm, worst_rad = float(np.max(position)), float(np.max(rotation))
     return Check("round trip", passed,
                  f"forward kinematics from the routine's joints of {len(pose_index)} regular postures of {len(t6)} "
                  f"poses returns each pose within {worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds "
-                 f"{report_tolerance_mm(robot):.3g} mm, {VALUE_TOLERANCE_RAD:g} rad, or the joints' rounding times the "
-                 f"posture's conditioning; postures near a singularity, where the pose is ill-conditioned, are left out)")
+                 f"{report_tolerance_mm(robot):.3g} mm, {VALUE_TOLERANCE_RAD:g} rad, or what the joints' closure "
+                 f"residual and rounding explain through the posture's conditioning; postures near a singularity, "
+                 f"where the pose is ill-conditioned, are left out)")
 
 
-def wrench_conditioning(robot, wrenches):
-    """The smallest singular value (n, postures) of each posture's wrench matrix, moments
-    divided by the robot's size: dimensionless, 0 at a direct singularity (also when the
-    limbs' lines cannot hold a rotation at all). Non-finite wrenches count as 0."""
-    scaled = wrenches * np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
-    finite = np.all(np.isfinite(scaled), axis=(-1, -2))
-    scaled = np.where(finite[..., None, None], scaled, 0.0)
-    return np.where(finite, np.linalg.svd(scaled, compute_uv=False)[..., -1], 0.0)
+def pose_conditioning(robot, wrenches, poses, free):
+    """The smallest singular value (m,) of the closure's derivative with respect to the free
+    pose coordinates (what forward kinematics solves for) at poses (m, 6) (mm, radians):
+    the limbs' unit wrenches (m, dof, 6) times the pose Jacobian, rotations per mm of arc at
+    the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
+    where the free coordinates are not all determined; non-finite counts as 0."""
+    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
+    with np.errstate(all="ignore"):
+        matrix = (wrenches @ pose_jacobian(poses))[:, :, free] * scale
+    finite = np.all(np.isfinite(matrix), axis=(1, 2))
+    matrix = np.where(finite[:, None, None], matrix, 0.0)
+    return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)
 
 
 def _sample_checks(robot, plugin, report, options, tally):

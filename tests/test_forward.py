@@ -83,3 +83,36 @@ def test_solve_switch_explains_the_thesis_jump_of_the_gantry_tau(capsys, tmp_pat
     assert "switch 0 -> 7: the joints move by carriage1 +1822.449573 mm" in out
     assert "assembly mode 1: pose (-1105.570, -1097.373, -3365.639, 0.000, 0.000, 0.000), 1509.199 mm" in out
     assert "may jump up to 1509.199 mm (2 assembly modes)" in out
+
+
+class _Perturbed:
+    """A plugin whose joints are its own moved by ``ulps`` units in the last place (signs
+    seeded), plus ``shift`` mm on the first joint: a routine rounding differently, or wrong."""
+
+    def __init__(self, plugin, ulps, shift=0.0):
+        self._plugin, self._ulps, self._shift = plugin, ulps, shift
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        signs = np.random.default_rng(2).choice([-1.0, 1.0], size=calls.solutions.shape)
+        calls.solutions[...] += self._ulps * signs * np.spacing(np.abs(calls.solutions))
+        calls.solutions[:, 0] += self._shift
+        return calls
+
+
+@pytest.mark.parametrize("name", ["exechon", "tau", "hexapod"])
+def test_joints_rounded_differently_go_round_and_wrong_joints_do_not(name, plugin):
+    """The round trip's bound follows the joints' own closure residual through the posture's
+    conditioning: a routine 256 units in the last place from kingen's (far inside the values
+    bound) passes, as kingen's own does; one whose first joint is 1 um off fails."""
+    from kingen.verify import VerifyOptions, round_trip_check
+
+    robot, routine = plugin(name)
+    _, t6 = random_t6(robot, 1000, seed=0)
+    for ulps in (0, 256):
+        check = round_trip_check(robot, _Perturbed(routine, ulps), VerifyOptions(), t6)
+        assert check.passed, (ulps, check.detail)
+    assert not round_trip_check(robot, _Perturbed(routine, 0, shift=1e-3), VerifyOptions(), t6).passed
