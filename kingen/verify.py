@@ -16,12 +16,9 @@ failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
-import collections
 import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
 
@@ -117,8 +114,6 @@ def pose_chunks(robot, count, seed, chunk):
         yield begin, home + rng.uniform(-1.0, 1.0, size=(min(chunk, count - begin), 6)) * half_widths
 
 
-CHUNKS_AHEAD = 3
-"""Chunks the second process may compare ahead of the one being merged."""
 LOCAL_SHARE = 2
 """With a second process, this one compares every LOCAL_SHARE-th chunk itself (and merges
 all of them): about equal work for both."""
@@ -126,7 +121,7 @@ REPORT_COUNTS = ("singular_entries", "singular_out_of_bound", "warning_mismatche
 REPORT_WORST = ("max_abs_error_mm", "max_abs_error_rad")
 _chunk_job = None
 """(robot, calibrated robot, plugin, options) of the comparing processes: set before the
-second one is forked, so that only poses travel to it."""
+second one is forked, so that nothing but results travels between them."""
 
 
 @dataclass
@@ -162,47 +157,67 @@ def _compare_chunk(poses, first=False):
 
 def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
     """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With
-    ``options.processes`` 2 and more than one chunk, a forked second process compares every
-    other chunk ahead. If it dies (the routine crashed or exited there), its chunks are
+    ``options.processes`` 2 and more than one chunk, a second process (_SecondProcess) compares
+    every other chunk ahead. If it dies (the routine crashed or exited there), its chunks are
     compared here again, so that a crash is named by this process's stage as always."""
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
+    parallel = (options.processes >= 2 and options.samples > chunk
+                and "fork" in multiprocessing.get_all_start_methods())
+    second = None
+    try:
+        for number, (begin, poses) in enumerate(pose_chunks(robot, options.samples, options.seed, chunk)):
+            phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
+            part = None
+            if parallel and number % LOCAL_SHARE:
+                second = second or _SecondProcess(robot, options, chunk)  # forked once the first chunk is done
+                part = second.result()
+            yield begin, len(poses), part or _compare_chunk(poses, first=begin == 0)
+    finally:
+        if second is not None:
+            second.stop()
 
-    def finished(begin, poses, future):
-        phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
-        if future is not None:
+
+class _SecondProcess:
+    """A forked process that compares the chunks numbered n with n % LOCAL_SHARE != 0, ahead
+    of this one: it draws the same poses itself, so only its results travel (through a
+    pipe, which also holds it back when it runs far ahead). It dies with this process."""
+
+    def __init__(self, robot, options, chunk):
+        context = multiprocessing.get_context("fork")
+        self._receiver, sender = context.Pipe(duplex=False)
+        self._process = context.Process(target=_compare_other_chunks, args=(sender, robot, options, chunk),
+                                        daemon=True)
+        self._process.start()
+        sender.close()
+        self._alive = True
+
+    def result(self):
+        """Its next chunk's _Part, or None once it has died (then this process compares them)."""
+        if self._alive:
             try:
-                return begin, len(poses), future.result()
-            except BrokenProcessPool:
-                pass
-        return begin, len(poses), _compare_chunk(poses, first=begin == 0)
+                return self._receiver.recv()
+            except (EOFError, OSError):
+                self._alive = False
+        return None
 
-    chunks = pose_chunks(robot, options.samples, options.seed, chunk)
-    if options.processes < 2 or options.samples <= chunk or "fork" not in multiprocessing.get_all_start_methods():
-        for begin, poses in chunks:
-            yield finished(begin, poses, None)
-        return
-    pending = collections.deque()
-    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork"), initializer=die_with_parent) as pool:
-        for number, (begin, poses) in enumerate(chunks):
-            pending.append((begin, poses, None if number % LOCAL_SHARE == 0 else _submit(pool, poses)))
-            while pending and (len(pending) > CHUNKS_AHEAD or pending[0][2] is None):
-                yield finished(*pending.popleft())
-        while pending:
-            yield finished(*pending.popleft())
+    def stop(self):
+        self._receiver.close()
+        if self._process.is_alive():
+            self._process.kill()
+        self._process.join()
+
+
+def _compare_other_chunks(sender, robot, options, chunk):
+    die_with_parent()
+    for number, (begin, poses) in enumerate(pose_chunks(robot, options.samples, options.seed, chunk)):
+        if number % LOCAL_SHARE:
+            sender.send(_compare_chunk(poses))
 
 
 def comparing_processes():
     """Processes a verification may compare with: two on a machine with two cores or more."""
     return min(2, os.cpu_count() or 1)
-
-
-def _submit(pool, poses):
-    """A future of _compare_chunk(poses) in ``pool``, or None when the pool has died."""
-    try:
-        return pool.submit(_compare_chunk, poses)
-    except BrokenProcessPool:
-        return None
 
 
 def _merge(report, tally, printed, part):
