@@ -576,9 +576,10 @@ def _count_postures(tally, report, revolute, calls, expected, columns, errors, s
     bad = columns.per_posture(np.where(singular, errors > bounds, errors > tolerance))
     reference_solves = expected.warnings != UNREACHABLE
     plugin_solves = calls.warnings != UNREACHABLE
-    counts = np.stack([flags.T for flags in (reference_solves & plugin_solves & ~bad, reference_solves & plugin_solves & bad,
-                                             reference_solves & ~plugin_solves, ~reference_solves & plugin_solves)])
-    tally.posture_counts += np.count_nonzero(counts, axis=2)  # counted along the poses, which (4, postures, n) puts last
+    both = reference_solves & plugin_solves
+    outcomes = (both & ~bad, both & bad, reference_solves & ~plugin_solves, ~reference_solves & plugin_solves)
+    # Counted along the poses, which (4, postures, n) puts last.
+    tally.posture_counts += np.count_nonzero(np.stack([flags.T for flags in outcomes]), axis=2)
     if not len(errors):
         return
     solved = np.where(columns.both_solve[:, None, :] & ~singular, errors, 0.0).max(axis=0)  # (dof, columns)
@@ -623,10 +624,11 @@ def closure_error(robot, expected, solutions):
             joint = solutions[:, index, posture]
             with np.errstate(all="ignore"):
                 relative = np.abs(limb.closure_residual(point, joint)) / np.abs(limb.passive_length(joint))
+            relative = np.where(np.isfinite(relative), relative, np.inf)
             judged = reachable[:, posture] & closing[:, index]
             judged_count += int(np.count_nonzero(judged))
             if np.any(judged):
-                worst = max(worst, float(np.max(np.where(judged, np.where(np.isfinite(relative), relative, np.inf), 0.0))))
+                worst = max(worst, float(np.max(np.where(judged, relative, 0.0))))
     return worst, judged_count
 
 
@@ -695,7 +697,7 @@ def round_trip_check(robot, plugin, options, t6):
     free = free_mask(calibrated)
     conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free)
     regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
-    pose_index, posture, conditioning, start = pose_index[regular], posture[regular], conditioning[regular], start[regular]
+    pose_index, posture, conditioning, start = (values[regular] for values in (pose_index, posture, conditioning, start))
     if not len(pose_index):
         return Check("round trip", True, "no regular posture among the sampled poses to go round")
     routine_joints = joints[pose_index, :, posture]
