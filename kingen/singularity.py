@@ -271,14 +271,21 @@ def _schur_complement(entries):
     return schur, translation_singular
 
 
+def _shifted(a, shift):
+    """(diagonal of A - shift I as three arrays, det(A - shift I)) for symmetric 3x3 matrices
+    {(i, j): array}, the determinant expanded along the first row."""
+    d0, d1, d2 = a[0, 0] - shift, a[1, 1] - shift, a[2, 2] - shift
+    determinant = (d0 * (d1 * d2 - a[1, 2] * a[1, 2]) - a[0, 1] * (a[0, 1] * d2 - a[1, 2] * a[0, 2])
+                   + a[0, 2] * (a[0, 1] * a[1, 2] - d1 * a[0, 2]))
+    return (d0, d1, d2), determinant
+
+
 def _positive_definite(a, shift):
     """Whether A - shift I is positive definite, for symmetric 3x3 matrices {(i, j): array}:
     Sylvester's criterion, its three leading principal minors positive (False for NaN)."""
-    a00, a11, a22 = a[0, 0] - shift, a[1, 1] - shift, a[2, 2] - shift
-    minor2 = a00 * a11 - a[0, 1] * a[0, 1]
-    minor3 = (a00 * (a11 * a22 - a[1, 2] * a[1, 2]) - a[0, 1] * (a[0, 1] * a22 - a[1, 2] * a[0, 2])
-              + a[0, 2] * (a[0, 1] * a[1, 2] - a11 * a[0, 2]))
-    return (a00 > 0.0) & (minor2 > 0.0) & (minor3 > 0.0)
+    (d0, d1, _), minor3 = _shifted(a, shift)
+    minor2 = d0 * d1 - a[0, 1] * a[0, 1]
+    return (d0 > 0.0) & (minor2 > 0.0) & (minor3 > 0.0)
 
 
 def _exact_smallest_eigenvalue(a, where):
@@ -293,10 +300,8 @@ def _smallest_eigenvalue(a):
     mean + 2 spread cos(acos(det(B) / 2) / 3 + 2 pi / 3), B = (A - mean I) / spread."""
     off = a[0, 1] ** 2 + a[0, 2] ** 2 + a[1, 2] ** 2
     mean = (a[0, 0] + a[1, 1] + a[2, 2]) / 3.0
-    b00, b11, b22 = a[0, 0] - mean, a[1, 1] - mean, a[2, 2] - mean
+    (b00, b11, b22), determinant = _shifted(a, mean)
     spread = np.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0)
-    determinant = (b00 * (b11 * b22 - a[1, 2] * a[1, 2]) - a[0, 1] * (a[0, 1] * b22 - a[1, 2] * a[0, 2])
-                   + a[0, 2] * (a[0, 1] * a[1, 2] - b11 * a[0, 2]))
     with np.errstate(all="ignore"):
         half_determinant = determinant / (2.0 * spread * spread * spread)
     # A multiple of the identity (spread 0) gives 0 / 0 above: fmin/fmax turn the NaN into 1,
