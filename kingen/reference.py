@@ -23,7 +23,7 @@ import numpy as np
 
 from . import abi
 from .singularity import (branch_table, direct_index_of_entries, direct_index_side, gram_entries_of, gram_partial_sums,
-                          limb_wrenches)
+                          limb_wrenches, posture_values)
 
 
 @dataclass(frozen=True)
@@ -118,13 +118,11 @@ def _solve(robot, t6, indices):
             radicands[:, index] = limb_solution.radicand
     branch_joints[~finite] = 0.0
 
-    table = branch_table(robot)
-    limbs = np.arange(robot.dof)
     lower, upper = robot.travel_limits()
     limited = np.isfinite(lower) | np.isfinite(upper)
     if np.any(limited):  # each limb's branches against its limits, then spread over the postures
         beyond = (branch_joints < lower[None, :, None]) | (branch_joints > upper[None, :, None])
-        outside = np.any(beyond[:, limbs, table], axis=2)
+        outside = np.any(posture_values(robot, beyond), axis=2)
     else:
         outside = np.zeros((count, robot.postures), dtype=bool)
     unreachable = np.any(~(radicands >= -abi.SINGULAR_TOLERANCE) | overflow, axis=1)
@@ -150,5 +148,5 @@ def _solve(robot, t6, indices):
                         (unreachable, "WARN_UNREACHABLE")):  # each later one wins
         np.copyto(warnings, abi.WARNINGS[code], where=flags)
     return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands,
-                    finite=finite, posture_branches=tuple(map(tuple, table.tolist())), points=points,
+                    finite=finite, posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points,
                     direct_index=index)

@@ -73,6 +73,12 @@ def branch_values(robot, per_posture):
         representative_postures(robot), per_posture.shape[:-1] + (2,)), axis=-1)
 
 
+def posture_values(robot, per_branch):
+    """(n, postures, dof, ...) each posture's value of each limb, from values per limb branch
+    (n, dof, 2, ...): the inverse of branch_values, postures before limbs."""
+    return per_branch[:, np.arange(robot.dof), branch_table(robot)]
+
+
 def limb_wrenches(robot, points, branch_joints, with_transmissions=True):
     """Unit wrenches (n, dof, 2, 6) and transmissions (n, dof, 2; None unless
     ``with_transmissions``) of each limb's two force lines (branch 0 and 1; the same twice
@@ -107,9 +113,7 @@ def posture_wrenches(robot, points, joints):
     """Unit wrenches (n, postures, dof, 6) and transmissions (n, postures, dof) of every
     limb in every posture, from platform points (n, dof, 3) and joints (n, dof, postures)."""
     wrenches, transmissions = limb_wrenches(robot, points, branch_values(robot, joints))
-    table = branch_table(robot)
-    limbs = np.arange(robot.dof)
-    return wrenches[:, limbs, table], transmissions[:, limbs, table]
+    return posture_values(robot, wrenches), posture_values(robot, transmissions)
 
 
 PACKED = [(i, j) for i in range(SIX) for j in range(i + 1)]

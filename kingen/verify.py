@@ -36,7 +36,7 @@ from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
 from .singularity import (PACKED, branch_table, branch_values, finite_difference_jacobian, jacobian,
-                          partial_sum_split, posture_wrenches, representative_postures)
+                          partial_sum_split, posture_values, posture_wrenches, representative_postures)
 from .snapshot import check as snapshot_check
 from .report import Check, GoldenResult, Report
 
@@ -275,7 +275,7 @@ def warnings_in_band(robot, reference_solution):
         near_limit = ((np.abs(joints - lower[None, :, None]) < WARNING_BAND)
                       | (np.abs(joints - upper[None, :, None]) < WARNING_BAND))
         if np.any(near_limit):
-            near = near | np.any(near_limit[:, np.arange(robot.dof), branch_table(robot)], axis=2)
+            near = near | np.any(posture_values(robot, near_limit), axis=2)
     if robot.direct_index_min is not None:
         with np.errstate(invalid="ignore"):
             near = near | (np.abs(reference_solution.direct_index - robot.direct_index_min)
