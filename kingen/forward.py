@@ -73,6 +73,12 @@ def pose_jacobian(poses):
     return jacobian
 
 
+def closure_derivative(wrenches, poses, free):
+    """d(residuals)/d(free pose coordinates) (n, dof, free count) at poses (n, 6) (mm, radians)
+    from the limbs' unit wrenches there (n, dof, 6): mm per mm, or mm per radian."""
+    return (wrenches @ pose_jacobian(poses))[:, :, free]
+
+
 def newton(robot, starts, joints, free):
     """Newton-Raphson from every start (n, 6) towards the joints (n, dof): the converged
     poses (n, 6) and their largest residuals (n,). ``free`` (6,) bool: the coordinates solved
@@ -81,7 +87,7 @@ def newton(robot, starts, joints, free):
     with np.errstate(all="ignore"):
         for _ in range(ITERATIONS):
             residual, wrenches = closure(robot, poses, joints)
-            matrix = (wrenches @ pose_jacobian(poses))[:, :, free]
+            matrix = closure_derivative(wrenches, poses, free)
             step = _least_squares(matrix, -residual)
             step = np.where(np.isfinite(step), step, 0.0)
             step = _limited(step, robot.size_mm, free)

@@ -28,7 +28,7 @@ from . import abi
 from .defaults import DEFAULT_TIMEOUT
 from .conventions import joint_errors, pose_from_t6, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
-from .forward import free_mask, newton, pose_jacobian, t6_of
+from .forward import closure_derivative, free_mask, newton, t6_of
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
 from .isolation import die_with_parent, keep_freed_memory, run_in_child
@@ -697,7 +697,7 @@ def round_trip_check(robot, plugin, options, t6):
     free = free_mask(calibrated)
     conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free)
     regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
-    pose_index, posture, conditioning, start = (values[regular] for values in (pose_index, posture, conditioning, start))
+    pose_index, posture, conditioning, start = (kept[regular] for kept in (pose_index, posture, conditioning, start))
     if not len(pose_index):
         return Check("round trip", True, "no regular posture among the sampled poses to go round")
     routine_joints = joints[pose_index, :, posture]
@@ -727,12 +727,12 @@ def round_trip_check(robot, plugin, options, t6):
 def pose_conditioning(robot, wrenches, poses, free):
     """The smallest singular value (m,) of the closure's derivative with respect to the free
     pose coordinates (what forward kinematics solves for) at poses (m, 6) (mm, radians):
-    the limbs' unit wrenches (m, dof, 6) times the pose Jacobian, rotations per mm of arc at
-    the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
+    forward.closure_derivative of the limbs' unit wrenches (m, dof, 6), the matrix Newton
+    solves with, rotations per mm of arc at the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
     where the free coordinates are not all determined; non-finite counts as 0."""
     scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
     with np.errstate(all="ignore"):
-        matrix = (wrenches @ pose_jacobian(poses))[:, :, free] * scale
+        matrix = closure_derivative(wrenches, poses, free) * scale
     finite = np.all(np.isfinite(matrix), axis=(1, 2))
     matrix = np.where(finite[:, None, None], matrix, 0.0)
     return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)
