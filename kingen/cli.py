@@ -161,7 +161,6 @@ def package(robot, out_dir, target, timeout):
     from .package import write_package
 
     model = _robot(robot)
-
     paths = write_package(model, out_dir or default_out_dir(model) / f"package-{target}", target, timeout=timeout)
     for path in paths:
         _say(str(path))

@@ -117,6 +117,11 @@ def pose_chunks(robot, count, seed, chunk):
 LOCAL_SHARE = 2
 """With a second process, this one compares every LOCAL_SHARE-th chunk itself (and merges
 all of them): about equal work for both."""
+
+
+def _second_takes(number):
+    """Whether chunk ``number`` (0, 1, ...) is the second process's to compare."""
+    return number % LOCAL_SHARE != 0
 REPORT_COUNTS = ("singular_entries", "singular_out_of_bound", "warning_mismatches", "warnings_in_band")
 REPORT_WORST = ("max_abs_error_mm", "max_abs_error_rad")
 _chunk_job = None
@@ -169,7 +174,7 @@ def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
         for number, (begin, poses) in enumerate(pose_chunks(robot, options.samples, options.seed, chunk)):
             phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
             part = None
-            if parallel and number % LOCAL_SHARE:
+            if parallel and _second_takes(number):
                 second = second or _SecondProcess(robot, options, chunk)  # forked once the first chunk is done
                 part = second.result()
             yield begin, len(poses), part or _compare_chunk(poses, first=begin == 0)
@@ -179,9 +184,9 @@ def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
 
 
 class _SecondProcess:
-    """A forked process that compares the chunks numbered n with n % LOCAL_SHARE != 0, ahead
-    of this one: it draws the same poses itself, so only its results travel (through a
-    pipe, which also holds it back when it runs far ahead). It dies with this process."""
+    """A forked process that compares the chunks _second_takes, ahead of this one: it draws
+    the same poses itself, so only its results travel (through a pipe, which also holds it
+    back when it runs far ahead). It dies with this process."""
 
     def __init__(self, robot, options, chunk):
         context = multiprocessing.get_context("fork")
@@ -211,7 +216,7 @@ class _SecondProcess:
 def _compare_other_chunks(sender, robot, options, chunk):
     die_with_parent()
     for number, (begin, poses) in enumerate(pose_chunks(robot, options.samples, options.seed, chunk)):
-        if number % LOCAL_SHARE:
+        if _second_takes(number):
             sender.send(_compare_chunk(poses))
 
 
