@@ -55,6 +55,22 @@ def plugin(built):
     return get
 
 
+class ChangedJoints:
+    """A loaded plugin whose joints ``change(t6 (n, 4, 4), solutions (n, dof, postures))``
+    alters in place after each call: a routine that rounds differently, or is wrong."""
+
+    def __init__(self, plugin, change):
+        self._plugin, self._change = plugin, change
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        self._change(np.asarray(t6).reshape(-1, 4, 4), calls.solutions)
+        return calls
+
+
 def random_t6(robot, count, seed):
     """T6 arrays for ``count`` seeded poses in the robot's verification region."""
     rng = np.random.default_rng(seed)

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from conftest import SHIPPED, random_t6
+from conftest import SHIPPED, ChangedJoints, random_t6
 from kingen.cli import main
 from kingen.conventions import pose_from_t6, t6_from_pose
 from kingen.forward import assemblies, closure, free_mask, newton
@@ -85,22 +85,15 @@ def test_solve_switch_explains_the_thesis_jump_of_the_gantry_tau(capsys, tmp_pat
     assert "may jump up to 1509.199 mm (2 assembly modes)" in out
 
 
-class _Perturbed:
-    """A plugin whose joints are its own moved by ``ulps`` units in the last place (signs
-    seeded), plus ``shift`` mm on the first joint: a routine rounding differently, or wrong."""
+def perturbed(plugin, ulps, shift=0.0):
+    """``plugin`` with its joints moved by ``ulps`` units in the last place (signs seeded),
+    plus ``shift`` mm or rad on the first joint."""
+    def change(t6, solutions):
+        signs = np.random.default_rng(2).choice([-1.0, 1.0], size=solutions.shape)
+        solutions += ulps * signs * np.spacing(np.abs(solutions))
+        solutions[:, 0] += shift
 
-    def __init__(self, plugin, ulps, shift=0.0):
-        self._plugin, self._ulps, self._shift = plugin, ulps, shift
-
-    def __getattr__(self, name):
-        return getattr(self._plugin, name)
-
-    def call(self, t6, *arguments, **keywords):
-        calls = self._plugin.call(t6, *arguments, **keywords)
-        signs = np.random.default_rng(2).choice([-1.0, 1.0], size=calls.solutions.shape)
-        calls.solutions[...] += self._ulps * signs * np.spacing(np.abs(calls.solutions))
-        calls.solutions[:, 0] += self._shift
-        return calls
+    return ChangedJoints(plugin, change)
 
 
 @pytest.mark.parametrize("name", ["exechon", "tau", "hexapod"])
@@ -113,6 +106,6 @@ def test_joints_rounded_differently_go_round_and_wrong_joints_do_not(name, plugi
     robot, routine = plugin(name)
     _, t6 = random_t6(robot, 1000, seed=0)
     for ulps in (0, 256):
-        check = round_trip_check(robot, _Perturbed(routine, ulps), VerifyOptions(), t6)
+        check = round_trip_check(robot, perturbed(routine, ulps), VerifyOptions(), t6)
         assert check.passed, (ulps, check.detail)
-    assert not round_trip_check(robot, _Perturbed(routine, 0, shift=1e-3), VerifyOptions(), t6).passed
+    assert not round_trip_check(robot, perturbed(routine, 0, shift=1e-3), VerifyOptions(), t6).passed

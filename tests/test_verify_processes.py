@@ -3,33 +3,26 @@ single process gives, counts, worst errors and per-posture statistics alike."""
 
 import dataclasses
 
-import numpy as np
 import pytest
 
+from conftest import ChangedJoints
 from kingen import verify as verify_module
 from kingen.verify import VerifyOptions, chunk_size, verify
 
 
-class _WrongOnSomePoses:
-    """A plugin whose first joint is 1e-6 off wherever T6's x exceeds the home's: errors in
-    every chunk, decided by the pose alone (so either process makes them)."""
+def wrong_on_some_poses(plugin, x):
+    """``plugin`` with its first joint 1e-6 off wherever T6's x exceeds ``x``: errors in every
+    chunk, decided by the pose alone (so either process makes them)."""
+    def change(t6, solutions):
+        solutions[t6[:, 3, 0] > x, 0] += 1e-6
 
-    def __init__(self, plugin, x):
-        self._plugin, self._x = plugin, x
-
-    def __getattr__(self, name):
-        return getattr(self._plugin, name)
-
-    def call(self, t6, *arguments, **keywords):
-        calls = self._plugin.call(t6, *arguments, **keywords)
-        calls.solutions[np.asarray(t6).reshape(-1, 4, 4)[:, 3, 0] > self._x, 0] += 1e-6
-        return calls
+    return ChangedJoints(plugin, change)
 
 
 @pytest.mark.parametrize("name", ["hexapod", "tau", "ceart"])
 def test_two_processes_report_what_one_does(name, plugin, monkeypatch):
     robot, routine = plugin(name)
-    wrong = _WrongOnSomePoses(routine, robot.verification.home[0])
+    wrong = wrong_on_some_poses(routine, robot.verification.home[0])
     compared_here = []
     compare_chunk = verify_module._compare_chunk
 
