@@ -69,9 +69,17 @@ def platform_points_in_base(t6, points):
     The result is a view of (m, 3, n) memory, so that every coordinate of a point is one
     contiguous row over the poses: numpy's element-wise operations on it (the limb models',
     the force lines') keep that layout and run along the poses."""
-    t6 = np.asarray(t6, dtype=float)
+    return _points_from_rows(_t6_rows(t6), points)
+
+
+def _t6_rows(t6):
+    """(4, 3, n) a new array: T6[r][i] of every pose as one contiguous row over the poses."""
+    return np.ascontiguousarray(np.moveaxis(np.asarray(t6, dtype=float)[:, :, :3], 0, -1))
+
+
+def _points_from_rows(rows, points):
+    """platform_points_in_base from T6 as _t6_rows gives it."""
     points = np.asarray(points, dtype=float)
-    rows = np.ascontiguousarray(np.moveaxis(t6[:, :, :3], 0, -1))  # (4, 3, n): T6[r][i] over the poses
     # Written out in the generated C's order: T6[0][i] x + T6[1][i] y + T6[2][i] z + T6[3][i].
     base = (rows[None, 0] * points[:, 0, None, None] + rows[None, 1] * points[:, 1, None, None]
             + rows[None, 2] * points[:, 2, None, None]) + rows[None, 3]
@@ -102,21 +110,21 @@ def _blocks(count, postures):
 
 def _solve(robot, t6, indices):
     count = t6.shape[0]
-    finite = np.all(np.isfinite(t6[:, :, :3]), axis=(1, 2))
-    safe_t6 = np.where(finite[:, None, None], t6, 0.0)
-    points = platform_points_in_base(safe_t6, [limb.platform_point for limb in robot.limbs])
+    rows = _t6_rows(t6)
+    finite = np.all(np.isfinite(rows.reshape(12, count)), axis=0)
+    if not np.all(finite):
+        rows[:, :, ~finite] = 0.0
+    points = _points_from_rows(rows, [limb.platform_point for limb in robot.limbs])
 
     branch_joints = np.empty((count, robot.dof, 2))
     radicands = np.full((count, robot.dof), np.inf)
-    overflow = np.zeros((count, robot.dof), dtype=bool)
     for index, limb in enumerate(robot.limbs):
         limb_solution = limb.solve(points[:, index])
-        values = limb_solution.values
-        overflow[:, index] = ~np.all(np.isfinite(values), axis=1)
-        branch_joints[:, index, :] = np.where(overflow[:, index, None], 0.0, values)
+        branch_joints[:, index, :] = limb_solution.values
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
-    branch_joints[~finite] = 0.0
+    overflow = ~np.all(np.isfinite(branch_joints), axis=2)  # (n, dof)
+    branch_joints[overflow | ~finite[:, None]] = 0.0
 
     lower, upper = robot.travel_limits()
     limited = np.isfinite(lower) | np.isfinite(upper)
