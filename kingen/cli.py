@@ -20,7 +20,7 @@ from pathlib import Path
 import click
 
 from . import __version__, abi
-from .defaults import DEFAULT_TIMEOUT, MAX_MM, TARGETS
+from .defaults import DEFAULT_TIMEOUT, MAX_MM, MAX_PROCESSES, TARGETS
 from .errors import InternalError, KingenError, PluginDefect
 from .text import printable
 
@@ -318,9 +318,12 @@ def _solve_job(channel, library, routine, matrix, link_lengths, link_offsets):
               callback=_output_file, help="Write the report as JUnit XML (one test case per check) to this file.")
 @click.option("--golden", "snapshot_path", type=click.Path(dir_okay=False, exists=True, path_type=Path), default=None,
               help="Also check the routine against this recorded snapshot (kingen golden record).")
+@click.option("--processes", type=click.IntRange(min=1), default=None,
+              help="Processes comparing the poses (same report whatever the number)  "
+                   f"[default: one per core, at most {MAX_PROCESSES}].")
 @calibration_options
 @TIMEOUT
-def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path,
+def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path, processes,
            link_lengths, link_offsets, timeout):
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
@@ -336,7 +339,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
     library, routine = _library(model, out_dir, library, source, routine, timeout)
     options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
-                            timeout=timeout, snapshot=snapshot)
+                            timeout=timeout, snapshot=snapshot, processes=processes)
     with _progress(samples, chunk_size(model)) as progress:
         report = verify_library(model, library, routine, options, progress)
     _print_report(report, library)

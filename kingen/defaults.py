@@ -11,3 +11,5 @@ DEFAULT_TIMEOUT = 300.0
 """Seconds a compiler run may take (``--timeout``, ``$KINGEN_TIMEOUT``) before it is killed."""
 TARGETS = ("linux", "windows")
 """What ``build --target`` and ``package --target`` can produce."""
+MAX_PROCESSES = 16
+"""verify's comparing processes at most, whatever the cores: each holds about 100 MB of chunk arrays."""

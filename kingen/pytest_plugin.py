@@ -106,7 +106,7 @@ class RobotFile(pytest.File):
             snapshot = load(snapshot_path(self.path), self.robot) if snapshot_path(self.path).is_file() else None
             result = build_plugin(self.robot, _build_folder() / self.robot.name)
             report = verify_library(self.robot, result.library, result.routine,
-                                    VerifyOptions(samples=samples, snapshot=snapshot))
+                                    VerifyOptions(samples=samples, snapshot=snapshot, processes=None))
         except KingenError as error:
             return None, str(error)
         return report, None

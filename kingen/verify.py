@@ -21,11 +21,12 @@ import os
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
+from typing import Optional
 
 import numpy as np
 
 from . import abi
-from .defaults import DEFAULT_TIMEOUT
+from .defaults import DEFAULT_TIMEOUT, MAX_PROCESSES
 from .conventions import joint_errors, pose_from_t6, t6_from_pose
 from .diagnose import diagnose, diagnose_warnings
 from .forward import closure_derivative, free_mask, newton, t6_of
@@ -88,9 +89,9 @@ class VerifyOptions:
     timeout: float = DEFAULT_TIMEOUT
     snapshot: object = None
     """A loaded kingen.snapshot.Snapshot to check the routine against (check ``snapshot``)."""
-    processes: int = 1
-    """Processes comparing the sampled poses: 2 forks a second one (as verify_library's child
-    does on a machine with two cores); 1 keeps everything in the calling process."""
+    processes: Optional[int] = 1
+    """Processes comparing the sampled poses: 1 keeps everything in the calling process, more
+    fork the others (compared_chunks); None: comparing_processes(), one per core."""
 
 
 def report_tolerance_mm(robot):
@@ -103,30 +104,60 @@ def value_tolerance_mm(robot):
     return max(VALUE_TOLERANCE_MM, RELATIVE_TOLERANCE * robot.size_mm)
 
 
+class PoseStream:
+    """The seeded poses of a verification, in order: uniform in the robot's verification
+    region (mm, degrees), from one generator, drawn or skipped a run at a time. Skipping
+    moves the generator past the poses as if they had been drawn (each uniform double takes
+    one 64-bit output of PCG64), so the poses after them are the same, bit for bit."""
+
+    def __init__(self, robot, seed):
+        region = robot.verification
+        self._home, self._half_widths = np.asarray(region.home), np.asarray(region.range)
+        self._generator = np.random.default_rng(seed)
+
+    def draw(self, count):
+        """The next ``count`` poses (count, 6)."""
+        return self._home + self._generator.uniform(-1.0, 1.0, size=(count, 6)) * self._half_widths
+
+    def skip(self, count):
+        """Move past the next ``count`` poses without drawing them."""
+        self._generator.bit_generator.advance(6 * count)
+
+
+def chunk_bounds(count, chunk):
+    """(first index, pose count) of each chunk of ``count`` poses, ``chunk`` at a time."""
+    return [(begin, min(chunk, count - begin)) for begin in range(0, count, chunk)]
+
+
 def pose_chunks(robot, count, seed, chunk):
-    """(first index, poses (m, 6)) chunk by chunk: ``count`` poses (mm, degrees) uniform in the
-    robot's verification region from one seeded generator, so the poses are the same, bit for
-    bit, whatever the chunk size; memory stays that of one chunk."""
-    region = robot.verification
-    home, half_widths = np.asarray(region.home), np.asarray(region.range)
-    rng = np.random.default_rng(seed)
-    for begin in range(0, count, chunk):
-        yield begin, home + rng.uniform(-1.0, 1.0, size=(min(chunk, count - begin), 6)) * half_widths
+    """(first index, poses (m, 6)) chunk by chunk: ``count`` poses of PoseStream, so the poses
+    are the same, bit for bit, whatever the chunk size; memory stays that of one chunk."""
+    stream = PoseStream(robot, seed)
+    for begin, size in chunk_bounds(count, chunk):
+        yield begin, stream.draw(size)
 
 
-LOCAL_SHARE = 2
-"""With a second process, this one compares every LOCAL_SHARE-th chunk itself (and merges
-all of them): about equal work for both."""
+def comparing_processes():
+    """Processes a verification compares with by default: one per core this process may run
+    on, at most MAX_PROCESSES."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(MAX_PROCESSES, cores))
 
 
-def _second_takes(number):
-    """Whether chunk ``number`` (0, 1, ...) is the second process's to compare."""
-    return number % LOCAL_SHARE != 0
+def _taker(number, processes):
+    """Which of ``processes`` comparing processes compares chunk ``number`` (0, 1, ...):
+    0 is the merging one, which also takes chunk 0 before the others are forked."""
+    return number % processes
+
+
 REPORT_COUNTS = ("singular_entries", "singular_out_of_bound", "warning_mismatches", "warnings_in_band")
 REPORT_WORST = ("max_abs_error_mm", "max_abs_error_rad")
 _chunk_job = None
 """(robot, calibrated robot, plugin, options) of the comparing processes: set before the
-second one is forked, so that nothing but results travels between them."""
+others are forked, so that nothing but results travels between them."""
 
 
 @dataclass
@@ -162,67 +193,83 @@ def _compare_chunk(poses, first=False):
 
 def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
     """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With
-    ``options.processes`` 2 and more than one chunk, a second process (_SecondProcess) compares
-    every other chunk ahead. If it dies (the routine crashed or exited there), its chunks are
-    compared here again, so that a crash is named by this process's stage as always."""
+    ``options.processes`` above 1 (None: comparing_processes()) and more than one chunk, the
+    other comparing processes (_Helpers) each compare the chunks _taker gives them, ahead of
+    this one, which draws and compares only its own. If one dies (the routine crashed or
+    exited there), its chunks are drawn and compared here again, so that a crash is named
+    by this process's stage as always."""
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
-    parallel = (options.processes >= 2 and options.samples > chunk
-                and "fork" in multiprocessing.get_all_start_methods())
-    second = None
+    bounds = chunk_bounds(options.samples, chunk)
+    processes = min(len(bounds), comparing_processes() if options.processes is None else options.processes)
+    if "fork" not in multiprocessing.get_all_start_methods():
+        processes = 1
+    stream = PoseStream(robot, options.seed)
+    helpers = None
     try:
-        for number, (begin, poses) in enumerate(pose_chunks(robot, options.samples, options.seed, chunk)):
-            phase(f"poses {begin} to {begin + len(poses) - 1} of seed {options.seed}")
+        for number, (begin, size) in enumerate(bounds):
+            phase(f"poses {begin} to {begin + size - 1} of seed {options.seed}")
             part = None
-            if parallel and _second_takes(number):
-                second = second or _SecondProcess(robot, options, chunk)  # forked once the first chunk is done
-                part = second.result()
-            yield begin, len(poses), part or _compare_chunk(poses, first=begin == 0)
+            if _taker(number, processes) != 0:
+                helpers = helpers or _Helpers(robot, options, bounds, processes)  # forked once chunk 0 is done
+                part = helpers.result(number)
+            if part is None:
+                part = _compare_chunk(stream.draw(size), first=begin == 0)
+            else:
+                stream.skip(size)
+            yield begin, size, part
     finally:
-        if second is not None:
-            second.stop()
+        if helpers is not None:
+            helpers.stop()
 
 
-class _SecondProcess:
-    """A forked process that compares the chunks _second_takes, ahead of this one: it draws
-    the same poses itself, so only its results travel (through a pipe, which also holds it
-    back when it runs far ahead). It dies with this process."""
+class _Helpers:
+    """Forked processes 1 .. processes - 1 that compare the chunks _taker gives them, ahead of
+    this one: each draws its own poses, so only results travel (through a pipe each, which
+    also holds a process back when it runs far ahead). They die with this process."""
 
-    def __init__(self, robot, options, chunk):
+    def __init__(self, robot, options, bounds, processes):
         context = multiprocessing.get_context("fork")
-        self._receiver, sender = context.Pipe(duplex=False)
-        self._process = context.Process(target=_compare_other_chunks, args=(sender, robot, options, chunk),
-                                        daemon=True)
-        self._process.start()
-        sender.close()
-        self._alive = True
+        self._processes = processes
+        self._receivers, self._children = {}, []
+        for taker in range(1, processes):
+            receiver, sender = context.Pipe(duplex=False)
+            child = context.Process(target=_compare_taken_chunks, args=(sender, robot, options, bounds, taker, processes),
+                                    daemon=True)
+            child.start()
+            sender.close()
+            self._receivers[taker] = receiver
+            self._children.append(child)
 
-    def result(self):
-        """Its next chunk's _Part, or None once it has died (then this process compares them)."""
-        if self._alive:
+    def result(self, number):
+        """Chunk ``number``'s _Part from the process that takes it, or None once that one has
+        died (then this process compares its chunks)."""
+        receiver = self._receivers.get(_taker(number, self._processes))
+        if receiver is not None:
             try:
-                return self._receiver.recv()
+                return receiver.recv()
             except (EOFError, OSError):
-                self._alive = False
+                receiver.close()
+                del self._receivers[_taker(number, self._processes)]
         return None
 
     def stop(self):
-        self._receiver.close()
-        if self._process.is_alive():
-            self._process.kill()
-        self._process.join()
+        for receiver in self._receivers.values():
+            receiver.close()
+        for child in self._children:
+            if child.is_alive():
+                child.kill()
+            child.join()
 
 
-def _compare_other_chunks(sender, robot, options, chunk):
+def _compare_taken_chunks(sender, robot, options, bounds, taker, processes):
     die_with_parent()
-    for number, (begin, poses) in enumerate(pose_chunks(robot, options.samples, options.seed, chunk)):
-        if _second_takes(number):
-            sender.send(_compare_chunk(poses))
-
-
-def comparing_processes():
-    """Processes a verification may compare with: two on a machine with two cores or more."""
-    return min(2, os.cpu_count() or 1)
+    stream = PoseStream(robot, options.seed)
+    for number, (_, size) in enumerate(bounds):
+        if _taker(number, processes) == taker:
+            sender.send(_compare_chunk(stream.draw(size)))
+        else:
+            stream.skip(size)
 
 
 def _merge(report, tally, printed, part):
@@ -447,7 +494,6 @@ def _verify_job(channel, robot, library, routine, options):
     printed = _Printed()
     with printed.capture():
         plugin = Plugin(library, routine)
-    options = replace(options, processes=comparing_processes())
     report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
                     phase=channel.stage, on_check=lambda check: channel.send("check", check))
     if printed.bytes:

@@ -81,6 +81,18 @@ def test_verify_json_contract(capsys, tmp_path):
     assert data["max_abs_error_mm"] <= 1e-9
 
 
+def test_verify_gives_the_same_report_whatever_its_processes(capsys, tmp_path):
+    reports = []
+    for processes in ("1", "3"):
+        path = tmp_path / f"{processes}.json"
+        code, out, _ = run(capsys, "verify", "tau", "-o", str(tmp_path / "b"), "--samples", "20000",
+                           "--processes", processes, "--json", str(path))
+        assert code == 0, out
+        reports.append({key: value for key, value in json.loads(path.read_text()).items()
+                        if key not in ("seconds", "poses_per_second")})
+    assert reports[0] == reports[1]
+
+
 def test_verify_fails_with_exit_1_on_a_wrong_golden_value(capsys, tmp_path):
     from kingen.model import robots_dir
     text = (robots_dir() / "exechon.yaml").read_text().replace("-24.8915", "-24.9915")
@@ -99,6 +111,7 @@ BAD_CALLS = [
     (["solve", "tau"], "give exactly one of --pose and --t6"),
     (["solve", "tau", "--pose", "1", "2"], "--pose"),
     (["verify", "tau", "--samples", "0"], "--samples"),
+    (["verify", "tau", "--processes", "0"], "--processes"),
     (["frobnicate"], "No such command"),
     (["verify"], "Missing argument"),
 ]

@@ -18,7 +18,7 @@ from kingen.errors import KingenError
 from kingen.model import load_robot, robots_dir
 from kingen.pe import dll_exports
 from kingen.report import Check, Report, json_text, junit_xml
-from kingen.verify import pose_chunks, sample_poses
+from kingen.verify import PoseStream, pose_chunks, sample_poses
 
 LEG = """\
 name: NAME
@@ -282,6 +282,18 @@ def test_poses_drawn_chunk_by_chunk_are_the_same_bit_for_bit():
     whole = sample_poses(robot, 10007, seed=3)
     for chunk in (1, 1000, 4096):
         assert np.array_equal(np.concatenate([p for _, p in pose_chunks(robot, 10007, 3, chunk)]), whole)
+
+
+def test_skipped_poses_leave_the_others_the_same_bit_for_bit():
+    """Each comparing process skips the chunks of the others: the generator moves past them
+    without drawing, and the poses after them must not change."""
+    robot = load_robot("tau")
+    whole = sample_poses(robot, 10007, seed=5)
+    stream = PoseStream(robot, 5)
+    stream.skip(1)
+    assert np.array_equal(stream.draw(999), whole[1:1000])
+    stream.skip(5000)
+    assert np.array_equal(stream.draw(4007), whole[6000:])
 
 
 def test_outputs_get_the_users_umask_permissions(capsys, tmp_path):

@@ -1,4 +1,4 @@
-"""verify compares every other chunk in a forked second process: the report must be the one a
+"""verify shares the chunks among forked comparing processes: the report must be the one a
 single process gives, counts, worst errors and per-posture statistics alike."""
 
 import dataclasses
@@ -20,7 +20,7 @@ def wrong_on_some_poses(plugin, x):
 
 
 @pytest.mark.parametrize("name", ["hexapod", "tau", "ceart"])
-def test_two_processes_report_what_one_does(name, plugin, monkeypatch):
+def test_several_processes_report_what_one_does(name, plugin, monkeypatch):
     robot, routine = plugin(name)
     wrong = wrong_on_some_poses(routine, robot.verification.home[0])
     compared_here = []
@@ -32,13 +32,14 @@ def test_two_processes_report_what_one_does(name, plugin, monkeypatch):
 
     monkeypatch.setattr(verify_module, "_compare_chunk", counted)
     reports = []
-    for processes in (1, 2):
+    here = {1: 4, 2: 2, 3: 2, 5: 1}  # chunks 0 to 3 all here; 0 and 2; 0 and 3; 0 (4 processes: one per chunk)
+    for processes, compared in here.items():
         compared_here.clear()
         report = dataclasses.asdict(verify(robot, wrong, VerifyOptions(samples=3 * chunk_size(robot) + 17,
                                                                        processes=processes)))
         report.pop("seconds")
         reports.append(report)
-        assert len(compared_here) == (4 if processes == 1 else 2)  # chunks 0 and 2 here, 1 and 3 there
-    assert reports[0] == reports[1]
+        assert len(compared_here) == compared
+    assert all(report == reports[0] for report in reports[1:])
     assert reports[0]["max_abs_error_mm" if name != "ceart" else "max_abs_error_rad"] == pytest.approx(1e-6, rel=1e-3)
     assert sum(row["wrong"] for row in reports[0]["posture_statistics"]) > 0
