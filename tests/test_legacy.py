@@ -222,12 +222,12 @@ def hexapod_source(**mistake):
     return text
 
 
-def run_verify(capsys, tmp_path, robot, text, routine, samples="3000"):
+def run_verify(capsys, tmp_path, robot, text, routine, samples="3000", *options):
     source = tmp_path / f"{routine}.c"
     source.write_text(text)
     report = tmp_path / "report.json"
     code = main(["verify", robot, "--source", str(source), "--routine", routine, "-o", str(tmp_path / "lib"),
-                 "--samples", samples, "--json", str(report), "--junit", str(tmp_path / "report.xml")])
+                 "--samples", samples, "--json", str(report), "--junit", str(tmp_path / "report.xml"), *options])
     out, err = capsys.readouterr()
     data = json.loads(report.read_text()) if report.exists() else None
     return code, out, err, data
@@ -388,14 +388,16 @@ def test_crank_angles_in_degrees_are_named(capsys, tmp_path):
 
 
 def test_a_crash_in_verifys_second_process_is_named_as_in_the_first(capsys, tmp_path):
-    """verify compares every other chunk in a forked second process: a routine that crashes
-    there (here on its 6000th call, in the second chunk) is run again on that chunk in the
-    first process, so the crash is named with its poses as always."""
+    """verify compares chunks in forked processes too: a routine that crashes there (here
+    1000 calls into chunk 1, the second process's first; the third crashes in chunk 2) is
+    run again on that chunk in the first process, so the crash is named with its poses as
+    always."""
     from kingen.model import load_robot
     from kingen.verify import chunk_size
     chunk = chunk_size(load_robot("hexapod"))
     text = "static int calls = 0;\n" + hexapod_source(CRASH=f"(++calls > {chunk + 1000})")
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", samples=str(5 * chunk))
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", str(5 * chunk),
+                                    "--processes", "3")
     assert code == 1
     assert failed_checks(data) == ["crash"]
     assert f"(signal SIGSEGV) during poses {chunk} to {2 * chunk - 1} of seed 0" in out
