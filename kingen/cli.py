@@ -318,9 +318,9 @@ def _solve_job(channel, library, routine, matrix, link_lengths, link_offsets):
               callback=_output_file, help="Write the report as JUnit XML (one test case per check) to this file.")
 @click.option("--golden", "snapshot_path", type=click.Path(dir_okay=False, exists=True, path_type=Path), default=None,
               help="Also check the routine against this recorded snapshot (kingen golden record).")
-@click.option("--processes", type=click.IntRange(min=1), default=None,
-              help="Processes comparing the poses (same report whatever the number)  "
-                   f"[default: one per core, at most {MAX_PROCESSES}].")
+@click.option("--processes", type=click.IntRange(min=1, max=MAX_PROCESSES), default=None,
+              help="Processes comparing the poses (the same report whatever the number)  "
+                   "[default: one per core].")
 @calibration_options
 @TIMEOUT
 def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path, processes,

@@ -12,4 +12,5 @@ DEFAULT_TIMEOUT = 300.0
 TARGETS = ("linux", "windows")
 """What ``build --target`` and ``package --target`` can produce."""
 MAX_PROCESSES = 16
-"""verify's comparing processes at most, whatever the cores: each holds about 100 MB of chunk arrays."""
+"""verify's comparing processes at most (``--processes``; by default one per core up to this):
+each holds about 100 MB of chunk arrays."""

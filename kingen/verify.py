@@ -201,7 +201,7 @@ def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
     bounds = chunk_bounds(options.samples, chunk)
-    processes = min(len(bounds), comparing_processes() if options.processes is None else options.processes)
+    processes = max(1, min(len(bounds), comparing_processes() if options.processes is None else options.processes))
     if "fork" not in multiprocessing.get_all_start_methods():
         processes = 1
     stream = PoseStream(robot, options.seed)

@@ -112,6 +112,7 @@ BAD_CALLS = [
     (["solve", "tau", "--pose", "1", "2"], "--pose"),
     (["verify", "tau", "--samples", "0"], "--samples"),
     (["verify", "tau", "--processes", "0"], "--processes"),
+    (["verify", "tau", "--processes", "17"], "--processes"),
     (["frobnicate"], "No such command"),
     (["verify"], "Missing argument"),
 ]
