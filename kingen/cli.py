@@ -643,7 +643,8 @@ def _print_report(report, library):
     for notice in report.notices:
         _say(f"  notice: {notice}")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
-    speed = f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s)" if report.seconds > 0 else ""
+    speed = (f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, "
+             f"{report.processes} process{'es' if report.processes > 1 else ''})") if report.seconds > 0 else ""
     _say(verdict + speed)
 
 

@@ -55,6 +55,8 @@ class Report:
     checks: list = field(default_factory=list)
     notices: list = field(default_factory=list)
     seconds: float = 0.0
+    processes: int = 1
+    """How many processes compared the sampled poses (``seconds`` is their wall time)."""
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
@@ -112,6 +114,7 @@ class Report:
             "notices": list(self.notices),
             "seconds": round(self.seconds, 6),
             "poses_per_second": self.poses_per_second,
+            "processes": self.processes,
             "passed": self.passed,
         })
 

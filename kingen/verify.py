@@ -147,6 +147,14 @@ def comparing_processes():
     return max(1, min(MAX_PROCESSES, cores))
 
 
+def process_count(options, chunks):
+    """How many processes compare ``chunks`` chunks: ``options.processes`` (None:
+    comparing_processes()), at most one per chunk; one where processes cannot be forked."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 1
+    return max(1, min(chunks, comparing_processes() if options.processes is None else options.processes))
+
+
 def _taker(number, processes):
     """Which of ``processes`` comparing processes compares chunk ``number`` (0, 1, ...):
     0 is the merging one, which also takes chunk 0 before the others are forked."""
@@ -201,9 +209,7 @@ def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
     bounds = chunk_bounds(options.samples, chunk)
-    processes = max(1, min(len(bounds), comparing_processes() if options.processes is None else options.processes))
-    if "fork" not in multiprocessing.get_all_start_methods():
-        processes = 1
+    processes = process_count(options, len(bounds))
     stream = PoseStream(robot, options.seed)
     helpers = None
     try:
@@ -505,11 +511,13 @@ def _verify_job(channel, robot, library, routine, options):
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
-    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, chunk_size(robot), phase):
+    chunk = chunk_size(robot)
+    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, chunk, phase):
         _merge(report, tally, printed, part)
         if progress is not None:
             progress(begin + count)
     report.seconds = time.perf_counter() - start
+    report.processes = process_count(options, len(chunk_bounds(options.samples, chunk)))
     report.posture_statistics = _posture_statistics(robot, tally)
     phase("the determinism check")
     with printed.capture():

@@ -88,8 +88,10 @@ def test_verify_gives_the_same_report_whatever_its_processes(capsys, tmp_path):
         code, out, _ = run(capsys, "verify", "tau", "-o", str(tmp_path / "b"), "--samples", "20000",
                            "--processes", processes, "--json", str(path))
         assert code == 0, out
-        reports.append({key: value for key, value in json.loads(path.read_text()).items()
-                        if key not in ("seconds", "poses_per_second")})
+        data = json.loads(path.read_text())
+        assert data["processes"] == int(processes) and f"{processes} process" in out
+        reports.append({key: value for key, value in data.items() if key not in ("seconds", "poses_per_second",
+                                                                                    "processes")})
     assert reports[0] == reports[1]
 
 
