@@ -16,11 +16,13 @@ failed value checks carry diagnoses (:mod:`kingen.diagnose`).
 becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
+import math
 import multiprocessing
 import os
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
+from pathlib import Path
 from typing import Optional
 
 import numpy as np
@@ -137,14 +139,37 @@ def pose_chunks(robot, count, seed, chunk):
         yield begin, stream.draw(size)
 
 
+CPU_QUOTA_FILES = (("/sys/fs/cgroup/cpu.max", None),
+                   ("/sys/fs/cgroup/cpu/cpu.cfs_quota_us", "/sys/fs/cgroup/cpu/cpu.cfs_period_us"))
+"""Where Linux control groups (v2, then v1) state a container's CPU time quota and period."""
+
+
 def comparing_processes():
     """Processes a verification compares with by default: one per core this process may run
-    on, at most MAX_PROCESSES."""
+    on, no more than its container's CPU quota allows, at most MAX_PROCESSES."""
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not Linux
         cores = os.cpu_count() or 1
+    quota = cpu_quota()
+    if quota is not None:
+        cores = min(cores, quota)
     return max(1, min(MAX_PROCESSES, cores))
+
+
+def cpu_quota():
+    """The cores a control group's CPU quota amounts to (rounded up), or None without one."""
+    for quota_file, period_file in CPU_QUOTA_FILES:
+        try:
+            words = Path(quota_file).read_text().split()
+            if period_file is not None:
+                words.append(Path(period_file).read_text().strip())
+            quota, period = float(words[0]), float(words[1])
+        except (OSError, ValueError, IndexError):  # no such file, "max" (v2) or unreadable
+            continue
+        if quota > 0 and period > 0:
+            return math.ceil(quota / period)
+    return None
 
 
 def process_count(options, chunks):

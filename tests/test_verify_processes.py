@@ -44,3 +44,20 @@ def test_several_processes_report_what_one_does(name, plugin, monkeypatch):
     assert all(report == reports[0] for report in reports[1:])
     assert reports[0]["max_abs_error_mm" if name != "ceart" else "max_abs_error_rad"] == pytest.approx(1e-6, rel=1e-3)
     assert sum(row["wrong"] for row in reports[0]["posture_statistics"]) > 0
+
+
+@pytest.mark.parametrize("files, cores", [
+    ({"cpu.max": "150000 100000\n"}, 2),  # cgroup v2: 1.5 CPUs of quota take two processes
+    ({"cpu.max": "max 100000\n"}, None),  # v2 without a quota
+    ({"quota": "300000\n", "period": "100000\n"}, 3),  # cgroup v1
+    ({"quota": "-1\n", "period": "100000\n"}, None),  # v1 without a quota
+    ({}, None),  # no control group files at all
+])
+def test_a_containers_cpu_quota_bounds_the_processes(tmp_path, monkeypatch, files, cores):
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    monkeypatch.setattr(verify_module, "CPU_QUOTA_FILES", ((str(tmp_path / "cpu.max"), None),
+                                                           (str(tmp_path / "quota"), str(tmp_path / "period"))))
+    monkeypatch.setattr(verify_module.os, "sched_getaffinity", lambda pid: set(range(64)))
+    assert verify_module.cpu_quota() == cores
+    assert verify_module.comparing_processes() == (cores or verify_module.MAX_PROCESSES)
