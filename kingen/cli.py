@@ -380,7 +380,8 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
     _say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
     _say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
     _say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
-    _say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s")
+    _say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s "
+         f"({_processes(figures['verify_processes'])})")
     if floor is not None:
         against = figures["against_floor"]
         _say(f"  against the floor {floor_source} ({against['rounds']} rounds in turns, ns/call):")
@@ -643,9 +644,14 @@ def _print_report(report, library):
     for notice in report.notices:
         _say(f"  notice: {notice}")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
-    speed = (f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, "
-             f"{report.processes} process{'es' if report.processes > 1 else ''})") if report.seconds > 0 else ""
+    speed = (f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, {_processes(report.processes)})"
+             if report.seconds > 0 else "")
     _say(verdict + speed)
+
+
+def _processes(count):
+    """'1 process', '2 processes': how many compared verify's poses."""
+    return f"{count} process" if count == 1 else f"{count} processes"
 
 
 def _warning_name(code):
