@@ -84,9 +84,16 @@ def run_in_child(job, arguments, timeout, on_message=None):
     finally:
         receiver.close()
         _end(child)
-    code = child.exitcode
-    how = f"signal {signal.Signals(-code).name}" if code is not None and code < 0 else f"exit status {code}"
-    return None, ChildFailure("crash", stage, f"the plugin ended the host process ({how}) during {stage}")
+    return None, ChildFailure("crash", stage, f"the plugin ended the host process ({ending(child.exitcode)}) "
+                                             f"during {stage}")
+
+
+def ending(exit_code):
+    """How a process ended, in words, from multiprocessing's exit code: 'signal SIGSEGV',
+    'exit status 3'."""
+    if exit_code is not None and exit_code < 0:
+        return f"signal {signal.Signals(-exit_code).name}"
+    return f"exit status {exit_code}"
 
 
 def _end(child):

@@ -34,7 +34,7 @@ from .diagnose import diagnose, diagnose_warnings
 from .forward import closure_derivative, free_mask, newton, t6_of
 from .errors import PluginDefect
 from .host import Plugin, captured_output, host_state
-from .isolation import die_with_parent, keep_freed_memory, run_in_child
+from .isolation import die_with_parent, ending, keep_freed_memory, run_in_child
 from .library_info import build_info
 from .abi import SINGULAR_TOLERANCE, UNWRITTEN_WARNING, VALUE_TOLERANCE_MM, VALUE_TOLERANCE_RAD, WARNING_BAND
 from .reference import solve
@@ -224,26 +224,24 @@ def _compare_chunk(poses, first=False):
     return _Part(counts, tally, printed.bytes, printed.first_line)
 
 
-def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
+def compared_chunks(robot, calibrated, plugin, options, chunk, phase, deaths):
     """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With
-    ``options.processes`` above 1 (None: comparing_processes()) and more than one chunk, the
-    other comparing processes (_Helpers) each compare the chunks _taker gives them, ahead of
-    this one, which draws and compares only its own. If one dies (the routine crashed or
-    exited there), its chunks are drawn and compared here again, so that a crash is named
-    by this process's stage as always."""
+    process_count above 1, the other comparing processes (_Helpers, forked before chunk 0)
+    each compare the chunks _taker gives them, ahead of this one, which draws and compares
+    only its own. If one dies (the routine crashed or exited there), its chunks are drawn
+    and compared here again, so that a crash is named by this process's stage as always;
+    if they pass here, (first index, pose count, exit code) of the chunk it died in is
+    appended to ``deaths``: the routine crashed all the same."""
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
     bounds = chunk_bounds(options.samples, chunk)
     processes = process_count(options, len(bounds))
     stream = PoseStream(robot, options.seed)
-    helpers = None
+    helpers = _Helpers(robot, options, bounds, processes) if processes > 1 else None
     try:
         for number, (begin, size) in enumerate(bounds):
             phase(f"poses {begin} to {begin + size - 1} of seed {options.seed}")
-            part = None
-            if _taker(number, processes) != 0:
-                helpers = helpers or _Helpers(robot, options, bounds, processes)  # forked once chunk 0 is done
-                part = helpers.result(number)
+            part = helpers.result(number) if helpers is not None and _taker(number, processes) != 0 else None
             if part is None:
                 part = _compare_chunk(stream.draw(size), first=begin == 0)
             else:
@@ -252,42 +250,48 @@ def compared_chunks(robot, calibrated, plugin, options, chunk, phase):
     finally:
         if helpers is not None:
             helpers.stop()
+            deaths.extend((*bounds[number], code) for number, code in helpers.deaths)
 
 
 class _Helpers:
     """Forked processes 1 .. processes - 1 that compare the chunks _taker gives them, ahead of
     this one: each draws its own poses, so only results travel (through a pipe each, which
-    also holds a process back when it runs far ahead). They die with this process."""
+    also holds a process back when it runs far ahead). They die with this process.
+    ``deaths``: (the chunk number it was awaited for, exit code) of each that died."""
 
     def __init__(self, robot, options, bounds, processes):
         context = multiprocessing.get_context("fork")
         self._processes = processes
-        self._receivers, self._children = {}, []
+        self._receivers, self._children = {}, {}
+        self.deaths = []
         for taker in range(1, processes):
             receiver, sender = context.Pipe(duplex=False)
             child = context.Process(target=_compare_taken_chunks, args=(sender, robot, options, bounds, taker, processes),
                                     daemon=True)
             child.start()
             sender.close()
-            self._receivers[taker] = receiver
-            self._children.append(child)
+            self._receivers[taker], self._children[taker] = receiver, child
 
     def result(self, number):
         """Chunk ``number``'s _Part from the process that takes it, or None once that one has
         died (then this process compares its chunks)."""
-        receiver = self._receivers.get(_taker(number, self._processes))
-        if receiver is not None:
-            try:
-                return receiver.recv()
-            except (EOFError, OSError):
-                receiver.close()
-                del self._receivers[_taker(number, self._processes)]
-        return None
+        taker = _taker(number, self._processes)
+        receiver = self._receivers.get(taker)
+        if receiver is None:
+            return None
+        try:
+            return receiver.recv()
+        except (EOFError, OSError):
+            receiver.close()
+            del self._receivers[taker]
+            self._children[taker].join()
+            self.deaths.append((number, self._children[taker].exitcode))
+            return None
 
     def stop(self):
         for receiver in self._receivers.values():
             receiver.close()
-        for child in self._children:
+        for child in self._children.values():
             if child.is_alive():
                 child.kill()
             child.join()
@@ -537,16 +541,22 @@ def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
     chunk = chunk_size(robot)
-    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, chunk, phase):
+    deaths = []
+    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, chunk, phase, deaths):
         _merge(report, tally, printed, part)
         if progress is not None:
             progress(begin + count)
     report.seconds = time.perf_counter() - start
     report.processes = process_count(options, len(chunk_bounds(options.samples, chunk)))
     report.posture_statistics = _posture_statistics(robot, tally)
+    crashes = [Check("crash", False, f"a comparing process ended ({ending(code)}) during poses {begin} to "
+                                     f"{begin + count - 1} of seed {options.seed}, which passed when compared again "
+                                     "in the first process: the routine crashed or exited all the same "
+                                     "(--processes 1 compares every pose in one process)")
+               for begin, count, code in deaths]
     phase("the determinism check")
     with printed.capture():
-        return _sample_checks(robot, plugin, report, options, tally)
+        return crashes + _sample_checks(robot, plugin, report, options, tally)
 
 
 def _accumulate(robot, report, tally, revolute, t6, calls, expected):

@@ -4,6 +4,7 @@ mistake: verify must pass the right ones and name the defect in the wrong ones."
 
 import json
 
+import numpy as np
 import pytest
 
 from kingen.cli import main
@@ -387,20 +388,40 @@ def test_crank_angles_in_degrees_are_named(capsys, tmp_path):
     assert "joint 0 (crank1) is scaled by 57.2957795 (degrees instead of radians)" in diagnoses(data)
 
 
-def test_a_crash_in_verifys_second_process_is_named_as_in_the_first(capsys, tmp_path):
-    """verify compares chunks in forked processes too: a routine that crashes there (here
-    1000 calls into chunk 1, the second process's first; the third crashes in chunk 2) is
-    run again on that chunk in the first process, so the crash is named with its poses as
-    always."""
+def test_a_crash_in_another_comparing_process_is_named_as_in_the_first(capsys, tmp_path):
+    """verify compares chunks in forked processes too: a routine that crashes there (here on
+    one pose of chunk 1, the second process's first) is run again on that chunk in the first
+    process, where it crashes on the same pose, so the crash is named with its poses as always."""
     from kingen.model import load_robot
-    from kingen.verify import chunk_size
-    chunk = chunk_size(load_robot("hexapod"))
-    text = "static int calls = 0;\n" + hexapod_source(CRASH=f"(++calls > {chunk + 1000})")
+    from kingen.verify import chunk_size, sample_poses
+    robot = load_robot("hexapod")
+    chunk = chunk_size(robot)
+    x = sample_poses(robot, 2 * chunk, seed=0)[chunk:, 0]
+    crashing = float(x[np.argmax(x > 40.0)])  # the routine's crash switch also asks for x > 40 mm
+    text = hexapod_source(CRASH=f"(T6[3][0] == {crashing!r})")
     code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", str(5 * chunk),
                                     "--processes", "3")
     assert code == 1
     assert failed_checks(data) == ["crash"]
     assert f"(signal SIGSEGV) during poses {chunk} to {2 * chunk - 1} of seed 0" in out
+
+
+def test_a_crash_only_in_another_comparing_process_still_fails(capsys, tmp_path):
+    """A routine that crashes in a forked comparing process but not when its chunk is compared
+    again in the first one (here: in any process but the one that called it first) has crashed
+    all the same: the verdict says so, naming the poses and the signal."""
+    from kingen.model import load_robot
+    from kingen.verify import chunk_size
+    chunk = chunk_size(load_robot("hexapod"))
+    text = ("#include <unistd.h>\nstatic pid_t first_caller = 0;\n"
+            + hexapod_source(CRASH="(first_caller == 0 ? (first_caller = getpid(), 0) : getpid() != first_caller)"))
+    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", str(5 * chunk),
+                                    "--processes", "2")
+    assert code == 1
+    assert failed_checks(data) == ["crash"]
+    assert (f"a comparing process ended (signal SIGSEGV) during poses {chunk} to {2 * chunk - 1} of seed 0, "
+            "which passed when compared again in the first process") in out
+    assert data["samples"] == 5 * chunk and data["max_abs_error_mm"] < 1e-9  # every pose compared all the same
 
 
 def test_a_routine_that_crashes_is_a_failed_check_not_a_dead_process(capsys, tmp_path):
