@@ -182,7 +182,7 @@ def process_count(options, chunks):
 
 def _taker(number, processes):
     """Which of ``processes`` comparing processes compares chunk ``number`` (0, 1, ...):
-    0 is the merging one, which also takes chunk 0 before the others are forked."""
+    0 is the one that merges them all (and takes chunk 0)."""
     return number % processes
 
 
@@ -230,8 +230,8 @@ def compared_chunks(robot, calibrated, plugin, options, chunk, phase, deaths):
     each compare the chunks _taker gives them, ahead of this one, which draws and compares
     only its own. If one dies (the routine crashed or exited there), its chunks are drawn
     and compared here again, so that a crash is named by this process's stage as always;
-    if they pass here, (first index, pose count, exit code) of the chunk it died in is
-    appended to ``deaths``: the routine crashed all the same."""
+    if they run to the end here, (first index, pose count, exit code) of the chunk it died
+    in is appended to ``deaths``: the routine crashed all the same."""
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
     bounds = chunk_bounds(options.samples, chunk)
@@ -550,8 +550,8 @@ def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     report.processes = process_count(options, len(chunk_bounds(options.samples, chunk)))
     report.posture_statistics = _posture_statistics(robot, tally)
     crashes = [Check("crash", False, f"a comparing process ended ({ending(code)}) during poses {begin} to "
-                                     f"{begin + count - 1} of seed {options.seed}, which passed when compared again "
-                                     "in the first process: the routine crashed or exited all the same "
+                                     f"{begin + count - 1} of seed {options.seed}, which ran to the end when compared "
+                                     "again in the first process: the routine crashed or exited all the same "
                                      "(--processes 1 compares every pose in one process)")
                for begin, count, code in deaths]
     phase("the determinism check")
