@@ -264,13 +264,17 @@ class _Helpers:
         self._processes = processes
         self._receivers, self._children = {}, {}
         self.deaths = []
-        for taker in range(1, processes):
-            receiver, sender = context.Pipe(duplex=False)
-            child = context.Process(target=_compare_taken_chunks, args=(sender, robot, options, bounds, taker, processes),
-                                    daemon=True)
-            child.start()
-            sender.close()
-            self._receivers[taker], self._children[taker] = receiver, child
+        try:
+            for taker in range(1, processes):
+                receiver, sender = context.Pipe(duplex=False)
+                child = context.Process(target=_compare_taken_chunks,
+                                        args=(sender, robot, options, bounds, taker, processes), daemon=True)
+                self._receivers[taker], self._children[taker] = receiver, child
+                child.start()
+                sender.close()
+        except BaseException:  # out of processes or memory: none is left running
+            self.stop()
+            raise
 
     def result(self, number):
         """Chunk ``number``'s _Part from the process that takes it, or None once that one has
@@ -292,9 +296,9 @@ class _Helpers:
         for receiver in self._receivers.values():
             receiver.close()
         for child in self._children.values():
-            if child.is_alive():
+            if child.pid is not None:  # started
                 child.kill()
-            child.join()
+                child.join()
 
 
 def _compare_taken_chunks(sender, robot, options, bounds, taker, processes):
