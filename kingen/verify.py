@@ -224,18 +224,16 @@ def _compare_chunk(poses, first=False):
     return _Part(counts, tally, printed.bytes, printed.first_line)
 
 
-def compared_chunks(robot, calibrated, plugin, options, chunk, phase, deaths):
-    """(first index, pose count, _Part) chunk by chunk, in order, over pose_chunks. With
-    process_count above 1, the other comparing processes (_Helpers, forked before chunk 0)
-    each compare the chunks _taker gives them, ahead of this one, which draws and compares
-    only its own. If one dies (the routine crashed or exited there), its chunks are drawn
+def compared_chunks(robot, calibrated, plugin, options, bounds, processes, phase, deaths):
+    """(first index, pose count, _Part) chunk by chunk, in order, for the chunks ``bounds``
+    (chunk_bounds) of PoseStream's poses. With ``processes`` (process_count) above 1, the
+    other comparing processes (_Helpers, forked before chunk 0) each compare the chunks
+    _taker gives them, ahead of this one, which draws and compares only its own. If one dies (the routine crashed or exited there), its chunks are drawn
     and compared here again, so that a crash is named by this process's stage as always;
     if they run to the end here, (first index, pose count, exit code) of the chunk it died
     in is appended to ``deaths``: the routine crashed all the same."""
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
-    bounds = chunk_bounds(options.samples, chunk)
-    processes = process_count(options, len(bounds))
     stream = PoseStream(robot, options.seed)
     helpers = _Helpers(robot, options, bounds, processes) if processes > 1 else None
     try:
@@ -544,14 +542,15 @@ def _verify_job(channel, robot, library, routine, options):
 def _compare_samples(robot, plugin, report, options, progress, printed, phase):
     tally = _Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
-    chunk = chunk_size(robot)
+    bounds = chunk_bounds(options.samples, chunk_size(robot))
+    report.processes = process_count(options, len(bounds))
     deaths = []
-    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, chunk, phase, deaths):
+    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, bounds, report.processes,
+                                              phase, deaths):
         _merge(report, tally, printed, part)
         if progress is not None:
             progress(begin + count)
     report.seconds = time.perf_counter() - start
-    report.processes = process_count(options, len(chunk_bounds(options.samples, chunk)))
     report.posture_statistics = _posture_statistics(robot, tally)
     crashes = [Check("crash", False, f"a comparing process ended ({ending(code)}) during poses {begin} to "
                                      f"{begin + count - 1} of seed {options.seed}, which ran to the end when compared "
