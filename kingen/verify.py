@@ -718,15 +718,22 @@ def closure_error(robot, expected, solutions):
     for index, limb in enumerate(robot.limbs):
         point = expected.points[:, index]
         for posture in representative[index, :limb.branches]:
-            joint = solutions[:, index, posture]
+            miss, length = _closure_miss(limb, point, solutions[:, index, posture])
             with np.errstate(all="ignore"):
-                relative = np.abs(limb.closure_residual(point, joint)) / np.abs(limb.passive_length(joint))
+                relative = miss / length
             relative = np.where(np.isfinite(relative), relative, np.inf)
             judged = reachable[:, posture] & closing[:, index]
             judged_count += int(np.count_nonzero(judged))
             if np.any(judged):
                 worst = max(worst, float(np.max(np.where(judged, relative, 0.0))))
     return worst, judged_count
+
+
+def _closure_miss(limb, points, joints):
+    """(|closure residual|, |passive-link length|) (n,) (n,), mm, of ``limb`` at its platform
+    points (n, 3) and joints (n,): by how much the joints miss closing the limb (NaN for NaN joints)."""
+    with np.errstate(all="ignore"):
+        return np.abs(limb.closure_residual(points, joints)), np.abs(limb.passive_length(joints))
 
 
 def jacobian_check(robot, plugin, options, t6):
@@ -800,11 +807,8 @@ def round_trip_check(robot, plugin, options, t6):
     routine_joints = joints[pose_index, :, posture]
     residual = np.zeros(len(pose_index))  # the joints' closure residual, as far as the closure check accepts it
     for index, limb in enumerate(calibrated.limbs):
-        point, joint = expected.points[pose_index, index], routine_joints[:, index]
-        with np.errstate(all="ignore"):
-            accepted = np.fmin(np.abs(limb.closure_residual(point, joint)),
-                               CLOSURE_TOLERANCE * np.abs(limb.passive_length(joint)))
-        residual = np.fmax(residual, accepted)
+        miss, length = _closure_miss(limb, expected.points[pose_index, index], routine_joints[:, index])
+        residual = np.fmax(residual, np.fmin(miss, CLOSURE_TOLERANCE * length))
     found, _ = newton(calibrated, start, routine_joints, free)
     position = np.max(np.abs(found[:, :3] - start[:, :3]), axis=1)
     rotation = np.max(np.abs(t6_of(found)[:, :3, :3] - t6_of(start)[:, :3, :3]), axis=(1, 2))
