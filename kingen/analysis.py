@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .abi import WARNINGS
+from .routine import WARNINGS
 from .conventions import matrix_from_pose, t6_from_matrix
 from .reference import solve
 from .singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries

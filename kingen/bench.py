@@ -2,6 +2,9 @@
 cffi call per pose, and the reference's and verify's poses per second. Figures are
 printed, never asserted: speed targets live here, not in unit tests.
 
+The routine is timed through the runners its host's loaded routine offers
+(``batch_runner`` and ``each_runner``, as DELMIA's plugin does).
+
 Memory is bounded whatever the call count: the routine is timed over a pool of at most
 ``POOL_POSES`` distinct poses, passed over repeatedly until ``calls`` calls are made."""
 
@@ -9,9 +12,10 @@ import statistics
 import time
 
 from .conventions import t6_from_pose
-from .host import captured_output
+from .isolation import captured_output
+from .poses import sample_poses
 from .reference import solve
-from .verify import VerifyOptions, sample_poses, verify
+from .verify import VerifyOptions, verify
 
 PER_CALL_LIMIT = 20000
 """The per-call cffi path is slow; it is timed on at most this many poses."""

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .abi import UNWRITTEN_WARNING, WARNINGS
+from .routine import UNWRITTEN_WARNING, WARNINGS
 from .conventions import joint_errors, wrap_difference
 from .reference import solve
 

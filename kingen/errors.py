@@ -30,11 +30,11 @@ def read_limited(path, limit, what):
 
 
 class PluginDefect(KingenError):
-    """A plugin that breaks the interface before it can be verified (it does not load, no
-    get_kin_config, impossible counts): a failed verification (exit 1), not bad input.
-    ``check`` names the verify check it fails."""
+    """A library that breaks its host's interface before it can be verified (it does not
+    load, lacks an entry point, answers impossible counts): a failed verification (exit 1),
+    not bad input. ``check`` names the verify check it fails."""
 
-    def __init__(self, message, check="get_kin_config"):
+    def __init__(self, message, check="load"):
         super().__init__(message)
         self.check = check
 

@@ -1,5 +1,5 @@
-"""Running foreign code in a child process: loading a plugin (its constructors run),
-``get_kin_config`` and every routine call.
+"""Running foreign code in a child process: loading a library (its constructors run),
+asking it about its routine and every routine call; and capturing what it prints.
 
 The command line never executes plugin code in its own process. A job runs in a
 forked child and talks to the parent through a pipe: stage names, progress, finished
@@ -17,12 +17,16 @@ import faulthandler
 import multiprocessing
 import os
 import signal
+import sys
+import tempfile
 import traceback
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from .errors import InternalError, KingenError, PluginDefect
 
-FIRST_STAGE = "loading the plugin (its constructors and get_kin_config)"
+FIRST_STAGE = "loading the routine"
+"""The stage a job starts in, unless its caller names it (a host's ``loading_stage``)."""
 
 
 @dataclass(frozen=True)
@@ -47,7 +51,7 @@ class Channel:
         self._connection.send((kind, value))
 
 
-def run_in_child(job, arguments, timeout, on_message=None):
+def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE):
     """Run ``job(channel, *arguments)`` in a forked child; return (result, None) or
     (None, ChildFailure). ``on_message(kind, value)`` gets every message other than
     stages. A KingenError raised in the child is raised here (bad input found while
@@ -59,7 +63,7 @@ def run_in_child(job, arguments, timeout, on_message=None):
     child = context.Process(target=_child_main, args=(sender, job, arguments), daemon=False)
     child.start()
     sender.close()
-    stage = FIRST_STAGE
+    stage = first_stage
     try:
         while True:
             if not receiver.poll(timeout):
@@ -161,3 +165,34 @@ def _silence_standard_streams():
     os.dup2(null, 1)
     os.dup2(null, 2)
     os.close(null)
+
+
+@contextmanager
+def captured_output(limit=4096):
+    """Capture what native code writes on file descriptors 1 and 2 (printf included).
+
+    Yields a dict that holds, after the block, ``bytes`` (how many were written) and
+    ``text`` (the first ``limit`` bytes, decoded). C's stdio buffers are flushed on both
+    sides of the block (``fflush(NULL)``), so nothing printed before or inside it is misplaced.
+    """
+    result = {"bytes": 0, "text": ""}
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
+    flush = ctypes.CDLL(None).fflush
+    flush(None)
+    saved = [os.dup(1), os.dup(2)]
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 1)
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield result
+        finally:
+            flush(None)
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for descriptor in saved:
+                os.close(descriptor)
+            result["bytes"] = sink.seek(0, os.SEEK_END)
+            sink.seek(0)
+            result["text"] = sink.read(limit).decode(errors="replace")

@@ -17,9 +17,9 @@ from typing import Annotated, Literal, Optional, Union
 import numpy as np
 from pydantic import AfterValidator, Field, ValidationError
 
-from . import abi
 from .conventions import branch_of_posture
 from .errors import KingenError, located
+from .hosts import name_problems
 from .layouts import LAYOUTS, Layout
 from .limbs import MODELS
 from .resources import robots_dir
@@ -34,11 +34,11 @@ MAX_TWO_BRANCH_LIMBS = 8
 
 
 def _check_c_names(name):
-    """The robot's own name may be anything identifier-shaped ('int' gives kin_int); the C
-    names made from it must not collide with a C keyword or a name the vendor header defines."""
-    for made in (f"kin_{name}", f"lib{name}"):
-        if made in abi.RESERVED_NAMES:
-            raise ValueError(f"gives the C name '{made}', which the DELMIA header or the C language already uses")
+    """The robot's own name may be anything identifier-shaped ('int' gives kin_int); the names
+    every registered host makes from it must not collide with what that host or C reserves."""
+    problems = name_problems(name)
+    if problems:
+        raise ValueError("; ".join(problems))
     return name
 
 
@@ -89,11 +89,15 @@ class Collision(Strict):
     crank_radius: Optional[Length] = None
 
 
-@functools.lru_cache(maxsize=None)
 def robot_file_schema():
-    """The YAML schema over the registered limb models (rebuilt when one is registered);
+    """The YAML schema over the registered limb models (built anew when the registry changed);
     documented field by field in README.md ('Robot definitions')."""
-    limb = Annotated[Union[tuple(MODELS.values())], Field(discriminator="model")]
+    return _schema_over(tuple(MODELS.values()))
+
+
+@functools.lru_cache(maxsize=None)
+def _schema_over(models):
+    limb = Annotated[Union[models], Field(discriminator="model")]
 
     class RobotFile(Strict):
         name: Annotated[Identifier, AfterValidator(_check_c_names)]
@@ -109,11 +113,6 @@ def robot_file_schema():
         collision: Optional[Collision] = None
 
     return RobotFile
-
-
-def schema_changed():
-    """Forget the cached schema: the registry of limb models changed."""
-    robot_file_schema.cache_clear()
 
 
 @dataclass(frozen=True)

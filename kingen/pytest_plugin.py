@@ -7,7 +7,8 @@ items ``build``, ``interface``, ``values``, ``warnings``, ``closure``, ``jacobia
 it, so ``-k "tau and golden"`` selects them. Each file is built and verified once per
 process (in a child process, as ``kingen verify`` does); a failing item shows its checks'
 details and diagnoses, and points at the robot file's line. ``--kingen-samples N`` sets the
-poses (default 2000). Works with pytest-xdist and ``--junitxml``.
+poses (default 2000), ``--kingen-host NAME`` the host (default delmia). Works with
+pytest-xdist and ``--junitxml``.
 """
 
 import atexit
@@ -18,17 +19,22 @@ from pathlib import Path
 import pytest
 
 ROBOT_SUFFIXES = (".yaml", ".yml")
-ITEM_CHECKS = {
-    "build": ("definition",),
-    "interface": ("load", "get_kin_config", "kin_check_definition", "refusal", "non-finite T6", "return value",
-                  "buffers", "determinism", "crash", "timeout"),
-    "values": ("values",),
-    "warnings": ("warnings",),
-    "closure": ("closure",),
-    "jacobian": ("jacobian",),
-}
-"""Which verify checks each item reports (golden[i] and snapshot report their own)."""
+ITEMS = ("build", "interface", "values", "warnings", "closure", "jacobian")
+"""The items every robot file gives (golden[i] and snapshot report their own checks)."""
+ALWAYS_INTERFACE = ("load", "crash", "timeout")
+"""What the ``interface`` item reports besides the host's checks whose ``item`` says so."""
 DEFAULT_SAMPLES = 2000
+
+
+def item_checks(host):
+    """Which verify checks each item reports, from ``host``'s checks (their ``item``)."""
+    items = {name: [] for name in ITEMS}
+    items["interface"].append("load")
+    for check in host.checks:
+        if check.item in items:
+            items[check.item].append(check.name)
+    items["interface"].extend(ALWAYS_INTERFACE[1:])
+    return {name: tuple(checks) for name, checks in items.items()}
 
 
 def pytest_addoption(parser):
@@ -37,6 +43,8 @@ def pytest_addoption(parser):
                     help="collect every robot YAML in DIR as kingen tests (repeatable)")
     group.addoption("--kingen-samples", type=int, default=None, metavar="N",
                     help=f"poses each robot is verified on (default {DEFAULT_SAMPLES})")
+    group.addoption("--kingen-host", default="delmia", metavar="NAME",
+                    help="the host each robot is built for and verified against (default delmia)")
     parser.addini("kingen_robots", "folders whose robot YAML files are collected as kingen tests", type="paths")
 
 
@@ -82,7 +90,7 @@ class RobotFile(pytest.File):
             yield KingenItem.from_parent(self, name="build", problem=str(error))
             return
         self.robot = robot
-        for name in ITEM_CHECKS:
+        for name in ITEMS:
             yield KingenItem.from_parent(self, name=name, line=robot.line_of("name"))
         for index in range(len(robot.golden)):
             yield KingenItem.from_parent(self, name=f"golden[{index}]", line=robot.line_of("golden", index))
@@ -96,17 +104,17 @@ class RobotFile(pytest.File):
         return self._outcome
 
     def _verify(self):
-        from .build import build_plugin
         from .errors import KingenError
         from .snapshot import load, snapshot_path
         from .verify import VerifyOptions, verify_library
 
         samples = self.config.getoption("kingen_samples") or DEFAULT_SAMPLES
         try:
+            host = _host(self.config)
             snapshot = load(snapshot_path(self.path), self.robot) if snapshot_path(self.path).is_file() else None
-            result = build_plugin(self.robot, _build_folder() / self.robot.name)
+            result = host.build(self.robot, _build_folder() / self.robot.name)
             report = verify_library(self.robot, result.library, result.routine,
-                                    VerifyOptions(samples=samples, snapshot=snapshot, processes=None))
+                                    VerifyOptions(samples=samples, snapshot=snapshot, processes=None), host=host)
         except KingenError as error:
             return None, str(error)
         return report, None
@@ -128,9 +136,9 @@ class KingenItem(pytest.Item):
         report, problem = self.parent.outcome()
         if problem is not None:
             raise KingenFailure(("the build failed: " if self.name == "build" else "not verified: ") + problem)
-        names = ITEM_CHECKS.get(self.name, (self.name,))
+        names = item_checks(_host(self.config)).get(self.name, (self.name,))
         checks = [check for check in report.checks if check.name in names]
-        if self.name not in ITEM_CHECKS and not checks:
+        if self.name not in ITEMS and not checks:
             raise KingenFailure(f"no check {self.name} in the report")
         failed = [check for check in checks if not check.passed]
         if failed:
@@ -151,6 +159,12 @@ class KingenItem(pytest.Item):
 
     def reportinfo(self):
         return self.path, self.line - 1, self.name
+
+
+def _host(config):
+    from .hosts import get_host
+
+    return get_host(config.getoption("kingen_host"))
 
 
 _folder = None

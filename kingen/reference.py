@@ -8,7 +8,7 @@ are every posture's joint values (mm, radians in (-pi, pi]) and warning.
 
 Warnings follow the generated C exactly (README, 'Warnings'):
 ``WARN_UNREACHABLE`` when some limb has no real solution, ``WARN_SINGULAR_SOLUTION``
-when some limb's normalised radicand D (rails, cranks) is within ``abi.SINGULAR_TOLERANCE``
+when some limb's normalised radicand D (rails, cranks) is within ``routine.SINGULAR_TOLERANCE``
 of zero or the posture's direct index is at most the robot's ``direct_index_min``, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;
 unreachable wins over singular, singular over joint limits. A limb without a
 real solution reports the value at the clamped radicand (closest approach), so
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import abi
+from .routine import SINGULAR_TOLERANCE, WARNINGS
 from .singularity import (branch_table, direct_index_of_entries, direct_index_side, gram_entries_of, gram_partial_sums,
                           limb_wrenches, posture_values)
 
@@ -133,8 +133,8 @@ def _solve(robot, t6, indices):
         outside = np.any(posture_values(robot, beyond), axis=2)
     else:
         outside = np.zeros((count, robot.postures), dtype=bool)
-    unreachable = np.any(~(radicands >= -abi.SINGULAR_TOLERANCE) | overflow, axis=1)
-    singular = np.any(np.abs(radicands) <= abi.SINGULAR_TOLERANCE, axis=1)
+    unreachable = np.any(~(radicands >= -SINGULAR_TOLERANCE) | overflow, axis=1)
+    singular = np.any(np.abs(radicands) <= SINGULAR_TOLERANCE, axis=1)
 
     unreachable = unreachable[:, None] | ~finite[:, None]
     singular = np.broadcast_to(singular[:, None], outside.shape)
@@ -151,10 +151,10 @@ def _solve(robot, t6, indices):
         if robot.direct_index_min is not None:
             singular = singular | (index <= robot.direct_index_min)
 
-    warnings = np.full((count, robot.postures), abi.WARNINGS["WARN_GOOD_SOLUTION"], dtype=np.int32)
+    warnings = np.full((count, robot.postures), WARNINGS["WARN_GOOD_SOLUTION"], dtype=np.int32)
     for flags, code in ((outside, "WARN_JOINT_LIMITS_EXCEEDED"), (singular, "WARN_SINGULAR_SOLUTION"),
                         (unreachable, "WARN_UNREACHABLE")):  # each later one wins
-        np.copyto(warnings, abi.WARNINGS[code], where=flags)
+        np.copyto(warnings, WARNINGS[code], where=flags)
     return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands,
                     finite=finite, posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points,
                     direct_index=index)

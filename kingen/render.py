@@ -1,9 +1,11 @@
-"""Rendering: robot -> C source text. Pure: nothing here touches the file system
-except reading the templates; the build layer writes files.
+"""Rendering, shared by every host: robot -> the view-model its C templates substitute.
+Pure: nothing here touches the file system except reading templates; the build layer
+writes files.
 
 All decisions are made here in a Python view-model; the templates only loop and
 substitute. Numbers are written with Python's shortest round-trip repr, so the
-C tables hold exactly the doubles the reference uses.
+C tables hold exactly the doubles the reference uses. Templates are found in the host's
+own folder first, then in the shared ``templates/`` (limb model partials from the registry).
 """
 
 import functools
@@ -12,19 +14,18 @@ import textwrap
 
 import jinja2
 
-from . import __version__, abi
+from . import __version__
 from .library_info import BUILD_INFO_MARKER
 from .limbs import MODELS, c_double, partial_path
+from .resources import templates_dir
 from .schema import dialog_label, field_index
 from .singularity import PACKED, partial_sum_split
-from .resources import templates_dir
 from .text import finalizer, markdown
-
 
 TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown", ".html.j2": "html"}
 """Which escaping (:func:`kingen.text.finalizer`) a template's substitutions get, by suffix
-(HTML: jinja2's autoescape); every other template is plain text. The stand-in header has no
-user text and none."""
+(HTML: jinja2's autoescape); every other template is plain text. Headers (``.h.j2``) hold no
+user text and get none."""
 
 
 def _partial_source(name):
@@ -37,10 +38,11 @@ def _partial_source(name):
 
 
 @functools.lru_cache(maxsize=None)
-def _environment(kind):
+def _environment(kind, folder):
+    folders = [str(folder)] if folder is not None else []
     return jinja2.Environment(
         loader=jinja2.ChoiceLoader([jinja2.FunctionLoader(_partial_source),
-                                    jinja2.FileSystemLoader(str(templates_dir()))]),
+                                    jinja2.FileSystemLoader([*folders, str(templates_dir())])]),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
         lstrip_blocks=True,
@@ -50,19 +52,15 @@ def _environment(kind):
     )
 
 
-def template(name):
-    """The jinja2 template ``name`` from templates/, in the environment that escapes its
-    substitutions for its kind of file (C, Markdown, plain text): strict undefined."""
-    kind = None if name == "shlibdefs.h.j2" else next(
+def template(name, folder=None):
+    """The jinja2 template ``name`` from ``folder`` (a host's templates) or the shared
+    templates/, in the environment that escapes its substitutions for its kind of file
+    (C, Markdown, HTML, plain text): strict undefined."""
+    kind = None if name.endswith(".h.j2") else next(
         (kind for suffix, kind in TEMPLATE_KINDS.items() if name.endswith(suffix)), "plain")
-    environment = _environment(kind)
+    environment = _environment(kind, folder)
     environment.filters["markdown"] = markdown
     return environment.get_template(name)
-
-
-def source_name(robot):
-    """The generated source's file name, kin_<name>.c, as DELMIA's makefile expects."""
-    return f"kin_{robot.name}.c"
 
 
 def calibration_line(robot, joint, parameter, dialog_field, built_in):
@@ -142,8 +140,9 @@ def joint_sum(robot):
             for index, bit in enumerate(robot.branch_bits)]
 
 
-def view_model(robot):
-    """Everything the plugin template substitutes, already formatted as C."""
+def robot_view(robot):
+    """What every host's routine template substitutes about the robot, already formatted as C:
+    names, joints, limb model tables, singularity tests and the build information."""
     lower, upper = robot.travel_limits()
     joints = []
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
@@ -162,8 +161,6 @@ def view_model(robot):
         })
     return {
         "version": __version__,
-        "header_version": abi.HEADER_VERSION,
-        "file_name": source_name(robot),
         "source_name": robot.path.name,
         "source_hash": robot.sha256,
         "name": robot.name,
@@ -174,7 +171,6 @@ def view_model(robot):
         "postures": robot.postures,
         "two_branch_count": sum(1 for bit in robot.branch_bits if bit >= 0),
         "joint_sum": joint_sum(robot),
-        "singular_tolerance": c_double(abi.SINGULAR_TOLERANCE),
         "joints": joints,
         "any_limits": any(limb.travel is not None for limb in robot.limbs),
         "any_revolute": any(limb.joint_type.wraps for limb in robot.limbs),
@@ -189,33 +185,4 @@ def view_model(robot):
         "degree": c_double(math.pi / 180.0),
         "calibration": [calibration_line(robot, *entry) for entry in robot.calibration()],
         "build_info": build_info(robot),
-        "get_kin_config": abi.GET_KIN_CONFIG,
-        "routine_prototype": abi.routine_prototype(robot.routine, "NUM_SOLUTIONS"),
     }
-
-
-def render(robot):
-    """The plugin's files as {file name: text}; today one file, ``kin_<name>.c``."""
-    text = template("kin_robot.c.j2").render(**view_model(robot))
-    return {source_name(robot): text}
-
-
-def render_header():
-    """The stand-in ``shlibdefs.h`` text, from :mod:`kingen.abi`."""
-    return template("shlibdefs.h.j2").render(
-        version=__version__,
-        header_version=abi.HEADER_VERSION,
-        warnings=list(abi.WARNINGS.items()),
-        warning_aliases=list(abi.WARNING_ALIASES.items()),
-        constants=list(abi.CONSTANTS.items()),
-        kinstat_struct=abi.kinstat_struct(),
-        host_check=abi.HOST_CHECK,
-        host_math=list(abi.HOST_MATH.items()),
-        emulator_functions=list(abi.EMULATOR_FUNCTIONS),
-        host_defines=abi.host_defines(),
-    )
-
-
-def host_source():
-    """The host emulator's C source (a fixed file, not a template)."""
-    return (templates_dir() / "kingen_host.c").read_text()

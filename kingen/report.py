@@ -9,8 +9,6 @@ from dataclasses import asdict, dataclass, field
 
 from .text import xml_text
 
-INTERFACE_CHECKS = ("get_kin_config", "kin_check_definition", "refusal", "non-finite T6")
-
 
 @dataclass
 class Check:
@@ -60,6 +58,8 @@ class Report:
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
+    interface_checks: tuple = ()
+    """Names of the host's interface checks (their failures are listed as ``interface_failures``)."""
     posture_statistics: list = field(default_factory=list)
     """Per posture: {posture, right, wrong, unreachable_wrongly, missed, worst_error_mm,
     worst_error_rad}: poses solved right, solved wrong (joints beyond their bound), reported
@@ -109,7 +109,7 @@ class Report:
             "golden": [asdict(result) for result in self.golden],
             "posture_statistics": self.posture_statistics,
             "checks": [asdict(check) for check in self.checks],
-            "interface_failures": [check.detail for check in self.failures if check.name in INTERFACE_CHECKS],
+            "interface_failures": [check.detail for check in self.failures if check.name in self.interface_checks],
             "diagnoses": [text for check in self.checks for text in check.diagnoses],
             "notices": list(self.notices),
             "seconds": round(self.seconds, 6),

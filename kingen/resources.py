@@ -20,8 +20,8 @@ def _folder(name, marker):
 
 
 def templates_dir():
-    """The folder of the jinja2 C templates and the host emulator source."""
-    return _folder("templates", "kin_robot.c.j2")
+    """The folder of the shared jinja2 templates (limb model partials, the analysis report)."""
+    return _folder("templates", "limbs/leg.c.j2")
 
 
 def robots_dir():

@@ -1,5 +1,5 @@
 """Recorded snapshots: poses with every posture's joints and warnings, kept in a JSON file
-next to a robot definition and checked on every run (check ``snapshot``).
+next to a robot definition and checked on every run (:mod:`kingen.verify.checks.snapshot`).
 
 A snapshot is recorded from the reference or from a trusted plugin (a hand-written routine
 already validated in the simulator). Recording is the only way a snapshot changes, and it
@@ -13,10 +13,10 @@ from typing import Annotated, Optional
 import numpy as np
 from pydantic import Field, ValidationError
 
-from . import __version__, abi
+from . import __version__
 from .conventions import t6_from_pose
 from .errors import located, read_limited
-from .report import Check
+from .poses import sample_poses
 from .schema import Strict
 
 FORMAT = 1
@@ -25,7 +25,6 @@ TOLERANCE_RAD = 1e-8
 """Defaults a snapshot is recorded with: far above rounding differences between compilers
 and machines, far below any modelling change."""
 MAX_SNAPSHOT_BYTES = 64 << 20
-WORST_SHOWN = 3
 
 
 class Tolerance(Strict):
@@ -83,8 +82,6 @@ def record(robot, t6, joints, warnings, recorded_from, samples, seed):
 
 def sample_t6(robot, samples, seed):
     """The poses a snapshot records: drawn like verify's, from their own seed."""
-    from .verify import sample_poses
-
     return t6_from_pose(sample_poses(robot, samples, seed))
 
 
@@ -106,42 +103,3 @@ def load(path, robot):
     if shapes - {(robot.dof, robot.postures, robot.postures)}:
         raise located(path, None, "entries", f"entries must hold {robot.dof} joints x {robot.postures} postures")
     return snapshot
-
-
-def check(robot, snapshot, call):
-    """The ``snapshot`` check: ``call(t6)`` gives the routine's (solutions, warnings) for the
-    snapshot's T6; joints are compared where the recording solved the posture, warnings
-    everywhere. The detail names the worst entries."""
-    t6 = np.array([entry.t6 for entry in snapshot.entries], dtype=float).reshape(-1, 4, 4)
-    recorded = np.array([[[np.nan if v is None else v for v in row] for row in entry.joints]
-                         for entry in snapshot.entries], dtype=float).reshape(len(t6), robot.dof, robot.postures)
-    recorded_warnings = np.array([entry.warnings for entry in snapshot.entries], dtype=int).reshape(len(t6), -1)
-    solutions, warnings = call(t6)
-    units = np.array(snapshot.joint_units)
-    tolerance = np.where(units == "rad", snapshot.tolerance.rad, snapshot.tolerance.mm)[None, :, None]
-    difference = solutions - recorded
-    difference[:, units == "rad"] = difference[:, units == "rad"] - 2 * np.pi * np.rint(
-        difference[:, units == "rad"] / (2 * np.pi))
-    error = np.where(np.isfinite(difference), np.abs(difference), np.inf)
-    solved = (recorded_warnings != abi.WARNINGS["WARN_UNREACHABLE"])[:, None, :]
-    excess = np.where(solved, error / tolerance, 0.0)
-    wrong_values = int(np.count_nonzero(excess > 1.0))
-    wrong_warnings = int(np.count_nonzero(warnings != recorded_warnings))
-    detail = (f"{len(t6)} recorded poses x {robot.postures} postures ({snapshot.recorded_from}, kingen "
-              f"{snapshot.kingen}): {wrong_values} joints beyond {snapshot.tolerance.mm:g} mm / "
-              f"{snapshot.tolerance.rad:g} rad, {wrong_warnings} warnings differ")
-    worst = []
-    for flat in np.argsort(excess, axis=None)[::-1][:WORST_SHOWN]:
-        pose, joint, posture = np.unravel_index(flat, excess.shape)
-        if excess[pose, joint, posture] > 1.0:
-            worst.append(f"pose {pose} posture {posture} {snapshot.joint_names[joint]}: recorded "
-                         f"{recorded[pose, joint, posture]:.9g}, now {solutions[pose, joint, posture]:.9g} "
-                         f"{units[joint]}")
-    for pose, posture in list(zip(*np.nonzero(warnings != recorded_warnings)))[:WORST_SHOWN]:
-        worst.append(f"pose {pose} posture {posture}: recorded warning {abi.WARNING_NAMES.get(recorded_warnings[pose, posture])}, "
-                     f"now {abi.WARNING_NAMES.get(int(warnings[pose, posture]), warnings[pose, posture])}")
-    result = Check("snapshot", not wrong_values and not wrong_warnings, detail, worst)
-    if snapshot.definition_sha256 != robot.sha256:
-        result.diagnoses.append(f"recorded from another definition (sha256 {snapshot.definition_sha256[:16]}; "
-                                f"the robot file has {robot.sha256[:16]}): record it again if the change was meant")
-    return result

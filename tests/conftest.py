@@ -14,9 +14,9 @@ if os.environ.get("CI"):
 
 os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache-"))
 
-from kingen.build import build_plugin  # noqa: E402
+from kingen.hosts.delmia.build import build_plugin  # noqa: E402
 from kingen.conventions import t6_from_pose  # noqa: E402
-from kingen.host import Plugin  # noqa: E402
+from kingen.hosts.delmia.loader import Plugin  # noqa: E402
 from kingen.model import load_robot, shipped_robots  # noqa: E402
 
 SHIPPED = shipped_robots()

@@ -101,7 +101,8 @@ def test_joints_rounded_differently_go_round_and_wrong_joints_do_not(name, plugi
     """The round trip's bound follows the joints' own closure residual through the posture's
     conditioning: a routine 256 units in the last place from kingen's (far inside the values
     bound) passes, as kingen's own does; one whose first joint is 1 um off fails."""
-    from kingen.verify import VerifyOptions, round_trip_check
+    from kingen.verify import VerifyOptions
+    from kingen.verify.checks.round_trip import round_trip_check
 
     robot, routine = plugin(name)
     _, t6 = random_t6(robot, 1000, seed=0)

@@ -12,9 +12,9 @@ import math
 import pytest
 from hypothesis import HealthCheck, example, given, settings, strategies as st
 
-from kingen.build import build_plugin
+from kingen.hosts.delmia.build import build_plugin
 from kingen.cli import main
-from kingen.host import Plugin
+from kingen.hosts.delmia.loader import Plugin
 from kingen.model import load_robot, robots_dir, shipped_robots
 from kingen.robot_file import read_robot_file
 from kingen.verify import VerifyOptions, verify

@@ -393,7 +393,8 @@ def test_a_crash_in_another_comparing_process_is_named_as_in_the_first(capsys, t
     one pose of chunk 1, the second process's first) is run again on that chunk in the first
     process, where it crashes on the same pose, so the crash is named with its poses as always."""
     from kingen.model import load_robot
-    from kingen.verify import chunk_size, sample_poses
+    from kingen.poses import sample_poses
+    from kingen.verify import chunk_size
     robot = load_robot("hexapod")
     chunk = chunk_size(robot)
     x = sample_poses(robot, 2 * chunk, seed=0)[chunk:, 0]

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from kingen import limbs
-from kingen.build import build_plugin
+from kingen.hosts.delmia.build import build_plugin
 from kingen.errors import KingenError
-from kingen.host import Plugin
+from kingen.hosts.delmia.loader import Plugin
 from kingen.limbs import LimbModel, LimbSolution, c_double, c_vector
 from kingen.model import load_robot
-from kingen.package import render_package
+from kingen.hosts.delmia.package import render_package
 from kingen.schema import Coordinate, Vec3
 from kingen.verify import VerifyOptions, verify
 

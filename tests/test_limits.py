@@ -12,13 +12,15 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 import pytest
 
-from kingen.build import build_plugin, cache_dir, first_diagnostic, host_support
+from kingen.compiler import first_diagnostic
+from kingen.files import cache_dir
+from kingen.hosts.delmia.build import build_plugin, host_support
 from kingen.cli import main
 from kingen.errors import KingenError
 from kingen.model import load_robot, robots_dir
-from kingen.pe import dll_exports
+from kingen.hosts.delmia.pe import dll_exports
 from kingen.report import Check, Report, json_text, junit_xml
-from kingen.verify import PoseStream, pose_chunks, sample_poses
+from kingen.poses import PoseStream, pose_chunks, sample_poses
 
 LEG = """\
 name: NAME
@@ -73,7 +75,7 @@ def test_control_and_bidi_characters_are_refused_in_robot_files(tmp_path, charac
 def test_a_file_name_cannot_add_make_targets_or_lines(tmp_path):
     path = leg_file(tmp_path, file_name="evil\n\tall:\n\t\tdel *.c\n.yaml")
     robot = load_robot(path)
-    from kingen.package import render_package
+    from kingen.hosts.delmia.package import render_package
     plain = render_package(load_robot(leg_file(tmp_path)), "windows")
     for name, text in render_package(robot, "windows").items():
         assert len(text.splitlines()) == len(plain[name].splitlines()), name
@@ -84,7 +86,7 @@ def test_a_file_name_cannot_add_make_targets_or_lines(tmp_path):
 
 def test_markdown_in_a_description_is_shown_not_interpreted(tmp_path):
     robot = load_robot(leg_file(tmp_path, description="# Title <script>alert(1)</script> | [x](y)"))
-    from kingen.package import render_package
+    from kingen.hosts.delmia.package import render_package
     sheet = render_package(robot, "windows")["SETUP.md"]
     assert "\\# Title \\<script\\>alert\\(1\\)\\</script\\> \\| \\[x\\]\\(y\\)" in sheet
 
@@ -372,7 +374,7 @@ def test_the_prismatic_bound_is_relative_only_for_large_robots(tmp_path):
 
 
 def test_plugins_built_by_kingen_verify_at_the_edge_of_the_range(tmp_path):
-    from kingen.host import Plugin
+    from kingen.hosts.delmia.loader import Plugin
     from kingen.verify import VerifyOptions, verify
     text = LEG.replace("NAME", "edge").replace("DESCRIPTION", "edge").replace(
         "platform_point: [0, 0, 0], reference_length: 100", "platform_point: [987654.321, -3.25, 12.5], "

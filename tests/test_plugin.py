@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6, require_tool
-from kingen.abi import UNWRITTEN_WARNING, WARNINGS
-from kingen.build import STRICT_C89, compiler_command, host_support
+from kingen.routine import UNWRITTEN_WARNING, WARNINGS
+from kingen.compiler import compiler_command
+from kingen.hosts.delmia.build import STRICT_C89, host_support
 from kingen.conventions import joint_errors, t6_from_pose
-from kingen.host import KinStat, Plugin, host_state
+from kingen.hosts.delmia.loader import KinStat, Plugin, host_state
 from kingen.model import load_robot
-from kingen.render import render
+from kingen.hosts.delmia.render import render
 from kingen.reference import solve
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
@@ -54,7 +55,7 @@ def test_generated_source_is_tables_plus_one_helper_per_model(name):
 
 def test_rendering_is_reproducible_across_processes(tmp_path):
     """Byte for byte, in fresh interpreters with different hash seeds (set and dict order)."""
-    script = ("import sys; from kingen.model import load_robot; from kingen.render import render; "
+    script = ("import sys; from kingen.model import load_robot; from kingen.hosts.delmia.render import render; "
               "sys.stdout.write(''.join(t for n in sys.argv[1:] for t in render(load_robot(n)).values()))")
     outputs = [subprocess.run([sys.executable, "-c", script, *SHIPPED], capture_output=True, text=True, check=True,
                               env={**os.environ, "PYTHONHASHSEED": seed}).stdout for seed in ("1", "2")]
@@ -133,7 +134,7 @@ def test_singular_pose_is_flagged_by_plugin_and_reference(plugin):
 
 def test_debug_build_prints_pdata_t6_and_joints(built, tmp_path, capfd):
     robot = load_robot("exechon")
-    from kingen.build import build_plugin
+    from kingen.hosts.delmia.build import build_plugin
     result = build_plugin(robot, tmp_path / "debug", defines=("KINGEN_DEBUG",))
     loaded = Plugin(result.library, result.routine)
     assert loaded.config.data_hint == 1

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6
-from kingen.abi import SINGULAR_TOLERANCE, WARNINGS
+from kingen.routine import SINGULAR_TOLERANCE, WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
 from kingen.reference import platform_points_in_base, solve

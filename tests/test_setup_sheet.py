@@ -3,7 +3,7 @@
 import re
 
 from kingen.model import load_robot
-from kingen.package import render_package
+from kingen.hosts.delmia.package import render_package
 
 
 def sheet(name, target="windows"):

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6
-from kingen.abi import WARNINGS
+from kingen.routine import WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
 from kingen.model import load_robot

@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6, require_tool
-from kingen.build import MINGW, STRICT_C89, build_plugin, compile_c, host_support, windows_host_import_library
+from kingen.compiler import compile_c
+from kingen.hosts.delmia.build import MINGW, STRICT_C89, build_plugin, host_support, windows_host_import_library
 from kingen.conventions import rotation_from_rpy, t6_from_matrix
 from kingen.model import load_robot
-from kingen.package import render_package, write_package
-from kingen.pe import dll_exports
+from kingen.hosts.delmia.package import render_package, write_package
+from kingen.hosts.delmia.pe import dll_exports
 from kingen.reference import solve
 
 
@@ -60,7 +61,7 @@ def sanitized_client(tmp_path_factory):
 @pytest.mark.parametrize("name", SHIPPED)
 def test_sanitized_plugin_reports_nothing_on_random_extreme_and_non_finite_t6(sanitized_client, tmp_path, name):
     robot = load_robot(name)
-    (file_name, text), = __import__("kingen.render", fromlist=["render"]).render(robot).items()
+    (file_name, text), = __import__("kingen.hosts.delmia.render", fromlist=["render"]).render(robot).items()
     source = tmp_path / file_name
     source.write_text(text)
     include, _ = host_support()
@@ -127,7 +128,7 @@ def test_package_never_ships_a_shlibdefs_h(tmp_path):
 
 
 def test_linux_package_holds_a_working_library(tmp_path):
-    from kingen.host import Plugin
+    from kingen.hosts.delmia.loader import Plugin
     paths = write_package(load_robot("exechon"), tmp_path, "linux")
     assert sorted(p.name for p in paths) == ["SETUP.md", "kin_exechon.c", "libexechon.so"]
     plugin = Plugin(tmp_path / "libexechon.so", "kin_exechon")

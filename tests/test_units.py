@@ -7,17 +7,18 @@ import stat
 import numpy as np
 import pytest
 
-from kingen.abi import UNWRITTEN_WARNING, WARNINGS
+from kingen.routine import UNWRITTEN_WARNING, WARNINGS, check_routine_name
 from kingen.bench import benchmark
-from kingen.build import (
-    WINDOWS_DEFINES, CompileError, compile_c, compiler_command, legacy_library_name, write_atomic,
-)
+from kingen.compiler import CompileError, compile_c, compiler_command
+from kingen.files import PACKAGE_MARKER as MARKER
+from kingen.files import write_atomic
+from kingen.hosts.delmia.build import WINDOWS_DEFINES, legacy_library_name
 from kingen.conventions import t6_from_pose
 from kingen.diagnose import diagnose, diagnose_warnings
 from kingen.errors import KingenError
-from kingen.host import KinStat, check_routine_name
+from kingen.hosts.delmia.loader import KinStat
 from kingen.model import load_robot
-from kingen.package import MARKER, render_package, write_package
+from kingen.hosts.delmia.package import render_package, write_package
 from kingen.reference import solve
 
 GOOD, UNREACHABLE = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]

@@ -8,13 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from kingen.abi import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
+from kingen.routine import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
 from kingen.conventions import t6_from_pose
-from kingen.host import Calls
+from kingen.routine import Calls
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.report import Report
-from kingen.verify import _accumulate, _Tally, singular_bounds, warnings_in_band
+from kingen.verify.tally import Tally as _Tally
+from kingen.verify.tally import accumulate as _accumulate
+from kingen.verify.tally import singular_bounds, warnings_in_band
 
 RAIL = """\
 name: one_rail

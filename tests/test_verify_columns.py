@@ -6,14 +6,17 @@ import dataclasses
 import numpy as np
 import pytest
 
-from kingen import verify
-from kingen.abi import WARNINGS
-from kingen.host import Calls
+from kingen.verify import tally as verify
+from kingen.routine import WARNINGS
+from kingen.routine import Calls
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.report import Report
 from kingen.singularity import branch_table
-from kingen.verify import _accumulate, _compared_columns, _Tally, sample_poses
+from kingen.poses import sample_poses
+from kingen.verify.tally import Tally as _Tally
+from kingen.verify.tally import accumulate as _accumulate
+from kingen.verify.tally import compared_columns as _compared_columns
 from kingen.conventions import t6_from_pose
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]

@@ -6,7 +6,7 @@ import dataclasses
 import pytest
 
 from conftest import ChangedJoints
-from kingen import verify as verify_module
+from kingen.verify import processes as verify_module
 from kingen.verify import VerifyOptions, chunk_size, verify
 
 

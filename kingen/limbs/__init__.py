@@ -3,7 +3,8 @@
 ``MODELS`` maps each YAML tag (``model: rail``) to its class. Everything that works per
 model (schema, reference solver, C tables, setup sheet words, diagnoses, verify's
 conditioning bound) asks the class; nothing else in kingen names a model. ``register``
-adds a model at run time (tests do, with a toy model).
+adds a model at run time (tests do, with a toy model); the robot-file schema follows
+the registry's content (:func:`kingen.model.robot_file_schema`).
 """
 
 from .base import LimbModel, LimbSolution, c_double, c_vector, model_name, partial_path
@@ -17,16 +18,12 @@ MODELS = {}
 def register(cls):
     """Add limb model class ``cls`` (a LimbModel subclass with a ``model`` literal)."""
     MODELS[model_name(cls)] = cls
-    from ..model import schema_changed
-    schema_changed()
     return cls
 
 
 def unregister(cls):
     """Remove limb model class ``cls`` again."""
     MODELS.pop(model_name(cls), None)
-    from ..model import schema_changed
-    schema_changed()
 
 
 for _cls in (Leg, Rail, Crank):

@@ -12,21 +12,19 @@ Loading runs the library's constructors and every call runs foreign code: the
 command line does both only in a child process (:mod:`kingen.isolation`).
 """
 
-import os
-import re
 import shutil
-import sys
 import tempfile
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 import cffi
 import numpy as np
 
+from ...errors import KingenError, PluginDefect
+from ...routine import Calls, check_routine_name
 from . import abi
 from .build import host_support
-from .errors import KingenError, PluginDefect
+from .checks import CHECKS
 
 ffi = cffi.FFI()
 ffi.cdef(abi.cffi_declarations())
@@ -34,7 +32,6 @@ ffi.cdef(abi.cffi_declarations())
 MAX_DOF = 64
 MAX_SOLUTIONS = 1 << 16
 """The largest joint and solution counts a get_kin_config answer may give to be called at all."""
-C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,254}")
 
 _host_library = None
 _loaded = {}
@@ -57,35 +54,6 @@ class KinConfig:
     dof: int
     solutions: int
     data_hint: int
-
-
-@dataclass(frozen=True)
-class Calls:
-    """Routine results for n poses: returned (n,), solutions (n, dof, postures), warnings (n, postures).
-
-    faults (n,): per call the :data:`kingen.abi.GUARD_FAULTS` bits (writes outside the
-    output buffers, modified inputs); 0 for a clean call.
-    """
-
-    returned: np.ndarray
-    solutions: np.ndarray
-    warnings: np.ndarray
-    faults: np.ndarray
-
-    @property
-    def guard_violations(self):
-        return int(np.count_nonzero(self.faults & ~16))
-
-    @property
-    def inputs_modified(self):
-        return bool(np.any(self.faults & 16))
-
-
-def check_routine_name(routine):
-    """``routine`` if it is a C identifier; else KingenError (it would be looked up as a symbol)."""
-    if not isinstance(routine, str) or not C_IDENTIFIER.fullmatch(routine):
-        raise KingenError(f"routine name {routine!r} is not a C identifier")
-    return routine
 
 
 def _dlopen(path):
@@ -125,7 +93,10 @@ class Plugin:
     Raises KingenError for what is the user's to fix (no such file, not a loadable
     library, a routine the library does not know) and PluginDefect for a library that
     breaks the interface (no get_kin_config, impossible joint or solution counts).
+    ``checks``: what verify runs on it (:mod:`kingen.hosts.delmia.checks`).
     """
+
+    checks = CHECKS
 
     def __init__(self, library_path, routine):
         host()
@@ -140,7 +111,7 @@ class Plugin:
         try:
             self.library.get_kin_config
         except AttributeError:
-            raise PluginDefect("the library does not export get_kin_config") from None
+            raise PluginDefect("the library does not export get_kin_config", check="get_kin_config") from None
         self.config = self.kin_config(routine)
         if self.config.status != 0:
             raise KingenError(f"{self.path}: get_kin_config does not know routine '{routine}'")
@@ -149,8 +120,12 @@ class Plugin:
         self.dof, self.postures = self.config.dof, self.config.solutions
         if not (1 <= self.dof <= MAX_DOF and 1 <= self.postures <= MAX_SOLUTIONS):
             raise PluginDefect(f"get_kin_config answers {self.dof} joints and {self.postures} solutions for "
-                               f"'{routine}': the routine cannot be called with such buffers")
+                               f"'{routine}': the routine cannot be called with such buffers", check="get_kin_config")
         self.reset_host()
+
+    def host_state(self):
+        """(kin_check_definition calls, last dof, last solution count) since the last reset."""
+        return host_state()
 
     def kin_config(self, routine):
         """Ask get_kin_config about ``routine`` (any name, to test refusals too)."""
@@ -263,32 +238,3 @@ def host_state():
     """(kin_check_definition calls, last dof, last solution count) recorded by the host."""
     lib = host()
     return lib.kingen_host_check_calls(), lib.kingen_host_last_dof(), lib.kingen_host_last_solutions()
-
-
-@contextmanager
-def captured_output(limit=4096):
-    """Capture what native code writes on file descriptors 1 and 2 (printf included).
-
-    Yields a dict that holds, after the block, ``bytes`` (how many were written) and
-    ``text`` (the first ``limit`` bytes, decoded).
-    """
-    result = {"bytes": 0, "text": ""}
-    for stream in (sys.stdout, sys.stderr):
-        if stream is not None:
-            stream.flush()
-    host().kingen_host_flush()
-    saved = [os.dup(1), os.dup(2)]
-    with tempfile.TemporaryFile() as sink:
-        os.dup2(sink.fileno(), 1)
-        os.dup2(sink.fileno(), 2)
-        try:
-            yield result
-        finally:
-            host().kingen_host_flush()
-            os.dup2(saved[0], 1)
-            os.dup2(saved[1], 2)
-            for descriptor in saved:
-                os.close(descriptor)
-            result["bytes"] = sink.seek(0, os.SEEK_END)
-            sink.seek(0)
-            result["text"] = sink.read(limit).decode(errors="replace")

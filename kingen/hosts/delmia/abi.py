@@ -3,20 +3,15 @@
 The stand-in ``shlibdefs.h``, the generated plugin's prototypes and the cffi
 declarations used to load plugins are all rendered from these lists, so the C
 side and the Python side cannot drift apart. Values are those of the vendor
-header (docs/delmia-abi.md).
+header (docs/delmia-abi.md). The warnings are kingen's status codes (:mod:`kingen.routine`).
 """
+
+from ...routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNINGS
 
 HEADER_VERSION = 1
 """Bumped when the stand-in header changes in a way generated sources rely on."""
 
-WARNINGS = {
-    "WARN_GOOD_SOLUTION": 0,
-    "WARN_JOINT_LIMITS_EXCEEDED": 1,
-    "WARN_UNREACHABLE": 2,
-    "WARN_SINGULAR_SOLUTION": 5,
-}
 WARNING_ALIASES = {"WARN_JOINT_LIMIT_EXCEEDED": "WARN_JOINT_LIMITS_EXCEEDED"}
-WARNING_NAMES = {value: name for name, value in WARNINGS.items()}
 
 CONSTANTS = {
     "USR_KIN_DATA_NULL": 0,
@@ -28,23 +23,8 @@ CONSTANTS = {
     "TRANSLATIONAL": 1,
     "STATUS_OKAY": 0,
     "STATUS_ERROR": 1,
-    "ZERO_TOL": 0.00001,
+    "ZERO_TOL": SINGULAR_TOLERANCE,
 }
-
-SINGULAR_TOLERANCE = CONSTANTS["ZERO_TOL"]
-"""Band |D| <= 1e-5 around a limb singularity (D: a limb's normalised radicand): the
-routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5."""
-
-UNWRITTEN_WARNING = -1
-"""Sentinel the host puts in every warning slot before a call: left there, it was never written."""
-UNWRITTEN_JOINT = float("nan")
-"""Sentinel the host puts in every solutions entry before a call."""
-VALUE_TOLERANCE_MM = 1e-9
-VALUE_TOLERANCE_RAD = 1e-9
-"""How close a routine's joints must be to the reference's (prismatic, revolute)."""
-WARNING_BAND = 1e-9
-"""Half-width of the band around a warning threshold (radicand +/- SINGULAR_TOLERANCE:
-relative; travel limits: mm or rad) inside which plugin and reference may disagree."""
 
 KINSTAT_FIELDS = (
     ("int", "dof_count"),
@@ -88,12 +68,11 @@ GUARD_FAULT_BITS = (
     ("KINGEN_WROTE_AFTER_SOLUTIONS", 2, "wrote past the end of solutions[][]"),
     ("KINGEN_WROTE_BEFORE_WARNINGS", 4, "wrote before warnings[0]"),
     ("KINGEN_WROTE_AFTER_WARNINGS", 8, "wrote past the end of warnings[]"),
-    ("KINGEN_WROTE_INPUTS", 16, "modified its inputs (T6, link_lengths or link_offsets)"),
+    ("KINGEN_WROTE_INPUTS", INPUTS_MODIFIED, "modified its inputs (T6, link_lengths or link_offsets)"),
 )
 """Bits kingen_host_run_guarded reports per call. Every bit but KINGEN_WROTE_INPUTS means
 the call was stopped at the faulting write (its outputs are partial)."""
 GUARD_FAULTS = {bit: text for _, bit, text in GUARD_FAULT_BITS}
-WROTE_INPUTS = 16
 
 
 def host_defines():

@@ -4,7 +4,7 @@ cross-compiled plugin offers DELMIA without needing Windows or objdump."""
 import struct
 from pathlib import Path
 
-from .errors import KingenError
+from ...errors import KingenError
 
 
 def dll_exports(path):

@@ -5,22 +5,18 @@ says exactly what to type into DELMIA's Inverse Kinematics dialog.
 the files atomically and, for Linux, adds the compiled library.
 """
 
-import os
 import shutil
-import tempfile
 from pathlib import Path
 
+from ...conventions import branch_of_posture
+from ...defaults import DEFAULT_TIMEOUT, TARGETS
+from ...files import write_atomic, write_folder
+from ...schema import dialog_label
 from . import abi
-from .build import WINDOWS_DEFINES, build_plugin, library_name, umask, write_atomic
-from .conventions import branch_of_posture
-from .defaults import DEFAULT_TIMEOUT, TARGETS
-from .errors import KingenError
-from .render import render, template, view_model
-from .schema import dialog_label
+from .build import WINDOWS_DEFINES, build_plugin, library_name
+from .render import delmia_template, render, view_model
 
 HOST_IMPORT_LIB_PLACEHOLDER = "DELMIA_HOST_IMPORT_LIB.lib"
-MARKER = ".kingen-package"
-"""Marks a folder kingen wrote, so that it may be replaced by a newer package."""
 CRLF_FILES = ("makefile", "BUILD.txt")
 """nmake and Notepad want CRLF line ends; the C source keeps LF (cl reads both)."""
 WARNING_MEANINGS = {
@@ -94,58 +90,32 @@ def render_package(robot, target):
         raise ValueError(f"unknown target {target!r}")
     files = dict(render(robot))
     view = sheet_view(robot, target)
-    files["SETUP.md"] = template("setup_sheet.md.j2").render(**view)
+    files["SETUP.md"] = delmia_template("setup_sheet.md.j2").render(**view)
     if target == "windows":
         extra = {"object": f"kin_{robot.name}.obj", "host_import_lib": HOST_IMPORT_LIB_PLACEHOLDER}
-        files["makefile"] = template("makefile.nmake.j2").render(**view, **extra)
-        files[f"{robot.library}.def"] = template("exports.def.j2").render(**view)
-        files["BUILD.txt"] = template("BUILD.txt.j2").render(**view)
+        files["makefile"] = delmia_template("makefile.nmake.j2").render(**view, **extra)
+        files[f"{robot.library}.def"] = delmia_template("exports.def.j2").render(**view)
+        files["BUILD.txt"] = delmia_template("BUILD.txt.j2").render(**view)
     return files
 
 
 def write_package(robot, out_dir, target, timeout=DEFAULT_TIMEOUT):
-    """Write the package folder ``out_dir``, whole or not at all; for linux also compile and
-    add lib<name>.so. Returns the written paths.
-
-    The files are written into a hidden sibling folder which then takes ``out_dir``'s place.
-    An existing ``out_dir`` is replaced only if it is empty or kingen wrote it (it holds
-    the marker file ``.kingen-package``); anything else is refused, never overwritten."""
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not (out_dir.is_dir() and (not any(out_dir.iterdir()) or (out_dir / MARKER).is_file())):
-        raise KingenError(f"{out_dir}: exists and is not a kingen package folder; choose another -o")
+    """Write the package folder ``out_dir``, whole or not at all (:func:`kingen.files.write_folder`:
+    an existing folder is replaced only if it is empty or kingen wrote it); for linux also
+    compile and add lib<name>.so. Returns the written paths."""
     files = {name: text.encode() for name, text in render_package(robot, target).items()}
     if target == "windows":
         files.update({name: files[name].replace(b"\n", b"\r\n") for name in files if name in CRLF_FILES
                       or name.endswith(".def")})
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
-    try:
+
+    def fill(staging):
         if target == "linux":
             built = build_plugin(robot, staging / ".build", timeout=timeout)
             write_atomic(staging / library_name(robot), built.library.read_bytes(), executable=True)
             shutil.rmtree(staging / ".build")
         for name, data in files.items():
             write_atomic(staging / name, data)
-        write_atomic(staging / MARKER, f"written by kingen for {robot.name} ({target})\n")
-        os.chmod(staging, 0o777 & ~umask())
-        _replace_folder(staging, out_dir)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
+
+    write_folder(out_dir, fill, f"written by kingen for {robot.name} ({target})\n")
     names = [*files, *([library_name(robot)] if target == "linux" else [])]
-    return [out_dir / name for name in names]
-
-
-def _replace_folder(new, old):
-    """Put folder ``new`` where ``old`` is: the old one is moved aside first, removed last."""
-    if not old.exists():
-        os.replace(new, old)
-        return
-    aside = Path(tempfile.mkdtemp(prefix=f".{old.name}.old.", dir=old.parent))
-    os.replace(old, aside / old.name)
-    try:
-        os.replace(new, old)
-    except OSError:
-        os.replace(aside / old.name, old)
-        raise
-    finally:
-        shutil.rmtree(aside, ignore_errors=True)
+    return [Path(out_dir) / name for name in names]

@@ -1,0 +1,66 @@
+"""The ``kingen`` command line: list, render, build, package, solve, verify, bench, fk, analyze,
+golden, info. Commands live in :mod:`.routine_commands` and :mod:`.solve_commands`; what
+they share (options, the host and routine to use, printing) in :mod:`.common`.
+
+Exit codes: 0 success, 1 verification failed (or the plugin broke, crashed or hung),
+2 bad input or usage (one line on stderr naming file, field and problem), 3 internal
+error (one line; the traceback only with ``KINGEN_DEBUG=1``), 143 terminated by
+SIGTERM. Library code raises KingenError; only this package prints and chooses exit
+codes. Foreign code (a library's constructors, its entry points, routines) runs only in a
+child process (:mod:`kingen.isolation`), bounded by ``--timeout``.
+"""
+
+import os
+import signal
+import traceback
+
+import click
+
+from ..errors import InternalError, KingenError, PluginDefect
+from . import routine_commands, solve_commands  # noqa: F401  (they register the commands)
+from .common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERNAL, cli, say
+
+EXIT_TERMINATED = 128 + signal.SIGTERM
+
+
+def _terminate(signal_number, frame):
+    """SIGTERM: unwind (temporary files are removed, child processes killed), then exit 143."""
+    raise SystemExit(EXIT_TERMINATED)
+
+
+def main(argv=None):
+    """Entry point: runs the CLI and maps every outcome to one stderr line and an exit code."""
+    signal.signal(signal.SIGTERM, _terminate)
+    try:
+        outcome = cli.main(args=argv, prog_name="kingen", standalone_mode=False)
+    except PluginDefect as error:
+        say(f"kingen: plugin failed: {error}", err=True)
+        return EXIT_FAILED
+    except KingenError as error:
+        say(f"kingen: error: {error}", err=True)
+        return EXIT_BAD_INPUT
+    except click.exceptions.NoArgsIsHelpError as error:
+        say(error.ctx.get_help())
+        return 0
+    except click.ClickException as error:
+        say(f"kingen: error: {' '.join(error.format_message().split())}", err=True)
+        return EXIT_BAD_INPUT
+    except click.exceptions.Abort:
+        say("kingen: aborted", err=True)
+        return 130
+    except KeyboardInterrupt:
+        say("kingen: interrupted", err=True)
+        return 130
+    except OSError as error:
+        say(f"kingen: error: {error.filename or ''}: {error.strerror or error}", err=True)
+        return EXIT_BAD_INPUT
+    except (Exception, InternalError) as error:
+        if os.environ.get("KINGEN_DEBUG") == "1":
+            raise
+        where = traceback.extract_tb(error.__traceback__)[-1] if error.__traceback__ else None
+        origin = f" at {os.path.basename(where.filename)}:{where.lineno}" if where else ""
+        say(f"kingen: internal error: {type(error).__name__}: {' '.join(str(error).split())}{origin}; "
+             "please report this (with KINGEN_DEBUG=1 for the traceback)", err=True)
+        return EXIT_INTERNAL
+    return outcome if isinstance(outcome, int) else 0
+

@@ -1,0 +1,208 @@
+"""What the command modules share: the ``kingen`` group, options, finding the robot, the host
+and the routine to check, running foreign code in a child process, and printing."""
+
+import math
+import os
+import sys
+from pathlib import Path
+
+import click
+
+from .. import __version__
+from ..defaults import DEFAULT_TIMEOUT, MAX_MM
+from ..errors import KingenError, PluginDefect
+from ..text import printable
+
+EXIT_FAILED = 1
+EXIT_BAD_INPUT = 2
+EXIT_INTERNAL = 3
+DEFAULT_HOST = "delmia"
+
+ROBOT = click.argument("robot", metavar="ROBOT")
+OUT_DIR = click.option(
+    "-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    help="Output folder [default: build/<name>].",
+)
+
+
+def _dialog_fields(context, parameter, values):
+    if values is not None and not all(math.isfinite(v) and abs(v) <= MAX_MM for v in values):
+        raise click.BadParameter(f"each value must be finite and within +/-{MAX_MM:g} (mm or degrees)")
+    return values
+
+
+def _routine_name(context, parameter, value):
+    if value is not None:
+        try:
+            from ..routine import check_routine_name
+
+            check_routine_name(value)
+        except KingenError as error:
+            raise click.BadParameter(str(error)) from None
+    return value
+
+
+def _output_file(context, parameter, path):
+    """Report paths are checked before the run, not after it."""
+    if path is not None:
+        folder = path.parent
+        if path.is_dir():
+            raise click.BadParameter(f"{path} is a folder")
+        if not folder.is_dir():
+            raise click.BadParameter(f"folder {folder} does not exist")
+        if not os.access(folder, os.W_OK):
+            raise click.BadParameter(f"folder {folder} is not writable")
+    return path
+
+
+TIMEOUT = click.option("--timeout", type=click.FloatRange(min=0.1, max=7 * 86400), default=DEFAULT_TIMEOUT,
+                       envvar="KINGEN_TIMEOUT", show_default=True, metavar="SECONDS",
+                       help="Longest a compiler run may take, and a plugin may go without progress, "
+                            "before it is killed ($KINGEN_TIMEOUT).")
+HOST = click.option("--host", "host_name", default=DEFAULT_HOST, show_default=True, metavar="NAME",
+                    help="The host the routine is for: delmia (DELMIA V5 / IGRIP), or one a plugin registered.")
+
+
+def calibration_options(function):
+    """--link-lengths / --link-offsets: the Solver Attributes fields Length 1-6 and Offset 1-6."""
+    function = click.option("--link-offsets", nargs=6, type=float, default=None, metavar="O1 .. O6",
+                            callback=_dialog_fields,
+                            help="Offset 1-6 of the Solver Attributes tab (link_offsets[]).")(function)
+    function = click.option("--link-lengths", nargs=6, type=float, default=None, metavar="L1 .. L6",
+                            callback=_dialog_fields,
+                            help="Length 1-6 of the Solver Attributes tab (link_lengths[]).")(function)
+    return function
+
+
+def plugin_options(function):
+    """--plugin / --source / --routine: verify a hand-written routine instead of kingen's."""
+    function = click.option("--routine", default=None, callback=_routine_name,
+                            help="Routine name in the library [default: kin_<name>].")(function)
+    function = click.option("--source", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                            help="Compile this C source (a legacy plugin) against the stand-in header first.")(function)
+    function = click.option("--plugin", "library", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                            help="Use this compiled library instead of building ROBOT's.")(function)
+    return function
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="kingen")
+def cli():
+    """Robot YAML -> DELMIA V5 / IGRIP user-inverse-kinematics plugin, verified.
+
+    ROBOT is a YAML path or the name of a shipped robot (see `kingen list`).
+    """
+
+
+def _host(name):
+    """The registered host ``name`` (kingen.hosts); KingenError (exit 2) for an unknown one."""
+    from ..hosts import get_host
+
+    return get_host(name)
+
+
+def host_target(host, target, command):
+    """The ``--target`` for ``host``: as given, or the host's default for ``command``; a
+    target the host does not know is a usage error."""
+    source = click.get_current_context().get_parameter_source("target")
+    if source is click.core.ParameterSource.DEFAULT:
+        return host.default_targets.get(command)
+    if target not in host.targets:
+        known = ", ".join(host.targets) or "none"
+        raise click.BadParameter(f"host {host.name} has no target {target} (targets: {known})", param_hint="--target")
+    return target
+
+
+def in_child(job, arguments, timeout, host):
+    """A job's result from a child process; a crash or a hang there is a failed run (exit 1)."""
+    from ..isolation import run_in_child
+
+    result, failure = run_in_child(job, arguments, timeout, first_stage=host.loading_stage)
+    if failure is not None:
+        raise PluginDefect(failure.detail)
+    return result
+
+
+def routine_to_check(model, host, out_dir, library=None, source=None, routine=None, timeout=DEFAULT_TIMEOUT):
+    """(library path, routine) to check: kingen's own build for ``host``, a given library, or
+    a compiled hand-written source."""
+    if library is not None and source is not None:
+        raise click.UsageError("give at most one of --plugin and --source")
+    own = host.routine_name(model)
+    if library is None and source is None:
+        if routine is not None and routine != own:
+            raise click.UsageError(f"--routine needs --plugin or --source (kingen's routine is {own})")
+        result = host.build(model, out_dir, timeout=timeout)
+        return result.library, result.routine
+    if source is not None:
+        library = host.build_source(source, out_dir or host.out_dir(model) / "legacy", timeout=timeout)
+    return library, routine or own
+
+
+def solve_job(channel, host, library, routine, matrix, link_lengths, link_offsets):
+    """In a child process: the routine's Calls on ``matrix`` (n, 4, 4)."""
+    plugin = host.load(library, routine)
+    channel.stage("the routine's call")
+    return plugin.call(matrix, link_lengths, link_offsets)
+
+
+def load_model(robot):
+    """The validated robot named by a shipped name or a YAML path (see kingen.model). Every
+    command that computes starts here, so numpy's floating-point warnings are turned off
+    here too: kingen judges NaN and inf itself, and the warnings would only be noise."""
+    import numpy as np
+
+    from ..model import load_robot
+
+    np.seterr(all="ignore")
+    return load_robot(robot)
+
+
+def finite(data):
+    if isinstance(data, float):
+        return data if math.isfinite(data) else None
+    if isinstance(data, dict):
+        return {key: finite(value) for key, value in data.items()}
+    if isinstance(data, list):
+        return [finite(value) for value in data]
+    return data
+
+
+def processes_text(count):
+    """'1 process', '2 processes': how many compared verify's poses."""
+    return f"{count} process" if count == 1 else f"{count} processes"
+
+
+def shorten(text, width):
+    text = " ".join(text.split())
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def print_table(rows):
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    for row in rows:
+        say("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip())
+
+
+def say(text, err=False):
+    """Print one line on stdout (or stderr), unprintable characters escaped. A reader that
+    went away (``| head``) or a closed stream ends the printing, not the command: its exit
+    code still tells the verdict."""
+    stream = sys.stderr if err else sys.stdout
+    if stream is None:
+        return
+    try:
+        click.echo(printable(text), file=stream)
+    except (BrokenPipeError, ValueError, OSError):
+        detach(err)
+
+
+def detach(err):
+    """Point a broken standard stream at /dev/null, so later writes and the final flush succeed."""
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 2 if err else 1)
+    os.close(null)
+    if err:
+        sys.stderr = open(os.devnull, "w")
+    else:
+        sys.stdout = open(os.devnull, "w")

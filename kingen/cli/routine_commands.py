@@ -1,0 +1,266 @@
+"""The commands that make and check a routine for a host: render, build, package, verify,
+bench, golden record, info."""
+
+import contextlib
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from ..defaults import MAX_PROCESSES, TARGETS
+from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _host, _output_file, cli, host_target, in_child,
+                     load_model, plugin_options, processes_text, routine_to_check, say, solve_job, calibration_options)
+
+MAX_BENCH_CALLS = 100_000_000
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@HOST
+def render(robot, out_dir, host_name):
+    """Write the routine's source (kin_<name>.c for DELMIA) into the output folder."""
+    host = _host(host_name)
+    model = load_model(robot)
+    path = host.write_source(model, out_dir or host.out_dir(model))
+    say(str(path))
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--debug", is_flag=True, help="Compile with KINGEN_DEBUG (DELMIA-style printing; slow).")
+@click.option("--target", type=click.Choice(TARGETS), default="linux", show_default=True,
+              help="linux: lib<name>.so with $CC; windows: lib<name>.dll cross-compiled with mingw-w64.")
+@HOST
+@TIMEOUT
+def build(robot, out_dir, debug, target, host_name, timeout):
+    """Render and compile the plugin, host symbols left to the host, as for DELMIA."""
+    host = _host(host_name)
+    target = host_target(host, target, "build")
+    model = load_model(robot)
+    result = host.build(model, out_dir, target=target, defines=("KINGEN_DEBUG",) if debug else (), timeout=timeout)
+    state = "compiled" if result.compiled else "up to date"
+    say(f"{result.library} ({state}; routine {result.routine}, source {result.source})")
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--target", type=click.Choice(TARGETS), default="windows", show_default=True,
+              help="windows: source, nmake makefile, .def, BUILD.txt; linux: source and lib<name>.so.")
+@HOST
+@TIMEOUT
+def package(robot, out_dir, target, host_name, timeout):
+    """A folder ready for the simulator, with SETUP.md: what to type into each dialog tab.
+
+    The folder is written whole or not at all; an existing folder is replaced only when
+    kingen wrote it."""
+    host = _host(host_name)
+    target = host_target(host, target, "package")
+    model = load_model(robot)
+    paths = host.package(model, out_dir or host.package_dir(model, target), target=target, timeout=timeout)
+    for path in paths:
+        say(str(path))
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@plugin_options
+@click.option("--samples", type=click.IntRange(min=1), default=10000, show_default=True,
+              help="Poses drawn in the robot's verification region (memory does not grow with it).")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the pose generator.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the report as JSON to this file (null: not a finite number).")
+@click.option("--junit", "junit_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the report as JUnit XML (one test case per check) to this file.")
+@click.option("--golden", "snapshot_path", type=click.Path(dir_okay=False, exists=True, path_type=Path), default=None,
+              help="Also check the routine against this recorded snapshot (kingen golden record).")
+@click.option("--processes", type=click.IntRange(min=1, max=MAX_PROCESSES), default=None,
+              help="Processes comparing the poses (the same report whatever the number)  "
+                   "[default: one per core].")
+@calibration_options
+@HOST
+@TIMEOUT
+def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path, processes,
+           link_lengths, link_offsets, host_name, timeout):
+    """Compare a routine with the reference: exit 0 when all agree, 1 when not.
+
+    By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
+    that follows the DELMIA interface, hand-written ones included. Plugin code runs in a
+    child process, so a routine that crashes, exits or hangs becomes a failed check.
+    """
+    from ..files import write_atomic
+    from ..snapshot import load as load_snapshot
+    from ..verify import VerifyOptions, chunk_size, verify_library
+
+    host = _host(host_name)
+    model = load_model(robot)
+    snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
+    library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
+    options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
+                            timeout=timeout, snapshot=snapshot, processes=processes)
+    with _progress(samples, chunk_size(model)) as progress:
+        report = verify_library(model, library, routine, options, progress, host=host)
+    print_report(report, library)
+    if json_path is not None:
+        from ..report import json_text
+
+        write_atomic(json_path, json_text(report, options))
+    if junit_path is not None:
+        from ..report import junit_xml
+
+        write_atomic(junit_path, junit_xml(report))
+    return 0 if report.passed else EXIT_FAILED
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@plugin_options
+@click.option("--calls", type=click.IntRange(min=1, max=MAX_BENCH_CALLS), default=200000, show_default=True,
+              help="Routine calls per timing (the per-call path uses at most 20000).")
+@click.option("--floor", "floor_source", type=click.Path(dir_okay=False, exists=True, path_type=Path), default=None,
+              help="A hand-written C routine for ROBOT (benchmarks/floors/): time it against the routine, "
+                   "in turns, and print the ratio.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the figures as JSON to this file.")
+@HOST
+@TIMEOUT
+def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, host_name, timeout):
+    """Print ns per routine call (C batch driver, per-call cffi) and poses per second."""
+    from ..files import write_atomic
+
+    host = _host(host_name)
+    model = load_model(robot)
+    library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
+    floor = None
+    if floor_source is not None:
+        floor = host.build_source(floor_source, (out_dir or host.out_dir(model)) / "floor", timeout=timeout)
+    figures = in_child(_bench_job, (model, host, library, routine, calls, floor), timeout, host)
+    say(f"bench {model.name} ({routine}, {model.postures} postures, {figures['calls']} calls)")
+    say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
+    say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
+    say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
+    say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s "
+         f"({processes_text(figures['verify_processes'])})")
+    if floor is not None:
+        against = figures["against_floor"]
+        say(f"  against the floor {floor_source} ({against['rounds']} rounds in turns, ns/call):")
+        for label in ("floor", "routine"):
+            say(f"    {label + ':':9} min {against[label]['min']:9.1f}, median {against[label]['median']:9.1f}")
+        say(f"    ratio:    min {against['ratio_min']:9.3f}, median {against['ratio_median']:9.3f}")
+    if json_path is not None:
+        write_atomic(json_path, json.dumps(figures, indent=2, allow_nan=False) + "\n")
+
+
+@cli.group()
+def golden():
+    """Recorded snapshots of poses, joints and warnings (checked by verify --golden)."""
+
+
+@golden.command("record")
+@ROBOT
+@plugin_options
+@click.option("--samples", type=click.IntRange(min=1, max=100000), default=100, show_default=True,
+              help="Poses to record.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the poses.")
+@click.option("-o", "--output", "output", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              callback=_output_file, help="The snapshot file to write (rewritten whole).")
+@HOST
+@TIMEOUT
+def golden_record(robot, library, source, routine, samples, seed, output, host_name, timeout):
+    """Record a snapshot from the reference, or from a trusted plugin (--plugin/--source)."""
+    from ..files import write_atomic
+    from ..snapshot import record, sample_t6
+
+    model = load_model(robot)
+    t6 = sample_t6(model, samples, seed)
+    if library is None and source is None:
+        if routine is not None:
+            raise click.UsageError("--routine needs --plugin or --source")
+        from ..reference import solve as reference_solve
+
+        expected = reference_solve(model, t6)
+        joints, warnings, recorded_from = expected.joints, expected.warnings, "the reference"
+    else:
+        host = _host(host_name)
+        library, routine = routine_to_check(model, host, None, library, source, routine, timeout)
+        calls = in_child(solve_job, (host, library, routine, t6, None, None), timeout, host)
+        joints, warnings, recorded_from = calls.solutions, calls.warnings, f"plugin {Path(library).name} ({routine})"
+    write_atomic(output, record(model, t6, joints, warnings, recorded_from, samples, seed))
+    say(f"{output}: {samples} poses x {model.postures} postures recorded from {recorded_from}")
+
+
+@cli.command()
+@click.argument("library", type=click.Path(dir_okay=False, exists=True, path_type=Path))
+def info(library):
+    """What a compiled library says about itself (read from its bytes, never loaded)."""
+    from ..library_info import binary_format, build_info
+
+    details = build_info(library)
+    say(f"library: {library}")
+    say(f"format: {binary_format(library)}")
+    if details is None:
+        say("kingen build information: none (not built by kingen)")
+        return 0
+    say(f"robot: {details.get('robot', '?')}")
+    say(f"routine: {details.get('routine', '?')}")
+    say(f"dof: {details.get('dof', '?')}, postures: {details.get('postures', '?')}")
+    say(f"definition sha256: {details.get('sha256', '?')}")
+    say(f"kingen version: {details.get('kingen', '?')}")
+    return 0
+
+
+def _bench_job(channel, model, host, library, routine, calls, floor):
+    from ..bench import ROUNDS, benchmark, compare
+    from ..isolation import keep_freed_memory
+
+    keep_freed_memory()  # as verify's child does, so that its poses per second are verify's
+    plugin = host.load(library, routine)
+    channel.stage("the timings")
+    tick = lambda: channel.send("progress", None)  # noqa: E731
+    figures = benchmark(model, plugin, calls=calls, tick=tick)
+    if floor is not None:
+        channel.stage("the timings against the floor")
+        timings = compare(model, {"floor": host.load(floor, host.routine_name(model)), "routine": plugin}, calls=calls, tick=tick)
+        figures["against_floor"] = {
+            **timings, "rounds": ROUNDS,
+            "ratio_min": timings["routine"]["min"] / timings["floor"]["min"],
+            "ratio_median": timings["routine"]["median"] / timings["floor"]["median"],
+        }
+    return figures
+
+
+def _progress(total, chunk):
+    """A progress bar on stderr for runs of several chunks at a terminal; otherwise nothing."""
+    if total <= chunk or sys.stderr is None or not sys.stderr.isatty():
+        return contextlib.nullcontext(None)
+    bar = click.progressbar(length=total, label="verifying", file=sys.stderr)
+
+    @contextlib.contextmanager
+    def running():
+        with bar:
+            yield lambda done: bar.update(done - bar.pos)
+
+    return running()
+
+
+def print_report(report, library):
+    say(f"verify {report.robot}: {report.samples} poses x {report.postures} postures, {library} ({report.routine})")
+    for check in report.checks:
+        say(f"  {'ok' if check.passed else 'FAILED':6} {check.name}: {check.detail}")
+        for diagnosis in check.diagnoses:
+            say(f"         diagnosis: {diagnosis}")
+    from ..report import statistics_lines
+
+    for line in statistics_lines(report):
+        say(f"  {line}")
+    for notice in report.notices:
+        say(f"  notice: {notice}")
+    verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
+    speed = (f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, {processes_text(report.processes)})"
+             if report.seconds > 0 else "")
+    say(verdict + speed)

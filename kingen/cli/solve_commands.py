@@ -1,0 +1,266 @@
+"""The commands that compute from the robot file itself: list, solve (a routine beside the
+reference), fk (forward kinematics) and analyze (tilt limits, sweeps, workspace slices)."""
+
+import contextlib
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+
+from ..errors import KingenError
+from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _host, _output_file, calibration_options, cli,
+                     finite, in_child, load_model, print_table, routine_to_check, say, shorten, solve_job)
+
+
+@cli.command("list")
+def list_robots():
+    """The shipped robots with DOF, postures and limb models."""
+    from ..model import shipped_robots
+
+    rows = [("robot", "dof", "postures", "limbs", "description")]
+    for name in shipped_robots():
+        robot = load_model(name)
+        counts = ", ".join(f"{sum(l.model == m for l in robot.limbs)} {m}" for m in robot.models)
+        rows.append((name, str(robot.dof), str(robot.postures), counts, shorten(robot.description, 60)))
+    print_table(rows)
+
+
+@cli.command()
+@ROBOT
+@OUT_DIR
+@click.option("--pose", nargs=6, type=float, metavar="X Y Z ROLL PITCH YAW",
+              help="Platform pose: mm and degrees, R = Rz(yaw) Ry(pitch) Rx(roll).")
+@click.option("--t6", nargs=16, type=float, metavar="16 NUMBERS",
+              help="DELMIA's T6, row by row: n, o, a, p rows, each with its 0/1 last entry.")
+@click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write every posture (joints in mm and rad, warnings, indices) as JSON.")
+@click.option("--switch", nargs=2, type=click.IntRange(min=0), default=None, metavar="A B",
+              help="Predict a switch from posture A to B: B's joints, their assembly modes and the TCP jump.")
+@calibration_options
+@HOST
+@TIMEOUT
+def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, link_offsets, host_name, timeout):
+    """Every posture's joints and warning from the plugin, with the reference's beside it."""
+    import numpy as np
+
+    from ..files import write_atomic
+    from ..conventions import branch_of_posture, t6_from_pose
+    from ..reference import solve as reference_solve
+
+    if (pose is None) == (t6 is None):
+        raise click.UsageError("give exactly one of --pose and --t6")
+    host = _host(host_name)
+    model = load_model(robot)
+    matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
+    library, routine = routine_to_check(model, host, out_dir, timeout=timeout)
+    calls = in_child(solve_job, (host, library, routine, matrix, link_lengths, link_offsets), timeout, host)
+    expected = reference_solve(model, matrix, link_lengths, link_offsets, indices=True)
+    direct = expected.direct_index[0] if expected.direct_index is not None else [None] * model.postures
+    inverse = float(expected.min_inverse_index[0])
+    inverse_text = f"{inverse:.6g}" if math.isfinite(inverse) else "n/a"
+    in_yaml_units = [t.wraps and degrees for t in model.joint_types]
+    scale = np.array([1.0 / t.yaml_scale if yaml else 1.0 for t, yaml in zip(model.joint_types, in_yaml_units)])
+    units = [t.yaml_unit if yaml else t.unit for t, yaml in zip(model.joint_types, in_yaml_units)]
+    names = [f"{name} ({unit})" for name, unit in zip(model.joint_names, units)]
+    header = (["posture", "branches"] + names + ["warning", "| reference"] + names
+              + ["warning", "direct index (mm)", "min inverse index"])
+    rows = [header]
+    digits = [bit for bit in model.branch_bits if bit >= 0]
+    for k in range(model.postures):
+        branches = "".join(str(branch_of_posture(k, bit)) for bit in digits) or "-"
+        rows.append(
+            [str(k), branches]
+            + [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k]), "|"]
+            + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale] + [_warning_name(expected.warnings[0, k])]
+            + [_index_text(direct[k]), inverse_text]
+        )
+    print_table(rows)
+    say(f"routine returned {calls.returned[0]}")
+    say(_indices_note(model))
+    if switch is not None:
+        _predict_switch(model, matrix[0], expected.joints[0], switch, scale, units)
+    if json_path is not None:
+        write_atomic(json_path, json.dumps(finite({
+            "robot": model.name, "routine": routine, "t6": matrix[0].tolist(), "returned": int(calls.returned[0]),
+            "joint_units": [t.unit for t in model.joint_types], "direct_index_min_mm": model.direct_index_min,
+            "postures": [{
+                "posture": k, "joints": calls.solutions[0, :, k].tolist(), "warning": _warning_name(calls.warnings[0, k]),
+                "reference_joints": expected.joints[0, :, k].tolist(),
+                "reference_warning": _warning_name(expected.warnings[0, k]),
+                "direct_index_mm": None if direct[k] is None else float(direct[k]),
+                "min_inverse_index": inverse,
+            } for k in range(model.postures)],
+        }), indent=2, allow_nan=False) + "\n")
+    if calls.faults[0]:
+        say(f"the routine {host.describe_faults(int(calls.faults[0]))}")
+        return EXIT_FAILED
+    return 0
+
+
+def _predict_switch(model, t6, joints, switch, scale, units):
+    """What a host that recomputes the TCP from posture B's joints may do after A -> B."""
+    import numpy as np
+
+    from ..conventions import pose_from_t6, wrap_angle
+    from ..forward import assemblies
+
+    first, second = switch
+    if max(first, second) >= model.postures:
+        raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--switch")
+    if not model.has_forward:
+        say(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)")
+        return
+    pose = pose_from_t6(t6)
+    commanded = np.concatenate([pose[:3], np.radians(pose[3:])])
+    change = joints[:, second] - joints[:, first]
+    change = np.where(model.revolute, wrap_angle(change), change)
+    moved = ", ".join(f"{name} {value * s:+.6f} {unit}" for name, value, s, unit in
+                      zip(model.joint_names, change, scale, units))
+    say(f"switch {first} -> {second}: the joints move by {moved}")
+    found = assemblies(model, joints[:, second], commanded)
+    if not found:
+        say(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP")
+        return
+    for number, assembly in enumerate(found):
+        distance = float(np.linalg.norm(assembly.pose[:3] - commanded[:3]))
+        pose = ", ".join(f"{v:.3f}" for v in np.concatenate([assembly.pose[:3], np.degrees(assembly.pose[3:])]))
+        say(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP")
+    worst = max(float(np.linalg.norm(a.pose[:3] - commanded[:3])) for a in found)
+    say(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {worst:.3f} mm "
+         f"({len(found)} assembly modes)")
+
+
+def _index_text(value):
+    if value is None:
+        return "n/a"
+    return "unreachable" if not math.isfinite(value) else f"{value:.6g}"
+
+
+def _indices_note(model):
+    """What the index columns mean for this robot, in one line."""
+    inverse = "min inverse index: the smallest normalised radicand D over the limbs (1 - 1/Inv_I; 0 at a limb singularity)"
+    if not model.has_direct_index:
+        return (f"direct index: not available ({model.dof} limbs: the constraints that complete the platform "
+                f"are not modelled); {inverse}")
+    threshold = (f"below {model.direct_index_min:g} mm the routine answers WARN_SINGULAR_SOLUTION"
+                 if model.direct_index_min is not None else "no threshold set (singularity: direct_index_min)")
+    return f"direct index: 0 at a direct (platform) singularity; {threshold}; {inverse}"
+
+
+@cli.command(context_settings={"ignore_unknown_options": True})
+@ROBOT
+@click.option("--joints", required=True, type=str, metavar="Q1 .. Qn",
+              help="The joints, mm (prismatic) and degrees (revolute), space-separated in one argument "
+                   "or as the remaining arguments.")
+@click.argument("more_joints", nargs=-1, type=click.UNPROCESSED, metavar="")
+@click.option("--near", nargs=6, type=float, default=None, metavar="X Y Z ROLL PITCH YAW",
+              help="The pose to measure distances from and to take non-free coordinates from "
+                   "[default: the verification home].")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the assembly modes as JSON.")
+def fk(robot, joints, more_joints, near, json_path):
+    """Forward kinematics: every platform pose (assembly mode) the joints admit.
+
+    Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
+    import numpy as np
+
+    from ..files import write_atomic
+    from ..forward import assemblies, best_residual
+
+    model = load_model(robot)
+    try:
+        values = [float(v) for v in joints.replace(",", " ").split()] + [float(v) for v in more_joints]
+    except ValueError:
+        raise click.BadParameter("numbers expected", param_hint="--joints") from None
+    if len(values) != model.dof or not all(math.isfinite(v) for v in values):
+        raise click.BadParameter(f"{model.name} has {model.dof} joints; give {model.dof} finite numbers",
+                                 param_hint="--joints")
+    if not model.has_forward:
+        raise KingenError(f"{model.path}: forward: forward kinematics needs free pose coordinates for a robot "
+                          f"with {model.dof} limbs: declare them, for example forward: {{free: [x, y, z]}}")
+    internal = np.array(values) * model.joint_scale()
+    near_pose = np.array(near if near is not None else model.verification.home, dtype=float)
+    near_internal = np.concatenate([near_pose[:3], np.radians(near_pose[3:])])
+    found = assemblies(model, internal, near_internal)
+    rows = [("mode", "x (mm)", "y (mm)", "z (mm)", "roll (deg)", "pitch (deg)", "yaw (deg)", "residual (mm)",
+             "from near (mm)")]
+    solutions = []
+    for number, assembly in enumerate(found):
+        pose = np.concatenate([assembly.pose[:3], np.degrees(assembly.pose[3:])])
+        distance = float(np.linalg.norm(assembly.pose[:3] - near_internal[:3]))
+        solutions.append({"pose": pose.tolist(), "residual_mm": assembly.residual_mm, "distance_from_near_mm": distance})
+        rows.append((str(number), *(f"{v:.6f}" for v in pose), f"{assembly.residual_mm:.3g}", f"{distance:.3f}"))
+    if json_path is not None:
+        write_atomic(json_path, json.dumps({"robot": model.name, "joints": values, "solutions": solutions},
+                                           indent=2, allow_nan=False) + "\n")
+    if not found:
+        say(f"no pose found for these joints (best residual {best_residual(model, internal, near_internal):.3g} mm)")
+        return EXIT_FAILED
+    print_table(rows)
+    return 0
+
+
+@cli.command()
+@ROBOT
+@click.option("--posture", type=click.IntRange(min=0), default=None,
+              help="The posture (assembly mode) to analyse [default: the robot's working_posture].")
+@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: build/<name>/analysis].")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Also write analysis.json to this file.")
+def analyze(robot, posture, out_dir, json_path):
+    """Tilt limits, sweeps and workspace slices of one posture: analysis.json, PNG figures
+    and a self-contained report.html."""
+    import time
+
+    from ..analysis import analyze as run_analysis
+    from ..files import default_out_dir, write_atomic
+    from ..figures import figures, report_html
+
+    model = load_model(robot)
+    if posture is not None and posture >= model.postures:
+        raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
+    out_dir = out_dir or default_out_dir(model) / "analysis"
+    start = time.perf_counter()
+    with _steps(["tilt limits", "sweeps", "workspace slices", "figures"]) as step:
+        analysis = run_analysis(model, posture, progress=step)
+        step("figures")
+        pngs = figures(analysis)
+    seconds = time.perf_counter() - start
+    text = json.dumps(finite(analysis), indent=1, allow_nan=False) + "\n"
+    outputs = {"analysis.json": text, **pngs, "report.html": report_html(model, analysis, pngs, seconds)}
+    for name, data in outputs.items():
+        write_atomic(out_dir / name, data)
+    if json_path is not None:
+        write_atomic(json_path, text)
+    limits = analysis["tilt_limits"]
+    about = {0: "X", 90: "Y", 180: "-X", 270: "-Y"}
+    summary = ", ".join(f"about {about[int(row['azimuth_deg'])]} {row['max_tilt_deg']} deg ({row['cause']})"
+                        for row in limits if int(row["azimuth_deg"]) in about)
+    say(f"analyze {model.name}, posture {analysis['posture']}: {summary}")
+    for name in outputs:
+        say(str(out_dir / name))
+    say(f"in {seconds:.1f} s")
+
+
+def _steps(names):
+    """A progress bar over named steps on a terminal; a no-op callable otherwise."""
+    if sys.stderr is None or not sys.stderr.isatty():
+        return contextlib.nullcontext(lambda text: None)
+    bar = click.progressbar(length=len(names), label="analysing", file=sys.stderr)
+
+    @contextlib.contextmanager
+    def running():
+        with bar:
+            yield lambda text: bar.update(1)
+
+    return running()
+
+
+def _warning_name(code):
+    from ..routine import WARNING_NAMES
+
+    return WARNING_NAMES.get(int(code), f"UNWRITTEN({code})")

@@ -1,0 +1,109 @@
+"""What a host is: the one small interface between the host-neutral core (model, limb models,
+reference, verify) and a program that runs a generated routine (DELMIA, a controller, ...).
+
+A host renders and builds a routine for a robot, builds a hand-written source, loads a
+compiled routine (generated or hand-written) as a :class:`LoadedRoutine` whose ``call``
+answers a batch of T6 with :class:`kingen.routine.Calls` in kingen's units, names the verify
+checks it runs, and writes a package. Hosts are registered in :mod:`kingen.hosts`; nothing
+outside a host's own package names its files, symbols or checks (docs/architecture.md).
+"""
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar, Optional, Protocol
+
+from ..defaults import DEFAULT_TIMEOUT
+from ..files import default_out_dir
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    """Paths of a built routine; ``compiled`` is False when the build was already up to date."""
+
+    source: Path
+    library: Path
+    routine: str
+    compiled: bool
+
+
+class LoadedRoutine(Protocol):
+    """A compiled routine loaded into this process, as its host would load it.
+
+    ``checks`` is the ordered tuple of :class:`kingen.verify.checks.VerifyCheck` that
+    verify runs on it: the shared ones and the host's own, in report order."""
+
+    routine: str
+    dof: int
+    postures: int
+    checks: tuple
+
+    def reset_host(self):
+        """Put the host's state back as before the first call (before every batch)."""
+
+    def call(self, t6, link_lengths=None, link_offsets=None):
+        """The routine on every T6 ((n, 4, 4), mm) with the calibration fields: a Calls."""
+
+
+class Host:
+    """A host: subclass, set the class attributes, implement the methods, and register an
+    instance with :func:`kingen.hosts.register`. Work in methods imports lazily, so that
+    registering a host (which the robot-file reader does to ask ``name_problem``) stays cheap."""
+
+    name: ClassVar[str]
+    """``--host NAME``."""
+    description: ClassVar[str] = ""
+    targets: ClassVar[tuple] = ()
+    """What ``--target`` may name for this host (empty: the option does not apply)."""
+    default_targets: ClassVar[dict] = {}
+    """``--target`` when not given, per command ('build', 'package')."""
+    loading_stage: ClassVar[str] = "loading the routine"
+    """The stage a crash or hang while loading foreign code is reported in."""
+    checks: tuple = ()
+    """The verify checks of this host's routines, in report order (a loaded routine's
+    ``checks``): those needing the library file run before it is loaded."""
+
+    def name_problem(self, robot_name) -> Optional[str]:
+        """Why ``robot_name`` cannot name a routine for this host (a C name it would clash
+        with), or None. Checked when a robot file is read, for every registered host."""
+        return None
+
+    def describe_faults(self, bits) -> str:
+        """What a call's fault bits (Calls.faults) say it did, as a phrase after "the routine"."""
+        return f"faulted (bits {bits})"
+
+    def out_dir(self, robot) -> Path:
+        """Where ``build`` writes by default."""
+        return default_out_dir(robot)
+
+    def render(self, robot) -> dict:
+        """The routine's source files as {file name: text}: pure, nothing written."""
+        raise NotImplementedError
+
+    def write_source(self, robot, out_dir) -> Path:
+        """Render ``robot`` into ``out_dir``; the main source's path."""
+        raise NotImplementedError
+
+    def build(self, robot, out_dir=None, *, target=None, defines=(), timeout=DEFAULT_TIMEOUT) -> BuildResult:
+        """Render and compile ``robot`` (skipped when up to date)."""
+        raise NotImplementedError
+
+    def build_source(self, source, out_dir, *, timeout=DEFAULT_TIMEOUT) -> Path:
+        """Compile a hand-written source for this host; the library's path."""
+        raise NotImplementedError
+
+    def load(self, library, routine) -> LoadedRoutine:
+        """Load ``routine`` of ``library`` in this process (runs the library's constructors:
+        callers do it in a child process, :mod:`kingen.isolation`)."""
+        raise NotImplementedError
+
+    def routine_name(self, robot) -> str:
+        """The routine kingen generates for ``robot``."""
+        raise NotImplementedError
+
+    def package(self, robot, out_dir, *, target=None, timeout=DEFAULT_TIMEOUT) -> list:
+        """Write the package folder whole or not at all; the written paths."""
+        raise NotImplementedError
+
+    def package_dir(self, robot, target) -> Path:
+        """Where ``package`` writes by default."""
+        return default_out_dir(robot) / f"package-{target}" if target else default_out_dir(robot) / "package"

@@ -1,0 +1,43 @@
+"""The seeded poses of a robot's verification region, drawn the same way by verify, snapshots
+and benchmarks: uniform in home +/- range (mm, degrees; docs/conventions.md), from one
+PCG64 generator, so that a seed names the same poses bit for bit whatever the chunking."""
+
+import numpy as np
+
+
+class PoseStream:
+    """The seeded poses of a verification, in order: uniform in the robot's verification
+    region (mm, degrees), from one generator, drawn or skipped a run at a time. Skipping
+    moves the generator past the poses as if they had been drawn (each uniform double takes
+    one 64-bit output of PCG64), so the poses after them are the same, bit for bit."""
+
+    def __init__(self, robot, seed):
+        region = robot.verification
+        self._home, self._half_widths = np.asarray(region.home), np.asarray(region.range)
+        self._generator = np.random.default_rng(seed)
+
+    def draw(self, count):
+        """The next ``count`` poses (count, 6)."""
+        return self._home + self._generator.uniform(-1.0, 1.0, size=(count, 6)) * self._half_widths
+
+    def skip(self, count):
+        """Move past the next ``count`` poses without drawing them."""
+        self._generator.bit_generator.advance(6 * count)
+
+
+def chunk_bounds(count, chunk):
+    """(first index, pose count) of each chunk of ``count`` poses, ``chunk`` at a time."""
+    return [(begin, min(chunk, count - begin)) for begin in range(0, count, chunk)]
+
+
+def pose_chunks(robot, count, seed, chunk):
+    """(first index, poses (m, 6)) chunk by chunk: ``count`` poses of PoseStream, so the poses
+    are the same, bit for bit, whatever the chunk size; memory stays that of one chunk."""
+    stream = PoseStream(robot, seed)
+    for begin, size in chunk_bounds(count, chunk):
+        yield begin, stream.draw(size)
+
+
+def sample_poses(robot, count, seed):
+    """``count`` poses (mm, degrees) uniform in the robot's verification region, seeded."""
+    return np.concatenate([poses for _, poses in pose_chunks(robot, count, seed, max(count, 1))])

@@ -1,0 +1,74 @@
+"""The routine contract every host shares: what a compiled inverse-kinematics routine answers
+for a batch of poses, in kingen's units, and how close it must come to the reference.
+
+A host (:mod:`kingen.hosts`) loads a routine and calls it on T6 matrices (mm); whatever its
+own interface, it hands verify a :class:`Calls`: every posture's joints (mm for prismatic,
+radians for revolute joints) and a status per posture in the codes of ``WARNINGS``
+(docs/conventions.md). DELMIA's warnings are these codes; another host maps its own.
+"""
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import KingenError
+
+WARNINGS = {
+    "WARN_GOOD_SOLUTION": 0,
+    "WARN_JOINT_LIMITS_EXCEEDED": 1,
+    "WARN_UNREACHABLE": 2,
+    "WARN_SINGULAR_SOLUTION": 5,
+}
+"""A posture's status: reachable and regular, a joint beyond its travel, no real solution,
+within a singularity's band (a limb's, or the platform's direct index)."""
+WARNING_NAMES = {value: name for name, value in WARNINGS.items()}
+
+SINGULAR_TOLERANCE = 0.00001
+"""Band |D| <= 1e-5 around a limb singularity (D: a limb's normalised radicand): the
+routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5 (DELMIA's ZERO_TOL)."""
+
+UNWRITTEN_WARNING = -1
+"""Sentinel put in every warning slot before a call: left there, it was never written."""
+UNWRITTEN_JOINT = float("nan")
+"""Sentinel put in every solutions entry before a call."""
+VALUE_TOLERANCE_MM = 1e-9
+VALUE_TOLERANCE_RAD = 1e-9
+"""How close a routine's joints must be to the reference's (prismatic, revolute)."""
+WARNING_BAND = 1e-9
+"""Half-width of the band around a warning threshold (radicand +/- SINGULAR_TOLERANCE:
+relative; travel limits: mm or rad) inside which routine and reference may disagree."""
+
+INPUTS_MODIFIED = 16
+"""The fault bit of a call that changed its inputs. Every other fault bit a host reports
+means the call was stopped at a faulting write: its outputs are partial."""
+C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,254}")
+
+
+@dataclass(frozen=True)
+class Calls:
+    """Routine results for n poses: returned (n,), solutions (n, dof, postures), warnings (n, postures).
+
+    faults (n,): per call the host's fault bits (writes outside the output buffers, modified
+    inputs: :data:`INPUTS_MODIFIED`); 0 for a clean call.
+    """
+
+    returned: np.ndarray
+    solutions: np.ndarray
+    warnings: np.ndarray
+    faults: np.ndarray
+
+    @property
+    def guard_violations(self):
+        return int(np.count_nonzero(self.faults & ~INPUTS_MODIFIED))
+
+    @property
+    def inputs_modified(self):
+        return bool(np.any(self.faults & INPUTS_MODIFIED))
+
+
+def check_routine_name(routine):
+    """``routine`` if it is a C identifier; else KingenError (it would be looked up as a symbol)."""
+    if not isinstance(routine, str) or not C_IDENTIFIER.fullmatch(routine):
+        raise KingenError(f"routine name {routine!r} is not a C identifier")
+    return routine

@@ -1,0 +1,164 @@
+"""Verification: a compiled routine (kingen's or hand-written) against the numpy
+reference, the golden values and the interface contract (docs: README, 'What verify proves').
+
+Everything is compared, nothing sampled away: every joint of every posture of
+every pose, and every warning. Where the reference calls a posture unreachable the
+interface asks only for finite joints, so only finiteness is checked there (the
+warning itself is compared as everywhere). A warning may differ only inside the documented
+tolerance band (``WARNING_BAND``): where the reference's decision quantity (a
+normalised radicand or a joint value) lies that close to its threshold, both
+answers are right within floating-point rounding. Each clause is a named check;
+failed value checks carry diagnoses (:mod:`kingen.diagnose`).
+
+This module orchestrates only: the poses are drawn and compared in chunks over processes
+by :mod:`kingen.verify.processes`, tallied by :mod:`kingen.verify.tally`, and judged by the
+checks of :mod:`kingen.verify.checks`, each in its own module; a routine's host composes
+which checks it gets (its ``checks`` tuple), verify runs them in that order.
+
+``verify`` runs in the calling process (for tests and kingen's own code);
+``verify_library`` loads and verifies a library in a child process
+(:mod:`kingen.isolation`), so that a crash, an ``exit()`` or a hang in foreign code
+becomes a failed check instead of a dead, silent or stuck kingen.
+"""
+
+import time
+
+from ..errors import PluginDefect
+from ..isolation import ending, keep_freed_memory, run_in_child
+from ..poses import chunk_bounds
+from .checks import PHASES, Check, Context, by_need
+from .options import VerifyOptions, report_tolerance_mm, value_tolerance_mm
+from .processes import Printed, chunk_size, compared_chunks, empty_report, merge, process_count
+from .tally import Tally, posture_statistics
+
+__all__ = ["VerifyOptions", "chunk_size", "report_tolerance_mm", "value_tolerance_mm", "verify", "verify_library"]
+
+
+def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on_check=None):
+    """Check the loaded routine ``plugin`` against ``robot``'s reference on ``options.samples``
+    seeded poses, its golden values and its host's contract: the checks of ``plugin.checks``
+    but those that need the library file. ``progress(done)`` is called after each chunk,
+    ``phase(text)`` before each stage and ``on_check(check)`` as each check is decided (all
+    optional). The calibration fields of ``options`` are passed to the routine and the
+    reference alike; golden values are checked with empty fields (the published geometry).
+    What the routine prints on stdout/stderr is reported as a notice."""
+    report = empty_report(robot, plugin.routine, options)
+    report.interface_checks = tuple(check.name for check in by_need(plugin.checks, "routine"))
+    phase = phase or (lambda text: None)
+    printed = Printed()
+    context = Context(robot=robot, options=options, routine=plugin, report=report)
+
+    def decided(checks):
+        for check in checks:
+            report.checks.append(check)
+            if on_check is not None:
+                on_check(check)
+
+    def run(need):
+        phase(PHASES[need])
+        with printed.capture():
+            decided([result for check in by_need(plugin.checks, need) for result in check.run(context)])
+
+    run("routine")
+    if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
+        decided(_compare_samples(context, progress, printed, phase))
+        run("golden values")
+        if options.snapshot is not None:
+            run("snapshot")
+    else:
+        decided([Check("values", False, "not compared: the routine's joint or posture count differs")])
+    if printed.bytes:
+        report.notices.append(
+            f"the routine printed {printed.bytes} bytes on stdout/stderr (first line: {printed.first_line!r}); "
+            "debug printing slows the host by orders of magnitude"
+        )
+    return report
+
+
+def verify_library(robot, library, routine, options=VerifyOptions(), progress=None, *, host):
+    """Load ``library`` through ``host`` (a kingen.hosts.Host) and verify its ``routine`` in a
+    child process, after the checks that read only the library file (``definition``). A
+    library that crashes, exits or stops making progress for ``options.timeout`` seconds, at
+    load time or in any call, gives a report whose last check is ``crash`` or ``timeout``
+    naming the stage; one that breaks the host's interface before it can be called fails the
+    check the host names. Bad input (no such file, not a library, unknown routine) raises
+    KingenError."""
+    context = Context(robot=robot, options=options, library=library)
+    checks = [result for check in by_need(host.checks, "library") for result in check.run(context)]
+    on_file = len(checks)
+
+    def on_message(kind, value):
+        if kind == "progress" and progress is not None:
+            progress(value)
+        elif kind == "check":
+            checks.append(value)
+
+    try:
+        report, failure = run_in_child(_verify_job, (robot, library, routine, host, options), options.timeout,
+                                       on_message, first_stage=host.loading_stage)
+    except PluginDefect as defect:
+        report, failure = None, None
+        checks = [Check(defect.check, False, str(defect))]
+    if report is not None:
+        report.checks[:0] = checks[:on_file]
+        return report
+    report = empty_report(robot, routine, options)
+    report.interface_checks = tuple(check.name for check in by_need(host.checks, "routine"))
+    report.checks.extend(checks)
+    if failure is not None:
+        report.checks.append(Check(failure.kind, False, failure.detail))
+    return report
+
+
+def _verify_job(channel, robot, library, routine, host, options):
+    keep_freed_memory()
+    printed = Printed()
+    with printed.capture():
+        plugin = host.load(library, routine)
+    report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
+                    phase=channel.stage, on_check=lambda check: channel.send("check", check))
+    if printed.bytes:
+        report.notices.insert(0, f"loading the library printed {printed.bytes} bytes on stdout/stderr "
+                                 f"(first line: {printed.first_line!r})")
+    return report
+
+
+def _compare_samples(context, progress, printed, phase):
+    """Compare the sampled poses chunk by chunk, then run the checks that judge them."""
+    robot, plugin, report, options = context.robot, context.routine, context.report, context.options
+    tally = Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
+    start = time.perf_counter()
+    bounds = chunk_bounds(options.samples, chunk_size(robot))
+    report.processes = process_count(options, len(bounds))
+    deaths = []
+    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, bounds, report.processes,
+                                              phase, deaths):
+        merge(report, tally, printed, part)
+        if progress is not None:
+            progress(begin + count)
+    report.seconds = time.perf_counter() - start
+    report.posture_statistics = posture_statistics(robot, tally)
+    crashes = [Check("crash", False, f"a comparing process ended ({ending(code)}) during poses {begin} to "
+                                     f"{begin + count - 1} of seed {options.seed}, which ran to the end when compared "
+                                     "again in the first process: the routine crashed or exited all the same "
+                                     "(--processes 1 compares every pose in one process)")
+               for begin, count, code in deaths]
+    context.tally = tally
+    phase(PHASES["compared poses"])
+    with printed.capture():
+        return crashes + _sample_checks(context)
+
+
+def _sample_checks(context):
+    """The checks that judge the sampled calls, in order: those that need compared poses
+    report their ``uncompared`` failure, or are left out, when every call was stopped."""
+    results = []
+    for check in context.routine.checks:
+        if check.needs == "sampled calls":
+            results.extend(check.run(context))
+        elif check.needs == "compared poses":
+            if context.tally.first is not None:
+                results.extend(check.run(context))
+            elif check.uncompared is not None:
+                results.append(Check(check.name, False, check.uncompared))
+    return results

@@ -1,0 +1,21 @@
+"""``closure``: each limb's joint of each branch, put back into the limb's geometry, closes
+the limb (:func:`kingen.verify.tally.closure_error`): catches a formula mistake that the
+routine and the reference share."""
+
+from .base import Check, VerifyCheck
+
+CLOSURE_TOLERANCE = 1e-9
+"""Relative to the passive link's length."""
+
+
+class Closure(VerifyCheck):
+    name = "closure"
+    needs = "compared poses"
+    item = "closure"
+
+    def run(self, context):
+        tally = context.tally
+        return [Check("closure", tally.closure_worst <= CLOSURE_TOLERANCE,
+                      f"each limb's joint of each branch put back into the limb geometry: worst relative "
+                      f"residual {tally.closure_worst:.3g} over {tally.closure_checked} joints "
+                      f"(at most {CLOSURE_TOLERANCE:g} of the link length)")]

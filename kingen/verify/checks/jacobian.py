@@ -1,0 +1,69 @@
+"""``jacobian``: finite differences of the routine's own joints against the analytic Jacobian
+of the limbs' constraint geometry (:mod:`kingen.singularity`), on regular postures."""
+
+import numpy as np
+
+from ...reference import solve
+from ...routine import WARNINGS
+from ...singularity import finite_difference_jacobian, jacobian, posture_wrenches
+from .base import Check, VerifyCheck
+
+JACOBIAN_POSES = 200
+JACOBIAN_STEP = 1e-6
+"""Central-difference steps: this fraction of the robot's size (mm), and this many radians:
+small enough for the curvature near (not in) a singular band, large against rounding."""
+JACOBIAN_TOLERANCE = 1e-6
+"""Relative to the largest entry of the joint's Jacobian row (rotations weighed as mm of arc
+at the robot's size); Richardson-extrapolated central differences with these steps agree
+with the analytic Jacobian to about 1e-9 on every shipped robot."""
+JACOBIAN_MIN_TRANSMISSION = 0.05
+JACOBIAN_MIN_RADICAND = 1e-3
+"""Only regular postures are compared: away from limb singularities, where differences
+of an ill-conditioned joint would measure the conditioning, not the formula."""
+
+
+def jacobian_check(robot, plugin, options, t6):
+    """Finite differences of the routine's own joints along the six unit twists, against
+    the analytic Jacobian of the limbs' constraint geometry (kingen.singularity), on the
+    reachable, regular postures of ``t6``: catches a formula mistake the routine and the
+    reference share."""
+    calibrated = robot.calibrated(options.link_lengths, options.link_offsets)
+    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    plugin.reset_host()
+    center = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
+    wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
+    analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
+
+    def joints_of(moved):
+        plugin.reset_host()
+        return plugin.call(moved, options.link_lengths, options.link_offsets).solutions
+
+    # Richardson's extrapolation of central differences at h and h/2: truncation error O(h^4).
+    coarse, fine = (finite_difference_jacobian(joints_of, t6, JACOBIAN_STEP * robot.size_mm / halving,
+                                               JACOBIAN_STEP / halving, robot.revolute) for halving in (1, 2))
+    numeric = (4.0 * fine - coarse) / 3.0
+    regular = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])[:, None, :]
+               & (np.abs(np.swapaxes(transmissions, 1, 2)) > JACOBIAN_MIN_TRANSMISSION)
+               & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None, None])
+    # Rotations in mm of arc at the robot's size, so that all six twists weigh alike.
+    units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
+    with np.errstate(all="ignore"):
+        relative = (np.max(np.abs(numeric - analytic) * units, axis=-1)
+                    / np.max(np.abs(analytic) * units, axis=-1))
+    relative = np.where(regular, np.where(np.isfinite(relative), relative, np.inf), 0.0)
+    worst, compared = float(relative.max(initial=0.0)), int(np.count_nonzero(regular))
+    passed = worst <= JACOBIAN_TOLERANCE
+    detail = (f"finite differences of the routine's joints against the analytic Jacobian on {compared} "
+              f"regular joint-postures of {len(t6)} poses: max relative difference {worst:.3g} "
+              f"(at most {JACOBIAN_TOLERANCE:g})")
+    return Check("jacobian", passed, detail)
+
+
+class Jacobian(VerifyCheck):
+    name = "jacobian"
+    needs = "compared poses"
+    item = "jacobian"
+
+    def run(self, context):
+        t6 = context.tally.first[0]
+        return [jacobian_check(context.robot, context.routine, context.options, t6[:JACOBIAN_POSES])]

@@ -1,0 +1,97 @@
+"""``round trip``: forward kinematics from the routine's joints of regular postures returns
+the sampled pose (:mod:`kingen.forward`), within what the joints explain."""
+
+import numpy as np
+
+from ...conventions import pose_from_t6
+from ...forward import closure_derivative, free_mask, newton, t6_of
+from ...reference import solve
+from ...routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ...singularity import posture_wrenches
+from ..options import CONDITIONING_FACTOR, report_tolerance_mm
+from ..tally import closure_miss
+from .base import Check, VerifyCheck
+from .closure import CLOSURE_TOLERANCE
+from .jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
+
+ROUND_TRIP_POSES = 1000
+ROUND_TRIP_POSTURES = 4096
+"""At most about this many regular (pose, posture) pairs of those poses go round: every one for
+robots with few postures, a diagonal selection covering every posture for many (CEART: 64)."""
+ROUND_TRIP_MIN_CONDITIONING = 1e-4
+"""Postures whose closure derivative with respect to the free pose coordinates (rotations per
+mm of arc at the robot's size) has a smallest singular value below this are near a
+singularity: their pose is not determined by the joints (pose_conditioning)."""
+def round_trip_check(robot, plugin, options, t6):
+    """Forward kinematics seeded at each sampled pose, from the routine's joints of its
+    regular postures (about ROUND_TRIP_POSTURES in all), must return that pose: within the
+    value bound (mm) and 1e-9 rad, or within what the joints explain through the posture's
+    conditioning (pose_conditioning): their closure residual at that pose, as far as the
+    closure check accepts it (CLOSURE_TOLERANCE), plus rounding (CONDITIONING_FACTOR x
+    size), over the conditioning. Joints a few units in the last place from the reference's
+    thus go round as well as its own; joints the closure check refuses do not."""
+    if not robot.has_forward:
+        return Check("round trip", True, f"not available: forward kinematics needs free pose coordinates for a "
+                                         f"robot with {robot.dof} limbs (forward: {{free: [...]}})")
+    calibrated = robot.calibrated(options.link_lengths, options.link_offsets)
+    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    plugin.reset_host()
+    joints = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
+    wrenches, transmissions = posture_wrenches(calibrated, expected.points, joints)
+    candidates = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
+                  & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
+                  & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
+    # About ROUND_TRIP_POSTURES of them, along diagonals of (pose, posture), so that every posture takes part.
+    stride = max(1, -(-int(np.count_nonzero(candidates)) // ROUND_TRIP_POSTURES))
+    pose_number, posture_number = np.indices(candidates.shape)
+    pose_index, posture = np.nonzero(candidates & ((pose_number + posture_number) % stride == 0))
+    sampled = pose_from_t6(t6)
+    start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)[pose_index]
+    free = free_mask(calibrated)
+    conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free)
+    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    pose_index, posture, conditioning, start = (kept[regular] for kept in (pose_index, posture, conditioning, start))
+    if not len(pose_index):
+        return Check("round trip", True, "no regular posture among the sampled poses to go round")
+    routine_joints = joints[pose_index, :, posture]
+    residual = np.zeros(len(pose_index))  # the joints' closure residual, as far as the closure check accepts it
+    for index, limb in enumerate(calibrated.limbs):
+        miss, length = closure_miss(limb, expected.points[pose_index, index], routine_joints[:, index])
+        residual = np.fmax(residual, np.fmin(miss, CLOSURE_TOLERANCE * length))
+    found, _ = newton(calibrated, start, routine_joints, free)
+    position = np.max(np.abs(found[:, :3] - start[:, :3]), axis=1)
+    rotation = np.max(np.abs(t6_of(found)[:, :3, :3] - t6_of(start)[:, :3, :3]), axis=(1, 2))
+    explained_mm = 2.0 * (np.sqrt(robot.dof) * residual + CONDITIONING_FACTOR * robot.size_mm) / conditioning
+    allowed_mm = np.maximum(report_tolerance_mm(robot), explained_mm)
+    allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, explained_mm / robot.size_mm)
+    passed = bool(np.all(position <= allowed_mm) and np.all(rotation <= allowed_rad))
+    worst_mm, worst_rad = float(np.max(position)), float(np.max(rotation))
+    return Check("round trip", passed,
+                 f"forward kinematics from the routine's joints of {len(pose_index)} regular postures of {len(t6)} "
+                 f"poses returns each pose within {worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds "
+                 f"{report_tolerance_mm(robot):.3g} mm, {VALUE_TOLERANCE_RAD:g} rad, or what the joints' closure "
+                 f"residual and rounding explain through the posture's conditioning; postures near a singularity, "
+                 f"where the pose is ill-conditioned, are left out)")
+
+
+def pose_conditioning(robot, wrenches, poses, free):
+    """The smallest singular value (m,) of the closure's derivative with respect to the free
+    pose coordinates (what forward kinematics solves for) at poses (m, 6) (mm, radians):
+    forward.closure_derivative of the limbs' unit wrenches (m, dof, 6), the matrix Newton
+    solves with, rotations per mm of arc at the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
+    where the free coordinates are not all determined; non-finite counts as 0."""
+    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
+    with np.errstate(all="ignore"):
+        matrix = closure_derivative(wrenches, poses, free) * scale
+    finite = np.all(np.isfinite(matrix), axis=(1, 2))
+    matrix = np.where(finite[:, None, None], matrix, 0.0)
+    return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)
+
+
+class RoundTrip(VerifyCheck):
+    name = "round trip"
+    needs = "compared poses"
+
+    def run(self, context):
+        t6 = context.tally.first[0]
+        return [round_trip_check(context.robot, context.routine, context.options, t6[:ROUND_TRIP_POSES])]

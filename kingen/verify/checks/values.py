@@ -1,0 +1,28 @@
+"""``values``: every joint of every posture the reference reaches, within the value bounds
+(1e-9 mm and rad; a limb's singular band within its conditioning bound), with diagnoses of
+what a failing routine got wrong (:mod:`kingen.diagnose`)."""
+
+from ...diagnose import diagnose
+from .base import STOPPED_CALLS, Check, VerifyCheck
+
+
+class Values(VerifyCheck):
+    name = "values"
+    needs = "compared poses"
+    item = "values"
+    uncompared = STOPPED_CALLS
+
+    def run(self, context):
+        report, tally = context.report, context.tally
+        t6, solutions, _, reference_joints, reference_warnings = tally.first
+        values_ok = (report.max_abs_error_mm <= report.tolerance_mm and report.max_abs_error_rad <= report.tolerance_rad
+                     and report.singular_out_of_bound == 0)
+        aborted = f" ({tally.aborted} calls stopped at a write outside their buffers left out)" if tally.aborted else ""
+        values = Check("values", values_ok,
+                       f"max |error| {report.max_abs_error_mm:.3g} mm, {report.max_abs_error_rad:.3g} rad over "
+                       f"{report.samples - tally.aborted} poses x {report.postures} postures{aborted}; "
+                       f"{report.singular_entries} entries in a singular band, {report.singular_out_of_bound} beyond "
+                       f"their bound (bounds {report.tolerance_mm:.3g} mm, {report.tolerance_rad:.3g} rad)")
+        if not values_ok:
+            values.diagnoses = diagnose(context.robot, t6, solutions, reference_joints, reference_warnings)
+        return [values]

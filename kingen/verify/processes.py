@@ -1,0 +1,241 @@
+"""How a verification's poses are compared: in chunks of flat memory, shared among forked
+comparing processes (one per core by default), each drawing its own chunks' poses and
+sending back only a chunk's totals. The report is the same whatever the process count."""
+
+import math
+import multiprocessing
+import os
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..conventions import t6_from_pose
+from ..defaults import MAX_PROCESSES
+from ..isolation import captured_output, die_with_parent
+from ..poses import PoseStream
+from ..reference import solve
+from ..report import Report
+from ..routine import VALUE_TOLERANCE_RAD
+from ..singularity import PACKED, partial_sum_split
+from .options import value_tolerance_mm
+from .tally import Tally, accumulate
+
+CHUNK_ENTRIES = 2000000
+"""Joint entries (poses x dof x postures) per batch, within 1000 and MAX_CHUNK_POSES poses:
+large enough for numpy to work in long runs, small enough for flat memory."""
+MAX_CHUNK_POSES = 8192
+
+
+def chunk_size(robot):
+    """Poses per batch for ``robot``: about CHUNK_ENTRIES joint entries, fewer when the direct
+    index's packed 6 x 6 matrices (21 entries per limb line and per partial sum, each pose)
+    are computed too; its per-posture ones take a fixed block (reference.BLOCK_POSTURES)."""
+    entries = robot.dof * robot.postures
+    if robot.direct_index_min is not None:
+        low_bits, low_limbs, _ = partial_sum_split(robot)
+        partial_sums = (robot.postures >> low_bits) + ((1 << low_bits) if low_limbs else 0)
+        entries += len(PACKED) * (2 * robot.dof + partial_sums)
+    return min(MAX_CHUNK_POSES, max(1000, CHUNK_ENTRIES // entries))
+
+
+CPU_QUOTA_FILES = (("/sys/fs/cgroup/cpu.max", None),
+                   ("/sys/fs/cgroup/cpu/cpu.cfs_quota_us", "/sys/fs/cgroup/cpu/cpu.cfs_period_us"))
+"""Where Linux control groups (v2, then v1) state a container's CPU time quota and period."""
+
+
+def comparing_processes():
+    """Processes a verification compares with by default: one per core this process may run
+    on, no more than its container's CPU quota allows, at most MAX_PROCESSES."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cores = os.cpu_count() or 1
+    quota = cpu_quota()
+    if quota is not None:
+        cores = min(cores, quota)
+    return max(1, min(MAX_PROCESSES, cores))
+
+
+def cpu_quota():
+    """The cores a control group's CPU quota amounts to (rounded up), or None without one."""
+    for quota_file, period_file in CPU_QUOTA_FILES:
+        try:
+            words = Path(quota_file).read_text().split()
+            if period_file is not None:
+                words.append(Path(period_file).read_text().strip())
+            quota, period = float(words[0]), float(words[1])
+        except (OSError, ValueError, IndexError):  # no such file, "max" (v2) or unreadable
+            continue
+        if quota > 0 and period > 0:
+            return math.ceil(quota / period)
+    return None
+
+
+def process_count(options, chunks):
+    """How many processes compare ``chunks`` chunks: ``options.processes`` (None:
+    comparing_processes()), at most one per chunk; one where processes cannot be forked."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return 1
+    return max(1, min(chunks, comparing_processes() if options.processes is None else options.processes))
+
+
+def _taker(number, processes):
+    """Which of ``processes`` comparing processes compares chunk ``number`` (0, 1, ...):
+    0 is the one that merges them all (and takes chunk 0)."""
+    return number % processes
+
+
+REPORT_COUNTS = ("singular_entries", "singular_out_of_bound", "warning_mismatches", "warnings_in_band")
+REPORT_WORST = ("max_abs_error_mm", "max_abs_error_rad")
+_chunk_job = None
+"""(robot, calibrated robot, plugin, options) of the comparing processes: set before the
+others are forked, so that nothing but results travels between them."""
+
+
+@dataclass
+class _Part:
+    """One chunk's comparison: the report's counters, the running totals, what was printed."""
+
+    counts: dict
+    tally: object
+    printed_bytes: int
+    printed_first_line: str
+
+
+def _compare_chunk(poses, first=False):
+    """Call the routine on ``poses`` (m, 6), solve the reference and compare: a _Part (with
+    the poses kept for diagnoses only for the ``first`` chunk; nothing else heavy, so
+    that it travels between processes cheaply)."""
+    robot, calibrated, plugin, options = _chunk_job
+    report = empty_report(robot, plugin.routine, options)
+    tally = Tally.start(calibrated)
+    printed = Printed()
+    t6 = t6_from_pose(poses)
+    plugin.reset_host()
+    with printed.capture():
+        calls = plugin.call(t6, options.link_lengths, options.link_offsets)
+    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+    counts = {name: getattr(report, name) for name in REPORT_COUNTS + REPORT_WORST}
+    tally.calibrated = None
+    if not first:
+        tally.first = None
+    return _Part(counts, tally, printed.bytes, printed.first_line)
+
+
+def compared_chunks(robot, calibrated, plugin, options, bounds, processes, phase, deaths):
+    """(first index, pose count, _Part) chunk by chunk, in order, for the chunks ``bounds``
+    (chunk_bounds) of PoseStream's poses. With ``processes`` (process_count) above 1, the
+    other comparing processes (_Helpers, forked before chunk 0) each compare the chunks
+    _taker gives them, ahead of this one, which draws and compares only its own. If one dies (the routine crashed or exited there), its chunks are drawn
+    and compared here again, so that a crash is named by this process's stage as always;
+    if they run to the end here, (first index, pose count, exit code) of the chunk it died
+    in is appended to ``deaths``: the routine crashed all the same."""
+    global _chunk_job
+    _chunk_job = (robot, calibrated, plugin, options)
+    stream = PoseStream(robot, options.seed)
+    helpers = _Helpers(robot, options, bounds, processes) if processes > 1 else None
+    try:
+        for number, (begin, size) in enumerate(bounds):
+            phase(f"poses {begin} to {begin + size - 1} of seed {options.seed}")
+            part = helpers.result(number) if helpers is not None and _taker(number, processes) != 0 else None
+            if part is None:
+                part = _compare_chunk(stream.draw(size), first=begin == 0)
+            else:
+                stream.skip(size)
+            yield begin, size, part
+    finally:
+        if helpers is not None:
+            helpers.stop()
+            deaths.extend((*bounds[number], code) for number, code in helpers.deaths)
+
+
+class _Helpers:
+    """Forked processes 1 .. processes - 1 that compare the chunks _taker gives them, ahead of
+    this one: each draws its own poses, so only results travel (through a pipe each, which
+    also holds a process back when it runs far ahead). They die with this process.
+    ``deaths``: (the chunk number it was awaited for, exit code) of each that died."""
+
+    def __init__(self, robot, options, bounds, processes):
+        context = multiprocessing.get_context("fork")
+        self._processes = processes
+        self._receivers, self._children = {}, {}
+        self.deaths = []
+        try:
+            for taker in range(1, processes):
+                receiver, sender = context.Pipe(duplex=False)
+                child = context.Process(target=_compare_taken_chunks,
+                                        args=(sender, robot, options, bounds, taker, processes), daemon=True)
+                self._receivers[taker], self._children[taker] = receiver, child
+                child.start()
+                sender.close()
+        except BaseException:  # out of processes or memory: none is left running
+            self.stop()
+            raise
+
+    def result(self, number):
+        """Chunk ``number``'s _Part from the process that takes it, or None once that one has
+        died (then this process compares its chunks)."""
+        taker = _taker(number, self._processes)
+        receiver = self._receivers.get(taker)
+        if receiver is None:
+            return None
+        try:
+            return receiver.recv()
+        except (EOFError, OSError):
+            receiver.close()
+            del self._receivers[taker]
+            self._children[taker].join()
+            self.deaths.append((number, self._children[taker].exitcode))
+            return None
+
+    def stop(self):
+        for receiver in self._receivers.values():
+            receiver.close()
+        for child in self._children.values():
+            if child.pid is not None:  # started
+                child.kill()
+                child.join()
+
+
+def _compare_taken_chunks(sender, robot, options, bounds, taker, processes):
+    die_with_parent()
+    stream = PoseStream(robot, options.seed)
+    for number, (_, size) in enumerate(bounds):
+        if _taker(number, processes) == taker:
+            sender.send(_compare_chunk(stream.draw(size)))
+        else:
+            stream.skip(size)
+
+
+def merge(report, tally, printed, part):
+    """Add one chunk's _Part to the verification's report, totals and printed output."""
+    for name in REPORT_COUNTS:
+        setattr(report, name, getattr(report, name) + part.counts[name])
+    for name in REPORT_WORST:
+        setattr(report, name, max(getattr(report, name), part.counts[name]))
+    tally.add(part.tally)
+    printed.bytes += part.printed_bytes
+    printed.first_line = printed.first_line or part.printed_first_line
+
+
+class Printed:
+    """What the routine printed on stdout/stderr over several captured blocks."""
+
+    def __init__(self):
+        self.bytes = 0
+        self.first_line = ""
+
+    @contextmanager
+    def capture(self):
+        with captured_output() as printed:
+            yield
+        self.bytes += printed["bytes"]
+        if not self.first_line and printed["text"].strip():
+            self.first_line = printed["text"].strip().splitlines()[0]
+
+
+def empty_report(robot, routine, options):
+    return Report(robot=robot.name, routine=routine, samples=options.samples, seed=options.seed,
+                  postures=robot.postures, tolerance_mm=value_tolerance_mm(robot),
+                  tolerance_rad=VALUE_TOLERANCE_RAD)
