@@ -130,6 +130,8 @@ class Robot:
     """mm, or None: no direct-singularity warning."""
     working_posture: int = 0
     """The assembly mode the machine is built in (analyze's default posture)."""
+    working_posture_given: bool = False
+    """Whether the robot file names it (a host with one answer needs it named)."""
     collision: Optional[dict] = None
     """{leg_radius, rod_radius, crank_radius} (mm) given in the robot file, or None."""
     forward_free: tuple = ()
@@ -287,6 +289,7 @@ def load_robot(spec):
         direct_index_min=document.singularity.direct_index_min if document.singularity else None,
         forward_free=tuple(document.forward.free) if document.forward else (),
         working_posture=document.working_posture,
+        working_posture_given="working_posture" in document.model_fields_set,
         collision=document.collision.model_dump(exclude_none=True) if document.collision else None,
         lines=tuple(lines.items()),
     )

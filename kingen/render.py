@@ -69,10 +69,13 @@ def calibration_line(robot, joint, parameter, dialog_field, built_in):
     return f"{dialog_label(dialog_field)} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:.10g})"
 
 
-def build_info(robot):
-    """What the library says about itself, compiled in as data (read back by kingen info)."""
-    return (f"{BUILD_INFO_MARKER} robot={robot.name} routine={robot.routine} dof={robot.dof} "
-            f"postures={robot.postures} sha256={robot.sha256} kingen={__version__}")
+def build_info(robot, routine=None, postures=None, extra=()):
+    """What the library says about itself, compiled in as data (read back by kingen info):
+    the robot, the routine (default the DELMIA routine's name), its joints and postures,
+    the definition's sha256, kingen's version, then any ``extra`` (key, value) pairs."""
+    text = (f"{BUILD_INFO_MARKER} robot={robot.name} routine={routine or robot.routine} dof={robot.dof} "
+            f"postures={robot.postures if postures is None else postures} sha256={robot.sha256} kingen={__version__}")
+    return text + "".join(f" {key}={value}" for key, value in extra)
 
 
 def _model_tables(robot):
@@ -177,6 +180,7 @@ def robot_view(robot):
         "has_radicand": any(limb.has_radicand for limb in robot.limbs),
         "models": _model_tables(robot),
         "direct_index": robot.direct_index_min is not None,
+        "jacobian": False,
         "low_bits": partial_sum_split(robot)[0],
         "ldl_lines": ldl_test_lines(),
         "gram_lines": gram_lines(),

@@ -139,9 +139,9 @@ def routine_to_check(model, host, out_dir, library=None, source=None, routine=No
     return library, routine or own
 
 
-def solve_job(channel, host, library, routine, matrix, link_lengths, link_offsets):
+def solve_job(channel, host, model, library, routine, matrix, link_lengths, link_offsets):
     """In a child process: the routine's Calls on ``matrix`` (n, 4, 4)."""
-    plugin = host.load(library, routine)
+    plugin = host.load(library, routine, model)
     channel.stage("the routine's call")
     return plugin.call(matrix, link_lengths, link_offsets)
 

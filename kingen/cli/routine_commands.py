@@ -100,6 +100,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     model = load_model(robot)
     snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
     library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
+    model = host.as_seen(model)
     options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
                             timeout=timeout, snapshot=snapshot, processes=processes)
     with _progress(samples, chunk_size(model)) as progress:
@@ -188,7 +189,7 @@ def golden_record(robot, library, source, routine, samples, seed, output, host_n
     else:
         host = _host(host_name)
         library, routine = routine_to_check(model, host, None, library, source, routine, timeout)
-        calls = in_child(solve_job, (host, library, routine, t6, None, None), timeout, host)
+        calls = in_child(solve_job, (host, model, library, routine, t6, None, None), timeout, host)
         joints, warnings, recorded_from = calls.solutions, calls.warnings, f"plugin {Path(library).name} ({routine})"
     write_atomic(output, record(model, t6, joints, warnings, recorded_from, samples, seed))
     say(f"{output}: {samples} poses x {model.postures} postures recorded from {recorded_from}")
@@ -211,6 +212,8 @@ def info(library):
     say(f"dof: {details.get('dof', '?')}, postures: {details.get('postures', '?')}")
     say(f"definition sha256: {details.get('sha256', '?')}")
     say(f"kingen version: {details.get('kingen', '?')}")
+    if "host" in details:
+        say(f"host: {details['host']}" + (f", the robot file's posture {details['posture']}" if "posture" in details else ""))
     return 0
 
 
@@ -219,13 +222,13 @@ def _bench_job(channel, model, host, library, routine, calls, floor):
     from ..isolation import keep_freed_memory
 
     keep_freed_memory()  # as verify's child does, so that its poses per second are verify's
-    plugin = host.load(library, routine)
+    plugin = host.load(library, routine, model)
     channel.stage("the timings")
     tick = lambda: channel.send("progress", None)  # noqa: E731
     figures = benchmark(model, plugin, calls=calls, tick=tick)
     if floor is not None:
         channel.stage("the timings against the floor")
-        timings = compare(model, {"floor": host.load(floor, host.routine_name(model)), "routine": plugin}, calls=calls, tick=tick)
+        timings = compare(model, {"floor": host.load(floor, host.routine_name(model), model), "routine": plugin}, calls=calls, tick=tick)
         figures["against_floor"] = {
             **timings, "rounds": ROUNDS,
             "ratio_min": timings["routine"]["min"] / timings["floor"]["min"],

@@ -56,7 +56,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     model = load_model(robot)
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
     library, routine = routine_to_check(model, host, out_dir, timeout=timeout)
-    calls = in_child(solve_job, (host, library, routine, matrix, link_lengths, link_offsets), timeout, host)
+    model = host.as_seen(model)
+    calls = in_child(solve_job, (host, model, library, routine, matrix, link_lengths, link_offsets), timeout, host)
     expected = reference_solve(model, matrix, link_lengths, link_offsets, indices=True)
     direct = expected.direct_index[0] if expected.direct_index is not None else [None] * model.postures
     inverse = float(expected.min_inverse_index[0])

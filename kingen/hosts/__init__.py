@@ -3,12 +3,13 @@ through :mod:`kingen.limbs`.
 
 ``HOSTS`` maps each ``--host`` name to a :class:`~kingen.hosts.base.Host` instance.
 ``register`` adds one at run time (tests do, with a toy host); ``get_host`` is how every
-command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``) is built in.
+command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``) and LinuxCNC (``linuxcnc``) are built in.
 """
 
 from ..errors import KingenError
 from .base import BuildResult, Host, LoadedRoutine
 from .delmia import DelmiaHost
+from .linuxcnc import LinuxcncHost
 
 DEFAULT_HOST = "delmia"
 HOSTS = {}
@@ -40,6 +41,7 @@ def name_problems(robot_name):
 
 
 register(DelmiaHost())
+register(LinuxcncHost())
 
 __all__ = ["BuildResult", "DEFAULT_HOST", "HOSTS", "Host", "LoadedRoutine", "get_host", "name_problems",
            "register", "unregister"]

@@ -36,6 +36,9 @@ class LoadedRoutine(Protocol):
     dof: int
     postures: int
     checks: tuple
+    pose_coordinates: object
+    """Optional: (6,) bool, the pose coordinates x y z roll pitch yaw the routine's answer
+    depends on (all six when absent; a translating platform's controller ignores rotations)."""
 
     def reset_host(self):
         """Put the host's state back as before the first call (before every batch)."""
@@ -91,10 +94,16 @@ class Host:
         """Compile a hand-written source for this host; the library's path."""
         raise NotImplementedError
 
-    def load(self, library, routine) -> LoadedRoutine:
-        """Load ``routine`` of ``library`` in this process (runs the library's constructors:
-        callers do it in a child process, :mod:`kingen.isolation`)."""
+    def load(self, library, routine, robot) -> LoadedRoutine:
+        """Load ``routine`` of ``library`` for ``robot`` (as :meth:`as_seen` gives it) in this
+        process (runs the library's constructors: callers do it in a child process,
+        :mod:`kingen.isolation`)."""
         raise NotImplementedError
+
+    def as_seen(self, robot):
+        """``robot`` as this host's routines answer it (every posture by default; a host with
+        one answer gives :func:`kingen.one_posture.at_posture`). What verify compares with."""
+        return robot
 
     def routine_name(self, robot) -> str:
         """The routine kingen generates for ``robot``."""

@@ -114,7 +114,7 @@ def _verify_job(channel, robot, library, routine, host, options):
     keep_freed_memory()
     printed = Printed()
     with printed.capture():
-        plugin = host.load(library, routine)
+        plugin = host.load(library, routine, robot)
     report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
                     phase=channel.stage, on_check=lambda check: channel.send("check", check))
     if printed.bytes:

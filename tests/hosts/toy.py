@@ -102,7 +102,7 @@ class ToyHost(Host):
                                       "-shared"], compiler=compiler_command(), timeout=timeout)
         return library
 
-    def load(self, library, routine):
+    def load(self, library, routine, robot):
         return ToyRoutine(library, routine)
 
     def package(self, robot, out_dir, *, target=None, timeout=300.0):

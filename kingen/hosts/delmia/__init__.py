@@ -58,7 +58,7 @@ class DelmiaHost(Host):
 
         return build_legacy(source, out_dir, timeout=timeout)
 
-    def load(self, library, routine):
+    def load(self, library, routine, robot=None):
         from .loader import Plugin
 
         return Plugin(library, routine)

@@ -1,0 +1,83 @@
+"""LinuxCNC, the open real-time CNC controller: a kinematics module (``<name>kins.c``, built
+into ``<name>kins.so``, loaded by ``loadrt <name>kins``) whose inverse is kingen's closed form
+at the robot's working posture and whose forward is Newton's method with the analytic
+Jacobian; verified through a HAL stand-in (:mod:`.loader`) and packaged with ``.hal`` and
+``.ini`` snippets and a setup sheet. linuxcnc.md in the project's shared notes has the facts.
+"""
+
+from dataclasses import replace
+
+from ...defaults import DEFAULT_TIMEOUT
+from ..base import Host
+
+
+class LinuxcncHost(Host):
+    name = "linuxcnc"
+    description = "LinuxCNC kinematics module"
+    loading_stage = "loading the module (rtapi_app_main)"
+
+    @property
+    def checks(self):
+        from .checks import CHECKS
+
+        return CHECKS
+
+    def as_seen(self, robot):
+        """The robot at its working posture; a translating platform without rotations (LinuxCNC's
+        A B C pass through to other joints), so verify draws its poses without them."""
+        from ...one_posture import at_posture
+        from .render import check_robot, translating
+
+        check_robot(robot)
+        seen = at_posture(robot, robot.working_posture)
+        if translating(robot):
+            region = robot.verification
+            still = region.model_copy(update={"home": [*region.home[:3], 0.0, 0.0, 0.0],
+                                              "range": [*region.range[:3], 0.0, 0.0, 0.0]})
+            seen = replace(seen, verification=still)
+        return seen
+
+    def out_dir(self, robot):
+        from .build import default_dir
+
+        return default_dir(robot)
+
+    def render(self, robot):
+        from .render import render
+
+        return render(robot)
+
+    def write_source(self, robot, out_dir):
+        from .build import write_source
+
+        return write_source(robot, out_dir)
+
+    def build(self, robot, out_dir=None, *, target=None, defines=(), timeout=DEFAULT_TIMEOUT):
+        from .build import build_module
+
+        return build_module(robot, out_dir, timeout=timeout)
+
+    def build_source(self, source, out_dir, *, timeout=DEFAULT_TIMEOUT):
+        from .build import build_source
+
+        return build_source(source, out_dir, timeout=timeout)
+
+    def load(self, library, routine, robot=None):
+        from .loader import Module
+
+        return Module(library, routine, robot)
+
+    def routine_name(self, robot):
+        from .render import module_name
+
+        return module_name(robot)
+
+    def package(self, robot, out_dir, *, target=None, timeout=DEFAULT_TIMEOUT):
+        from .package import write_package
+
+        return write_package(robot, out_dir, timeout=timeout)
+
+    def package_dir(self, robot, target):
+        from .build import default_dir
+
+        return default_dir(robot) / "package"

@@ -1,0 +1,97 @@
+"""Building LinuxCNC kinematics modules: ``<name>kins.c`` compiled into ``<name>kins.so`` with
+the flags of LinuxCNC's own module build (Makefile.modinc, uspace) against its headers, warnings
+as errors; and the HAL stand-in kingen loads modules with, built once per content in the cache."""
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from ... import __version__
+from ...compiler import CompileError, compile_c, compiler_command
+from ...defaults import DEFAULT_TIMEOUT
+from ...errors import KingenError
+from ...files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
+from ..base import BuildResult
+from .render import harness_source, module_name, render, source_name
+
+HEADERS = "/usr/include/linuxcnc"
+"""Where Debian's linuxcnc-uspace-dev puts kinematics.h, hal.h, rtapi.h ($KINGEN_LINUXCNC_INCLUDE)."""
+MODULE_FLAGS = ("-std=gnu99", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared", "-DRTAPI", "-D_GNU_SOURCE",
+                "-Drealtime", "-D__MODULE__", "-DSIM", "-DUSPACE", "-fno-fast-math", "-fno-unsafe-math-optimizations")
+"""LinuxCNC's uspace module flags (Makefile.modinc), with warnings as errors and -O2."""
+HARNESS_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
+
+
+def linuxcnc_headers():
+    """The folder holding LinuxCNC's kinematics.h; KingenError naming the package otherwise."""
+    folder = Path(os.environ.get("KINGEN_LINUXCNC_INCLUDE") or HEADERS)
+    if not (folder / "kinematics.h").is_file():
+        raise KingenError(f"LinuxCNC's headers are not in {folder} (no kinematics.h): install Debian's "
+                          "linuxcnc-uspace-dev or set KINGEN_LINUXCNC_INCLUDE")
+    return folder
+
+
+def default_dir(robot):
+    return default_out_dir(robot) / "linuxcnc"
+
+
+def harness(timeout=DEFAULT_TIMEOUT):
+    """The HAL stand-in library (libkingen_hal.so), built once per content and compiler."""
+    source, command = harness_source(), compiler_command()
+    folder = cache_dir() / f"linuxcnc-hal-{digest(__version__, source, *command)[:16]}"
+    library = folder / "libkingen_hal.so"
+
+    def make():
+        write_atomic(folder / "kingen_hal.c", source)
+        compile_c([folder / "kingen_hal.c"], library, list(HARNESS_FLAGS), timeout=timeout)
+
+    cached(folder, library, make)
+    return library
+
+
+def build_module(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
+    """Render and compile ``robot``'s module into ``out_dir`` (default build/<name>/linuxcnc):
+    ``<name>kins.c`` and ``<name>kins.so``. Skips compiling when the stamp matches."""
+    out_dir = Path(out_dir or default_dir(robot))
+    (name, text), = render(robot).items()
+    command = compiler_command()
+    flags = [*MODULE_FLAGS, f"-I{linuxcnc_headers()}"]
+    source, library = out_dir / name, out_dir / f"{module_name(robot)}.so"
+    key = digest(__version__, text, *command, *flags)
+    stamp = out_dir / ".kingen-build-linuxcnc.json"
+    if read_stamp(stamp, "key") == key and read_stamp(stamp, "library_sha256") == file_digest(library) \
+            and file_digest(source) == digest(text):
+        return BuildResult(source, library, module_name(robot), compiled=False)
+    with tempfile.TemporaryDirectory(prefix="kingen-build-") as scratch:
+        scratch_source, scratch_library = Path(scratch) / name, Path(scratch) / library.name
+        scratch_source.write_text(text)
+        try:
+            compile_c([scratch_source], scratch_library, flags, compiler=command, timeout=timeout, shown_source=source)
+        except CompileError:
+            write_atomic(source, text)
+            raise
+        data = scratch_library.read_bytes()
+        write_atomic(source, text)
+        write_atomic(library, data, executable=True)
+    write_atomic(stamp, json.dumps({"key": key, "library_sha256": file_digest(library), "robot": robot.name,
+                                    "kingen": __version__}) + "\n")
+    return BuildResult(source, library, module_name(robot), compiled=True)
+
+
+def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
+    """Compile a hand-written module source (a stock module's, say) as LinuxCNC's build would;
+    warnings allowed. Returns the module's path."""
+    source = Path(source)
+    if not source.is_file():
+        raise KingenError(f"{source}: no such C source")
+    library = Path(out_dir) / f"{source.stem}.so"
+    flags = [flag for flag in MODULE_FLAGS if flag not in ("-Werror", "-Wall", "-Wextra")]
+    compile_c([source], library, [*flags, f"-I{linuxcnc_headers()}"], timeout=timeout)
+    return library
+
+
+def write_source(robot, out_dir):
+    for name, text in render(robot).items():
+        write_atomic(Path(out_dir) / name, text)
+    return Path(out_dir) / source_name(robot)

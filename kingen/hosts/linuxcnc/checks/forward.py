@@ -1,0 +1,93 @@
+"""``forward``: kinematicsForward, given the joints of a sampled pose and started a servo cycle
+away (0.01 mm, 0.01 degree) and far away (10 mm, 5 degrees), returns the sampled pose within
+the value bounds, or fails; it never returns another pose (another assembly mode). Judged on
+the regular poses of the sample (as the round trip: away from singularities, where the pose
+is not determined by the joints); the report gives the failure rates and Newton's iterations."""
+
+import numpy as np
+
+from ....conventions import pose_from_t6, t6_from_pose
+from ....forward import free_mask
+from ....reference import solve
+from ....routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ....singularity import posture_wrenches
+from ....verify.checks.base import Check, VerifyCheck
+from ....verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
+from ....verify.options import value_tolerance_mm
+
+FORWARD_POSES = 1000
+SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
+"""Seed distances: mm along a random direction of x y z, degrees along a random direction of
+roll pitch yaw (for the free coordinates)."""
+
+
+def regular_poses(robot, routine, poses):
+    """The poses (m, 6) (mm, degrees) of ``poses`` that are reachable and regular at the
+    routine's posture, with their reference joints (m, dof), mm and radians."""
+    t6 = t6_from_pose(poses)
+    expected = solve(robot, t6)
+    good = expected.warnings[:, 0] == WARNINGS["WARN_GOOD_SOLUTION"]
+    poses, t6 = poses[good], t6[good]
+    joints = expected.joints[good, :, 0]
+    if not len(poses):
+        return poses, joints
+    wrenches, _ = posture_wrenches(robot, expected.points[good], expected.joints[good])
+    start = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+    conditioning = pose_conditioning(robot, wrenches[:, 0], start, free_mask(robot))
+    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    return poses[regular], joints[regular]
+
+
+class Forward(VerifyCheck):
+    name = "forward"
+    needs = "compared poses"
+
+    def run(self, context):
+        robot, module = context.robot, context.routine
+        poses = pose_from_t6(context.tally.first[0][:FORWARD_POSES])
+        poses, joints = regular_poses(robot, module, poses)
+        if not len(poses):
+            return [Check("forward", True, "not exercised: no regular, reachable pose among the sampled ones")]
+        free = free_mask(robot)
+        machine_joints = np.full((len(poses), 16), 0.0)
+        machine_joints[:, :robot.dof] = joints / module.joint_scale()
+        bound_mm, bound_deg = value_tolerance_mm(robot), np.degrees(VALUE_TOLERANCE_RAD)
+        generator = np.random.default_rng(context.options.seed)
+        passed, parts = True, []
+        for label, (distance_mm, distance_deg) in SEEDS.items():
+            offset = np.concatenate([_directions(generator, len(poses)) * distance_mm,
+                                     _directions(generator, len(poses)) * distance_deg], axis=1)
+            offset[:, ~free] = 0.0
+            seeds = np.zeros((len(poses), 9))
+            seeds[:, :3] = (poses[:, :3] + offset[:, :3]) / module.scale
+            seeds[:, 3:6] = poses[:, 3:] + offset[:, 3:]
+            found, returns, iterations = module.forward(machine_joints, seeds)
+            position = np.max(np.abs(found[:, :3] * module.scale - poses[:, :3]), axis=1)
+            angle = np.max(np.abs(found[:, 3:6] - poses[:, 3:]), axis=1) if np.any(free[3:]) else np.zeros(len(poses))
+            converged = returns == 0
+            right = converged & (position <= bound_mm) & (angle <= bound_deg)
+            wrong = converged & ~right
+            failed = ~converged
+            counted = iterations[converged & np.isfinite(iterations)]
+            statistics = (f"iterations mean {counted.mean():.2f}, max {int(counted.max())}" if len(counted)
+                          else "no iteration count (no pin <module>.iterations)" if np.any(converged) else "")
+            parts.append(f"{label}: {int(np.count_nonzero(right))} of {len(poses)} returned the pose, "
+                         f"{int(np.count_nonzero(failed))} failed ({_codes(returns[failed])}), "
+                         f"{int(np.count_nonzero(wrong))} returned another pose"
+                         f"{f' (up to {float(np.max(position[wrong])):.3g} mm away)' if np.any(wrong) else ''}"
+                         f"{'; ' + statistics if statistics else ''}")
+            passed = passed and not np.any(wrong) and (label != "a servo cycle away" or not np.any(failed))
+        detail = (f"{'; '.join(parts)} (bounds {bound_mm:.3g} mm, {bound_deg:.3g} degrees; "
+                  f"{len(poses)} regular poses of the sample)")
+        return [Check("forward", passed, detail)]
+
+
+def _directions(generator, count):
+    """``count`` random unit 3-vectors."""
+    direction = generator.normal(size=(count, 3))
+    return direction / np.linalg.norm(direction, axis=1, keepdims=True)
+
+
+def _codes(returns):
+    values, counts = np.unique(returns, return_counts=True)
+    return ", ".join(f"{count} x {value}" for value, count in zip(values, counts)) or "none"

@@ -1,0 +1,159 @@
+"""Loading a LinuxCNC kinematics module as LinuxCNC's motion controller does, without LinuxCNC:
+the HAL stand-in (:func:`kingen.hosts.linuxcnc.build.harness`) is loaded first with global
+symbol visibility, so the module's ``hal_*`` and ``rtapi_*`` imports resolve to it; the module
+is loaded, its ``rtapi_app_main`` run, its parameters set (setp), and its
+``kinematicsInverse`` and ``kinematicsForward`` called from C over whole batches.
+
+Units: kingen's side is mm and radians (T6, Calls); the module's is the machine's units and
+degrees (EmcPose, joints). Loading runs the module's code: callers do it in a child process.
+"""
+
+import shutil
+import tempfile
+from pathlib import Path
+
+import cffi
+import numpy as np
+
+from ...conventions import pose_from_t6
+from ...errors import KingenError, PluginDefect
+from ...routine import WARNINGS, Calls
+from .build import harness
+from .render import translating
+from .checks import CHECKS
+
+ffi = cffi.FFI()
+ffi.cdef("""
+void kingen_hal_reset(void);
+int kingen_hal_set(const char *name, double value);
+int kingen_hal_get(const char *name, double *value);
+int kingen_hal_count(void);
+const char *kingen_hal_name(int index);
+void kingen_inverse_batch(void *routine, int count, const double *poses, double *joints, int *returns,
+                          const char *status_pin, double *statuses);
+void kingen_forward_batch(void *routine, int count, const double *joints, double *poses, int *returns,
+                          const char *iterations_pin, double *iterations);
+int rtapi_app_main(void);
+int kinematicsForward(const double *joint, void *world, const unsigned long *fflags, unsigned long *iflags);
+int kinematicsInverse(const void *world, double *joint, const unsigned long *iflags, unsigned long *fflags);
+int kinematicsType(void);
+""")
+ENTRY_POINTS = ("kinematicsForward", "kinematicsInverse", "kinematicsType", "rtapi_app_main")
+JOINT_SLOTS = 16
+"""The joint array LinuxCNC passes (EMCMOT_MAX_JOINTS)."""
+_harness = None
+
+
+def _hal():
+    global _harness
+    if _harness is None:
+        _harness = ffi.dlopen(str(harness()), ffi.RTLD_NOW | ffi.RTLD_GLOBAL)
+    return _harness
+
+
+def _pointer(ctype, array):
+    return ffi.cast(ctype, ffi.from_buffer(array))
+
+
+class Module:
+    """A loaded kinematics module for ``robot`` (a one-posture view: the joints LinuxCNC sees).
+
+    ``routine`` is the HAL module name (``<name>kins``, ``genhexkins``): its pins and
+    parameters start with it. ``setp`` is {name: value} set after ``rtapi_app_main``.
+    Raises KingenError for what is the user's (no such file, not a library) and PluginDefect
+    for a module that lacks an entry point or whose rtapi_app_main fails."""
+
+    checks = CHECKS
+
+    def __init__(self, library, routine, robot, setp=None, inch=False):
+        hal = _hal()
+        path = Path(library).resolve()
+        if not path.is_file():
+            raise KingenError(f"{path}: no such module")
+        folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))
+        copy = folder / path.name  # a fresh copy: each load gets the module's own static state
+        shutil.copy2(path, copy)
+        hal.kingen_hal_reset()
+        try:
+            self.library = ffi.dlopen(str(copy), ffi.RTLD_NOW)
+        except OSError as error:
+            raise PluginDefect(f"the module cannot be loaded: {str(error).split('.  Additionally')[0]}") from None
+        finally:
+            shutil.rmtree(folder, ignore_errors=True)
+        for name in ENTRY_POINTS:
+            try:
+                getattr(self.library, name)
+            except AttributeError:
+                raise PluginDefect(f"the module does not export {name}") from None
+        status = self.library.rtapi_app_main()
+        if status != 0:
+            raise PluginDefect(f"rtapi_app_main returned {status}")
+        for name, value in (setp or {}).items():
+            if hal.kingen_hal_set(name.encode(), float(value)) != 0:
+                raise KingenError(f"--setp {name}: the module has no such pin or parameter")
+        self.routine, self.robot = routine, robot
+        self.dof, self.postures = robot.dof, 1
+        self.pose_coordinates = np.array([True] * 3 + [not translating(robot)] * 3)
+        self.scale = 25.4 if inch else 1.0
+        self.status_pin = self._pin("status")
+        self.iterations_pin = self._pin("iterations")
+
+    def _pin(self, suffix):
+        """The C name of the pin <module>.<suffix>, or NULL when the module has none."""
+        name = f"{self.routine}.{suffix}".encode()
+        value = ffi.new("double *")
+        return ffi.new("char[]", name) if _hal().kingen_hal_get(name, value) == 0 else ffi.NULL
+
+    def reset_host(self):
+        pass
+
+    def hal_names(self):
+        """Every pin and parameter the module made."""
+        hal = _hal()
+        return [ffi.string(hal.kingen_hal_name(index)).decode() for index in range(hal.kingen_hal_count())]
+
+    def emc_poses(self, t6):
+        """EmcPose numbers (n, 9): x y z in machine units, a b c degrees, u v w 0, from T6 (mm)."""
+        pose = pose_from_t6(np.asarray(t6, dtype=float).reshape(-1, 4, 4))
+        world = np.zeros((len(pose), 9))
+        world[:, :3] = pose[:, :3] / self.scale
+        world[:, 3:6] = pose[:, 3:]
+        return world
+
+    def inverse(self, world):
+        """kinematicsInverse on EmcPose numbers (n, 9): (joints (n, 16) machine units and degrees,
+        returns (n,), status pin (n,) or NaN without one)."""
+        world = np.ascontiguousarray(world, dtype=float)
+        count = len(world)
+        joints = np.full((count, JOINT_SLOTS), np.nan)
+        returns = np.empty(count, dtype=np.intc)
+        statuses = np.full(count, np.nan)
+        _hal().kingen_inverse_batch(ffi.cast("void *", self.library.kinematicsInverse), count,
+                                    _pointer("double *", world), _pointer("double *", joints),
+                                    _pointer("int *", returns), self.status_pin, _pointer("double *", statuses))
+        return joints, returns, statuses
+
+    def forward(self, joints, seeds):
+        """kinematicsForward on joints (n, 16) from seeds (n, 9): (poses (n, 9), returns, iterations)."""
+        joints = np.ascontiguousarray(joints, dtype=float)
+        poses = np.ascontiguousarray(seeds, dtype=float).copy()
+        count = len(poses)
+        returns = np.empty(count, dtype=np.intc)
+        iterations = np.full(count, np.nan)
+        _hal().kingen_forward_batch(ffi.cast("void *", self.library.kinematicsForward), count,
+                                    _pointer("double *", joints), _pointer("double *", poses),
+                                    _pointer("int *", returns), self.iterations_pin, _pointer("double *", iterations))
+        return poses, returns, iterations
+
+    def joint_scale(self):
+        """Per joint: factor from the module's joint units to kingen's (mm, radians)."""
+        return np.where(self.robot.revolute, np.pi / 180.0, self.scale)
+
+    def call(self, t6, link_lengths=None, link_offsets=None):
+        """The inverse on every T6 (n, 4, 4), mm, as Calls in kingen's units: one posture; the
+        status pin's warning where the module has one, else good (0) or unreachable."""
+        joints, returns, statuses = self.inverse(self.emc_poses(t6))
+        solutions = (joints[:, :self.dof] * self.joint_scale())[:, :, None]
+        fallback = np.where(returns == 0, WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_UNREACHABLE"])
+        warnings = np.where(np.isfinite(statuses), statuses, fallback).astype(np.intc)[:, None]
+        return Calls(returned=returns, solutions=solutions, warnings=warnings, faults=np.zeros(len(t6), dtype=np.intc))

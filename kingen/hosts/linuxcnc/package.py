@@ -1,0 +1,76 @@
+"""Packaging for LinuxCNC: the module's source and built module, a ``.hal`` snippet (loadrt
+and the geometry's setp lines), an ``.ini`` snippet ([KINS], one [JOINT_n] per limb with the
+robot file's travel limits and the joints at the verification home) and a setup sheet."""
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from ... import __version__
+from ...conventions import t6_from_pose
+from ...defaults import DEFAULT_TIMEOUT
+from ...files import write_atomic, write_folder
+from ...reference import solve
+from ...render import template
+from .build import build_module
+from .render import TEMPLATES, module_name, render, view_model
+
+
+def _number(value):
+    return f"{value:.10g}"
+
+
+def sheet_view(robot):
+    """What the snippets and the sheet show: the module view plus joints' homes and limits."""
+    view = view_model(robot)
+    home = np.asarray(robot.verification.home, dtype=float)
+    joints = solve(robot, t6_from_pose(home[None]), indices=False).joints[0, :, robot.working_posture]
+    lower, upper = robot.travel_limits()
+    ini = []
+    for joint in view["joints"]:
+        index, revolute = joint["index"], joint["revolute"]
+        scale = 180.0 / math.pi if revolute else 1.0
+        limited = robot.limbs[index].travel is not None
+        ini.append({**joint, "type": "ANGULAR" if revolute else "LINEAR",
+                    "lower": _number(lower[index] * scale) if limited else "",
+                    "upper": _number(upper[index] * scale) if limited else "",
+                    "travel": f"[{_number(lower[index] * scale)}, {_number(upper[index] * scale)}]" if limited else "-",
+                    "home": _number(joints[index] * scale)})
+    parameters = [{**parameter, "value": _number(_value(robot, parameter))} for parameter in view["parameters"]]
+    return {**view, "ini_joints": ini, "parameters": parameters, "version": __version__,
+            "joint_count": robot.dof + (6 if view["translating"] else 0),
+            "home_text": " ".join(_number(value) for value in home), "description": robot.description}
+
+
+def _value(robot, parameter):
+    """The robot file's value of a geometry parameter '<joint>.<field>[.x|.y|.z]'."""
+    joint, field, *axis = parameter["name"].split(".")
+    value = getattr(robot.limbs[robot.joint_names.index(joint)], field.replace("-", "_"))
+    return value["xyz".index(axis[0])] if axis else value
+
+
+def render_package(robot):
+    """The text files of the package as {file name: text}."""
+    view = sheet_view(robot)
+    module = module_name(robot)
+    return {**render(robot), f"{module}.hal": template("module.hal.j2", TEMPLATES).render(**view),
+            f"{module}.ini": template("module.ini.j2", TEMPLATES).render(**view),
+            "SETUP.md": template("setup_sheet.md.j2", TEMPLATES).render(**view)}
+
+
+def write_package(robot, out_dir, timeout=DEFAULT_TIMEOUT):
+    """Write the package folder whole or not at all, with the built module. Returns the paths."""
+    files = render_package(robot)
+    library = f"{module_name(robot)}.so"
+
+    def fill(staging):
+        built = build_module(robot, staging / ".build", timeout=timeout)
+        write_atomic(staging / library, built.library.read_bytes(), executable=True)
+        shutil.rmtree(staging / ".build")
+        for name, text in files.items():
+            write_atomic(staging / name, text)
+
+    write_folder(out_dir, fill, f"written by kingen for {robot.name} (linuxcnc)\n")
+    return [Path(out_dir) / name for name in (*files, library)]

@@ -1,0 +1,132 @@
+"""Rendering a LinuxCNC kinematics module: robot -> ``<name>kins.c``, from this host's
+template, the shared view-model (:func:`kingen.render.robot_view`) and the limb models'
+partials (with their force lines and transmissions, for the forward Jacobian). Pure."""
+
+import math
+from pathlib import Path
+
+from ...errors import KingenError
+from ...limbs import c_double
+from ...render import build_info, robot_view, template
+from ...routine import SINGULAR_TOLERANCE
+
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+STOCK_MODULES = frozenset({
+    "5axiskins", "corexykins", "genhexkins", "genserkins", "lineardeltakins", "maxkins", "pentakins", "pumakins",
+    "rosekins", "rotarydeltakins", "rotatekins", "scarakins", "scorbot-kins", "tripodkins", "trivkins", "userkins",
+    "xyzab_tdr_kins", "xyzac-trt-kins", "xyzbc-trt-kins", "switchkins", "kins",
+})
+"""LinuxCNC's own kinematics modules (Debian's linuxcnc-uspace 2.9): a generated module may
+not take their names."""
+MAX_ITERATIONS = 20
+TOLERANCE = 1e-10
+"""Newton stops when a step is at most this long (mm and radians)."""
+MAX_STEP = 25.0
+MAX_STEP_ANGLE = 10.0
+"""mm and degrees per angle: how far the forward may move from the pose passed in (the last
+servo cycle's) before it fails instead of jumping to another assembly mode."""
+TRANSLATION = ("x", "y", "z")
+
+
+def module_name(robot):
+    """The HAL module name: <name>kins."""
+    return f"{robot.name}kins"
+
+
+def source_name(robot):
+    return f"{module_name(robot)}.c"
+
+
+def translating(robot):
+    """Whether the platform only translates (forward.free is x, y, z): A B C pass through."""
+    return tuple(robot.forward_free) == TRANSLATION or set(robot.forward_free) == set(TRANSLATION)
+
+
+def robot_problem(robot):
+    """Why this host cannot drive ``robot``, or None."""
+    if module_name(robot) in STOCK_MODULES:
+        return f"name: the module name '{module_name(robot)}' is LinuxCNC's own module's"
+    if robot.dof != 6 and not translating(robot):
+        return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
+                f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
+    if robot.postures > 1 and not robot.working_posture_given:
+        return (f"working_posture: LinuxCNC's inverse kinematics has one answer: name the posture the machine "
+                f"is built in (working_posture: 0 to {robot.postures - 1})")
+    return None
+
+
+def check_robot(robot):
+    problem = robot_problem(robot)
+    if problem is not None:
+        field, _, text = problem.partition(": ")
+        raise KingenError(f"{robot.path}:{robot.line_of(field)}: {field}: {text}")
+
+
+def _parameters(robot, tables):
+    """HAL parameters of the geometry: '<joint>.<field>[.x|.y|.z]' -> the member in kingen_hal."""
+    parameters = []
+    for table in tables:
+        for number, row in enumerate(table["rows"]):
+            limb = robot.limbs[row["joint"]]
+            for field in limb.length_fields:
+                member = f"{table['name']}s[{number}].{field}"
+                base = f"{robot.joint_names[row['joint']]}.{field.replace('_', '-')}"
+                if isinstance(getattr(limb, field), (list, tuple)):
+                    parameters += [{"name": f"{base}.{axis}", "member": f"{member}[{index}]"}
+                                   for index, axis in enumerate("xyz")]
+                else:
+                    parameters.append({"name": base, "member": member})
+    return parameters
+
+
+def view_model(robot):
+    """What the module template substitutes, already formatted as C."""
+    check_robot(robot)
+    view = robot_view(robot)
+    branches = robot.posture_branches(robot.working_posture)
+    lower, upper = robot.travel_limits()
+    joints = []
+    for index, limb in enumerate(robot.limbs):
+        revolute = limb.joint_type.wraps
+        limited = limb.travel is not None
+        joints.append({
+            "index": index, "name": robot.joint_names[index], "model": limb.model,
+            "unit": "degrees" if revolute else "mm", "branch": branches[index], "revolute": int(revolute),
+            "limited": int(limited), "lower": c_double(lower[index] if limited else 0.0),
+            "upper": c_double(upper[index] if limited else 0.0),
+            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {limb.joint_type.yaml_unit}" if limited else "",
+        })
+    two_branch = [(index, limb) for index, limb in enumerate(robot.limbs) if limb.branches == 2]
+    words = ", ".join(f"{robot.joint_names[index]} {limb.branch_labels[branches[index]]}" for index, limb in two_branch)
+    return {
+        **view,
+        "module": module_name(robot),
+        "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
+                                                                ("posture", robot.working_posture))),
+        "unit_name": "mm",
+        "translating": translating(robot),
+        "free_count": 3 if translating(robot) else 6,
+        "working_posture": robot.working_posture,
+        "branch_words": words,
+        "joints": joints,
+        "direct_index": True,
+        "jacobian": True,
+        "direct_index_min": c_double(robot.direct_index_min) if robot.direct_index_min is not None else None,
+        "singular_tolerance": c_double(SINGULAR_TOLERANCE),
+        "parameters": _parameters(robot, view["models"]),
+        "max_iterations": MAX_ITERATIONS,
+        "tolerance": c_double(TOLERANCE),
+        "max_step": c_double(MAX_STEP),
+        "max_step_angle": c_double(MAX_STEP_ANGLE),
+        "degree": c_double(math.pi / 180.0),
+    }
+
+
+def render(robot):
+    """The module's source as {file name: text}."""
+    return {source_name(robot): template("kins.c.j2", TEMPLATES).render(**view_model(robot))}
+
+
+def harness_source():
+    """The HAL stand-in's C source (a fixed file)."""
+    return (TEMPLATES / "kingen_hal.c").read_text()

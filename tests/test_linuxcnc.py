@@ -1,0 +1,171 @@
+"""The LinuxCNC host: kingen's kinematics module for every shipped robot with six limbs or a
+translating platform builds warning-free, loads through the HAL stand-in as LinuxCNC's motion
+controller would, and passes verify (its inverse against the reference at the working
+posture; its forward Newton from seeds a servo cycle and 10 mm / 5 degrees away); robots it
+cannot drive are refused with a located error; its package's snippets hold the robot file's
+numbers. LinuxCNC's headers come from Debian's linuxcnc-uspace-dev (.ci/run installs it)."""
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import require_tool
+from kingen.cli import main
+from kingen.conventions import t6_from_pose
+from kingen.errors import KingenError
+from kingen.hosts import get_host
+from kingen.hosts.linuxcnc.build import build_module
+from kingen.hosts.linuxcnc.loader import Module
+from kingen.hosts.linuxcnc.package import render_package
+from kingen.model import load_robot
+from kingen.reference import solve
+from kingen.resources import robots_dir
+from kingen.verify import VerifyOptions, verify_library
+
+LINUXCNC_ROBOTS = ["hexapod", "flexapod", "stewart_gough_example", "ceart", "iwf", "rus_optimized", "tau"]
+"""Every shipped robot with six limbs or a translating platform."""
+
+
+@pytest.fixture(autouse=True)
+def linuxcnc_headers():
+    if not Path(os.environ.get("KINGEN_LINUXCNC_INCLUDE", "/usr/include/linuxcnc"), "kinematics.h").is_file():
+        message = "LinuxCNC's headers are not installed (Debian package linuxcnc-uspace-dev; .ci/run installs it)"
+        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
+        pytest.skip(message)
+
+
+@pytest.fixture(scope="module")
+def modules(tmp_path_factory):
+    """modules(name) -> (robot, robot as LinuxCNC sees it, BuildResult), built once."""
+    folder, cache = tmp_path_factory.mktemp("linuxcnc"), {}
+    host = get_host("linuxcnc")
+
+    def get(name):
+        if name not in cache:
+            robot = load_robot(name)
+            cache[name] = (robot, host.as_seen(robot), build_module(robot, folder / name))
+        return cache[name]
+
+    return get
+
+
+@pytest.mark.parametrize("name", LINUXCNC_ROBOTS)
+def test_every_shipped_module_passes_verify(name, modules):
+    _, seen, built = modules(name)
+    report = verify_library(seen, built.library, built.routine, VerifyOptions(samples=3000), host=get_host("linuxcnc"))
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+    checks = {check.name: check.detail for check in report.checks}
+    assert report.max_abs_error_mm <= 1e-9 and report.max_abs_error_rad <= 1e-9
+    servo = re.search(r"a servo cycle away: (\d+) of (\d+) returned the pose, 0 failed", checks["forward"])
+    assert servo and servo.group(1) == servo.group(2) and int(servo.group(2)) > 0
+    assert "0 returned another pose; iterations mean" in checks["forward"]
+
+
+def test_the_module_answers_the_working_posture(modules):
+    robot, seen, built = modules("ceart")
+    poses = np.array([robot.verification.home, [10, -20, robot.verification.home[2] + 15, 4, -3, 8]])
+    module = Module(built.library, built.routine, seen)
+    calls = module.call(t6_from_pose(poses))
+    expected = solve(robot, t6_from_pose(poses))
+    assert robot.working_posture == 63
+    assert np.max(np.abs(calls.solutions[:, :, 0] - expected.joints[:, :, 63])) < 1e-12
+    assert list(calls.warnings[:, 0]) == list(expected.warnings[:, 63]) and list(calls.returned) == [0, 0]
+
+
+def test_geometry_parameters_change_the_module_without_recompiling(modules):
+    robot, seen, built = modules("hexapod")
+    home = t6_from_pose(np.array([robot.verification.home]))
+    before = Module(built.library, built.routine, seen).call(home).solutions[0, :, 0]
+    after = Module(built.library, built.routine, seen, setp={"hexapodkins.leg1.reference-length": 400.413}).call(home)
+    assert after.solutions[0, 0, 0] == pytest.approx(before[0] - 1.0, abs=1e-12)
+    assert np.array_equal(after.solutions[0, 1:, 0], before[1:])
+    names = Module(built.library, built.routine, seen).hal_names()
+    assert {"hexapodkins.leg1.base-point.x", "hexapodkins.leg6.platform-point.z", "hexapodkins.max-step",
+            "hexapodkins.status", "hexapodkins.iterations"} <= set(names)
+
+
+def test_the_forward_fails_rather_than_stray_far_from_the_pose_passed_in(modules):
+    robot, seen, built = modules("hexapod")
+    module = Module(built.library, built.routine, seen)
+    home = np.array(robot.verification.home)
+    world = np.zeros((3, 9))
+    world[:, :3], world[:, 3:6] = home[:3], home[3:]
+    joints, returns, _ = module.inverse(world[:1])
+    assert returns[0] == 0
+    world[1, 2] += 20.0  # within max-step (25 mm): converges back
+    world[2, 2] += 60.0  # beyond it: fails with -3
+    found, returns, iterations = module.forward(np.repeat(joints, 3, axis=0), world)
+    assert list(returns) == [0, 0, -3]
+    assert np.max(np.abs(found[:2, :6] - np.r_[home][None])) < 1e-9 and iterations[0] == 1
+
+
+def test_a_wrong_inverse_fails_values_and_a_wrong_forward_fails_forward(modules, tmp_path, capsys):
+    _, _, built = modules("hexapod")
+    text = built.source.read_text()
+    wrong = {"inverse": ("joint[i] = kingen_revolute[i] ? value / KINGEN_DEGREE : value;",
+                         "joint[i] = (kingen_revolute[i] ? value / KINGEN_DEGREE : value) + (i == 2);"),
+             "forward": ("residual[i] = value - measured[i];", "residual[i] = value - measured[i] * 1.000001;")}
+    outputs = {}
+    for name, (old, new) in wrong.items():
+        assert old in text
+        source = tmp_path / f"{name}kins.c"
+        source.write_text(text.replace(old, new))
+        code = main(["verify", "hexapod", "--host", "linuxcnc", "--source", str(source), "--routine", "hexapodkins",
+                     "-o", str(tmp_path / name), "--samples", "2000"])
+        outputs[name] = capsys.readouterr().out
+        assert code == 1
+    assert "FAILED values: max |error| 1 mm" in outputs["inverse"]
+    assert "diagnosis: joint 2 (leg3) is off by a constant +1 mm on every pose" in outputs["inverse"]
+    assert "ok     forward" in outputs["inverse"]  # its forward is right: it is fed the reference's joints
+    assert "ok     values" in outputs["forward"] and "FAILED forward" in outputs["forward"]
+    assert re.search(r"a servo cycle away: 0 of \d+ returned the pose", outputs["forward"])
+
+
+@pytest.mark.parametrize("change, words", [
+    (lambda text: text.replace("working_posture: 0\n", ""), ":1: working_posture: LinuxCNC's inverse kinematics has one"),
+    (lambda text: text.replace("name: tau", "name: genhex"), ":2: name: the module name 'genhexkins' is LinuxCNC's own"),
+])
+def test_robots_linuxcnc_cannot_drive_are_refused(change, words, tmp_path, capsys):
+    path = tmp_path / "robot.yaml"
+    path.write_text(change((robots_dir() / "tau.yaml").read_text()))
+    assert main(["build", str(path), "--host", "linuxcnc", "-o", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1 and not (tmp_path / "b").exists()
+
+
+def test_a_robot_that_neither_has_six_limbs_nor_translates_is_refused():
+    with pytest.raises(KingenError, match=r"exechon.yaml:\d+: forward: LinuxCNC drives six-limb robots"):
+        build_module(load_robot("exechon"))
+
+
+def test_the_package_holds_the_robot_files_numbers(modules):
+    robot, _, _ = modules("tau")
+    files = render_package(robot)
+    assert sorted(files) == ["SETUP.md", "taukins.c", "taukins.hal", "taukins.ini"]
+    assert "setp taukins.carriage3.link-length 1499.775\n" in files["taukins.hal"]
+    assert "setp taukins.carriage1.platform-point.x 224.999\n" in files["taukins.hal"]
+    home = solve(robot, t6_from_pose(np.array([robot.verification.home]))).joints[0, :, 0]
+    ini = files["taukins.ini"]
+    assert "KINEMATICS = taukins\nJOINTS = 9\n" in ini
+    assert f"[JOINT_0]\n# carriage1 (rail, mm)\nTYPE = LINEAR\nMIN_LIMIT = -1\nMAX_LIMIT = 2600\nHOME = {home[0]:.10g}\n" in ini
+    assert "A B C U V W pass through to joints 3 to 8" in files["SETUP.md"]
+
+
+def test_kingen_info_reads_the_module(modules, capsys):
+    _, _, built = modules("iwf")
+    assert main(["info", str(built.library)]) == 0
+    out = capsys.readouterr().out
+    assert "robot: iwf\nroutine: iwfkins\ndof: 6, postures: 1\n" in out and "format: ELF 64-bit shared object" in out
+    assert "host: linuxcnc, the robot file's posture 63\n" in out
+
+
+def test_the_module_compiles_warning_free_with_clang(modules, tmp_path, monkeypatch):
+    require_tool("clang", "clang")
+    robot, _, _ = modules("ceart")
+    monkeypatch.setenv("CC", "clang")
+    monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
+    assert build_module(robot, tmp_path / "clang").compiled
