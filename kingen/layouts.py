@@ -1,6 +1,7 @@
-"""Layouts: generators of six limbs for parametric robots (``layout:`` in a robot file).
+"""Layouts: generators of limbs for parametric robots (``layout:`` in a robot file).
 
-Each layout takes its parameters (mm, degrees) and returns six limbs of one model,
+Each layout takes its parameters (mm, degrees) and returns the limbs of one model (six, or
+three for the deltas, whose parameters are named as LinuxCNC's pins name them),
 sharing travel limits and giving each limb its own calibration fields.
 docs/conventions.md states the formulas.
 """
@@ -10,8 +11,8 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import Field, field_validator
 
-from .limbs import Crank, Leg, model_name
-from .schema import MAX_MM, Coordinate, DialogField, Length, SixAngles, Strict, Travel
+from .limbs import Crank, Leg, Rail, model_name
+from .schema import MAX_MM, Coordinate, DialogField, Length, ReferenceLength, SixAngles, Strict, Travel
 
 class _Layout(Strict):
     """A generator of six limbs of one model; ``calibrate`` maps a parameter to six fields."""
@@ -45,7 +46,7 @@ class StewartGoughLayout(_Layout):
     platform_pair_angle: Annotated[float, Field(gt=0, lt=120)]
     base_height: Coordinate = 0.0
     platform_height: Coordinate = 0.0
-    reference_length: Length
+    reference_length: ReferenceLength
     limb_class: ClassVar[type] = Leg
 
     def limbs(self):
@@ -105,5 +106,62 @@ class Rus6Layout(_Layout):
         return cranks
 
 
-LAYOUTS = (StewartGoughLayout, Rus6Layout)
+class _DeltaLayout(_Layout):
+    """Three limbs 120 degrees apart, named and placed as LinuxCNC's delta modules do."""
+
+    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=3, max_length=3)]] = {}
+
+
+class LinearDeltaLayout(_DeltaLayout):
+    """A linear (Rostock-style) delta as LinuxCNC's lineardeltakins: towers 0, 1, 2 at 90, 210
+    and 330 degrees, at distance R from the axis, carriages moving up +z; a rod of length L
+    joins each carriage to the effector's controlled point (the effector and carriage offsets
+    are taken off R, as lineardeltakins' R). The joint is the carriage's height; the
+    carriage above the effector is branch 1 (docs/conventions.md, 'Linear delta')."""
+
+    type: Literal["linear_delta"]
+    R: Length
+    """lineardeltakins.R (mm): horizontal distance from the axis to a tower's rod joint, less the effector offset."""
+    L: Length
+    """lineardeltakins.L (mm): the diagonal rod's length."""
+    limb_class: ClassVar[type] = Rail
+
+    def limbs(self):
+        """The three rails, their points computed as lineardeltakins computes them."""
+        sin_60, cos_60 = math.sqrt(3) / 2, 0.5
+        towers = [(0.0, self.R), (-sin_60 * self.R, -cos_60 * self.R), (sin_60 * self.R, -cos_60 * self.R)]
+        return [Rail(model=model_name(Rail), name=f"tower{index}", rail_point=[x, y, 0.0], direction=[0.0, 0.0, 1.0],
+                     carriage_offset=[0.0, 0.0, 0.0], platform_point=[0.0, 0.0, 0.0], link_length=self.L,
+                     **self._shared(index))
+                for index, (x, y) in enumerate(towers)]
+
+
+class RotaryDeltaLayout(_DeltaLayout):
+    """A rotary (Clavel) delta as LinuxCNC's rotarydeltakins: hips in the plane z = 0 at
+    distance platformradius, thighs of thighlength pointing out at -90, 30 and 150 degrees for
+    joints 0, 1 and 2, shins of shinlength to the foot's joints at footradius from the
+    controlled point. Joints in degrees, 0 with the thigh horizontal, positive moving the knee
+    down (docs/conventions.md, 'Rotary delta')."""
+
+    type: Literal["rotary_delta"]
+    platformradius: Length
+    thighlength: Length
+    shinlength: Length
+    footradius: Annotated[float, Field(ge=0, le=MAX_MM)]
+    limb_class: ClassVar[type] = Crank
+    HIP_ANGLES: ClassVar[tuple] = (-90.0, 30.0, 150.0)
+
+    def limbs(self):
+        cranks = []
+        for index, angle in enumerate(self.HIP_ANGLES):
+            c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
+            cranks.append(Crank(model=model_name(Crank), name=f"hip{index}",
+                                pivot=[self.platformradius * c, self.platformradius * s, 0.0], crank_direction=angle,
+                                crank_length=self.thighlength, rod_length=self.shinlength,
+                                platform_point=[self.footradius * c, self.footradius * s, 0.0],
+                                **self._shared(index)))
+        return cranks
+
+
+LAYOUTS = (StewartGoughLayout, Rus6Layout, LinearDeltaLayout, RotaryDeltaLayout)
 Layout = Annotated[Union[LAYOUTS], Field(discriminator="type")]

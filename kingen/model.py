@@ -26,6 +26,7 @@ from .resources import robots_dir
 from .robot_file import dotted, read_robot_file
 from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict, dialog_value
 from .singularity import SIX
+from .units import LENGTH_UNITS, document_in_mm
 
 MAX_GOLDEN = 1000
 MAX_LIMBS = 64
@@ -111,6 +112,7 @@ def _schema_over(models):
         forward: Optional[Forward] = None
         working_posture: Annotated[int, Field(ge=0)] = 0
         collision: Optional[Collision] = None
+        units: Literal["mm", "inch"] = "mm"
 
     return RobotFile
 
@@ -132,6 +134,8 @@ class Robot:
     """The assembly mode the machine is built in (analyze's default posture)."""
     working_posture_given: bool = False
     """Whether the robot file names it (a host with one answer needs it named)."""
+    length_unit: str = "mm"
+    """The unit the robot file's lengths are written in ('mm' or 'inch'); the Robot holds mm."""
     collision: Optional[dict] = None
     """{leg_radius, rod_radius, crank_radius} (mm) given in the robot file, or None."""
     forward_free: tuple = ()
@@ -278,6 +282,8 @@ def load_robot(spec):
     except ValidationError as error:
         raise _diagnostic(error, locate) from None
     limbs = _expand_limbs(document, locate)
+    if document.units != "mm":
+        document, limbs = document_in_mm(document, limbs, LENGTH_UNITS[document.units])
     robot = Robot(
         name=document.name,
         description=document.description,
@@ -291,8 +297,12 @@ def load_robot(spec):
         working_posture=document.working_posture,
         working_posture_given="working_posture" in document.model_fields_set,
         collision=document.collision.model_dump(exclude_none=True) if document.collision else None,
+        length_unit=document.units,
         lines=tuple(lines.items()),
     )
+    if robot.size_mm > MAX_MM:
+        raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "
+                                      "computes in")
     _check_golden(robot, locate)
     if robot.working_posture >= robot.postures:
         raise locate.error(["working_posture"], f"posture {robot.working_posture} does not exist "

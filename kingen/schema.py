@@ -48,6 +48,8 @@ UnitVec3 = Annotated[Vec3, AfterValidator(_check_unit)]
 Pose = Annotated[list[float], Field(min_length=6, max_length=6), AfterValidator(_check_pose)]
 SixAngles = Annotated[list[Angle], Field(min_length=6, max_length=6)]
 Length = Annotated[float, Field(ge=MIN_LENGTH_MM, le=MAX_MM)]
+ReferenceLength = Annotated[float, Field(ge=0, le=MAX_MM)]
+"""A leg's length at joint value 0 (mm): 0 makes the joint the leg's absolute length."""
 Travel = Annotated[list[Coordinate], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
 DialogField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
 """A Solver Attributes field: length1..length6 (link_lengths[0..5]), offset1..offset6 (link_offsets[0..5])."""

@@ -25,8 +25,22 @@ from kingen.reference import solve
 from kingen.resources import robots_dir
 from kingen.verify import VerifyOptions, verify_library
 
-LINUXCNC_ROBOTS = ["hexapod", "flexapod", "stewart_gough_example", "ceart", "iwf", "rus_optimized", "tau"]
+LINUXCNC_ROBOTS = ["hexapod", "flexapod", "stewart_gough_example", "ceart", "iwf", "rus_optimized", "tau",
+                   "linuxcnc_hexapod", "linear_delta", "rotary_delta"]
 """Every shipped robot with six limbs or a translating platform."""
+STOCK = Path("/usr/lib/linuxcnc/modules")
+"""LinuxCNC's own modules (Debian's linuxcnc-uspace)."""
+
+
+def stock_report(robot_name, module, *arguments):
+    """verify of LinuxCNC's stock ``module`` against a shipped robot at its sample geometry."""
+    host = get_host("linuxcnc")
+    units = next((value for flag, value in zip(arguments, arguments[1:]) if flag == "units"), None)
+    setp = dict(pair for flag, pair in zip(arguments, arguments[1:]) if flag == "setp")
+    host = host.configured(units=units, setp=tuple(setp.items()))
+    seen = host.as_seen(load_robot(robot_name))
+    report = verify_library(seen, STOCK / f"{module}.so", module, VerifyOptions(samples=3000), host=host)
+    return report, {check.name: check for check in report.checks}
 
 
 @pytest.fixture(autouse=True)
@@ -47,7 +61,7 @@ def modules(tmp_path_factory):
     def get(name):
         if name not in cache:
             robot = load_robot(name)
-            cache[name] = (robot, host.as_seen(robot), build_module(robot, folder / name))
+            cache[name] = (robot, host.as_seen(robot), host.build(robot, folder / name))
         return cache[name]
 
     return get
@@ -150,7 +164,7 @@ def test_the_package_holds_the_robot_files_numbers(modules):
     assert "setp taukins.carriage1.platform-point.x 224.999\n" in files["taukins.hal"]
     home = solve(robot, t6_from_pose(np.array([robot.verification.home]))).joints[0, :, 0]
     ini = files["taukins.ini"]
-    assert "KINEMATICS = taukins\nJOINTS = 9\n" in ini
+    assert "KINEMATICS = taukins\nJOINTS = 3\n" in ini
     assert f"[JOINT_0]\n# carriage1 (rail, mm)\nTYPE = LINEAR\nMIN_LIMIT = -1\nMAX_LIMIT = 2600\nHOME = {home[0]:.10g}\n" in ini
     assert "A B C U V W pass through to joints 3 to 8" in files["SETUP.md"]
 
@@ -169,3 +183,65 @@ def test_the_module_compiles_warning_free_with_clang(modules, tmp_path, monkeypa
     monkeypatch.setenv("CC", "clang")
     monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
     assert build_module(robot, tmp_path / "clang").compiled
+
+
+def test_lineardeltakins_agrees_with_the_reference_everywhere():
+    report, checks = stock_report("linear_delta", "lineardeltakins")
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+    assert report.max_abs_error_mm <= 1e-12
+    assert "no iteration count" in checks["forward"].detail
+
+
+def test_rotarydeltakins_agrees_but_answers_a_nan_pose():
+    report, checks = stock_report("rotary_delta", "rotarydeltakins")
+    assert [check.name for check in report.failures] == ["inverse refusal"]
+    assert checks["inverse refusal"].detail.startswith("returns 0 for x = NaN")
+    assert report.max_abs_error_rad <= 1e-12
+
+
+def test_genhexkins_agrees_with_absolute_strut_lengths_but_answers_non_finite_poses():
+    report, checks = stock_report("linuxcnc_hexapod", "genhexkins")
+    assert [check.name for check in report.failures] == ["inverse refusal"]
+    assert checks["inverse refusal"].detail.startswith("returns 0 for x = NaN, x = inf")
+    assert report.max_abs_error_mm <= 1e-9 * 25.4
+    assert "the first call after loading (a switchable module starts it from the all-zero pose" in checks["forward"].detail
+
+
+def test_genhexkins_on_a_mm_machine_names_its_max_error():
+    robot = load_robot("linuxcnc_hexapod")
+    setp = [("setp", (f"genhexkins.{kind}.{index}.{axis}", value)) for index, limb in enumerate(robot.limbs)
+            for kind, point in (("base", limb.base_point), ("platform", limb.platform_point))
+            for axis, value in zip("xyz", point)]
+    report, checks = stock_report("linuxcnc_hexapod", "genhexkins", "units", "mm", *(item for pair in setp for item in pair))
+    assert report.max_abs_error_mm <= 1e-9
+    assert "returned -2" in checks["forward"].detail
+    assert checks["forward"].diagnoses == [
+        "genhexkins.max-error is 500 mm: the forward gives up (-2) once the joints' error exceeds it, a bound sized "
+        "for inch machines; on a mm machine set it about 25.4 times larger (setp genhexkins.max-error 12700)"]
+
+
+def test_genhexkins_against_extensions_is_told_it_reports_absolute_lengths():
+    robot = load_robot("hexapod")
+    setp = tuple((f"genhexkins.{kind}.{index}.{axis}", value) for index, limb in enumerate(robot.limbs)
+                 for kind, point in (("base", limb.base_point), ("platform", limb.platform_point))
+                 for axis, value in zip("xyz", point))
+    host = get_host("linuxcnc").configured(setp=setp)
+    report = verify_library(host.as_seen(robot), STOCK / "genhexkins.so", "genhexkins", VerifyOptions(samples=1000),
+                            host=host)
+    values = next(check for check in report.checks if check.name == "values")
+    assert not values.passed and len(values.diagnoses) == 6
+    assert values.diagnoses[0] == (
+        "joint 0 (leg1) is off by a constant +399.413 mm on every pose and posture: the routine reports the leg's "
+        "absolute strut length, not its extension from the reference length 399.413 mm (as LinuxCNC's genhexkins "
+        "does): to verify it, set reference_length: 0")
+
+
+def test_an_inch_machine_gets_its_module_in_inches(tmp_path):
+    host = get_host("linuxcnc").configured(units="inch")
+    robot = load_robot("hexapod")
+    built = host.build(robot, tmp_path / "inch")
+    report = verify_library(host.as_seen(robot), built.library, built.routine, VerifyOptions(samples=2000), host=host)
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+    files = render_package(robot, "inch")
+    assert f"setp hexapodkins.leg1.reference-length {399.413 / 25.4:.10g}\n" in files["hexapodkins.hal"]
+    assert "X Y Z in inch" in files["hexapodkins.c"]

@@ -13,6 +13,7 @@ EXPECTED_SHAPE = {  # (dof, postures, limb model) from docs/conventions.md
     "hexapod": (6, 1, "leg"), "flexapod": (6, 1, "leg"), "exechon": (3, 1, "leg"), "tau": (3, 8, "rail"),
     "ceart": (6, 64, "crank"), "iwf": (6, 64, "crank"), "rus_optimized": (6, 64, "crank"),
     "stewart_gough_example": (6, 1, "leg"),
+    "linuxcnc_hexapod": (6, 1, "leg"), "linear_delta": (3, 8, "rail"), "rotary_delta": (3, 8, "crank"),
 }
 
 
@@ -148,3 +149,45 @@ def test_unreadable_files(tmp_path, content, fragment):
 def test_unknown_robot_names_the_shipped_ones():
     with pytest.raises(KingenError, match="no shipped robot of that name .shipped: ceart, exechon"):
         load_robot("nonexistent")
+
+
+def test_a_robot_file_in_inches_is_the_same_robot_in_mm(tmp_path):
+    """units: inch reads every length in inches: the Robot equals the one written in mm
+    (lengths times 25.4 exactly), angles untouched."""
+    inch, mm = tmp_path / "inch.yaml", tmp_path / "mm.yaml"
+    geometry = ("layout: {{type: stewart_gough, base_radius: {0}, platform_radius: {1}, base_pair_angle: 20, "
+                "platform_pair_angle: 100, reference_length: {2}, travel: [{3}, {4}]}}\n"
+                "verification: {{home: [0, 0, {5}, 1, 2, 3], range: [{6}, {6}, {6}, 5, 5, 5]}}\n"
+                "golden: [{{source: s, pose: [0, 0, {5}, 0, 0, 0], joints: [{7}, {7}, {7}, {7}, {7}, {7}], tolerance: {8}}}]\n")
+    numbers = (6, 4, 8, 0.5, 5.5, 10, 1, 2.5, 0.5)
+    inch.write_text("name: a\ndescription: d\nunits: inch\n" + geometry.format(*numbers))
+    mm.write_text("name: a\ndescription: d\n" + geometry.format(*(value * 25.4 for value in numbers)))
+    a, b = load_robot(inch), load_robot(mm)
+    assert a.length_unit == "inch" and b.length_unit == "mm"
+    for first, second in zip(a.limbs, b.limbs):
+        assert first.base_point == pytest.approx(second.base_point, rel=1e-15)
+        assert first.reference_length == pytest.approx(second.reference_length, rel=1e-15)
+        assert first.travel == pytest.approx(second.travel, rel=1e-15)
+    assert a.verification.home == pytest.approx(b.verification.home, rel=1e-15)
+    assert a.golden[0].joints == pytest.approx(b.golden[0].joints, rel=1e-15)
+    assert a.golden[0].tolerance == pytest.approx(b.golden[0].tolerance, rel=1e-15)
+
+
+def test_a_leg_may_report_its_absolute_length(tmp_path):
+    robot = load_robot("linuxcnc_hexapod")
+    assert all(limb.reference_length == 0 for limb in robot.limbs) and robot.length_unit == "inch"
+
+
+def test_delta_layouts_place_their_limbs_as_linuxcnc_does():
+    """lineardeltakins: towers 0, 1, 2 at (0, R), (-sin60 R, -cos60 R), (sin60 R, -cos60 R) with
+    sin60 = sqrt(3)/2 computed as it computes it; rotarydeltakins: hips at -90, 30, 150 degrees."""
+    import math
+
+    linear = load_robot("linear_delta")
+    radius = 130.25
+    assert [limb.rail_point for limb in linear.limbs] == [
+        [0.0, radius, 0.0], [-(math.sqrt(3) / 2) * radius, -0.5 * radius, 0.0], [(math.sqrt(3) / 2) * radius, -0.5 * radius, 0.0]]
+    assert {limb.link_length for limb in linear.limbs} == {269.0}
+    rotary = load_robot("rotary_delta")
+    assert [limb.crank_direction for limb in rotary.limbs] == [-90.0, 30.0, 150.0]
+    assert rotary.limbs[1].pivot == pytest.approx([254 * math.cos(math.radians(30)), 254 * math.sin(math.radians(30)), 0])

@@ -1,6 +1,7 @@
 """What the command modules share: the ``kingen`` group, options, finding the robot, the host
 and the routine to check, running foreign code in a child process, and printing."""
 
+import functools
 import math
 import os
 import sys
@@ -59,8 +60,35 @@ TIMEOUT = click.option("--timeout", type=click.FloatRange(min=0.1, max=7 * 86400
                        envvar="KINGEN_TIMEOUT", show_default=True, metavar="SECONDS",
                        help="Longest a compiler run may take, and a plugin may go without progress, "
                             "before it is killed ($KINGEN_TIMEOUT).")
-HOST = click.option("--host", "host_name", default=DEFAULT_HOST, show_default=True, metavar="NAME",
-                    help="The host the routine is for: delmia (DELMIA V5 / IGRIP), or one a plugin registered.")
+def HOST(function):
+    """--host NAME with the host settings --units and --setp: the command gets ``host``, the
+    registered host so configured (kingen.hosts; an unknown one is bad input, exit 2)."""
+    @functools.wraps(function)
+    def with_host(*args, host_name, units, setp, **kwargs):
+        from ..hosts import get_host
+
+        return function(*args, host=get_host(host_name).configured(units=units, setp=setp), **kwargs)
+
+    with_host = click.option("--setp", "setp", multiple=True, metavar="NAME=VALUE", callback=_setp,
+                             help="Set a pin or parameter of the loaded module (linuxcnc), as halcmd setp.")(with_host)
+    with_host = click.option("--units", type=click.Choice(["mm", "inch"]), default=None,
+                             help="The machine's LINEAR_UNITS (linuxcnc) [default: the robot file's units].")(with_host)
+    return click.option("--host", "host_name", default=DEFAULT_HOST, show_default=True, metavar="NAME",
+                        help="The host the routine is for: delmia (DELMIA V5 / IGRIP), linuxcnc (a LinuxCNC "
+                             "kinematics module), or one a plugin registered.")(with_host)
+
+
+def _setp(context, parameter, values):
+    settings = []
+    for value in values:
+        name, equals, number = value.partition("=")
+        try:
+            settings.append((name, float(number)))
+        except ValueError:
+            raise click.BadParameter(f"{value!r}: give NAME=VALUE with a number") from None
+        if not equals or not name or not math.isfinite(settings[-1][1]):
+            raise click.BadParameter(f"{value!r}: give NAME=VALUE with a finite number")
+    return tuple(settings)
 
 
 def calibration_options(function):
@@ -92,13 +120,6 @@ def cli():
 
     ROBOT is a YAML path or the name of a shipped robot (see `kingen list`).
     """
-
-
-def _host(name):
-    """The registered host ``name`` (kingen.hosts); KingenError (exit 2) for an unknown one."""
-    from ..hosts import get_host
-
-    return get_host(name)
 
 
 def host_target(host, target, command):

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ..defaults import MAX_PROCESSES, TARGETS
-from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _host, _output_file, cli, host_target, in_child,
+from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, cli, host_target, in_child,
                      load_model, plugin_options, processes_text, routine_to_check, say, solve_job, calibration_options)
 
 MAX_BENCH_CALLS = 100_000_000
@@ -19,9 +19,8 @@ MAX_BENCH_CALLS = 100_000_000
 @ROBOT
 @OUT_DIR
 @HOST
-def render(robot, out_dir, host_name):
+def render(robot, out_dir, host):
     """Write the routine's source (kin_<name>.c for DELMIA) into the output folder."""
-    host = _host(host_name)
     model = load_model(robot)
     path = host.write_source(model, out_dir or host.out_dir(model))
     say(str(path))
@@ -35,9 +34,8 @@ def render(robot, out_dir, host_name):
               help="linux: lib<name>.so with $CC; windows: lib<name>.dll cross-compiled with mingw-w64.")
 @HOST
 @TIMEOUT
-def build(robot, out_dir, debug, target, host_name, timeout):
+def build(robot, out_dir, debug, target, host, timeout):
     """Render and compile the plugin, host symbols left to the host, as for DELMIA."""
-    host = _host(host_name)
     target = host_target(host, target, "build")
     model = load_model(robot)
     result = host.build(model, out_dir, target=target, defines=("KINGEN_DEBUG",) if debug else (), timeout=timeout)
@@ -52,12 +50,11 @@ def build(robot, out_dir, debug, target, host_name, timeout):
               help="windows: source, nmake makefile, .def, BUILD.txt; linux: source and lib<name>.so.")
 @HOST
 @TIMEOUT
-def package(robot, out_dir, target, host_name, timeout):
+def package(robot, out_dir, target, host, timeout):
     """A folder ready for the simulator, with SETUP.md: what to type into each dialog tab.
 
     The folder is written whole or not at all; an existing folder is replaced only when
     kingen wrote it."""
-    host = _host(host_name)
     target = host_target(host, target, "package")
     model = load_model(robot)
     paths = host.package(model, out_dir or host.package_dir(model, target), target=target, timeout=timeout)
@@ -85,7 +82,7 @@ def package(robot, out_dir, target, host_name, timeout):
 @HOST
 @TIMEOUT
 def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path, processes,
-           link_lengths, link_offsets, host_name, timeout):
+           link_lengths, link_offsets, host, timeout):
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
     By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
@@ -96,7 +93,6 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     from ..snapshot import load as load_snapshot
     from ..verify import VerifyOptions, chunk_size, verify_library
 
-    host = _host(host_name)
     model = load_model(robot)
     snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
     library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
@@ -130,11 +126,10 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
               callback=_output_file, help="Write the figures as JSON to this file.")
 @HOST
 @TIMEOUT
-def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, host_name, timeout):
+def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, host, timeout):
     """Print ns per routine call (C batch driver, per-call cffi) and poses per second."""
     from ..files import write_atomic
 
-    host = _host(host_name)
     model = load_model(robot)
     library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
     floor = None
@@ -172,7 +167,7 @@ def golden():
               callback=_output_file, help="The snapshot file to write (rewritten whole).")
 @HOST
 @TIMEOUT
-def golden_record(robot, library, source, routine, samples, seed, output, host_name, timeout):
+def golden_record(robot, library, source, routine, samples, seed, output, host, timeout):
     """Record a snapshot from the reference, or from a trusted plugin (--plugin/--source)."""
     from ..files import write_atomic
     from ..snapshot import record, sample_t6
@@ -187,7 +182,6 @@ def golden_record(robot, library, source, routine, samples, seed, output, host_n
         expected = reference_solve(model, t6)
         joints, warnings, recorded_from = expected.joints, expected.warnings, "the reference"
     else:
-        host = _host(host_name)
         library, routine = routine_to_check(model, host, None, library, source, routine, timeout)
         calls = in_child(solve_job, (host, model, library, routine, t6, None, None), timeout, host)
         joints, warnings, recorded_from = calls.solutions, calls.warnings, f"plugin {Path(library).name} ({routine})"

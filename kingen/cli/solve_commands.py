@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
-from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _host, _output_file, calibration_options, cli,
+from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, calibration_options, cli,
                      finite, in_child, load_model, print_table, routine_to_check, say, shorten, solve_job)
 
 
@@ -42,7 +42,7 @@ def list_robots():
 @calibration_options
 @HOST
 @TIMEOUT
-def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, link_offsets, host_name, timeout):
+def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, link_offsets, host, timeout):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
     import numpy as np
 
@@ -52,7 +52,6 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
 
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
-    host = _host(host_name)
     model = load_model(robot)
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
     library, routine = routine_to_check(model, host, out_dir, timeout=timeout)

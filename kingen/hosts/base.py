@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import ClassVar, Optional, Protocol
 
 from ..defaults import DEFAULT_TIMEOUT
+from ..errors import KingenError
 from ..files import default_out_dir
 
 
@@ -64,6 +65,14 @@ class Host:
     checks: tuple = ()
     """The verify checks of this host's routines, in report order (a loaded routine's
     ``checks``): those needing the library file run before it is loaded."""
+
+    def configured(self, **settings):
+        """This host with the command line's host settings (``units``, ``setp``); a host that
+        takes none refuses any that is given."""
+        given = [name for name, value in settings.items() if value]
+        if given:
+            raise KingenError(f"--{given[0]}: host {self.name} takes no such setting")
+        return self
 
     def name_problem(self, robot_name) -> Optional[str]:
         """Why ``robot_name`` cannot name a routine for this host (a C name it would clash

@@ -1,6 +1,7 @@
 """Leg (S-P-S, U-P-S): a prismatic leg from base point b to platform point t.
 
-q = |R t + p - b| - L0 (mm). One branch, always reachable (docs/conventions.md, 'Leg').
+q = |R t + p - b| - L0 (mm). One branch, always reachable (docs/conventions.md, 'Leg'). With
+L0 = 0 the joint is the leg's absolute length.
 """
 
 from typing import Literal
@@ -8,7 +9,7 @@ from typing import Literal
 import numpy as np
 
 from ..conventions import PRISMATIC
-from ..schema import Length, Vec3
+from ..schema import ReferenceLength, Vec3
 from .base import LimbModel, LimbSolution, c_double, c_vector
 
 
@@ -17,7 +18,8 @@ class Leg(LimbModel):
 
     model: Literal["leg"]
     base_point: Vec3
-    reference_length: Length
+    reference_length: ReferenceLength
+    """mm; 0: the joint is the leg's absolute length (as LinuxCNC's genhexkins reports it)."""
 
     joint_type = PRISMATIC
     calibratable = {"reference_length": "mm"}
@@ -44,5 +46,9 @@ class Leg(LimbModel):
                 "reference_length": c_double(self.reference_length)}
 
     def explain_offset(self, offset):
+        if self.reference_length > 0 and abs(offset - self.reference_length) <= 1e-9 * max(1.0, self.reference_length):
+            return (f"the routine reports the leg's absolute strut length, not its extension from the reference "
+                    f"length {self.reference_length:g} mm (as LinuxCNC's genhexkins does): to verify it, set "
+                    "reference_length: 0")
         return (f"a wrong reference length (the routine behaves as if L0 = "
                 f"{self.reference_length - offset:.6g} mm; the robot says {self.reference_length:g} mm)")

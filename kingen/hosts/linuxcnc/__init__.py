@@ -16,6 +16,17 @@ class LinuxcncHost(Host):
     description = "LinuxCNC kinematics module"
     loading_stage = "loading the module (rtapi_app_main)"
 
+    def __init__(self, units=None, setp=()):
+        self.units, self.setp = units, dict(setp)
+
+    def configured(self, units=None, setp=()):
+        """This host for a machine in ``units`` (LINEAR_UNITS 'mm' or 'inch'; default: the robot
+        file's), its modules' pins and parameters set to ``setp`` ((name, value) pairs) when loaded."""
+        return LinuxcncHost(units, setp)
+
+    def machine_units(self, robot):
+        return self.units or robot.length_unit
+
     @property
     def checks(self):
         from .checks import CHECKS
@@ -45,17 +56,17 @@ class LinuxcncHost(Host):
     def render(self, robot):
         from .render import render
 
-        return render(robot)
+        return render(robot, self.machine_units(robot))
 
     def write_source(self, robot, out_dir):
         from .build import write_source
 
-        return write_source(robot, out_dir)
+        return write_source(robot, out_dir, self.machine_units(robot))
 
     def build(self, robot, out_dir=None, *, target=None, defines=(), timeout=DEFAULT_TIMEOUT):
         from .build import build_module
 
-        return build_module(robot, out_dir, timeout=timeout)
+        return build_module(robot, out_dir, self.machine_units(robot), timeout=timeout)
 
     def build_source(self, source, out_dir, *, timeout=DEFAULT_TIMEOUT):
         from .build import build_source
@@ -65,7 +76,7 @@ class LinuxcncHost(Host):
     def load(self, library, routine, robot=None):
         from .loader import Module
 
-        return Module(library, routine, robot)
+        return Module(library, routine, robot, self.setp, self.machine_units(robot) == "inch")
 
     def routine_name(self, robot):
         from .render import module_name
@@ -75,7 +86,7 @@ class LinuxcncHost(Host):
     def package(self, robot, out_dir, *, target=None, timeout=DEFAULT_TIMEOUT):
         from .package import write_package
 
-        return write_package(robot, out_dir, timeout=timeout)
+        return write_package(robot, out_dir, self.machine_units(robot), timeout=timeout)
 
     def package_dir(self, robot, target):
         from .build import default_dir

@@ -50,11 +50,12 @@ def harness(timeout=DEFAULT_TIMEOUT):
     return library
 
 
-def build_module(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
-    """Render and compile ``robot``'s module into ``out_dir`` (default build/<name>/linuxcnc):
-    ``<name>kins.c`` and ``<name>kins.so``. Skips compiling when the stamp matches."""
+def build_module(robot, out_dir=None, units="mm", timeout=DEFAULT_TIMEOUT):
+    """Render and compile ``robot``'s module for a machine in ``units`` into ``out_dir``
+    (default build/<name>/linuxcnc): ``<name>kins.c`` and ``<name>kins.so``. Skips compiling
+    when the stamp matches."""
     out_dir = Path(out_dir or default_dir(robot))
-    (name, text), = render(robot).items()
+    (name, text), = render(robot, units).items()
     command = compiler_command()
     flags = [*MODULE_FLAGS, f"-I{linuxcnc_headers()}"]
     source, library = out_dir / name, out_dir / f"{module_name(robot)}.so"
@@ -91,7 +92,7 @@ def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
     return library
 
 
-def write_source(robot, out_dir):
-    for name, text in render(robot).items():
+def write_source(robot, out_dir, units="mm"):
+    for name, text in render(robot, units).items():
         write_atomic(Path(out_dir) / name, text)
     return Path(out_dir) / source_name(robot)

@@ -24,7 +24,7 @@ from .checks import CHECKS
 
 ffi = cffi.FFI()
 ffi.cdef("""
-void kingen_hal_reset(void);
+void kingen_hal_forget(const char *prefix);
 int kingen_hal_set(const char *name, double value);
 int kingen_hal_get(const char *name, double *value);
 int kingen_hal_count(void);
@@ -37,6 +37,7 @@ int rtapi_app_main(void);
 int kinematicsForward(const double *joint, void *world, const unsigned long *fflags, unsigned long *iflags);
 int kinematicsInverse(const void *world, double *joint, const unsigned long *iflags, unsigned long *fflags);
 int kinematicsType(void);
+int kinematicsSwitchable(void);
 """)
 ENTRY_POINTS = ("kinematicsForward", "kinematicsInverse", "kinematicsType", "rtapi_app_main")
 JOINT_SLOTS = 16
@@ -73,7 +74,7 @@ class Module:
         folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))
         copy = folder / path.name  # a fresh copy: each load gets the module's own static state
         shutil.copy2(path, copy)
-        hal.kingen_hal_reset()
+        hal.kingen_hal_forget(f"{routine}.".encode())
         try:
             self.library = ffi.dlopen(str(copy), ffi.RTLD_NOW)
         except OSError as error:
@@ -97,6 +98,31 @@ class Module:
         self.scale = 25.4 if inch else 1.0
         self.status_pin = self._pin("status")
         self.iterations_pin = self._pin("iterations")
+        self._warm_up()
+
+    def _warm_up(self):
+        """A switchable module (genhexkins, built on LinuxCNC's switchkins.c) starts its first
+        forward after loading from a static all-zero pose instead of the pose passed in, as in
+        LinuxCNC's first servo cycle: that call is made here, with the joints of the verification
+        home, and its return kept (``first_forward``), so that every later call starts where it
+        is told."""
+        self.first_forward = None
+        try:
+            switchable = self.library.kinematicsSwitchable()
+        except AttributeError:
+            return
+        if switchable:
+            home = np.zeros((1, 9))
+            home[0, :3] = np.asarray(self.robot.verification.home[:3]) / self.scale
+            home[0, 3:6] = self.robot.verification.home[3:]
+            joints, _, _ = self.inverse(home)
+            _, returns, _ = self.forward(np.nan_to_num(joints), home)
+            self.first_forward = int(returns[0])
+
+    def parameter(self, name):
+        """The value of the module's pin or parameter ``name``, or None when it has none."""
+        value = ffi.new("double *")
+        return value[0] if _hal().kingen_hal_get(name.encode(), value) == 0 else None
 
     def _pin(self, suffix):
         """The C name of the pin <module>.<suffix>, or NULL when the module has none."""
@@ -108,9 +134,10 @@ class Module:
         pass
 
     def hal_names(self):
-        """Every pin and parameter the module made."""
+        """Every pin and parameter the module made (named after it)."""
         hal = _hal()
-        return [ffi.string(hal.kingen_hal_name(index)).decode() for index in range(hal.kingen_hal_count())]
+        names = [ffi.string(hal.kingen_hal_name(index)).decode() for index in range(hal.kingen_hal_count())]
+        return [name for name in names if name.startswith(f"{self.routine}.")]
 
     def emc_poses(self, t6):
         """EmcPose numbers (n, 9): x y z in machine units, a b c degrees, u v w 0, from T6 (mm)."""

@@ -15,6 +15,7 @@ from ...files import write_atomic, write_folder
 from ...reference import solve
 from ...render import template
 from .build import build_module
+from ...units import LENGTH_UNITS, robot_in_units
 from .render import TEMPLATES, module_name, render, view_model
 
 
@@ -22,12 +23,14 @@ def _number(value):
     return f"{value:.10g}"
 
 
-def sheet_view(robot):
-    """What the snippets and the sheet show: the module view plus joints' homes and limits."""
-    view = view_model(robot)
+def sheet_view(robot, units="mm"):
+    """What the snippets and the sheet show, in the machine's ``units``: the module view plus
+    the joints' homes and limits."""
+    view = view_model(robot, units)
     home = np.asarray(robot.verification.home, dtype=float)
     joints = solve(robot, t6_from_pose(home[None]), indices=False).joints[0, :, robot.working_posture]
-    lower, upper = robot.travel_limits()
+    machine = robot_in_units(robot, units)
+    lower, upper = machine.travel_limits()
     ini = []
     for joint in view["joints"]:
         index, revolute = joint["index"], joint["revolute"]
@@ -37,11 +40,12 @@ def sheet_view(robot):
                     "lower": _number(lower[index] * scale) if limited else "",
                     "upper": _number(upper[index] * scale) if limited else "",
                     "travel": f"[{_number(lower[index] * scale)}, {_number(upper[index] * scale)}]" if limited else "-",
-                    "home": _number(joints[index] * scale)})
-    parameters = [{**parameter, "value": _number(_value(robot, parameter))} for parameter in view["parameters"]]
+                    "home": _number(joints[index] * (scale if revolute else 1.0 / LENGTH_UNITS[units]))})
+    parameters = [{**parameter, "value": _number(_value(machine, parameter))} for parameter in view["parameters"]]
+    position = home[:3] / LENGTH_UNITS[units]
     return {**view, "ini_joints": ini, "parameters": parameters, "version": __version__,
-            "joint_count": robot.dof + (6 if view["translating"] else 0),
-            "home_text": " ".join(_number(value) for value in home), "description": robot.description}
+            "joint_count": robot.dof,
+            "home_text": " ".join(_number(value) for value in (*position, *home[3:])), "description": robot.description}
 
 
 def _value(robot, parameter):
@@ -51,22 +55,22 @@ def _value(robot, parameter):
     return value["xyz".index(axis[0])] if axis else value
 
 
-def render_package(robot):
+def render_package(robot, units="mm"):
     """The text files of the package as {file name: text}."""
-    view = sheet_view(robot)
+    view = sheet_view(robot, units)
     module = module_name(robot)
-    return {**render(robot), f"{module}.hal": template("module.hal.j2", TEMPLATES).render(**view),
+    return {**render(robot, units), f"{module}.hal": template("module.hal.j2", TEMPLATES).render(**view),
             f"{module}.ini": template("module.ini.j2", TEMPLATES).render(**view),
             "SETUP.md": template("setup_sheet.md.j2", TEMPLATES).render(**view)}
 
 
-def write_package(robot, out_dir, timeout=DEFAULT_TIMEOUT):
+def write_package(robot, out_dir, units="mm", timeout=DEFAULT_TIMEOUT):
     """Write the package folder whole or not at all, with the built module. Returns the paths."""
-    files = render_package(robot)
+    files = render_package(robot, units)
     library = f"{module_name(robot)}.so"
 
     def fill(staging):
-        built = build_module(robot, staging / ".build", timeout=timeout)
+        built = build_module(robot, staging / ".build", units, timeout=timeout)
         write_atomic(staging / library, built.library.read_bytes(), executable=True)
         shutil.rmtree(staging / ".build")
         for name, text in files.items():

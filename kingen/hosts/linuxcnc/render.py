@@ -9,6 +9,7 @@ from ...errors import KingenError
 from ...limbs import c_double
 from ...render import build_info, robot_view, template
 from ...routine import SINGULAR_TOLERANCE
+from ...units import LENGTH_UNITS, robot_in_units
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 STOCK_MODULES = frozenset({
@@ -79,9 +80,9 @@ def _parameters(robot, tables):
     return parameters
 
 
-def view_model(robot):
-    """What the module template substitutes, already formatted as C."""
+def view_model(robot, units="mm"):
     check_robot(robot)
+    robot = robot_in_units(robot, units)
     view = robot_view(robot)
     branches = robot.posture_branches(robot.working_posture)
     lower, upper = robot.travel_limits()
@@ -91,7 +92,7 @@ def view_model(robot):
         limited = limb.travel is not None
         joints.append({
             "index": index, "name": robot.joint_names[index], "model": limb.model,
-            "unit": "degrees" if revolute else "mm", "branch": branches[index], "revolute": int(revolute),
+            "unit": "degrees" if revolute else units, "branch": branches[index], "revolute": int(revolute),
             "limited": int(limited), "lower": c_double(lower[index] if limited else 0.0),
             "upper": c_double(upper[index] if limited else 0.0),
             "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {limb.joint_type.yaml_unit}" if limited else "",
@@ -103,9 +104,10 @@ def view_model(robot):
         "module": module_name(robot),
         "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                 ("posture", robot.working_posture))),
-        "unit_name": "mm",
+        "unit_name": units,
         "translating": translating(robot),
         "free_count": 3 if translating(robot) else 6,
+        "closed_form": translating(robot) and robot.dof == 3 and robot.models == ("rail",),
         "working_posture": robot.working_posture,
         "branch_words": words,
         "joints": joints,
@@ -116,15 +118,15 @@ def view_model(robot):
         "parameters": _parameters(robot, view["models"]),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": c_double(TOLERANCE),
-        "max_step": c_double(MAX_STEP),
+        "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),
         "max_step_angle": c_double(MAX_STEP_ANGLE),
         "degree": c_double(math.pi / 180.0),
     }
 
 
-def render(robot):
-    """The module's source as {file name: text}."""
-    return {source_name(robot): template("kins.c.j2", TEMPLATES).render(**view_model(robot))}
+def render(robot, units="mm"):
+    """The module's source as {file name: text}, in the machine's ``units``."""
+    return {source_name(robot): template("kins.c.j2", TEMPLATES).render(**view_model(robot, units))}
 
 
 def harness_source():

@@ -2,7 +2,9 @@
 away (0.01 mm, 0.01 degree) and far away (10 mm, 5 degrees), returns the sampled pose within
 the value bounds, or fails; it never returns another pose (another assembly mode). Judged on
 the regular poses of the sample (as the round trip: away from singularities, where the pose
-is not determined by the joints); the report gives the failure rates and Newton's iterations."""
+is not determined by the joints); the report gives the failure rates and Newton's iterations,
+and what the first call after loading returned (LinuxCNC's switchable modules start it from
+the all-zero pose: on a mm machine genhexkins' max-error, sized for inches, stops it)."""
 
 import numpy as np
 
@@ -47,13 +49,14 @@ class Forward(VerifyCheck):
         poses = pose_from_t6(context.tally.first[0][:FORWARD_POSES])
         poses, joints = regular_poses(robot, module, poses)
         if not len(poses):
-            return [Check("forward", True, "not exercised: no regular, reachable pose among the sampled ones")]
+            return [Check("forward", False, "not exercised: no regular, reachable pose among the sampled ones "
+                                            "(the working posture is never regular in the verification region)")]
         free = free_mask(robot)
         machine_joints = np.full((len(poses), 16), 0.0)
         machine_joints[:, :robot.dof] = joints / module.joint_scale()
         bound_mm, bound_deg = value_tolerance_mm(robot), np.degrees(VALUE_TOLERANCE_RAD)
         generator = np.random.default_rng(context.options.seed)
-        passed, parts = True, []
+        passed, parts, failed_codes = True, [], set()
         for label, (distance_mm, distance_deg) in SEEDS.items():
             offset = np.concatenate([_directions(generator, len(poses)) * distance_mm,
                                      _directions(generator, len(poses)) * distance_deg], axis=1)
@@ -68,6 +71,7 @@ class Forward(VerifyCheck):
             right = converged & (position <= bound_mm) & (angle <= bound_deg)
             wrong = converged & ~right
             failed = ~converged
+            failed_codes.update(int(code) for code in returns[failed])
             counted = iterations[converged & np.isfinite(iterations)]
             statistics = (f"iterations mean {counted.mean():.2f}, max {int(counted.max())}" if len(counted)
                           else "no iteration count (no pin <module>.iterations)" if np.any(converged) else "")
@@ -77,9 +81,26 @@ class Forward(VerifyCheck):
                          f"{f' (up to {float(np.max(position[wrong])):.3g} mm away)' if np.any(wrong) else ''}"
                          f"{'; ' + statistics if statistics else ''}")
             passed = passed and not np.any(wrong) and (label != "a servo cycle away" or not np.any(failed))
+        if module.first_forward is not None:
+            parts.insert(0, f"the first call after loading (a switchable module starts it from the all-zero "
+                            f"pose, not the one passed in; not judged) returned {module.first_forward}")
+            if module.first_forward != 0:
+                failed_codes.add(module.first_forward)
         detail = (f"{'; '.join(parts)} (bounds {bound_mm:.3g} mm, {bound_deg:.3g} degrees; "
                   f"{len(poses)} regular poses of the sample)")
-        return [Check("forward", passed, detail)]
+        return [Check("forward", passed, detail, _diagnoses(module, failed_codes))]
+
+
+def _diagnoses(module, codes):
+    """What a module's failures point at: genhexkins' max-error, sized for inch machines."""
+    limit = module.parameter(f"{module.routine}.max-error")
+    if limit is None or -2 not in codes:
+        return []
+    unit = "inch" if module.scale != 1.0 else "mm"
+    return [f"{module.routine}.max-error is {limit:g} {unit}: the forward gives up (-2) once the joints' error "
+            f"exceeds it, a bound sized for inch machines; on a mm machine set it about 25.4 times larger "
+            f"(setp {module.routine}.max-error {limit * 25.4:g})" if unit == "mm" else
+            f"{module.routine}.max-error is {limit:g} {unit}: the forward gives up (-2) once the joints' error exceeds it"]
 
 
 def _directions(generator, count):

@@ -35,7 +35,6 @@ typedef int (*kingen_forward_t)(const double *, kingen_emc_pose *, const unsigne
 
 static kingen_hal_item kingen_items[KINGEN_HAL_MAX];
 static int kingen_item_count;
-static char kingen_pin_storage[KINGEN_HAL_MAX][8];
 
 static int kingen_record(const char *name, int type, void *address)
 {
@@ -49,13 +48,12 @@ static int kingen_record(const char *name, int type, void *address)
     return 0;
 }
 
+/* A pin's value lives in memory of its own, kept as long as the process (a module holds it). */
 static int kingen_pin(const char *name, int type, void **pointer)
 {
     void *storage;
-    if (kingen_item_count >= KINGEN_HAL_MAX)
+    if (kingen_item_count >= KINGEN_HAL_MAX || (storage = calloc(1, 8)) == NULL)
         return -1;
-    storage = kingen_pin_storage[kingen_item_count];
-    memset(storage, 0, 8);
     *pointer = storage;
     return kingen_record(name, type, storage);
 }
@@ -111,10 +109,16 @@ int hal_param_bit_newf(int dir, unsigned char *address, int comp_id, const char 
 void rtapi_print(const char *fmt, ...) { (void)fmt; }
 void rtapi_print_msg(int level, const char *fmt, ...) { (void)level; (void)fmt; }
 
-/* Forget every recorded pin and parameter (before loading another module). */
-void kingen_hal_reset(void)
+/* Forget the pins and parameters whose names start with prefix (before loading that module
+ * again: a fresh copy makes them anew). */
+void kingen_hal_forget(const char *prefix)
 {
-    kingen_item_count = 0;
+    int i, kept = 0;
+    size_t length = strlen(prefix);
+    for (i = 0; i < kingen_item_count; i++)
+        if (strncmp(kingen_items[i].name, prefix, length) != 0)
+            kingen_items[kept++] = kingen_items[i];
+    kingen_item_count = kept;
 }
 
 static kingen_hal_item *kingen_find(const char *name)

@@ -1,0 +1,57 @@
+"""Lengths in other units than kingen's mm: a robot file written in inches (``units: inch``),
+read into mm once; and a machine whose controller works in inches (LinuxCNC's LINEAR_UNITS),
+whose module's tables hold the robot's lengths in its units. Angles stay degrees (files) and
+radians (inside)."""
+
+from dataclasses import replace
+
+LENGTH_UNITS = {"mm": 1.0, "inch": 25.4}
+"""mm per unit of length."""
+
+
+def _scaled(value, scale):
+    return [v * scale for v in value] if isinstance(value, (list, tuple)) else value * scale
+
+
+def scaled_limbs(limbs, scale):
+    """``limbs`` with every length field (:attr:`LimbModel.length_fields`) and the travel of
+    prismatic joints multiplied by ``scale``."""
+    converted = []
+    for limb in limbs:
+        update = {name: _scaled(getattr(limb, name), scale) for name in limb.length_fields}
+        if limb.travel is not None and not limb.joint_type.wraps:
+            update["travel"] = _scaled(limb.travel, scale)
+        converted.append(limb.model_copy(update=update))
+    return converted
+
+
+def document_in_mm(document, limbs, scale):
+    """A validated robot file and its limbs with every length (limb geometry, prismatic travel,
+    the verification region's position, golden positions, prismatic joints and tolerances, the
+    direct-index threshold, collision radii) multiplied by ``scale``, mm per the file's unit."""
+    prismatic = [not limb.joint_type.wraps for limb in limbs]
+    region = document.verification
+    region = region.model_copy(update={"home": [*_scaled(region.home[:3], scale), *region.home[3:]],
+                                       "range": [*_scaled(region.range[:3], scale), *region.range[3:]]})
+    golden = [entry.model_copy(update={
+        "pose": [*_scaled(entry.pose[:3], scale), *entry.pose[3:]],
+        "joints": [value * scale if linear else value for value, linear in zip(entry.joints, prismatic)],
+        "tolerance": entry.tolerance * scale}) for entry in document.golden]
+    update = {"verification": region, "golden": golden}
+    if document.singularity is not None:
+        update["singularity"] = document.singularity.model_copy(
+            update={"direct_index_min": document.singularity.direct_index_min * scale})
+    if document.collision is not None:
+        update["collision"] = document.collision.model_copy(update={
+            name: _scaled(value, scale) for name, value in document.collision.model_dump(exclude_none=True).items()})
+    return document.model_copy(update=update), scaled_limbs(limbs, scale)
+
+
+def robot_in_units(robot, units):
+    """``robot`` with its lengths (limb geometry, prismatic travel, the direct-index threshold)
+    in ``units`` ('mm' or 'inch') instead of mm: what a machine's controller computes with."""
+    scale = 1.0 / LENGTH_UNITS[units]
+    if scale == 1.0:
+        return robot
+    minimum = robot.direct_index_min * scale if robot.direct_index_min is not None else None
+    return replace(robot, limbs=tuple(scaled_limbs(robot.limbs, scale)), direct_index_min=minimum)

@@ -1,0 +1,67 @@
+#!/usr/bin/python3
+"""A headless LinuxCNC display for tests/test_linuxcnc_machine.py: LinuxCNC starts it as its
+[DISPLAY] program. It homes, makes the MDI moves of $KINGEN_MOVES (X Y Z A B C), jogs joint 0
+by $KINGEN_JOG in joint mode, reads joint and world positions back after each, reads the
+kinematics module's pins with halcmd, and writes everything as JSON to $KINGEN_RESULT; then it
+exits, and LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
+
+import json
+import os
+import subprocess
+import time
+
+import linuxcnc
+
+result = {"log": [], "moves": []}
+status, command = linuxcnc.stat(), linuxcnc.command()
+
+
+def wait(condition, what, timeout=30.0):
+    end = time.time() + timeout
+    while time.time() < end:
+        status.poll()
+        if condition():
+            return
+        time.sleep(0.02)
+    raise TimeoutError(f"no {what} in {timeout:g} s")
+
+
+def settled():
+    wait(lambda: status.inpos and status.queue == 0 and status.interp_state == linuxcnc.INTERP_IDLE, "end of motion")
+    time.sleep(0.1)
+    status.poll()
+    return {"joints": list(status.joint_actual_position[:status.joints]), "world": list(status.actual_position[:6])}
+
+
+try:
+    wait(lambda: True, "status")
+    command.state(linuxcnc.STATE_ESTOP_RESET)
+    command.state(linuxcnc.STATE_ON)
+    wait(lambda: status.task_state == linuxcnc.STATE_ON, "machine on")
+    command.mode(linuxcnc.MODE_MANUAL)
+    command.wait_complete()
+    command.home(-1)
+    wait(lambda: all(status.homed[:status.joints]), "homing")
+    result["homed"] = settled()
+    command.mode(linuxcnc.MODE_MDI)
+    command.wait_complete()
+    for pose in json.loads(os.environ["KINGEN_MOVES"]):
+        command.mdi("G90 G0 " + " ".join(f"{axis}{value:.12f}" for axis, value in zip("XYZABC", pose)))
+        command.wait_complete(60)
+        result["moves"].append({"pose": pose, **settled()})
+    command.mode(linuxcnc.MODE_MANUAL)
+    command.wait_complete()
+    command.teleop_enable(0)
+    command.traj_mode(linuxcnc.TRAJ_MODE_FREE)
+    time.sleep(0.2)
+    before = settled()
+    command.jog(linuxcnc.JOG_INCREMENT, True, 0, 1.0, float(os.environ["KINGEN_JOG"]))
+    time.sleep(0.2)
+    result["jog"] = {"before": before, "after": settled()}
+    pins = subprocess.run(["halcmd", "-s", "show", "pin", os.environ["KINGEN_MODULE"]], capture_output=True, text=True)
+    result["pins"] = pins.stdout
+except Exception as error:
+    result["log"].append(repr(error))
+finally:
+    with open(os.environ["KINGEN_RESULT"], "w") as stream:
+        json.dump(result, stream)
