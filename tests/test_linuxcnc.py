@@ -245,3 +245,24 @@ def test_an_inch_machine_gets_its_module_in_inches(tmp_path):
     files = render_package(robot, "inch")
     assert f"setp hexapodkins.leg1.reference-length {399.413 / 25.4:.10g}\n" in files["hexapodkins.hal"]
     assert "X Y Z in inch" in files["hexapodkins.c"]
+
+
+def test_towers_in_another_order_are_named(tmp_path):
+    """rotarydeltakins against a robot file with hips 1 and 2 in the other order."""
+    text = (robots_dir() / "rotary_delta.yaml").read_text()
+    swapped = tmp_path / "rotary_delta.yaml"
+    hips = ("{type: rotary_delta, platformradius: 10, thighlength: 10, shinlength: 14, footradius: 6, travel: [-45, 90]}")
+    assert hips in text
+    limbs = "\n".join(
+        f"  - {{name: hip{index}, model: crank, pivot: [{float(10 * np.cos(np.radians(angle)))!r}, {float(10 * np.sin(np.radians(angle)))!r}, 0], "
+        f"crank_direction: {angle}, crank_length: 10, rod_length: 14, "
+        f"platform_point: [{float(6 * np.cos(np.radians(angle)))!r}, {float(6 * np.sin(np.radians(angle)))!r}, 0], travel: [-45, 90]}}"
+        for index, angle in enumerate((-90.0, 150.0, 30.0)))
+    swapped.write_text(text.replace("layout: " + hips, "limbs:\n" + limbs))
+    host = get_host("linuxcnc")
+    report = verify_library(host.as_seen(load_robot(swapped)), STOCK / "rotarydeltakins.so", "rotarydeltakins",
+                            VerifyOptions(samples=1000), host=host)
+    values = next(check for check in report.checks if check.name == "values")
+    assert values.diagnoses[:2] == ["joint 1 (hip1) holds the values of reference joint 2 (hip2): joints swapped in the "
+                                    "solutions array", "joint 2 (hip2) holds the values of reference joint 1 (hip1): "
+                                    "joints swapped in the solutions array"]
