@@ -266,3 +266,11 @@ def test_towers_in_another_order_are_named(tmp_path):
     assert values.diagnoses[:2] == ["joint 1 (hip1) holds the values of reference joint 2 (hip2): joints swapped in the "
                                     "solutions array", "joint 2 (hip2) holds the values of reference joint 1 (hip1): "
                                     "joints swapped in the solutions array"]
+
+
+def test_bench_times_a_module(tmp_path, capsys):
+    assert main(["bench", "hexapod", "--host", "linuxcnc", "--calls", "2000", "-o", str(tmp_path / "b"),
+                 "--json", str(tmp_path / "bench.json")]) == 0
+    figures = __import__("json").loads((tmp_path / "bench.json").read_text())
+    assert figures["routine"] == "hexapodkins" and figures["postures"] == 1 and figures["verify_passed"]
+    assert figures["batch_ns_per_call"] > 0 and figures["cffi_ns_per_call"] > 0

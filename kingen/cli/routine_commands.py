@@ -132,6 +132,7 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
 
     model = load_model(robot)
     library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
+    model = host.as_seen(model)
     floor = None
     if floor_source is not None:
         floor = host.build_source(floor_source, (out_dir or host.out_dir(model)) / "floor", timeout=timeout)

@@ -172,6 +172,36 @@ class Module:
                                     _pointer("int *", returns), self.iterations_pin, _pointer("double *", iterations))
         return poses, returns, iterations
 
+    def batch_runner(self, t6):
+        """A function running kinematicsInverse over ``t6`` (n, 4, 4) from C into buffers made
+        here once: the module's own time, for benchmarks."""
+        world = np.ascontiguousarray(self.emc_poses(t6))
+        count = len(world)
+        joints, returns = np.empty((count, JOINT_SLOTS)), np.empty(count, dtype=np.intc)
+        arguments = (ffi.cast("void *", self.library.kinematicsInverse), count, _pointer("double *", world),
+                     _pointer("double *", joints), _pointer("int *", returns), ffi.NULL, ffi.NULL)
+
+        def run():
+            _hal().kingen_inverse_batch(*arguments)
+            return world, joints, returns
+
+        return run
+
+    def each_runner(self, t6):
+        """A function calling kinematicsInverse once per T6 through cffi, as a Python caller would."""
+        world = np.ascontiguousarray(self.emc_poses(t6))
+        joints = np.empty(JOINT_SLOTS)
+        flags = ffi.new("unsigned long[2]")
+        poses = [ffi.cast("void *", _pointer("double *", world) + 9 * index) for index in range(len(world))]
+        inverse, joints_pointer = self.library.kinematicsInverse, _pointer("double *", joints)
+
+        def run():
+            for pose in poses:
+                inverse(pose, joints_pointer, flags, flags + 1)
+            return world, joints
+
+        return run
+
     def joint_scale(self):
         """Per joint: factor from the module's joint units to kingen's (mm, radians)."""
         return np.where(self.robot.revolute, np.pi / 180.0, self.scale)
