@@ -283,6 +283,9 @@ def load_robot(spec):
         raise _diagnostic(error, locate) from None
     limbs = _expand_limbs(document, locate)
     if document.units != "mm":
+        if document.golden and len({limb.joint_type.wraps for limb in limbs}) > 1:
+            raise locate.error(["golden"], f"a golden tolerance is one number: with prismatic and revolute joints "
+                                           f"in a file in {document.units}, write the file in mm")
         document, limbs = document_in_mm(document, limbs, LENGTH_UNITS[document.units])
     robot = Robot(
         name=document.name,

@@ -28,15 +28,19 @@ def scaled_limbs(limbs, scale):
 def document_in_mm(document, limbs, scale):
     """A validated robot file and its limbs with every length (limb geometry, prismatic travel,
     the verification region's position, golden positions, prismatic joints and tolerances, the
-    direct-index threshold, collision radii) multiplied by ``scale``, mm per the file's unit."""
+    direct-index threshold, collision radii) multiplied by ``scale``, mm per the file's unit. A
+    golden tolerance is scaled for robots whose joints are all prismatic (for revolute joints it
+    is degrees); model.py refuses golden values in a file that mixes both."""
     prismatic = [not limb.joint_type.wraps for limb in limbs]
     region = document.verification
     region = region.model_copy(update={"home": [*_scaled(region.home[:3], scale), *region.home[3:]],
                                        "range": [*_scaled(region.range[:3], scale), *region.range[3:]]})
+    # A golden tolerance is in the joints' units: inches for prismatic, degrees for revolute ones.
+    tolerance_scale = scale if all(prismatic) else 1.0
     golden = [entry.model_copy(update={
         "pose": [*_scaled(entry.pose[:3], scale), *entry.pose[3:]],
         "joints": [value * scale if linear else value for value, linear in zip(entry.joints, prismatic)],
-        "tolerance": entry.tolerance * scale}) for entry in document.golden]
+        "tolerance": entry.tolerance * tolerance_scale}) for entry in document.golden]
     update = {"verification": region, "golden": golden}
     if document.singularity is not None:
         update["singularity"] = document.singularity.model_copy(

@@ -165,7 +165,8 @@ def test_the_package_holds_the_robot_files_numbers(modules):
     home = solve(robot, t6_from_pose(np.array([robot.verification.home]))).joints[0, :, 0]
     ini = files["taukins.ini"]
     assert "KINEMATICS = taukins\nJOINTS = 3\n" in ini
-    assert f"[JOINT_0]\n# carriage1 (rail, mm)\nTYPE = LINEAR\nMIN_LIMIT = -1\nMAX_LIMIT = 2600\nHOME = {home[0]:.10g}\n" in ini
+    assert f"[JOINT_0]\n# carriage1 (rail, mm)\nTYPE = LINEAR\nMIN_LIMIT = -1\nMAX_LIMIT = 2600\nHOME = {float(home[0])!r}\n" in ini
+    assert "[TRAJ]\nHOME = -1200.0 -750.0 -1900.0 0.0 0.0 0.0\n" in ini
     assert "A B C U V W pass through to joints 3 to 8" in files["SETUP.md"]
 
 
@@ -243,7 +244,7 @@ def test_an_inch_machine_gets_its_module_in_inches(tmp_path):
     report = verify_library(host.as_seen(robot), built.library, built.routine, VerifyOptions(samples=2000), host=host)
     assert report.passed, [(check.name, check.detail) for check in report.failures]
     files = render_package(robot, "inch")
-    assert f"setp hexapodkins.leg1.reference-length {399.413 / 25.4:.10g}\n" in files["hexapodkins.hal"]
+    assert f"setp hexapodkins.leg1.reference-length {399.413 * (1 / 25.4)!r}\n" in files["hexapodkins.hal"]
     assert "X Y Z in inch" in files["hexapodkins.c"]
 
 
@@ -274,3 +275,27 @@ def test_bench_times_a_module(tmp_path, capsys):
     figures = __import__("json").loads((tmp_path / "bench.json").read_text())
     assert figures["routine"] == "hexapodkins" and figures["postures"] == 1 and figures["verify_passed"]
     assert figures["batch_ns_per_call"] > 0 and figures["cffi_ns_per_call"] > 0
+
+
+@pytest.mark.parametrize("name", ["linear_delta", "rotary_delta", "linuxcnc_hexapod"])
+def test_the_packages_setp_lines_give_back_the_verified_geometry(name, modules):
+    """Every setp line of <name>kins.hal holds the module's own double: a module set from the
+    package verifies as the built one does."""
+    robot, seen, built = modules(name)
+    host = get_host("linuxcnc")
+    files = render_package(robot, host.machine_units(robot))
+    setp = tuple((line.split()[1], float(line.split()[2])) for line in files[f"{built.routine}.hal"].splitlines()
+                 if line.startswith("setp "))
+    configured = host.configured(setp=setp)
+    report = verify_library(seen, built.library, built.routine, VerifyOptions(samples=2000), host=configured)
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+    assert len(setp) > 4 * robot.dof
+
+
+def test_a_name_past_linuxcncs_hal_limit_is_refused(tmp_path):
+    path = tmp_path / "robot.yaml"
+    path.write_text((robots_dir() / "stewart_gough_example.yaml").read_text().replace(
+        "name: stewart_gough_example", "name: stewart_gough_example_v2"))
+    with pytest.raises(KingenError, match=r"name: the HAL name 'stewart_gough_example_v2kins.leg1.platform-point.x' "
+                                          r"has 50 characters; LinuxCNC takes at most 47"):
+        build_module(load_robot(path), tmp_path / "b")

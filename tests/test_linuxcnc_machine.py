@@ -86,22 +86,23 @@ def linuxcnc_machine():
 
 
 def machine_ini(robot, folder, kins_ini, units):
-    """A simulated machine's .ini: kingen's [KINS] and [JOINT_n] sections, with homing at
-    the HOME kingen wrote (home to the current position) and velocities added."""
-    joints = []
+    """A simulated machine's .ini: kingen's [TRAJ] HOME, [KINS] and [JOINT_n] entries, with
+    homing at the HOME kingen wrote (home to the current position) and velocities added."""
+    joints, home = [], None
     for section in kins_ini.split("\n[")[1:]:
         header, _, body = section.partition("]\n")
+        if header == "TRAJ":
+            home = body.split("HOME = ")[1].splitlines()[0]
+            continue
         extra = ("MAX_VELOCITY = 50\nMAX_ACCELERATION = 500\nHOME_SEQUENCE = 0\nHOME_SEARCH_VEL = 0\n"
                  "HOME_LATCH_VEL = 0\n" if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")
-    home = list(robot.verification.home)
-    home[:3] = [value / (25.4 if units == "inch" else 1.0) for value in home[:3]]
     coordinates = "X Y Z A B C" if robot.dof == 6 else "X Y Z"
     axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -1000\nMAX_LIMIT = 1000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
                    for axis in coordinates.split())
     (folder / "sim.tbl").write_text("")
     (folder / "machine.ini").write_text(MACHINE.format(
-        name=robot.name, driver=DRIVER, home=" ".join(f"{value:.10g}" for value in home), coordinates=coordinates,
+        name=robot.name, driver=DRIVER, home=home, coordinates=coordinates,
         units=units, velocity=10 if units == "inch" else 100, axes=axes, kins="\n".join(joints)))
     return folder / "machine.ini"
 

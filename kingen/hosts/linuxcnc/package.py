@@ -23,6 +23,11 @@ def _number(value):
     return f"{value:.10g}"
 
 
+def _exact(value):
+    """A number as Python's shortest round-trip text: what LinuxCNC reads back is the module's double."""
+    return repr(float(value))
+
+
 def sheet_view(robot, units="mm"):
     """What the snippets and the sheet show, in the machine's ``units``: the module view plus
     the joints' homes and limits."""
@@ -40,12 +45,12 @@ def sheet_view(robot, units="mm"):
                     "lower": _number(lower[index] * scale) if limited else "",
                     "upper": _number(upper[index] * scale) if limited else "",
                     "travel": f"[{_number(lower[index] * scale)}, {_number(upper[index] * scale)}]" if limited else "-",
-                    "home": _number(joints[index] * (scale if revolute else 1.0 / LENGTH_UNITS[units]))})
-    parameters = [{**parameter, "value": _number(_value(machine, parameter))} for parameter in view["parameters"]]
+                    "home": _exact(joints[index] * (scale if revolute else 1.0 / LENGTH_UNITS[units]))})
+    parameters = [{**parameter, "value": _exact(_value(machine, parameter))} for parameter in view["parameters"]]
     position = home[:3] / LENGTH_UNITS[units]
     return {**view, "ini_joints": ini, "parameters": parameters, "version": __version__,
             "joint_count": robot.dof,
-            "home_text": " ".join(_number(value) for value in (*position, *home[3:])), "description": robot.description}
+            "home_text": " ".join(_exact(value) for value in (*position, *home[3:])), "description": robot.description}
 
 
 def _value(robot, parameter):

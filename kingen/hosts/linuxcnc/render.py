@@ -19,6 +19,10 @@ STOCK_MODULES = frozenset({
 })
 """LinuxCNC's own kinematics modules (Debian's linuxcnc-uspace 2.9): a generated module may
 not take their names."""
+HAL_NAME_LEN = 47
+"""The longest pin or parameter name LinuxCNC's HAL accepts (hal.h's HAL_NAME_LEN)."""
+SETTINGS = ("max-iterations", "tolerance", "max-step", "max-step-angle", "status", "iterations")
+"""The module's own pins and parameters, besides the geometry."""
 MAX_ITERATIONS = 20
 TOLERANCE = 1e-10
 """Newton stops when a step is at most this long (mm and radians)."""
@@ -50,6 +54,12 @@ def robot_problem(robot):
     if robot.dof != 6 and not translating(robot):
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
+    names = [f"{module_name(robot)}.{name}" for name in
+             (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot, robot_view(robot)["models"])))]
+    longest = max(names, key=len)
+    if len(longest) > HAL_NAME_LEN:
+        return (f"name: the HAL name '{longest}' has {len(longest)} characters; LinuxCNC takes at most "
+                f"{HAL_NAME_LEN}: shorten the robot's or its limbs' names")
     if robot.postures > 1 and not robot.working_posture_given:
         return (f"working_posture: LinuxCNC's inverse kinematics has one answer: name the posture the machine "
                 f"is built in (working_posture: 0 to {robot.postures - 1})")
@@ -95,7 +105,8 @@ def view_model(robot, units="mm"):
             "unit": "degrees" if revolute else units, "branch": branches[index], "revolute": int(revolute),
             "limited": int(limited), "lower": c_double(lower[index] if limited else 0.0),
             "upper": c_double(upper[index] if limited else 0.0),
-            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {limb.joint_type.yaml_unit}" if limited else "",
+            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {'degrees' if revolute else units}"
+            if limited else "",
         })
     two_branch = [(index, limb) for index, limb in enumerate(robot.limbs) if limb.branches == 2]
     words = ", ".join(f"{robot.joint_names[index]} {limb.branch_labels[branches[index]]}" for index, limb in two_branch)

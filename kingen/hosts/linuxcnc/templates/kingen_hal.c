@@ -14,6 +14,7 @@
 
 #define KINGEN_HAL_MAX 512
 #define KINGEN_HAL_NAME 96
+#define KINGEN_HAL_NAME_LEN 47 /* hal.h's HAL_NAME_LEN: a longer name is refused, as by LinuxCNC's HAL */
 #define KINGEN_HAL_FLOAT 0
 #define KINGEN_HAL_S32 1
 #define KINGEN_HAL_U32 2
@@ -38,7 +39,7 @@ static int kingen_item_count;
 
 static int kingen_record(const char *name, int type, void *address)
 {
-    if (kingen_item_count >= KINGEN_HAL_MAX || name == NULL)
+    if (kingen_item_count >= KINGEN_HAL_MAX || name == NULL || strlen(name) > KINGEN_HAL_NAME_LEN)
         return -1;
     strncpy(kingen_items[kingen_item_count].name, name, KINGEN_HAL_NAME - 1);
     kingen_items[kingen_item_count].name[KINGEN_HAL_NAME - 1] = '\0';
