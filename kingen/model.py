@@ -136,6 +136,8 @@ class Robot:
     """Whether the robot file names it (a host with one answer needs it named)."""
     length_unit: str = "mm"
     """The unit the robot file's lengths are written in ('mm' or 'inch'); the Robot holds mm."""
+    left_out: tuple = ()
+    """What a view of the robot (kingen.one_posture) leaves unchecked, in words: verify's notices."""
     collision: Optional[dict] = None
     """{leg_radius, rod_radius, crank_radius} (mm) given in the robot file, or None."""
     forward_free: tuple = ()

@@ -39,4 +39,7 @@ def at_posture(robot, posture):
     limbs = tuple(limb if bit < 0 else OneBranch(limb, int(branch_of_posture(posture, bit)))
                   for limb, bit in zip(robot.limbs, robot.branch_bits))
     golden = tuple(entry.model_copy(update={"posture": 0}) for entry in robot.golden if entry.posture == posture)
-    return replace(robot, limbs=limbs, golden=golden, working_posture=0)
+    other = [index for index, entry in enumerate(robot.golden) if entry.posture != posture]
+    left_out = (f"golden {', '.join(f'[{index}]' for index in other)} not checked: at other postures than {posture}, "
+                "the one the routine answers",) if other else ()
+    return replace(robot, limbs=limbs, golden=golden, working_posture=0, left_out=robot.left_out + left_out)

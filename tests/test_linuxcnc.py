@@ -299,3 +299,10 @@ def test_a_name_past_linuxcncs_hal_limit_is_refused(tmp_path):
     with pytest.raises(KingenError, match=r"name: the HAL name 'stewart_gough_example_v2kins.leg1.platform-point.x' "
                                           r"has 50 characters; LinuxCNC takes at most 47"):
         build_module(load_robot(path), tmp_path / "b")
+
+
+def test_golden_values_of_other_postures_are_said_to_be_unchecked(modules):
+    _, seen, built = modules("tau")
+    report = verify_library(seen, built.library, built.routine, VerifyOptions(samples=500), host=get_host("linuxcnc"))
+    assert [check.name for check in report.checks if check.name.startswith("golden")] == ["golden[0]"]
+    assert "golden [1] not checked: at other postures than 0, the one the routine answers" in report.notices

@@ -72,6 +72,7 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
             f"the routine printed {printed.bytes} bytes on stdout/stderr (first line: {printed.first_line!r}); "
             "debug printing slows the host by orders of magnitude"
         )
+    report.notices.extend(robot.left_out)
     return report
 
 
