@@ -6,18 +6,38 @@ import json
 import math
 import xml.etree.ElementTree as ElementTree
 from dataclasses import asdict, dataclass, field
+from typing import Optional
 
 from .text import xml_text
 
 
 @dataclass
 class Check:
-    """One clause of the contract: its name, verdict, the evidence, and diagnoses when it failed."""
+    """One clause of the contract: its name, verdict, the evidence, and diagnoses when it failed.
+
+    ``exercised`` is False for a check that judged nothing (no case it applies to was met): it
+    then reads ``not exercised``, never ``ok``, and fails nothing; checks that must be
+    exercised fail instead. ``judged`` counts what it judged (poses, postures, calls), or None
+    where no count applies."""
 
     name: str
     passed: bool
     detail: str = ""
     diagnoses: list = field(default_factory=list)
+    exercised: bool = True
+    judged: Optional[int] = None
+
+    @property
+    def status(self):
+        """'ok', 'FAILED' or 'not exercised'."""
+        if not self.passed:
+            return "FAILED"
+        return "ok" if self.exercised else "not exercised"
+
+
+def not_exercised(name, why):
+    """A check that judged nothing, saying why."""
+    return Check(name, True, why, exercised=False, judged=0)
 
 
 @dataclass
@@ -108,7 +128,7 @@ class Report:
             "golden_failed": self.golden_failed,
             "golden": [asdict(result) for result in self.golden],
             "posture_statistics": self.posture_statistics,
-            "checks": [asdict(check) for check in self.checks],
+            "checks": [{**asdict(check), "status": check.status} for check in self.checks],
             "interface_failures": [check.detail for check in self.failures if check.name in self.interface_checks],
             "diagnoses": [text for check in self.checks for text in check.diagnoses],
             "notices": list(self.notices),
@@ -142,13 +162,17 @@ def junit_xml(report):
     """The report as JUnit XML: one test case per check."""
     suite = ElementTree.Element("testsuite", {
         "name": f"kingen verify {report.robot}", "tests": str(len(report.checks)),
-        "failures": str(len(report.failures)), "time": f"{report.seconds:.6f}",
+        "failures": str(len(report.failures)),
+        "skipped": str(sum(1 for check in report.checks if check.passed and not check.exercised)),
+        "time": f"{report.seconds:.6f}",
     })
     for check in report.checks:
         case = ElementTree.SubElement(suite, "testcase", {"classname": f"kingen.{report.robot}", "name": check.name})
         if not check.passed:
             failure = ElementTree.SubElement(case, "failure", {"message": xml_text(check.detail)})
             failure.text = xml_text("\n".join([check.detail, *check.diagnoses]))
+        elif not check.exercised:
+            ElementTree.SubElement(case, "skipped", {"message": xml_text(check.detail)})
         else:
             ElementTree.SubElement(case, "system-out").text = xml_text(check.detail)
     if report.notices:

@@ -87,7 +87,11 @@ def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition)
     robot = load_robot(path)
     result = build_plugin(robot, folder / "build")
     report = verify(robot, Plugin(result.library, result.routine), VerifyOptions(samples=2000))
-    assert report.passed, [(check.name, check.detail, check.diagnoses) for check in report.failures]
+    failures = [(check.name, check.detail, check.diagnoses) for check in report.failures]
+    vacuous = [("values", f"no pose of the verification region is reachable at any posture: at least 10 needed "
+                          "to compare joints (move verification.home into the workspace, or narrow its range)", [])]
+    # A random region may lie outside the workspace: then verify must say so and fail, not pass.
+    assert report.passed or failures == vacuous, failures
 
 
 TOKENS = ["&a ", "*a", "[", "]", "{", "}", ": ", "- ", "!!str ", "!x ", "'", '"', "#", "\n", "\t", "---\n",

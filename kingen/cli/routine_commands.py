@@ -249,7 +249,8 @@ def _progress(total, chunk):
 def print_report(report, library):
     say(f"verify {report.robot}: {report.samples} poses x {report.postures} postures, {library} ({report.routine})")
     for check in report.checks:
-        say(f"  {'ok' if check.passed else 'FAILED':6} {check.name}: {check.detail}")
+        say(f"  {check.status:6} {check.name}: {check.detail}" if check.exercised or not check.passed
+            else f"  {check.name}: not exercised: {check.detail}")
         for diagnosis in check.diagnoses:
             say(f"         diagnosis: {diagnosis}")
     from ..report import statistics_lines

@@ -15,6 +15,7 @@ from .options import CONDITIONING_FACTOR
 DIAGNOSIS_POSES = 2000
 """The first this many compared poses are kept for diagnoses and the per-pose checks."""
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
+WARNING_KINDS = tuple(WARNINGS)
 
 
 def singular_bounds(robot, reference_solution):
@@ -59,6 +60,10 @@ class Tally:
     calibrated: object = None
     """The robot with the dialog's fields applied, for the closure check."""
     returns_wrong: int = 0
+    reachable_poses: int = 0
+    """Poses at which the reference reaches at least one posture."""
+    warning_counts: np.ndarray = None
+    """(WARNING_KINDS,) how many postures the reference gave each warning, in WARNING_KINDS order."""
     aborted: int = 0
     closure_worst: float = 0.0
     closure_checked: int = 0
@@ -76,11 +81,13 @@ class Tally:
         """Empty totals for ``calibrated`` (the robot with the dialog's fields applied)."""
         postures = calibrated.postures
         return cls(calibrated=calibrated, posture_counts=np.zeros((4, postures), dtype=np.int64),
-                   posture_worst=[np.zeros(postures), np.zeros(postures)])
+                   posture_worst=[np.zeros(postures), np.zeros(postures)],
+                   warning_counts=np.zeros(len(WARNING_KINDS), dtype=np.int64))
 
     def add(self, other):
         """Add the totals of a later chunk (its ``first`` counts only when none is kept yet)."""
-        for name in ("returns_wrong", "aborted", "closure_checked", "faulty_calls"):
+        self.warning_counts = self.warning_counts + other.warning_counts
+        for name in ("returns_wrong", "reachable_poses", "aborted", "closure_checked", "faulty_calls"):
             setattr(self, name, getattr(self, name) + getattr(other, name))
         self.fault_bits |= other.fault_bits
         self.closure_worst = max(self.closure_worst, other.closure_worst)
@@ -118,6 +125,8 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected):
     report.warnings_in_band += int(np.count_nonzero(excused))
     none_reachable = np.all(expected.warnings == UNREACHABLE, axis=1)
     tally.returns_wrong += int(np.count_nonzero(calls.returned != np.where(none_reachable, 1, 0)))
+    tally.reachable_poses += int(np.count_nonzero(~none_reachable))
+    tally.warning_counts += np.array([np.count_nonzero(expected.warnings == WARNINGS[kind]) for kind in WARNING_KINDS])
     closure_worst, closure_checked = closure_error(tally.calibrated, expected, calls.solutions)
     tally.closure_worst = max(tally.closure_worst, closure_worst)
     tally.closure_checked += closure_checked

@@ -10,6 +10,7 @@ from ...routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...singularity import posture_wrenches
 from ..options import CONDITIONING_FACTOR, report_tolerance_mm
 from ..tally import closure_miss
+from ...report import not_exercised
 from .base import Check, VerifyCheck
 from .closure import CLOSURE_TOLERANCE
 from .jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
@@ -31,7 +32,7 @@ def round_trip_check(robot, plugin, options, t6):
     size), over the conditioning. Joints a few units in the last place from the reference's
     thus go round as well as its own; joints the closure check refuses do not."""
     if not robot.has_forward:
-        return Check("round trip", True, f"not available: forward kinematics needs free pose coordinates for a "
+        return not_exercised("round trip", f"forward kinematics needs free pose coordinates for a "
                                          f"robot with {robot.dof} limbs (forward: {{free: [...]}})")
     calibrated = robot.calibrated(options.link_lengths, options.link_offsets)
     expected = solve(robot, t6, options.link_lengths, options.link_offsets)
@@ -52,7 +53,7 @@ def round_trip_check(robot, plugin, options, t6):
     regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
     pose_index, posture, conditioning, start = (kept[regular] for kept in (pose_index, posture, conditioning, start))
     if not len(pose_index):
-        return Check("round trip", True, "no regular posture among the sampled poses to go round")
+        return not_exercised("round trip", f"no regular posture among the {len(t6)} sampled poses to go round")
     routine_joints = joints[pose_index, :, posture]
     residual = np.zeros(len(pose_index))  # the joints' closure residual, as far as the closure check accepts it
     for index, limb in enumerate(calibrated.limbs):
@@ -66,7 +67,7 @@ def round_trip_check(robot, plugin, options, t6):
     allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, explained_mm / robot.size_mm)
     passed = bool(np.all(position <= allowed_mm) and np.all(rotation <= allowed_rad))
     worst_mm, worst_rad = float(np.max(position)), float(np.max(rotation))
-    return Check("round trip", passed,
+    return Check("round trip", passed, judged=len(pose_index), detail=
                  f"forward kinematics from the routine's joints of {len(pose_index)} regular postures of {len(t6)} "
                  f"poses returns each pose within {worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds "
                  f"{report_tolerance_mm(robot):.3g} mm, {VALUE_TOLERANCE_RAD:g} rad, or what the joints' closure "

@@ -13,6 +13,7 @@ from ....forward import free_mask
 from ....reference import solve
 from ....routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ....singularity import posture_wrenches
+from ....report import not_exercised
 from ....verify.checks.base import Check, VerifyCheck
 from ....verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
 from ....verify.options import value_tolerance_mm
@@ -49,8 +50,8 @@ class Forward(VerifyCheck):
         poses = pose_from_t6(context.tally.first[0][:FORWARD_POSES])
         poses, joints = regular_poses(robot, module, poses)
         if not len(poses):
-            return [Check("forward", False, "not exercised: no regular, reachable pose among the sampled ones "
-                                            "(the working posture is never regular in the verification region)")]
+            return [not_exercised("forward", "no regular, reachable pose among the sampled ones (the working "
+                                             "posture is never regular in the verification region)")]
         free = free_mask(robot)
         machine_joints = np.full((len(poses), 16), 0.0)
         machine_joints[:, :robot.dof] = joints / module.joint_scale()
@@ -88,7 +89,7 @@ class Forward(VerifyCheck):
                 failed_codes.add(module.first_forward)
         detail = (f"{'; '.join(parts)} (bounds {bound_mm:.3g} mm, {bound_deg:.3g} degrees; "
                   f"{len(poses)} regular poses of the sample)")
-        return [Check("forward", passed, detail, _diagnoses(module, failed_codes))]
+        return [Check("forward", passed, detail, _diagnoses(module, failed_codes), judged=2 * len(poses))]
 
 
 def _diagnoses(module, codes):
