@@ -78,6 +78,9 @@ class Report:
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
+    boundary_poses: dict = field(default_factory=dict)
+    """{poses: how many poses on warnings' boundaries joined the sample, boundaries_found:
+    {warning: boundaries found}} (kingen.verify.boundaries)."""
     interface_checks: tuple = ()
     """Names of the host's interface checks (their failures are listed as ``interface_failures``)."""
     posture_statistics: list = field(default_factory=list)
@@ -128,6 +131,7 @@ class Report:
             "golden_failed": self.golden_failed,
             "golden": [asdict(result) for result in self.golden],
             "posture_statistics": self.posture_statistics,
+            "boundary_poses": self.boundary_poses,
             "checks": [{**asdict(check), "status": check.status} for check in self.checks],
             "interface_failures": [check.detail for check in self.failures if check.name in self.interface_checks],
             "diagnoses": [text for check in self.checks for text in check.diagnoses],

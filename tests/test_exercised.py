@@ -5,6 +5,8 @@ fails naming the cause; every check states how much it judged."""
 import json
 import xml.etree.ElementTree as ElementTree
 
+import pytest
+
 from kingen.cli import main
 from kingen.resources import robots_dir
 
@@ -46,3 +48,42 @@ def test_a_robot_without_forward_kinematics_does_not_claim_a_round_trip(tmp_path
     checks = {check["name"]: check for check in json.loads((tmp_path / "r.json").read_text())["checks"]}
     assert checks["values"]["judged"] == 500 and checks["warnings"]["judged"] == 500
     assert checks["jacobian"]["judged"] > 0 and checks["closure"]["judged"] == 3 * 500
+
+
+class WithoutWarning:
+    """A loaded routine that answers WARN_GOOD_SOLUTION wherever it should give ``code``."""
+
+    def __init__(self, plugin, code):
+        self._plugin, self._code = plugin, code
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        calls.warnings[calls.warnings == self._code] = 0
+        return calls
+
+
+def cases():
+    from conftest import SHIPPED
+    from kingen.model import load_robot
+    from kingen.verify.boundaries import warnings_to_exercise
+
+    return [(name, kind) for name in SHIPPED for kind in warnings_to_exercise(load_robot(name))]
+
+
+@pytest.mark.parametrize("name, kind", cases())
+def test_a_routine_that_never_gives_a_warning_fails_warnings(name, kind, plugin):
+    """Every shipped robot, every warning it can give: the boundary poses make a routine that
+    never gives it fail, even where the uniform sample holds no such pose."""
+    from kingen.routine import WARNINGS
+    from kingen.verify import VerifyOptions, verify
+
+    robot, routine = plugin(name)
+    report = verify(robot, routine, VerifyOptions(samples=300))
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+    assert report.boundary_poses["boundaries_found"][kind] > 0
+    broken = verify(robot, WithoutWarning(routine, WARNINGS[kind]), VerifyOptions(samples=300))
+    warnings = next(check for check in broken.checks if check.name == "warnings")
+    assert not warnings.passed and not warnings.detail.startswith("0 mismatches"), warnings.detail

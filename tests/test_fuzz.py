@@ -88,10 +88,10 @@ def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition)
     result = build_plugin(robot, folder / "build")
     report = verify(robot, Plugin(result.library, result.routine), VerifyOptions(samples=2000))
     failures = [(check.name, check.detail, check.diagnoses) for check in report.failures]
-    vacuous = [("values", f"no pose of the verification region is reachable at any posture: at least 10 needed "
-                          "to compare joints (move verification.home into the workspace, or narrow its range)", [])]
-    # A random region may lie outside the workspace: then verify must say so and fail, not pass.
-    assert report.passed or failures == vacuous, failures
+    # A random region may lie (mostly) outside the workspace: then verify must say so and fail, not pass.
+    vacuous = (len(failures) == 1 and failures[0][0] == "values" and failures[0][1].startswith(("no pose", "only "))
+               and "at least 10 needed to compare joints" in failures[0][1])
+    assert report.passed or vacuous, failures
 
 
 TOKENS = ["&a ", "*a", "[", "]", "{", "}", ": ", "- ", "!!str ", "!x ", "'", '"', "#", "\n", "\t", "---\n",

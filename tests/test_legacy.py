@@ -8,6 +8,25 @@ import numpy as np
 import pytest
 
 from kingen.cli import main
+from kingen.resources import robots_dir
+
+_THESIS = {}
+
+
+def thesis_hexapod():
+    """The hexapod as the DELMIA thesis defines it, without kingen's direct-singularity
+    threshold (``singularity:``): its hand-written routine gives no such warning."""
+    if "path" not in _THESIS:
+        import tempfile
+        from pathlib import Path
+
+        text = (robots_dir() / "hexapod.yaml").read_text()
+        kept = "".join(line for line in text.splitlines(keepends=True) if not line.startswith("singularity:"))
+        assert kept != text
+        path = Path(tempfile.mkdtemp(prefix="kingen-thesis-")) / "hexapod.yaml"
+        path.write_text(kept)
+        _THESIS["path"] = str(path)
+    return _THESIS["path"]
 
 HEXAPOD_LEGACY = r"""
 /* kin_hexapodFullTest.c: hand-written in the thesis's style */
@@ -243,7 +262,7 @@ def failed_checks(data):
 
 
 def test_right_hexapod_in_thesis_style_passes(capsys, tmp_path):
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(), "kin_hexapodFullTest")
+    code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(), "kin_hexapodFullTest")
     assert code == 0, out
     assert data["passed"] and data["max_abs_error_mm"] <= 1e-9
     assert (tmp_path / "lib" / "libhexapodFullTest.so").is_file()
@@ -251,14 +270,14 @@ def test_right_hexapod_in_thesis_style_passes(capsys, tmp_path):
 
 
 def test_debug_printing_is_a_notice_not_a_failure(capsys, tmp_path):
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(PRINT="1"), "kin_hexapodFullTest")
+    code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(PRINT="1"), "kin_hexapodFullTest")
     assert code == 0
     assert "notice: the routine printed" in out and "'leg 1 = " in out
     assert "debug printing slows the host" in data["notices"][0]
 
 
 def test_wrong_reference_length_is_named_with_its_offset(capsys, tmp_path):
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(REFERENCE_LENGTH="376.5"),
+    code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(REFERENCE_LENGTH="376.5"),
                                     "kin_hexapodFullTest")
     assert code == 1
     assert failed_checks(data) == ["closure", "golden[0]", "round trip", "values"]
@@ -270,14 +289,14 @@ def test_wrong_reference_length_is_named_with_its_offset(capsys, tmp_path):
 
 def test_untransposed_t6_is_named(capsys, tmp_path):
     untransposed = "T6[j][0] * t[i][0] + T6[j][1] * t[i][1] + T6[j][2] * t[i][2] + T6[j][3]"
-    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(ROTATED=untransposed),
+    code, _, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(ROTATED=untransposed),
                                   "kin_hexapodFullTest")
     assert code == 1
     assert "reads T6 untransposed" in diagnoses(data)
 
 
 def test_swapped_joints_are_named(capsys, tmp_path):
-    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(ORDER="1, 0, 2, 3, 4, 5"),
+    code, _, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(ORDER="1, 0, 2, 3, 4, 5"),
                                   "kin_hexapodFullTest")
     assert code == 1
     text = diagnoses(data)
@@ -290,13 +309,13 @@ def test_swapped_joints_are_named(capsys, tmp_path):
     ({"SIGN": "-"}, "has its sign flipped"),
 ])
 def test_scale_and_sign_are_named(capsys, tmp_path, mistake, words):
-    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(**mistake), "kin_hexapodFullTest")
+    code, _, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(**mistake), "kin_hexapodFullTest")
     assert code == 1
     assert words in diagnoses(data)
 
 
 def test_writing_past_the_solutions_array_is_caught(capsys, tmp_path):
-    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(OUT_OF_BOUNDS="1"),
+    code, _, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(OUT_OF_BOUNDS="1"),
                                   "kin_hexapodFullTest")
     assert code == 1
     assert failed_checks(data) == ["buffers", "return value", "values", "warnings"]
@@ -305,7 +324,7 @@ def test_writing_past_the_solutions_array_is_caught(capsys, tmp_path):
 
 
 def test_ignoring_kin_check_definition_is_caught(capsys, tmp_path):
-    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(CHECK_DEFINITION="0"),
+    code, _, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(CHECK_DEFINITION="0"),
                                   "kin_hexapodFullTest")
     assert code == 1
     assert failed_checks(data) == ["kin_check_definition", "refusal"]
@@ -320,17 +339,21 @@ def test_ignoring_kin_check_definition_is_caught(capsys, tmp_path):
      "when kin_check_definition refuses, the routine writes solutions or warnings"),
 ])
 def test_interface_mistakes_are_named(capsys, tmp_path, mistake, check, words):
-    code, _, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(**mistake), "kin_hexapodFullTest",
+    code, _, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(**mistake), "kin_hexapodFullTest",
                                   samples="200")
     assert code == 1
     assert failed_checks(data) == [check]
     assert words in " ".join(data["interface_failures"])
 
 
-def test_right_tau_passes(capsys, tmp_path):
+def test_right_tau_without_the_singular_band_fails_only_warnings(capsys, tmp_path):
+    """The thesis-style routine is right everywhere but in the limb singular band, where it
+    never warns: the poses verify adds beside that boundary catch it."""
     text = TAU_LEGACY.replace("BRANCH0", "0").replace("WRITTEN", "8")
     code, out, _, data = run_verify(capsys, tmp_path, "tau", text, "kin_tau")
-    assert code == 0, out
+    assert code == 1, out
+    assert [check["name"] for check in data["checks"] if not check["passed"]] == ["warnings"]
+    assert "where the reference says WARN_SINGULAR_SOLUTION" in diagnoses(data)
 
 
 def test_postures_in_another_order_give_the_permutation(capsys, tmp_path):
@@ -361,25 +384,33 @@ def test_source_that_does_not_compile_is_bad_input(capsys, tmp_path):
 
 
 def test_plugin_option_verifies_a_prebuilt_library(capsys, tmp_path):
-    run_verify(capsys, tmp_path, "hexapod", hexapod_source(), "kin_hexapodFullTest", samples="10")
-    code = main(["verify", "hexapod", "--plugin", str(tmp_path / "lib" / "libhexapodFullTest.so"),
+    run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(), "kin_hexapodFullTest", samples="10")
+    code = main(["verify", thesis_hexapod(), "--plugin", str(tmp_path / "lib" / "libhexapodFullTest.so"),
                  "--routine", "kin_hexapodFullTest", "--samples", "500"])
     out, _ = capsys.readouterr()
     assert code == 0 and "PASSED" in out
 
 
 def test_unknown_routine_is_bad_input(capsys, tmp_path):
-    run_verify(capsys, tmp_path, "hexapod", hexapod_source(), "kin_hexapodFullTest", samples="10")
-    code = main(["verify", "hexapod", "--plugin", str(tmp_path / "lib" / "libhexapodFullTest.so"),
+    run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(), "kin_hexapodFullTest", samples="10")
+    code = main(["verify", thesis_hexapod(), "--plugin", str(tmp_path / "lib" / "libhexapodFullTest.so"),
                  "--routine", "kin_other"])
     _, err = capsys.readouterr()
     assert code == 2 and "get_kin_config does not know routine 'kin_other'" in err
 
 
-def test_right_crank_routine_passes(capsys, tmp_path):
+def test_thesis_crank_routine_fails_where_limbs_reach_their_singular_band(capsys, tmp_path):
+    """The thesis-style crank routine agrees with the reference on the uniform sample, but it
+    has no singular band: beside a crank's singularity it answers good, or unreachable with
+    every joint of the posture cleared. The poses verify adds on both sides of that boundary
+    show it, in values, warnings, return value and closure alike."""
     code, out, _, data = run_verify(capsys, tmp_path, "ceart", crank_source("1.0"), "kin_ceart")
-    assert code == 0, out
-    assert data["max_abs_error_rad"] <= 1e-9
+    assert code == 1, out
+    assert [check["name"] for check in data["checks"] if not check["passed"]] == [
+        "values", "warnings", "return value", "closure"]
+    assert "postures answer WARN_UNREACHABLE where the reference says WARN_SINGULAR_SOLUTION" in diagnoses(data)
+    assert "postures answer WARN_GOOD_SOLUTION where the reference says WARN_SINGULAR_SOLUTION" in diagnoses(data)
+    assert data["boundary_poses"]["boundaries_found"] == {"WARN_UNREACHABLE": 16, "WARN_SINGULAR_SOLUTION": 16}
 
 
 def test_crank_angles_in_degrees_are_named(capsys, tmp_path):
@@ -395,12 +426,12 @@ def test_a_crash_in_another_comparing_process_is_named_as_in_the_first(capsys, t
     from kingen.model import load_robot
     from kingen.poses import sample_poses
     from kingen.verify import chunk_size
-    robot = load_robot("hexapod")
+    robot = load_robot(thesis_hexapod())
     chunk = chunk_size(robot)
     x = sample_poses(robot, 2 * chunk, seed=0)[chunk:, 0]
     crashing = float(x[np.argmax(x > 40.0)])  # the routine's crash switch also asks for x > 40 mm
     text = hexapod_source(CRASH=f"(T6[3][0] == {crashing!r})")
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", str(5 * chunk),
+    code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), text, "kin_hexapodFullTest", str(5 * chunk),
                                     "--processes", "3")
     assert code == 1
     assert failed_checks(data) == ["crash"]
@@ -413,10 +444,10 @@ def test_a_crash_only_in_another_comparing_process_still_fails(capsys, tmp_path)
     all the same: the verdict says so, naming the poses and the signal."""
     from kingen.model import load_robot
     from kingen.verify import chunk_size
-    chunk = chunk_size(load_robot("hexapod"))
+    chunk = chunk_size(load_robot(thesis_hexapod()))
     text = ("#include <unistd.h>\nstatic pid_t first_caller = 0;\n"
             + hexapod_source(CRASH="(first_caller == 0 ? (first_caller = getpid(), 0) : getpid() != first_caller)"))
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", text, "kin_hexapodFullTest", str(5 * chunk),
+    code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), text, "kin_hexapodFullTest", str(5 * chunk),
                                     "--processes", "2")
     assert code == 1
     assert failed_checks(data) == ["crash"]
@@ -426,10 +457,10 @@ def test_a_crash_only_in_another_comparing_process_still_fails(capsys, tmp_path)
 
 
 def test_a_routine_that_crashes_is_a_failed_check_not_a_dead_process(capsys, tmp_path):
-    code, out, _, data = run_verify(capsys, tmp_path, "hexapod", hexapod_source(CRASH="1"), "kin_hexapodFullTest")
+    code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(CRASH="1"), "kin_hexapodFullTest")
     assert code == 1
     assert failed_checks(data) == ["crash"]
     from kingen.model import load_robot
     from kingen.verify import chunk_size
-    last = min(3000, chunk_size(load_robot("hexapod"))) - 1
+    last = min(3000, chunk_size(load_robot(thesis_hexapod()))) - 1
     assert f"the plugin ended the host process (signal SIGSEGV) during poses 0 to {last} of seed 0" in out

@@ -43,7 +43,7 @@ class Plumb(LimbModel):
                          np.full(np.shape(platform_point)[:-1], self.height)], axis=-1)
 
     def passive_length(self, joint):
-        return np.asarray(joint)
+        return np.abs(joint)
 
     def c_row(self):
         return {"platform_point": c_vector(self.platform_point), "height": c_double(self.height)}

@@ -37,6 +37,9 @@ class LoadedRoutine(Protocol):
     dof: int
     postures: int
     checks: tuple
+    warning_vocabulary: tuple
+    """Optional: the warnings the routine can tell apart (all of kingen's when absent); the
+    reference's others read as WARN_GOOD_SOLUTION when it is judged."""
     pose_coordinates: object
     """Optional: (6,) bool, the pose coordinates x y z roll pitch yaw the routine's answer
     depends on (all six when absent; a translating platform's controller ignores rotations)."""

@@ -28,7 +28,8 @@ from ..isolation import ending, keep_freed_memory, run_in_child
 from ..poses import chunk_bounds
 from .checks import PHASES, Check, Context, by_need
 from .options import VerifyOptions, report_tolerance_mm, value_tolerance_mm
-from .processes import Printed, chunk_size, compared_chunks, empty_report, merge, process_count
+from .boundaries import boundary_poses
+from .processes import Printed, chunk_size, compare_poses, compared_chunks, empty_report, merge, process_count
 from .tally import Tally, posture_statistics
 
 __all__ = ["VerifyOptions", "chunk_size", "report_tolerance_mm", "value_tolerance_mm", "verify", "verify_library"]
@@ -137,6 +138,15 @@ def _compare_samples(context, progress, printed, phase):
         merge(report, tally, printed, part)
         if progress is not None:
             progress(begin + count)
+    phase("the warnings' boundary poses")
+    boundary, found = boundary_poses(robot, options.seed, options.link_lengths, options.link_offsets,
+                                     getattr(plugin, "warning_vocabulary", None))
+    report.boundary_poses = {"poses": len(boundary), "boundaries_found": found}
+    if len(boundary):
+        part = compare_poses(boundary, first=True)
+        tally.boundary_first, part.tally.first = part.tally.first, None  # for the warnings' diagnoses
+        tally.boundary_reachable = part.tally.reachable_poses
+        merge(report, tally, printed, part)
     report.seconds = time.perf_counter() - start
     report.posture_statistics = posture_statistics(robot, tally)
     crashes = [Check("crash", False, f"a comparing process ended ({ending(code)}) during poses {begin} to "

@@ -6,8 +6,10 @@ import math
 import multiprocessing
 import os
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+
+import numpy as np
 
 from ..conventions import t6_from_pose
 from ..defaults import MAX_PROCESSES
@@ -15,7 +17,7 @@ from ..isolation import captured_output, die_with_parent
 from ..poses import PoseStream
 from ..reference import solve
 from ..report import Report
-from ..routine import VALUE_TOLERANCE_RAD
+from ..routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ..singularity import PACKED, partial_sum_split
 from .options import value_tolerance_mm
 from .tally import Tally, accumulate
@@ -106,6 +108,12 @@ def _compare_chunk(poses, first=False):
     """Call the routine on ``poses`` (m, 6), solve the reference and compare: a _Part (with
     the poses kept for diagnoses only for the ``first`` chunk; nothing else heavy, so
     that it travels between processes cheaply)."""
+    return compare_poses(poses, first)
+
+
+def compare_poses(poses, first=False):
+    """_compare_chunk's work, for poses that are not one of the sample's chunks (the warnings'
+    boundary poses), in this process, after compared_chunks."""
     robot, calibrated, plugin, options = _chunk_job
     report = empty_report(robot, plugin.routine, options)
     tally = Tally.start(calibrated)
@@ -114,7 +122,7 @@ def _compare_chunk(poses, first=False):
     plugin.reset_host()
     with printed.capture():
         calls = plugin.call(t6, options.link_lengths, options.link_offsets)
-    expected = solve(robot, t6, options.link_lengths, options.link_offsets)
+    expected = in_vocabulary(solve(robot, t6, options.link_lengths, options.link_offsets), plugin)
     accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
     counts = {name: getattr(report, name) for name in REPORT_COUNTS + REPORT_WORST}
     tally.calibrated = None
@@ -233,6 +241,25 @@ class Printed:
         self.bytes += printed["bytes"]
         if not self.first_line and printed["text"].strip():
             self.first_line = printed["text"].strip().splitlines()[0]
+
+
+def in_vocabulary(expected, plugin):
+    """The reference's solution with the warnings ``plugin`` cannot give (its optional
+    ``warning_vocabulary``: a LinuxCNC module without a status pin tells only good from
+    unreachable) read as WARN_GOOD_SOLUTION, but a limb's singular band where its radicand is
+    negative as WARN_UNREACHABLE: what such a routine is judged by."""
+    vocabulary = getattr(plugin, "warning_vocabulary", None)
+    if vocabulary is None:
+        return expected
+    codes = [WARNINGS[name] for name in vocabulary]
+    warnings = expected.warnings
+    if WARNINGS["WARN_SINGULAR_SOLUTION"] not in codes:
+        # Inside a limb's singular band a routine without that warning may call the pose
+        # unreachable where the radicand is negative: the reference's closest approach there.
+        past = np.any(expected.radicands < 0, axis=1)[:, None] & (warnings == WARNINGS["WARN_SINGULAR_SOLUTION"])
+        warnings = np.where(past, WARNINGS["WARN_UNREACHABLE"], warnings)
+    warnings = np.where(np.isin(warnings, codes), warnings, WARNINGS["WARN_GOOD_SOLUTION"])
+    return replace(expected, warnings=warnings.astype(expected.warnings.dtype))
 
 
 def empty_report(robot, routine, options):

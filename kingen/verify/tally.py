@@ -75,6 +75,10 @@ class Tally:
     faulty_calls: int = 0
     fault_bits: int = 0
     first: tuple = None
+    boundary_reachable: int = 0
+    """Of ``reachable_poses``, those beside warnings' boundaries (not drawn in the region)."""
+    boundary_first: tuple = None
+    """As ``first``, for the poses beside warnings' boundaries (kingen.verify.boundaries)."""
 
     @classmethod
     def start(cls, calibrated):

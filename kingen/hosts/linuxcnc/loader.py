@@ -98,6 +98,9 @@ class Module:
         self.scale = 25.4 if inch else 1.0
         self.status_pin = self._pin("status")
         self.iterations_pin = self._pin("iterations")
+        if self.status_pin == ffi.NULL:
+            self.warning_vocabulary = ("WARN_GOOD_SOLUTION", "WARN_UNREACHABLE")
+            """Without a status pin the module tells only success from failure (its return)."""
         self._warm_up()
 
     def _warm_up(self):
@@ -211,6 +214,8 @@ class Module:
         status pin's warning where the module has one, else good (0) or unreachable."""
         joints, returns, statuses = self.inverse(self.emc_poses(t6))
         solutions = (joints[:, :self.dof] * self.joint_scale())[:, :, None]
+        # A failed call's joints mean nothing to LinuxCNC (it stops): kingen's contract wants them finite.
+        solutions[(returns != 0)[:, None, None] & ~np.isfinite(solutions)] = 0.0
         fallback = np.where(returns == 0, WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_UNREACHABLE"])
         warnings = np.where(np.isfinite(statuses), statuses, fallback).astype(np.intc)[:, None]
         return Calls(returned=returns, solutions=solutions, warnings=warnings, faults=np.zeros(len(t6), dtype=np.intc))

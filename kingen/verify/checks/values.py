@@ -21,12 +21,13 @@ class Values(VerifyCheck):
         t6, solutions, _, reference_joints, reference_warnings = tally.first
         compared = report.samples - tally.aborted
         required = min(MIN_REACHABLE_POSES, compared)
-        if tally.reachable_poses < required:
-            cause = ("no pose of the verification region is reachable" if not tally.reachable_poses else
-                     f"only {tally.reachable_poses} of {compared} poses of the verification region are reachable")
+        reachable = tally.reachable_poses - tally.boundary_reachable  # drawn in the verification region
+        if reachable < required:
+            cause = ("no pose of the verification region is reachable" if not reachable else
+                     f"only {reachable} of {compared} poses of the verification region are reachable")
             return [Check("values", False, f"{cause} at any posture: at least {required} needed to compare joints "
                                            "(move verification.home into the workspace, or narrow its range)",
-                          judged=int(tally.reachable_poses))]
+                          judged=int(reachable))]
         values_ok = (report.max_abs_error_mm <= report.tolerance_mm and report.max_abs_error_rad <= report.tolerance_rad
                      and report.singular_out_of_bound == 0)
         aborted = f" ({tally.aborted} calls stopped at a write outside their buffers left out)" if tally.aborted else ""
@@ -35,7 +36,7 @@ class Values(VerifyCheck):
                        f"{report.samples - tally.aborted} poses x {report.postures} postures{aborted}; "
                        f"{report.singular_entries} entries in a singular band, {report.singular_out_of_bound} beyond "
                        f"their bound (bounds {report.tolerance_mm:.3g} mm, {report.tolerance_rad:.3g} rad); "
-                       f"{tally.reachable_poses} poses reachable at some posture",
+                       f"{reachable} sampled poses reachable at some posture",
                        judged=int(tally.posture_counts[:3].sum()))
         if not values_ok:
             values.diagnoses = diagnose(context.robot, t6, solutions, reference_joints, reference_warnings)

@@ -1,8 +1,11 @@
 """``warnings``: every posture's status equal to the reference's, except inside the tolerance
 band around a threshold (:func:`kingen.verify.tally.warnings_in_band`)."""
 
+import numpy as np
+
 from ...diagnose import diagnose_warnings
 from ...routine import WARNING_NAMES
+from ..boundaries import RAYS, warnings_to_exercise
 from ..tally import WARNING_KINDS
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
@@ -17,10 +20,25 @@ class Warnings(VerifyCheck):
         report, tally = context.report, context.tally
         _, _, warnings, _, reference_warnings = tally.first
         judged = int(tally.warning_counts.sum())
-        given = ", ".join(f"{int(count)} {kind}" for kind, count in zip(WARNING_KINDS, tally.warning_counts) if count)
-        check = Check("warnings", report.warning_mismatches == 0,
-                      f"{report.warning_mismatches} mismatches, {report.warnings_in_band} inside the tolerance band, "
-                      f"over {judged} postures (the reference's: {given or 'none'})", judged=judged)
-        if not check.passed:
+        counts = dict(zip(WARNING_KINDS, (int(count) for count in tally.warning_counts)))
+        given = ", ".join(f"{count} {kind}" for kind, count in counts.items() if count)
+        boundary = report.boundary_poses
+        found = ", ".join(f"{kind} {count}" for kind, count in boundary.get("boundaries_found", {}).items())
+        vocabulary = getattr(context.routine, "warning_vocabulary", None)
+        missing = [kind for kind in warnings_to_exercise(context.robot, vocabulary) if not counts[kind]]
+        detail = (f"{report.warning_mismatches} mismatches, {report.warnings_in_band} inside the tolerance band, "
+                  f"over {judged} postures of {report.samples} sampled poses and {boundary.get('poses', 0)} poses "
+                  f"beside warnings' boundaries (boundaries found along {RAYS} rays: {found or 'none sought'}); the "
+                  f"reference's warnings: {given or 'none'}")
+        if vocabulary is not None:
+            detail += f"; the routine tells only {', '.join(vocabulary)} (the reference's others read as good)"
+        if missing:
+            detail += (f"; not exercised: {', '.join(missing)} (the robot can give it, no compared pose did): "
+                       "widen the verification region or check the robot's limits")
+        check = Check("warnings", report.warning_mismatches == 0 and not missing, detail, judged=judged)
+        if report.warning_mismatches:
+            if tally.boundary_first is not None:
+                warnings = np.concatenate([warnings, tally.boundary_first[2]])
+                reference_warnings = np.concatenate([reference_warnings, tally.boundary_first[4]])
             check.diagnoses = diagnose_warnings(warnings, reference_warnings, WARNING_NAMES)
         return [check]

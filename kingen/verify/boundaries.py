@@ -1,0 +1,121 @@
+"""Poses on both sides of every warning's boundary, added to verify's sample so that each
+warning a robot can give is exercised (a routine that never gives one fails ``warnings``).
+
+Uniform poses rarely land near a boundary: the limb singular band is 2e-5 wide in the
+normalised radicand, a direct-index threshold or a travel limit may lie outside the
+verification region. So rays are cast from the verification home, in directions drawn
+from the region's half-widths, out to ``REACH`` times them; where the reference's warning of
+a posture turns into the warning sought between two steps, the boundary is found by
+bisection, and a pose just before and one just after it join the sample, each outside the
+tolerance band in which routine and reference may disagree (mm, degrees; kingen.poses).
+"""
+
+import numpy as np
+
+from ..conventions import t6_from_pose
+from ..reference import solve
+from ..routine import WARNINGS
+from .tally import warnings_in_band
+
+RAYS = 64
+STEPS = 32
+REACH = 4.0
+"""Rays reach this many times the region's half-widths from home (boundaries outside the
+region are taken too: verify's report says how many poses came from here)."""
+FAR = 4.0
+"""Then, for a warning not met, translations up to this many times the robot's size."""
+PER_WARNING = 16
+"""Boundaries kept per warning: two poses each."""
+BISECTIONS = 48
+PAST = {"WARN_JOINT_LIMITS_EXCEEDED": ("WARN_JOINT_LIMITS_EXCEEDED",), "WARN_UNREACHABLE": ("WARN_UNREACHABLE",),
+        "WARN_SINGULAR_SOLUTION": ("WARN_SINGULAR_SOLUTION", "WARN_UNREACHABLE")}
+"""The warnings on the far side of each warning's boundary: the limb singular band lies between
+reachable and unreachable, so a ray that steps over it still brackets its edge."""
+OFFSETS = (1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
+"""Distances from the boundary tried, as fractions of the ray's length, until both poses lie
+outside the tolerance band."""
+
+
+def warnings_to_exercise(robot, vocabulary=None):
+    """The warnings ``robot``'s routine can give besides WARN_GOOD_SOLUTION (within the
+    routine's ``vocabulary`` of warnings, when it has one)."""
+    kinds = []
+    if any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
+           for limb in robot.limbs):  # a revolute travel of a full turn or more is never exceeded
+        kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
+    if any(limb.has_radicand for limb in robot.limbs):
+        kinds.append("WARN_UNREACHABLE")
+    if any(limb.has_radicand for limb in robot.limbs) or robot.direct_index_min is not None:
+        kinds.append("WARN_SINGULAR_SOLUTION")
+    return [kind for kind in kinds if vocabulary is None or kind in vocabulary]
+
+
+def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary=None):
+    """(poses (m, 6) in mm and degrees, {warning: boundaries found}) on both sides of each
+    warning's boundary, seeded; the same poses whatever the number of processes. Rays first
+    span the verification region (``REACH`` times its half-widths); a warning they do not meet
+    is sought again along translations up to ``FAR`` times the robot's size."""
+    region = robot.verification
+    home, widths = np.asarray(region.home, dtype=float), np.asarray(region.range, dtype=float)
+    generator = np.random.default_rng([seed, 0x626f756e64])  # apart from the sample's own stream
+    kinds = warnings_to_exercise(robot, vocabulary)
+    far = np.zeros((RAYS, 6))
+    far[:, :3] = generator.normal(size=(RAYS, 3))
+    far[:, :3] *= FAR * robot.size_mm / np.linalg.norm(far[:, :3], axis=1, keepdims=True)
+    stages = [generator.uniform(-1.0, 1.0, size=(RAYS, 6)) * widths * REACH, far]
+    poses, found = [], {kind: 0 for kind in kinds}
+    for directions in stages:
+        missing = [kind for kind in kinds if not found[kind]]
+        if not missing or not np.any(directions):
+            continue
+        for kind, count, sides in _boundaries(robot, home, directions, missing, link_lengths, link_offsets):
+            found[kind] = count
+            poses.append(sides)
+    return (np.concatenate(poses) if poses else np.zeros((0, 6))), found
+
+
+def _boundaries(robot, home, directions, kinds, link_lengths, link_offsets):
+    """(warning, boundaries found, poses on both sides) for each of ``kinds`` that the rays
+    home + t directions (0 <= t <= 1) meet."""
+    def warnings_at(fractions, rays):
+        poses = home + fractions[:, None] * directions[rays]
+        return solve(robot, t6_from_pose(poses), link_lengths, link_offsets), poses
+
+    rays_count = len(directions)
+    steps = np.linspace(0.0, 1.0, STEPS + 1)
+    grid, _ = warnings_at(np.tile(steps, rays_count), np.repeat(np.arange(rays_count), STEPS + 1))
+    grid_warnings = grid.warnings.reshape(rays_count, STEPS + 1, -1)
+    for kind in kinds:
+        codes = [WARNINGS[name] for name in PAST[kind]]
+        hits = np.isin(grid_warnings, codes)  # (rays, steps, postures)
+        rays, lows, postures = [], [], []
+        for ray in range(rays_count):
+            changes = np.argwhere(~hits[ray, :-1] & hits[ray, 1:])  # (step, posture) where it turns into kind
+            if len(changes):
+                rays.append(ray)
+                lows.append(changes[0][0])
+                postures.append(changes[0][1])
+            if len(rays) == PER_WARNING:
+                break
+        if not rays:
+            continue
+        rays, postures = np.array(rays), np.array(postures)
+        low, high = steps[np.array(lows)], steps[np.array(lows) + 1]
+        for _ in range(BISECTIONS):
+            middle = 0.5 * (low + high)
+            solution, _ = warnings_at(middle, rays)
+            inside = np.isin(solution.warnings[np.arange(len(rays)), postures], codes)
+            high, low = np.where(inside, middle, high), np.where(inside, low, middle)
+        yield kind, len(rays), _both_sides(robot, warnings_at, rays, low, high, link_lengths, link_offsets)
+
+
+def _both_sides(robot, warnings_at, rays, low, high, link_lengths, link_offsets):
+    """A pose before and one after each bracketed boundary, as near as the tolerance band allows."""
+    chosen = {}
+    for offset in OFFSETS:
+        for side, fractions in (("before", np.clip(low - offset, 0.0, None)), ("after", high + offset)):
+            solution, poses = warnings_at(fractions, rays)
+            clear = ~np.any(warnings_in_band(robot.calibrated(link_lengths, link_offsets), solution), axis=1)
+            for index in np.flatnonzero(clear):
+                chosen.setdefault((side, index), poses[index])
+    return np.array(list(chosen.values())) if chosen else np.zeros((0, 6))
