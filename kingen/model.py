@@ -18,12 +18,13 @@ import numpy as np
 from pydantic import AfterValidator, Field, ValidationError
 
 from .conventions import branch_of_posture
-from .errors import KingenError, located
+from .errors import KingenError
 from .hosts import name_problems
-from .layouts import LAYOUTS, Layout
+from .layouts import Layout
+from .located import Locator, diagnostic
 from .limbs import MODELS
 from .resources import robots_dir
-from .robot_file import dotted, read_robot_file
+from .robot_file import read_robot_file
 from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict, dialog_value
 from .singularity import SIX
 from .units import LENGTH_UNITS, document_in_mm
@@ -278,11 +279,11 @@ def load_robot(spec):
     path = resolve_robot_path(spec)
     shown = str(path)
     data, lines, raw = read_robot_file(path)
-    locate = _Locator(shown, lines)
+    locate = Locator(shown, lines)
     try:
         document = robot_file_schema().model_validate(data)
     except ValidationError as error:
-        raise _diagnostic(error, locate) from None
+        raise diagnostic(error, locate) from None
     limbs = _expand_limbs(document, locate)
     if document.units != "mm":
         if document.golden and len({limb.joint_type.wraps for limb in limbs}) > 1:
@@ -319,47 +320,6 @@ def load_robot(spec):
         raise locate.error(["singularity", "direct_index_min"],
                            f"the direct index needs six force lines; this robot has {robot.dof} limbs")
     return robot
-
-
-class _Locator:
-    """Turns a field path into 'file:line: field: problem' using the YAML's key lines."""
-
-    def __init__(self, source, lines):
-        self.source = source
-        self.lines = lines
-
-    def error(self, path, problem):
-        line = None
-        for cut in range(len(path), -1, -1):
-            if tuple(path[:cut]) in self.lines:
-                line = self.lines[tuple(path[:cut])]
-                break
-        return located(self.source, line, dotted(path), problem)
-
-
-_FRIENDLY = {"extra_forbidden": "unknown key", "missing": "required key missing"}
-
-
-def _diagnostic(error, locate):
-    """The first pydantic error as a located one-line KingenError."""
-    first = error.errors(include_url=False)[0]
-    tags = {*MODELS, *(layout.model_fields["type"].annotation.__args__[0] for layout in LAYOUTS)}
-    path = []
-    for part in first["loc"]:
-        if isinstance(part, str) and part in tags and path and (
-            isinstance(path[-1], int) or path[-1] == "layout"
-        ):
-            continue
-        path.append(part)
-    if first["type"] in ("union_tag_invalid", "union_tag_not_found"):
-        path.append(first["ctx"]["discriminator"].strip("'"))
-    problem = _FRIENDLY.get(first["type"], first["msg"])
-    if problem.startswith("Value error, "):
-        problem = problem[len("Value error, "):]
-    value = first.get("input")
-    if first["type"] not in _FRIENDLY and not isinstance(value, (dict, list)) and len(repr(value)) < 40:
-        problem += f" (got {value!r})"
-    return locate.error(path, problem)
 
 
 def _expand_limbs(document, locate):

@@ -97,8 +97,18 @@ def load(path, robot):
             field = ".".join(str(part) for part in first["loc"])
             raise located(path, None, field, first["msg"]) from None
         raise located(path, None, None, f"not a kingen snapshot (JSON: {str(error).splitlines()[0]})") from None
+    if snapshot.kingen_snapshot != FORMAT:
+        raise located(path, None, "kingen_snapshot", f"version {snapshot.kingen_snapshot} is not one this kingen "
+                                                     f"reads (it reads {FORMAT})")
     if snapshot.robot != robot.name:
         raise located(path, None, "robot", f"recorded for '{snapshot.robot}', not '{robot.name}'")
+    units = [joint_type.unit for joint_type in robot.joint_types]
+    if len(snapshot.joint_units) != robot.dof:
+        raise located(path, None, "joint_units", f"{len(snapshot.joint_units)} units for {robot.dof} joints")
+    for name, given, unit in zip(robot.joint_names, snapshot.joint_units, units):
+        if given != unit:
+            raise located(path, None, "joint_units", f"'{given}' for joint {name}, which is in {unit}: a snapshot's "
+                                                      "units are the robot's")
     shapes = {(len(entry.joints), *{len(row) for row in entry.joints}, len(entry.warnings)) for entry in snapshot.entries}
     if shapes - {(robot.dof, robot.postures, robot.postures)}:
         raise located(path, None, "entries", f"entries must hold {robot.dof} joints x {robot.postures} postures")

@@ -87,3 +87,8 @@ def finalizer(kind):
         return escape(value) if isinstance(value, str) else value
 
     return finalize
+
+
+def counted(count, noun):
+    """'1 posture', '8 postures': a count with its noun, plural unless it is one."""
+    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"

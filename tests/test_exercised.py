@@ -87,3 +87,31 @@ def test_a_routine_that_never_gives_a_warning_fails_warnings(name, kind, plugin)
     broken = verify(robot, WithoutWarning(routine, WARNINGS[kind]), VerifyOptions(samples=300))
     warnings = next(check for check in broken.checks if check.name == "warnings")
     assert not warnings.passed and not warnings.detail.startswith("0 mismatches"), warnings.detail
+
+
+def test_a_snapshot_in_other_units_or_of_an_unknown_version_is_refused(tmp_path, capsys):
+    snapshot = tmp_path / "tau.golden.json"
+    assert main(["golden", "record", "tau", "-o", str(snapshot), "--samples", "5"]) == 0
+    capsys.readouterr()
+    data = json.loads(snapshot.read_text())
+    for change, words in ((("joint_units", ["rad", "mm", "mm"]), ": joint_units: 'rad' for joint carriage1, which is in "
+                                                                   "mm: a snapshot's units are the robot's"),
+                          (("joint_units", ["mm"]), ": joint_units: 1 units for 3 joints"),
+                          (("kingen_snapshot", 999), ": kingen_snapshot: version 999 is not one this kingen reads")):
+        bad = tmp_path / "bad.json"
+        bad.write_text(json.dumps({**data, change[0]: change[1]}))
+        code, _, err = run(capsys, "verify", "tau", "--golden", bad, "-o", tmp_path / "b", "--samples", "50")
+        assert code == 2 and words in err and err.count("\n") == 1, err
+
+
+def test_a_misspelt_key_is_named_with_the_key_it_resembles(tmp_path, capsys):
+    path = tmp_path / "robot.yaml"
+    path.write_text((robots_dir() / "tau.yaml").read_text().replace("verification:", "verificaton:"))
+    code, _, err = run(capsys, "verify", path)
+    assert code == 2 and err == f"kingen: error: {path}:19: verificaton: unknown key 'verificaton' (did you mean " \
+                                "'verification'?)\n"
+
+
+def test_one_posture_is_one_posture(tmp_path, capsys):
+    code, out, _ = run(capsys, "verify", "hexapod", "-o", tmp_path / "b", "--samples", "50")
+    assert code == 0 and out.startswith("verify hexapod: 50 poses x 1 posture, ")

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from ..defaults import MAX_PROCESSES, TARGETS
+from ..text import counted
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, cli, host_target, in_child,
                      load_model, plugin_options, processes_text, routine_to_check, say, solve_job, calibration_options)
 
@@ -247,7 +248,8 @@ def _progress(total, chunk):
 
 
 def print_report(report, library):
-    say(f"verify {report.robot}: {report.samples} poses x {report.postures} postures, {library} ({report.routine})")
+    say(f"verify {report.robot}: {counted(report.samples, 'pose')} x {counted(report.postures, 'posture')}, {library} "
+        f"({report.routine})")
     for check in report.checks:
         say(f"  {check.status:6} {check.name}: {check.detail}" if check.exercised or not check.passed
             else f"  {check.name}: not exercised: {check.detail}")

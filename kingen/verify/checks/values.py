@@ -3,6 +3,7 @@
 what a failing routine got wrong (:mod:`kingen.diagnose`)."""
 
 from ...diagnose import diagnose
+from ...text import counted
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
 MIN_REACHABLE_POSES = 10
@@ -33,7 +34,8 @@ class Values(VerifyCheck):
         aborted = f" ({tally.aborted} calls stopped at a write outside their buffers left out)" if tally.aborted else ""
         values = Check("values", values_ok,
                        f"max |error| {report.max_abs_error_mm:.3g} mm, {report.max_abs_error_rad:.3g} rad over "
-                       f"{report.samples - tally.aborted} poses x {report.postures} postures{aborted}; "
+                       f"{counted(report.samples - tally.aborted, 'pose')} x {counted(report.postures, 'posture')}"
+                       f"{aborted}; "
                        f"{report.singular_entries} entries in a singular band, {report.singular_out_of_bound} beyond "
                        f"their bound (bounds {report.tolerance_mm:.3g} mm, {report.tolerance_rad:.3g} rad); "
                        f"{reachable} sampled poses reachable at some posture",
