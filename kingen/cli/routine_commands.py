@@ -262,6 +262,6 @@ def print_report(report, library):
     for notice in report.notices:
         say(f"  notice: {notice}")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
-    speed = (f" in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, {processes_text(report.processes)})"
-             if report.seconds > 0 else "")
+    speed = (f"; the sampled poses compared in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, "
+             f"{processes_text(report.processes)})" if report.seconds > 0 else "")
     say(verdict + speed)
