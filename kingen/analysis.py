@@ -3,7 +3,8 @@ posture (the robot's working posture), each pose judged by what stops it.
 
 Causes, in this order: ``unreachable`` (a limb has no solution, or is at its own
 singularity), ``joint_limits``, ``direct_singularity`` (the direct index at most the robot's
-``direct_index_min``), ``collision`` (two passive links, or two cranks, closer than their
+``direct_index_min``, or, with or without one, below ``CROSSING`` of its value at home: a
+crossing of a direct singularity, never "no limit"), ``collision`` (two passive links, or two cranks, closer than their
 radii allow: ``collision:`` in the robot file), else ``none``. Poses are mm and degrees;
 tilts turn about horizontal axes through the home point. Everything is the numpy
 reference's: no plugin runs here.
@@ -27,13 +28,25 @@ SWEEP_STEPS = 61
 SLICE_CELLS = 81
 SLICE_SPAN = 3.0
 """Slices cover the verification region's position range times this, around home."""
+CROSSING = 0.05
+"""A direct index below this fraction of its value at home stops a pose as a direct
+singularity even where the robot file sets no ``direct_index_min``."""
 
 
-def evaluate(robot, t6, posture):
+def home_index(robot, posture):
+    """The direct index (mm) of ``posture`` at the verification home, or NaN."""
+    return float(evaluate(robot, t6_from_matrix(matrix_from_pose(np.array([robot.verification.home]))), posture,
+                          np.nan)["direct_index_mm"][0])
+
+
+def evaluate(robot, t6, posture, at_home=None):
     """Per pose of t6 (n, 4, 4), for ``posture``: a dict of arrays: cause (n,) index into
     CAUSES, warning, direct_index_mm (NaN: not available or unreachable), min_inverse_index,
     min_rod_distance_mm and min_crank_distance_mm (clearances; NaN when not configured or
-    not applicable), joints (n, dof)."""
+    not applicable), joints (n, dof). ``at_home``: the posture's direct index at home
+    (home_index; computed when not given) for the crossing rule."""
+    if at_home is None:
+        at_home = home_index(robot, posture) if robot.has_direct_index else np.nan
     plain = replace(robot, direct_index_min=None)
     expected = solve(plain, t6)
     joints = expected.joints[:, :, posture]
@@ -50,7 +63,8 @@ def evaluate(robot, t6, posture):
     cause = np.full(count, CAUSES.index("none"))
     candidates = [
         ("collision", (rods < 0.0) | (cranks < 0.0)),
-        ("direct_singularity", index <= (robot.direct_index_min if robot.direct_index_min is not None else -1.0)),
+        ("direct_singularity", (index <= (robot.direct_index_min if robot.direct_index_min is not None else -1.0))
+         | (index < CROSSING * at_home)),
         ("joint_limits", warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]),
         ("unreachable", ~reachable | (np.min(np.abs(expected.radicands), axis=1) <= 1e-5)),
     ]
@@ -127,20 +141,25 @@ def _rotation(axis, angle):
 
 
 def tilt_limits(robot, posture):
-    """[{azimuth_deg, max_tilt_deg, cause}]: the largest positive tilt before the posture
-    stops, to TILT_STEP degrees; cause 'none' when nothing stops it within TILT_MAX."""
+    """[{azimuth_deg, max_tilt_deg, cause, min_direct_index_mm}]: the largest positive tilt
+    before the posture stops, to TILT_STEP degrees; cause 'none' when nothing stops it within
+    TILT_MAX; the least direct index along the tilt up to where it stops (None: not available)."""
     angles = np.arange(0.0, TILT_MAX + TILT_STEP / 2, TILT_STEP)
-    causes = evaluate(robot, tilted_t6(robot, TILT_AZIMUTHS, angles), posture)["cause"].reshape(
-        len(TILT_AZIMUTHS), len(angles))
+    evaluated = evaluate(robot, tilted_t6(robot, TILT_AZIMUTHS, angles), posture)
+    causes = evaluated["cause"].reshape(len(TILT_AZIMUTHS), len(angles))
+    indices = evaluated["direct_index_mm"].reshape(len(TILT_AZIMUTHS), len(angles))
     limits = []
-    for azimuth, row in zip(TILT_AZIMUTHS, causes):
+    for azimuth, row, index in zip(TILT_AZIMUTHS, causes, indices):
         stops = np.nonzero(row != CAUSES.index("none"))[0]
+        reached = index[:(int(stops[0]) if len(stops) else len(index))]
+        least = float(np.nanmin(reached)) if np.any(np.isfinite(reached)) else None
         if not len(stops):
-            limits.append({"azimuth_deg": float(azimuth), "max_tilt_deg": TILT_MAX, "cause": "none"})
+            limits.append({"azimuth_deg": float(azimuth), "max_tilt_deg": TILT_MAX, "cause": "none",
+                           "min_direct_index_mm": least})
         else:
             first = int(stops[0])
             limits.append({"azimuth_deg": float(azimuth), "max_tilt_deg": round(float(angles[max(first - 1, 0)]), 1)
-                           if first else 0.0, "cause": CAUSES[row[first]]})
+                           if first else 0.0, "cause": CAUSES[row[first]], "min_direct_index_mm": least})
     return limits
 
 
@@ -208,5 +227,15 @@ def analyze(robot, posture=None, progress=None):
         "collision": "available" if robot.collision is not None else
         "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file",
     }
-    return {"robot": robot.name, "posture": posture, "available": available, "tilt_limits": limits,
-            "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min}
+    settings = {"tilt_convention": "axis: rotations about (cos a, sin a, 0) through home",
+                "azimuths_deg": list(TILT_AZIMUTHS), "tilt_step_deg": TILT_STEP, "tilt_max_deg": TILT_MAX,
+                "sweep_angles_deg": [float(SWEEP_ANGLES[0]), float(SWEEP_ANGLES[-1])],
+                "crossing_fraction": CROSSING, "direct_index_at_home_mm": _finite_or_none(home_index(robot, posture))
+                if robot.has_direct_index else None,
+                "collision": "segments: every pair of passive links and of cranks, cranks at their angle"}
+    return {"robot": robot.name, "posture": posture, "available": available, "settings": settings,
+            "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min}
+
+
+def _finite_or_none(value):
+    return float(value) if np.isfinite(value) else None

@@ -40,7 +40,9 @@ def test_analysis_json_contract(ceart_analysis):
     assert set(data["sweeps"]) == {"roll", "pitch", "yaw", "x", "y", "z"}
     assert all(SWEEP_KEYS <= set(entry) for entries in data["sweeps"].values() for entry in entries)
     about_y = data["tilt_limits"][6]
-    assert about_y == {"azimuth_deg": 90.0, "max_tilt_deg": 23.9, "cause": "unreachable"}
+    assert {key: about_y[key] for key in ("azimuth_deg", "max_tilt_deg", "cause")} == {
+        "azimuth_deg": 90.0, "max_tilt_deg": 23.9, "cause": "unreachable"}
+    assert about_y["min_direct_index_mm"] > 29.3  # above CEART's threshold all the way
     assert (ceart_analysis / "copy.json").read_text() == (ceart_analysis / "analysis.json").read_text()
 
 
@@ -77,3 +79,19 @@ window.addEventListener("load", function () {
 
     pixels = matplotlib.image.imread(shot)
     assert pixels.shape[:2] == (1600, 1200) and float(pixels[..., :3].std()) > 0.05  # not blank
+
+
+def test_a_crossing_of_a_direct_singularity_stops_a_tilt_without_a_threshold(tmp_path):
+    """LinuxCNC's sample hexapod sets no direct_index_min; its index falls from 336.7 mm at home
+    towards 0 rolling to about -56.5 degrees (tilt about -X): analyze stops there instead of
+    reporting no limit, and states the settings and the least index of every tilt."""
+    assert main(["analyze", "linuxcnc_hexapod", "-o", str(tmp_path)]) == 0
+    data = json.loads((tmp_path / "analysis.json").read_text())
+    assert data["settings"]["direct_index_at_home_mm"] == pytest.approx(336.724, abs=1e-3)
+    assert data["settings"]["crossing_fraction"] == 0.05
+    about_minus_x = next(row for row in data["tilt_limits"] if row["azimuth_deg"] == 180.0)
+    assert about_minus_x["cause"] == "direct_singularity" and 50.0 < about_minus_x["max_tilt_deg"] < 56.5
+    assert about_minus_x["min_direct_index_mm"] >= 0.05 * 336.724
+    assert all(row["min_direct_index_mm"] is not None for row in data["tilt_limits"])
+    rolled = {entry["value"]: entry for entry in data["sweeps"]["roll"]}
+    assert rolled[-57.0]["cause"] == "direct_singularity" and rolled[0.0]["cause"] == "none"
