@@ -18,7 +18,6 @@ from pathlib import Path
 
 import numpy as np
 
-from kingen.conventions import t6_from_pose
 from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.checks.forward import SEEDS, regular_poses
 from kingen.hosts.linuxcnc.loader import Module
@@ -33,7 +32,7 @@ MAX_LIMIT = 40
 
 def inverse_agreement(samples):
     host = get_host("linuxcnc")
-    print(f"| stock module | robot file | poses | worst joint error | verify says |\n| --- | --- | --- | --- | --- |")
+    print("| stock module | robot file | poses | worst joint error | verify says |\n| --- | --- | --- | --- | --- |")
     for module, robot_name in PAIRS:
         seen = host.as_seen(load_robot(robot_name))
         report = verify_library(seen, STOCK / f"{module}.so", module, VerifyOptions(samples=samples), host=host)
@@ -50,11 +49,11 @@ def iterations(poses_count):
         built = host.build(robot, Path(folder) / "module")
         kingen_module = Module(built.library, built.routine, seen, inch=True)
         stock = Module(STOCK / "genhexkins.so", "genhexkins", seen, inch=True)
-        poses, joints = regular_poses(seen, kingen_module, sample_poses(seen, poses_count, seed=1))
+        poses, joints = regular_poses(seen, sample_poses(seen, poses_count, seed=1))
         machine_joints = np.zeros((len(poses), 16))
         machine_joints[:, :6] = joints / kingen_module.joint_scale()
         generator = np.random.default_rng(0)
-        print(f"\n| seeds | module | converged | iterations mean | max |\n| --- | --- | --- | --- | --- |")
+        print("\n| seeds | module | converged | iterations mean | max |\n| --- | --- | --- | --- | --- |")
         for label, (distance_mm, distance_deg) in SEEDS.items():
             offset = np.concatenate([_unit(generator, len(poses)) * distance_mm, _unit(generator, len(poses)) * distance_deg], 1)
             seeds = np.zeros((len(poses), 9))
@@ -68,7 +67,6 @@ def iterations(poses_count):
                 open_ = np.isnan(needed)
                 if not open_.any():
                     break
-                stock.library  # the module stays loaded; its limit is a pin
                 _set(stock, "genhexkins.limit-iterations", limit)
                 _, returns, _ = stock.forward(machine_joints[open_], seeds[open_])
                 needed[np.flatnonzero(open_)[returns == 0]] = limit

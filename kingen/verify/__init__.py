@@ -44,7 +44,7 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
     reference alike; golden values are checked with empty fields (the published geometry).
     What the routine prints on stdout/stderr is reported as a notice."""
     report = empty_report(robot, plugin.routine, options)
-    report.interface_checks = tuple(check.name for check in by_need(plugin.checks, "routine"))
+    report.interface_checks = _interface_names(plugin.checks)
     phase = phase or (lambda text: None)
     printed = Printed()
     context = Context(robot=robot, options=options, routine=plugin, report=report)
@@ -105,11 +105,16 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
         report.checks[:0] = checks[:on_file]
         return report
     report = empty_report(robot, routine, options)
-    report.interface_checks = tuple(check.name for check in by_need(host.checks, "routine"))
+    report.interface_checks = _interface_names(host.checks)
     report.checks.extend(checks)
     if failure is not None:
         report.checks.append(Check(failure.kind, False, failure.detail))
     return report
+
+
+def _interface_names(checks):
+    """The names of the checks run on the loaded routine before any pose: its interface."""
+    return tuple(check.name for check in by_need(checks, "routine"))
 
 
 def _verify_job(channel, robot, library, routine, host, options):

@@ -59,6 +59,7 @@ def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary
     home, widths = np.asarray(region.home, dtype=float), np.asarray(region.range, dtype=float)
     generator = np.random.default_rng([seed, 0x626f756e64])  # apart from the sample's own stream
     kinds = warnings_to_exercise(robot, vocabulary)
+    calibrated = robot.calibrated(link_lengths, link_offsets)
     far = np.zeros((RAYS, 6))
     far[:, :3] = generator.normal(size=(RAYS, 3))
     far[:, :3] *= FAR * robot.size_mm / np.linalg.norm(far[:, :3], axis=1, keepdims=True)
@@ -68,18 +69,18 @@ def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary
         missing = [kind for kind in kinds if not found[kind]]
         if not missing or not np.any(directions):
             continue
-        for kind, count, sides in _boundaries(robot, home, directions, missing, link_lengths, link_offsets):
+        for kind, count, sides in _boundaries(calibrated, home, directions, missing):
             found[kind] = count
             poses.append(sides)
     return (np.concatenate(poses) if poses else np.zeros((0, 6))), found
 
 
-def _boundaries(robot, home, directions, kinds, link_lengths, link_offsets):
+def _boundaries(robot, home, directions, kinds):
     """(warning, boundaries found, poses on both sides) for each of ``kinds`` that the rays
-    home + t directions (0 <= t <= 1) meet."""
+    home + t directions (0 <= t <= 1) meet; ``robot`` calibrated as the routine is called."""
     def warnings_at(fractions, rays):
         poses = home + fractions[:, None] * directions[rays]
-        return solve(robot, t6_from_pose(poses), link_lengths, link_offsets), poses
+        return solve(robot, t6_from_pose(poses)), poses
 
     rays_count = len(directions)
     steps = np.linspace(0.0, 1.0, STEPS + 1)
@@ -106,16 +107,16 @@ def _boundaries(robot, home, directions, kinds, link_lengths, link_offsets):
             solution, _ = warnings_at(middle, rays)
             inside = np.isin(solution.warnings[np.arange(len(rays)), postures], codes)
             high, low = np.where(inside, middle, high), np.where(inside, low, middle)
-        yield kind, len(rays), _both_sides(robot, warnings_at, rays, low, high, link_lengths, link_offsets)
+        yield kind, len(rays), _both_sides(robot, warnings_at, rays, low, high)
 
 
-def _both_sides(robot, warnings_at, rays, low, high, link_lengths, link_offsets):
+def _both_sides(robot, warnings_at, rays, low, high):
     """A pose before and one after each bracketed boundary, as near as the tolerance band allows."""
     chosen = {}
     for offset in OFFSETS:
         for side, fractions in (("before", np.clip(low - offset, 0.0, None)), ("after", high + offset)):
             solution, poses = warnings_at(fractions, rays)
-            clear = ~np.any(warnings_in_band(robot.calibrated(link_lengths, link_offsets), solution), axis=1)
+            clear = ~np.any(warnings_in_band(robot, solution), axis=1)
             for index in np.flatnonzero(clear):
                 chosen.setdefault((side, index), poses[index])
     return np.array(list(chosen.values())) if chosen else np.zeros((0, 6))

@@ -129,9 +129,8 @@ class Module:
 
     def _pin(self, suffix):
         """The C name of the pin <module>.<suffix>, or NULL when the module has none."""
-        name = f"{self.routine}.{suffix}".encode()
-        value = ffi.new("double *")
-        return ffi.new("char[]", name) if _hal().kingen_hal_get(name, value) == 0 else ffi.NULL
+        name = f"{self.routine}.{suffix}"
+        return ffi.new("char[]", name.encode()) if self.parameter(name) is not None else ffi.NULL
 
     def reset_host(self):
         pass

@@ -16,7 +16,7 @@ from ...reference import solve
 from ...render import template
 from .build import build_module
 from ...units import LENGTH_UNITS, robot_in_units
-from .render import TEMPLATES, module_name, render, view_model
+from .render import TEMPLATES, module_name, source_name, view_model
 
 
 def _number(value):
@@ -46,25 +46,18 @@ def sheet_view(robot, units="mm"):
                     "upper": _number(upper[index] * scale) if limited else "",
                     "travel": f"[{_number(lower[index] * scale)}, {_number(upper[index] * scale)}]" if limited else "-",
                     "home": _exact(joints[index] * (scale if revolute else 1.0 / LENGTH_UNITS[units]))})
-    parameters = [{**parameter, "value": _exact(_value(machine, parameter))} for parameter in view["parameters"]]
+    parameters = [{**parameter, "value": _exact(parameter["value"])} for parameter in view["parameters"]]
     position = home[:3] / LENGTH_UNITS[units]
     return {**view, "ini_joints": ini, "parameters": parameters, "version": __version__,
             "joint_count": robot.dof,
             "home_text": " ".join(_exact(value) for value in (*position, *home[3:])), "description": robot.description}
 
 
-def _value(robot, parameter):
-    """The robot file's value of a geometry parameter '<joint>.<field>[.x|.y|.z]'."""
-    joint, field, *axis = parameter["name"].split(".")
-    value = getattr(robot.limbs[robot.joint_names.index(joint)], field.replace("-", "_"))
-    return value["xyz".index(axis[0])] if axis else value
-
-
 def render_package(robot, units="mm"):
     """The text files of the package as {file name: text}."""
     view = sheet_view(robot, units)
     module = module_name(robot)
-    return {**render(robot, units), f"{module}.hal": template("module.hal.j2", TEMPLATES).render(**view),
+    return {source_name(robot): template("kins.c.j2", TEMPLATES).render(**view), f"{module}.hal": template("module.hal.j2", TEMPLATES).render(**view),
             f"{module}.ini": template("module.ini.j2", TEMPLATES).render(**view),
             "SETUP.md": template("setup_sheet.md.j2", TEMPLATES).render(**view)}
 

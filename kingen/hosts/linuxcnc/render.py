@@ -54,8 +54,7 @@ def robot_problem(robot):
     if robot.dof != 6 and not translating(robot):
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
-    names = [f"{module_name(robot)}.{name}" for name in
-             (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot, robot_view(robot)["models"])))]
+    names = [f"{module_name(robot)}.{name}" for name in (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot)))]
     longest = max(names, key=len)
     if len(longest) > HAL_NAME_LEN:
         return (f"name: the HAL name '{longest}' has {len(longest)} characters; LinuxCNC takes at most "
@@ -73,20 +72,21 @@ def check_robot(robot):
         raise KingenError(f"{robot.path}:{robot.line_of(field)}: {field}: {text}")
 
 
-def _parameters(robot, tables):
-    """HAL parameters of the geometry: '<joint>.<field>[.x|.y|.z]' -> the member in kingen_hal."""
-    parameters = []
-    for table in tables:
-        for number, row in enumerate(table["rows"]):
-            limb = robot.limbs[row["joint"]]
-            for field in limb.length_fields:
-                member = f"{table['name']}s[{number}].{field}"
-                base = f"{robot.joint_names[row['joint']]}.{field.replace('_', '-')}"
-                if isinstance(getattr(limb, field), (list, tuple)):
-                    parameters += [{"name": f"{base}.{axis}", "member": f"{member}[{index}]"}
-                                   for index, axis in enumerate("xyz")]
-                else:
-                    parameters.append({"name": base, "member": member})
+def _parameters(robot):
+    """HAL parameters of the geometry, one per number of a length field: {name
+    '<joint>.<field>[.x|.y|.z]', member (in kingen_hal), value (the robot's, in its units)}."""
+    parameters, rows = [], {}
+    for joint, limb in enumerate(robot.limbs):
+        number = rows[limb.model] = rows.get(limb.model, -1) + 1  # the limb's row in its model's table
+        for field in limb.length_fields:
+            member = f"{limb.model}s[{number}].{field}"
+            base = f"{robot.joint_names[joint]}.{field.replace('_', '-')}"
+            value = getattr(limb, field)
+            if isinstance(value, (list, tuple)):
+                parameters += [{"name": f"{base}.{axis}", "member": f"{member}[{index}]", "value": value[index]}
+                               for index, axis in enumerate("xyz")]
+            else:
+                parameters.append({"name": base, "member": member, "value": value})
     return parameters
 
 
@@ -126,7 +126,7 @@ def view_model(robot, units="mm"):
         "jacobian": True,
         "direct_index_min": c_double(robot.direct_index_min) if robot.direct_index_min is not None else None,
         "singular_tolerance": c_double(SINGULAR_TOLERANCE),
-        "parameters": _parameters(robot, view["models"]),
+        "parameters": _parameters(robot),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": c_double(TOLERANCE),
         "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),

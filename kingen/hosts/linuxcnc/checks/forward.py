@@ -24,9 +24,9 @@ SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
 roll pitch yaw (for the free coordinates)."""
 
 
-def regular_poses(robot, routine, poses):
+def regular_poses(robot, poses):
     """The poses (m, 6) (mm, degrees) of ``poses`` that are reachable and regular at the
-    routine's posture, with their reference joints (m, dof), mm and radians."""
+    robot's one posture (a one-posture view), with their reference joints (m, dof), mm and radians."""
     t6 = t6_from_pose(poses)
     expected = solve(robot, t6)
     good = expected.warnings[:, 0] == WARNINGS["WARN_GOOD_SOLUTION"]
@@ -48,7 +48,7 @@ class Forward(VerifyCheck):
     def run(self, context):
         robot, module = context.robot, context.routine
         poses = pose_from_t6(context.tally.first[0][:FORWARD_POSES])
-        poses, joints = regular_poses(robot, module, poses)
+        poses, joints = regular_poses(robot, poses)
         if not len(poses):
             return [not_exercised("forward", "no regular, reachable pose among the sampled ones (the working "
                                              "posture is never regular in the verification region)")]
