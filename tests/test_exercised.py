@@ -115,3 +115,30 @@ def test_a_misspelt_key_is_named_with_the_key_it_resembles(tmp_path, capsys):
 def test_one_posture_is_one_posture(tmp_path, capsys):
     code, out, _ = run(capsys, "verify", "hexapod", "-o", tmp_path / "b", "--samples", "50")
     assert code == 0 and out.startswith("verify hexapod: 50 poses x 1 posture, ")
+
+
+def test_bad_host_settings_are_one_line_errors(tmp_path, capsys):
+    for argv, words in ((["--setp", "x"], "'x': give NAME=VALUE with a number"),
+                        (["--setp", "a=nan"], "'a=nan': give NAME=VALUE with a finite number"),
+                        (["--units", "furlong"], "Invalid value for '--units'"),
+                        (["--setp", "hexapodkins.no-such-pin=1"],
+                         "--setp hexapodkins.no-such-pin: the module has no such pin or parameter")):
+        code, _, err = run(capsys, "verify", "hexapod", "--host", "linuxcnc", "-o", tmp_path / "b", "--samples", "50",
+                           *argv)
+        assert code == 2 and words in err and err.count("\n") == 1, err
+        assert "Traceback" not in err
+    code, _, err = run(capsys, "build", "hexapod", "--units", "inch", "-o", tmp_path / "d")
+    assert code == 2 and err == "kingen: error: --units: host delmia takes no such setting\n"
+
+
+def test_a_library_kingen_did_not_build_has_its_definition_not_exercised(tmp_path, capsys):
+    from kingen.model import load_robot
+    from kingen.hosts import get_host
+    from kingen.verify import VerifyOptions, verify_library
+
+    host = get_host("linuxcnc")
+    robot = host.as_seen(load_robot("linear_delta"))
+    report = verify_library(robot, "/usr/lib/linuxcnc/modules/lineardeltakins.so", "lineardeltakins",
+                            VerifyOptions(samples=200), host=host)
+    definition = report.checks[0]
+    assert definition.name == "definition" and definition.status == "not exercised" and definition.passed

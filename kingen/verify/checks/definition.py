@@ -2,6 +2,7 @@
 information carries; :mod:`kingen.library_info`), read from its bytes, never loaded."""
 
 from ...library_info import build_info
+from ...report import not_exercised
 from .base import Check, VerifyCheck
 
 
@@ -10,8 +11,8 @@ def definition_check(robot, library):
     carries), from another one, or not by kingen (then the check passes, saying so)."""
     info = build_info(library)
     if info is None:
-        return Check("definition", True, "the library carries no kingen build information (not built by kingen): "
-                                         "its definition cannot be traced")
+        return not_exercised("definition", "the library carries no kingen build information (not built by "
+                                           "kingen): its definition cannot be traced")
     if info.get("sha256") == robot.sha256:
         return Check("definition", True, f"built by kingen {info.get('kingen', '?')} from this robot file "
                                          f"(sha256 {robot.sha256[:16]})")
