@@ -76,10 +76,22 @@ def small_crank_beside_legs():
             "verification": {"home": [0.0, 0.0, 1.875, 0.0, 0.0, 0.0], "range": [2.0] * 3 + [0.0] * 3}}
 
 
+def long_rail_beside_its_singular_band():
+    """Found by this test once verify added poses beside the warnings' boundaries: a 20 m link
+    just outside its singular band, where kingen's own routine and the reference differed by
+    1.8e-9 mm: the square root is as ill-conditioned there as inside the band, so the
+    conditioning bound now holds there too."""
+    rail = {"model": "rail", "rail_point": [0.0, 0.0, 0.0], "direction": [0.7071067811865475, 0.7071067811865475, 0.0],
+            "carriage_offset": [0.0, 0.0, 0.0], "platform_point": [0.0, 0.0, 0.0], "link_length": 20000.0}
+    return {"name": "fuzz", "description": "A random robot within the stated geometry range.", "limbs": [rail],
+            "verification": {"home": [0.0] * 6, "range": [2000.0] * 3 + [0.0] * 3}}
+
+
 @settings(FUZZ, max_examples=15)
 @given(definition=robots())
 @example(definition=coincident_platform_points())
 @example(definition=small_crank_beside_legs())
+@example(definition=long_rail_beside_its_singular_band())
 def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition):
     folder = tmp_path_factory.mktemp("fuzz")
     path = folder / "fuzz.yaml"

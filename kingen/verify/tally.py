@@ -18,14 +18,20 @@ UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 WARNING_KINDS = tuple(WARNINGS)
 
 
-def singular_bounds(robot, reference_solution):
-    """(n, dof) error bound for joints in their singular band; 0 where the fixed limits apply."""
+def singular_bounds(robot, reference_solution, fixed=None):
+    """(n, dof) error bound for ill-conditioned joints; 0 where the fixed limits apply. A joint
+    is ill-conditioned in its limb's singular band, and wherever its conditioning bound
+    CONDITIONING_FACTOR * scale / sqrt(|D|) exceeds its fixed bound ``fixed`` ((dof,), mm or
+    rad; when given): just outside the band of a long link the square root is as
+    ill-conditioned as inside it, so the bound does not drop there."""
     radicands = reference_solution.radicands
     scale = np.array([limb.singular_scale() for limb in robot.limbs])
     in_band = np.abs(radicands) <= SINGULAR_TOLERANCE + WARNING_BAND
     eps = np.finfo(float).eps
     with np.errstate(invalid="ignore"):
         bound = CONDITIONING_FACTOR * scale / np.sqrt(np.maximum(np.abs(radicands), eps))
+    if fixed is not None:
+        in_band = in_band | (bound > fixed)
     return np.where(in_band, bound, 0.0)
 
 
@@ -113,7 +119,7 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected):
     columns = compared_columns(robot, calls, expected)
     errors = joint_errors(columns.plugin, columns.reference, revolute)
     errors = np.where(~columns.reference_solves[:, None, :] & np.isfinite(columns.plugin), 0.0, errors)
-    bounds = singular_bounds(robot, expected)[:, :, None]
+    bounds = singular_bounds(robot, expected, np.where(revolute, report.tolerance_rad, report.tolerance_mm))[:, :, None]
     singular = np.broadcast_to(bounds > 0, errors.shape)
     report.singular_entries += int(np.count_nonzero(bounds)) * robot.postures
     report.singular_out_of_bound += columns.postures_of(singular & (errors > bounds))
