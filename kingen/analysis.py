@@ -1,136 +1,166 @@
-"""Where the machine works: tilt limits, single-axis sweeps and workspace slices of one
+"""Where the machine works: tilt limits, single-coordinate sweeps and workspace slices of one
 posture (the robot's working posture), each pose judged by what stops it.
 
-Causes, in this order: ``unreachable`` (a limb has no solution, or is at its own
-singularity), ``joint_limits``, ``direct_singularity`` (the direct index at most the robot's
-``direct_index_min``, or, with or without one, below ``CROSSING`` of its value at home: a
-crossing of a direct singularity, never "no limit"), ``collision`` (two passive links, or two cranks, closer than their
-radii allow: ``collision:`` in the robot file), else ``none``. Poses are mm and degrees;
-tilts turn about horizontal axes through the home point. Everything is the numpy
-reference's: no plugin runs here.
+Only the coordinates the robot can move are analysed (``forward.free``; all six for six
+limbs): a delta is swept in x, y, z and never tilted. Causes, in this order:
+``unreachable`` (a limb has no solution, or is at its own singularity), ``joint_limits``,
+``direct_singularity`` (the direct index at most the robot's ``direct_index_min``; or, with
+or without one, a crossing: the index below ``CROSSING`` of its value at home, or the sign
+of the closure Jacobian's determinant over the free coordinates differing from home's),
+``collision`` (:mod:`kingen.collision`, with the robot file's ``collision:`` radii), else
+``none``. Poses are mm and degrees. Everything is the numpy reference's: no plugin runs here.
 """
 
-from dataclasses import replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from .routine import WARNINGS
+from .collision import MODELS, clearances
 from .conventions import matrix_from_pose, t6_from_matrix
+from .forward import COORDINATES, closure_derivative
 from .reference import solve
+from .routine import WARNINGS
 from .singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
 
 CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none")
-TILT_AZIMUTHS = tuple(range(0, 360, 15))
-TILT_MAX = 60.0
-TILT_STEP = 0.1
-SWEEP_ANGLES = np.arange(-60.0, 60.5, 1.0)
+TILT_CONVENTIONS = {
+    "axis": "axis: the platform turned by the tilt about the horizontal axis (cos a, sin a, 0) through home",
+    "euler": "euler: roll = tilt cos a, pitch = tilt sin a (R = Rz(yaw) Ry(pitch) Rx(roll)), "
+             "the 6-RUS thesis's polar graph",
+}
+SWEEP_STEP_DEG = 1.0
 SWEEP_STEPS = 61
 SLICE_CELLS = 81
-SLICE_SPAN = 3.0
-"""Slices cover the verification region's position range times this, around home."""
+SLICE_RAYS = 32
+SLICE_DOUBLINGS = 12
+"""A slice's window is the workspace's extent in its plane: along SLICE_RAYS rays from home,
+doubling from the verification range up to 2**SLICE_DOUBLINGS times it, then bisected."""
 CROSSING = 0.05
 """A direct index below this fraction of its value at home stops a pose as a direct
 singularity even where the robot file sets no ``direct_index_min``."""
 
 
-def home_index(robot, posture):
-    """The direct index (mm) of ``posture`` at the verification home, or NaN."""
-    return float(evaluate(robot, t6_from_matrix(matrix_from_pose(np.array([robot.verification.home]))), posture,
-                          np.nan)["direct_index_mm"][0])
+@dataclass(frozen=True)
+class Settings:
+    """What an analysis is asked for: the tilt convention (TILT_CONVENTIONS), the tilt step,
+    azimuth step and cap (degrees; a tilt's limit is the largest multiple of the step up to
+    which every step passes, without refinement), and the collision model (collision.MODELS)."""
+
+    tilt_convention: str = "axis"
+    tilt_step_deg: float = 0.1
+    azimuth_step_deg: float = 15.0
+    tilt_max_deg: float = 90.0
+    collision: str = "segments"
+
+    @property
+    def azimuths(self):
+        return np.arange(0.0, 360.0 - 1e-9, self.azimuth_step_deg)
+
+    @property
+    def tilts(self):
+        return np.arange(round(self.tilt_max_deg / self.tilt_step_deg) + 1) * self.tilt_step_deg
 
 
-def evaluate(robot, t6, posture, at_home=None):
+@dataclass(frozen=True)
+class Home:
+    """A posture's values at the verification home: direct index (mm, NaN: not available)
+    and the sign of the closure Jacobian's determinant (0: singular or unreachable)."""
+
+    index_mm: float
+    det_sign: float
+
+
+def free_coordinates(robot):
+    """Indices into COORDINATES of what the robot can move (forward.free; all six otherwise)."""
+    return [COORDINATES.index(name) for name in (robot.forward_free or COORDINATES)]
+
+
+def home_values(robot, posture, settings=Settings()):
+    """The posture's Home at the verification home."""
+    evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(np.array([robot.verification.home]))), posture,
+                         settings, Home(np.nan, 0.0))
+    return Home(float(evaluated["direct_index_mm"][0]), float(evaluated["det_sign"][0]))
+
+
+def evaluate(robot, t6, posture, settings=Settings(), home=None):
     """Per pose of t6 (n, 4, 4), for ``posture``: a dict of arrays: cause (n,) index into
-    CAUSES, warning, direct_index_mm (NaN: not available or unreachable), min_inverse_index,
-    min_rod_distance_mm and min_crank_distance_mm (clearances; NaN when not configured or
-    not applicable), joints (n, dof). ``at_home``: the posture's direct index at home
-    (home_index; computed when not given) for the crossing rule."""
-    if at_home is None:
-        at_home = home_index(robot, posture) if robot.has_direct_index else np.nan
+    CAUSES, warning, direct_index_mm (NaN: not available or unreachable), det_sign (sign of
+    the closure Jacobian's determinant over the free coordinates; 0 where unreachable),
+    min_inverse_index, min_rod_distance_mm and min_crank_distance_mm (clearances; NaN when
+    not configured or not applicable), joints (n, dof). ``home``: the posture's Home
+    (computed when not given) for the crossing rules."""
+    home = home_values(robot, posture, settings) if home is None else home
     plain = replace(robot, direct_index_min=None)
     expected = solve(plain, t6)
     joints = expected.joints[:, :, posture]
     warning = expected.warnings[:, posture].copy()
-    count = len(t6)
-    index = np.full(count, np.nan)
+    index = np.full(len(t6), np.nan)
     reachable = warning != WARNINGS["WARN_UNREACHABLE"]
     if robot.has_direct_index and np.any(reachable):
         wrenches, _ = limb_wrenches(plain, expected.points[reachable], expected.branch_joints[reachable],
                                     with_transmissions=False)
         index[reachable] = direct_index_of_entries(posture_gram_entries(plain, wrenches)[:, :, posture],
                                                    robot.direct_index_min)
-    rods, cranks = clearances(robot, expected.points, joints)
-    cause = np.full(count, CAUSES.index("none"))
+    sign = np.where(reachable, _det_sign(robot, t6, expected.points, joints), 0.0)
+    rods, cranks = clearances(robot, expected.points, joints, settings.collision)
+    threshold = robot.direct_index_min if robot.direct_index_min is not None else -1.0
+    crossed = (index < CROSSING * home.index_mm) | ((home.det_sign != 0) & (sign != home.det_sign) & reachable)
+    cause = np.full(len(t6), CAUSES.index("none"))
     candidates = [
         ("collision", (rods < 0.0) | (cranks < 0.0)),
-        ("direct_singularity", (index <= (robot.direct_index_min if robot.direct_index_min is not None else -1.0))
-         | (index < CROSSING * at_home)),
+        ("direct_singularity", (index <= threshold) | crossed),
         ("joint_limits", warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]),
         ("unreachable", ~reachable | (np.min(np.abs(expected.radicands), axis=1) <= 1e-5)),
     ]
     for name, mask in candidates:  # the last assigned wins: unreachable over limits over ...
         cause = np.where(mask, CAUSES.index(name), cause)
-    return {"cause": cause, "warning": warning, "direct_index_mm": index,
+    return {"cause": cause, "warning": warning, "direct_index_mm": index, "det_sign": sign,
             "min_inverse_index": np.where(np.isfinite(expected.min_inverse_index), expected.min_inverse_index, np.nan),
             "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints}
 
 
-def clearances(robot, points, joints):
-    """(rods, cranks) (n,): the least clearance (mm) between any two passive links and
-    between any two crank segments, as cylinders of the robot's ``collision`` radii; NaN
-    where the robot declares no radii or has fewer than two such segments."""
-    count = len(points)
-    rods = np.full(count, np.nan)
-    cranks = np.full(count, np.nan)
-    if robot.collision is None:
-        return rods, cranks
-    links, link_radii, arms, arm_radii = [], [], [], []
+def _det_sign(robot, t6, points, joints):
+    """Sign of det d(closure residuals)/d(free coordinates) (n,): over the platform twist
+    for six limbs (free of any angle convention), over the free pose coordinates otherwise."""
+    wrenches = np.empty(points.shape[:2] + (6,))
     for index, limb in enumerate(robot.limbs):
-        start = limb.base_side_point(points[:, index], joints[:, index])
-        links.append((start, points[:, index]))
-        link_radii.append(robot.collision.get(limb.passive_radius, 0.0))
-        segment = limb.actuator_segment(joints[:, index])
-        if segment is not None:
-            arms.append(segment)
-            arm_radii.append(robot.collision.get("crank_radius", 0.0))
-    return _least_clearance(links, link_radii, rods), _least_clearance(arms, arm_radii, cranks)
+        direction = limb.force_direction(points[:, index], joints[:, index])
+        wrenches[:, index] = np.concatenate([direction, np.cross(points[:, index], direction)], axis=-1)
+    free = free_coordinates(robot)
+    if len(free) == 6:
+        square = wrenches
+    else:
+        square = closure_derivative(wrenches, _poses_of(t6), free)
+    with np.errstate(invalid="ignore"):
+        return np.nan_to_num(np.sign(np.linalg.det(square)))
 
 
-def _least_clearance(segments, radii, empty):
-    best = empty.copy()
-    for i in range(len(segments)):
-        for j in range(i + 1, len(segments)):
-            distance = segment_distance(*segments[i], *segments[j]) - radii[i] - radii[j]
-            best = np.fmin(best, distance)
-    return best
+def _poses_of(t6):
+    """Poses (n, 6) mm and radians of T6 (n, 4, 4), R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
+    pitch = np.arcsin(np.clip(-rotation[:, 2, 0], -1.0, 1.0))
+    roll = np.arctan2(rotation[:, 2, 1], rotation[:, 2, 2])
+    yaw = np.arctan2(rotation[:, 1, 0], rotation[:, 0, 0])
+    return np.column_stack([t6[:, 3, :3], roll, pitch, yaw])
 
 
-def segment_distance(p1, q1, p2, q2):
-    """Distances (n,) between segments p1-q1 and p2-q2 (n, 3 each): closest points clamped
-    to both segments (Ericson, Real-Time Collision Detection, 5.1.9), vectorised."""
-    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a, e = np.sum(d1 * d1, -1), np.sum(d2 * d2, -1)
-    f, c, b = np.sum(d2 * r, -1), np.sum(d1 * r, -1), np.sum(d1 * d2, -1)
-    denominator = a * e - b * b
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(denominator > 1e-12 * a * e, np.clip((b * f - c * e) / denominator, 0.0, 1.0), 0.0)
-        t = np.where(e > 0, (b * s + f) / e, 0.0)
-        s = np.where(t < 0.0, np.where(a > 0, np.clip(-c / a, 0.0, 1.0), 0.0), np.where(
-            t > 1.0, np.where(a > 0, np.clip((b - c) / a, 0.0, 1.0), 0.0), s))
-    t = np.clip(t, 0.0, 1.0)
-    return np.linalg.norm(p1 + d1 * s[:, None] - (p2 + d2 * t[:, None]), axis=-1)
-
-
-def tilted_t6(robot, azimuths, angles):
-    """T6 (len(azimuths) * len(angles), 4, 4): home turned by each angle (degrees) about each
-    horizontal axis (cos a, sin a, 0) through the home point."""
-    home = matrix_from_pose(robot.verification.home)
+def tilted_t6(robot, azimuths, tilts, convention="axis"):
+    """T6 (len(azimuths) * len(tilts), 4, 4): home tilted by each tilt (degrees) towards
+    each azimuth (degrees) in ``convention`` (TILT_CONVENTIONS)."""
+    home = np.array(robot.verification.home, dtype=float)
+    if convention == "euler":
+        poses = np.tile(home, (len(azimuths) * len(tilts), 1))
+        a, k = np.meshgrid(np.radians(azimuths), tilts, indexing="ij")
+        poses[:, 3] += (k * np.cos(a)).ravel()
+        poses[:, 4] += (k * np.sin(a)).ravel()
+        return t6_from_matrix(matrix_from_pose(poses))
+    start = matrix_from_pose(home)
     matrices = []
     for azimuth in np.radians(azimuths):
         axis = np.array([np.cos(azimuth), np.sin(azimuth), 0.0])
-        for angle in np.radians(angles):
-            turned = home.copy()
-            turned[:3, :3] = _rotation(axis, angle) @ home[:3, :3]
+        for angle in np.radians(tilts):
+            turned = start.copy()
+            turned[:3, :3] = _rotation(axis, angle) @ start[:3, :3]
             matrices.append(turned)
     return t6_from_matrix(np.array(matrices))
 
@@ -140,42 +170,50 @@ def _rotation(axis, angle):
     return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
 
 
-def tilt_limits(robot, posture):
-    """[{azimuth_deg, max_tilt_deg, cause, min_direct_index_mm}]: the largest positive tilt
-    before the posture stops, to TILT_STEP degrees; cause 'none' when nothing stops it within
-    TILT_MAX; the least direct index along the tilt up to where it stops (None: not available)."""
-    angles = np.arange(0.0, TILT_MAX + TILT_STEP / 2, TILT_STEP)
-    evaluated = evaluate(robot, tilted_t6(robot, TILT_AZIMUTHS, angles), posture)
-    causes = evaluated["cause"].reshape(len(TILT_AZIMUTHS), len(angles))
-    indices = evaluated["direct_index_mm"].reshape(len(TILT_AZIMUTHS), len(angles))
+def can_tilt(robot):
+    """Whether the platform can tilt: roll and pitch are both free coordinates."""
+    return {3, 4} <= set(free_coordinates(robot))
+
+
+def tilt_limits(robot, posture, settings=Settings(), home=None):
+    """[{azimuth_deg, max_tilt_deg, cause, min_direct_index_mm}] per azimuth: the largest
+    multiple of the tilt step up to which every step passes; cause 'none' when nothing stops
+    it up to the cap; the least direct index up to where it stops (None: not available).
+    Empty when the platform cannot tilt."""
+    if not can_tilt(robot):
+        return []
+    azimuths, tilts = settings.azimuths, settings.tilts
+    evaluated = evaluate(robot, tilted_t6(robot, azimuths, tilts, settings.tilt_convention), posture, settings, home)
+    causes = evaluated["cause"].reshape(len(azimuths), len(tilts))
+    indices = evaluated["direct_index_mm"].reshape(len(azimuths), len(tilts))
     limits = []
-    for azimuth, row, index in zip(TILT_AZIMUTHS, causes, indices):
+    for azimuth, row, index in zip(azimuths, causes, indices):
         stops = np.nonzero(row != CAUSES.index("none"))[0]
-        reached = index[:(int(stops[0]) if len(stops) else len(index))]
-        least = float(np.nanmin(reached)) if np.any(np.isfinite(reached)) else None
-        if not len(stops):
-            limits.append({"azimuth_deg": float(azimuth), "max_tilt_deg": TILT_MAX, "cause": "none",
-                           "min_direct_index_mm": least})
-        else:
-            first = int(stops[0])
-            limits.append({"azimuth_deg": float(azimuth), "max_tilt_deg": round(float(angles[max(first - 1, 0)]), 1)
-                           if first else 0.0, "cause": CAUSES[row[first]], "min_direct_index_mm": least})
+        first = int(stops[0]) if len(stops) else len(row)
+        reached = index[:first]
+        limits.append({"azimuth_deg": round(float(azimuth), 6),
+                       "max_tilt_deg": round(float(tilts[max(first - 1, 0)]), 6),
+                       "cause": CAUSES[row[first]] if len(stops) else "none",
+                       "min_direct_index_mm": float(np.nanmin(reached)) if np.any(np.isfinite(reached)) else None})
     return limits
 
 
-def sweeps(robot, posture):
-    """{roll, pitch, yaw, x, y, z: [entries]}: single-coordinate sweeps from home (angles
-    -60 to 60 degrees, positions over the verification range)."""
-    home = np.array(robot.verification.home, dtype=float)
+def sweeps(robot, posture, settings=Settings(), home=None):
+    """{coordinate: [entries]} for each free coordinate: sweeps from home, angles over
+    +-tilt_max in SWEEP_STEP_DEG steps, positions over +-the verification range."""
+    start = np.array(robot.verification.home, dtype=float)
     result = {}
-    for axis, name in enumerate(("x", "y", "z", "roll", "pitch", "yaw")):
-        values = SWEEP_ANGLES + home[axis] if axis >= 3 else home[axis] + np.linspace(
-            -1.0, 1.0, SWEEP_STEPS) * max(robot.verification.range[axis], 1.0)
-        poses = np.tile(home, (len(values), 1))
+    for axis in sorted(free_coordinates(robot), key=lambda axis: (axis < 3, axis)):
+        if axis >= 3:
+            values = start[axis] + np.arange(-settings.tilt_max_deg, settings.tilt_max_deg + SWEEP_STEP_DEG / 2,
+                                             SWEEP_STEP_DEG)
+        else:
+            values = start[axis] + np.linspace(-1.0, 1.0, SWEEP_STEPS) * max(robot.verification.range[axis], 1.0)
+        poses = np.tile(start, (len(values), 1))
         poses[:, axis] = values
-        evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture)
-        result[name] = [_entry(robot, float(value), evaluated, i) for i, value in enumerate(values)]
-    return {name: result[name] for name in ("roll", "pitch", "yaw", "x", "y", "z")}
+        evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)
+        result[COORDINATES[axis]] = [_entry(robot, float(value), evaluated, i) for i, value in enumerate(values)]
+    return result
 
 
 def _entry(robot, value, evaluated, i):
@@ -191,49 +229,97 @@ def _entry(robot, value, evaluated, i):
             "joints": [float(v) for v in evaluated["joints"][i] * scale]}
 
 
-def slices(robot, posture):
-    """{'xy', 'xz'}: grids at home orientation, each {axes, first, second, causes} with
-    causes (cells, cells) indices into CAUSES (x-y at home z, x-z at home y)."""
-    home = np.array(robot.verification.home, dtype=float)
+def workspace_extent(robot, posture, axes, settings=Settings(), home=None):
+    """(low, high, capped) per axis of ``axes`` (two position indices): the bounding box (mm)
+    of the workspace at home orientation in their plane, found along SLICE_RAYS rays from
+    home (a pose is inside while no limb is unreachable and no joint limit is passed);
+    ``capped``: some ray was still inside at the search's end."""
+    start = np.array(robot.verification.home, dtype=float)
+    angles = np.linspace(0.0, 2 * np.pi, SLICE_RAYS, endpoint=False)
+    directions = np.column_stack([np.cos(angles), np.sin(angles)])
+    scale = max(max(robot.verification.range[axis] for axis in axes), 1.0)
+
+    def inside(distances):
+        poses = np.tile(start, (SLICE_RAYS, 1))
+        for column, axis in enumerate(axes):
+            poses[:, axis] += directions[:, column] * distances
+        cause = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)["cause"]
+        return (cause != CAUSES.index("unreachable")) & (cause != CAUSES.index("joint_limits"))
+
+    low, high = np.zeros(SLICE_RAYS), np.full(SLICE_RAYS, scale)
+    searching = np.ones(SLICE_RAYS, dtype=bool)
+    for _ in range(SLICE_DOUBLINGS):
+        moved = searching & inside(high)
+        low, high = np.where(moved, high, low), np.where(moved, 2 * high, high)
+        searching = moved
+    capped = bool(np.any(searching))
+    for _ in range(30):
+        middle = (low + high) / 2
+        good = inside(middle)
+        low, high = np.where(good, middle, low), np.where(good, high, middle)
+    reach = np.where(searching, low, high)
+    points = directions * reach[:, None]
+    return [(float(start[axis] + points[:, column].min()), float(start[axis] + points[:, column].max()))
+            for column, axis in enumerate(axes)], capped
+
+
+def slices(robot, posture, settings=Settings(), home=None):
+    """{'xy', 'xz'} for each plane of two free position coordinates: grids at home
+    orientation over the workspace's extent in that plane plus a tenth (equal cell size on
+    both axes), each {axes, first, second, causes, extent_mm, capped}."""
+    start = np.array(robot.verification.home, dtype=float)
+    free = set(free_coordinates(robot))
     result = {}
-    for name, (first, second) in (("xy", (0, 1)), ("xz", (0, 2))):
-        spans = [home[axis] + np.linspace(-1.0, 1.0, SLICE_CELLS) * SLICE_SPAN * max(robot.verification.range[axis], 1.0)
-                 for axis in (first, second)]
+    for name, axes in (("xy", (0, 1)), ("xz", (0, 2))):
+        if not set(axes) <= free:
+            continue
+        extent, capped = workspace_extent(robot, posture, axes, settings, home)
+        margins = [0.1 * (high - low) + 1e-9 for low, high in extent]
+        widest = max(high - low + 2 * margin for (low, high), margin in zip(extent, margins))
+        cell = widest / (SLICE_CELLS - 1)
+        spans = [np.arange(low - margin, high + margin + cell / 2, cell) for (low, high), margin in zip(extent, margins)]
         grid_first, grid_second = np.meshgrid(*spans, indexing="ij")
-        poses = np.tile(home, (grid_first.size, 1))
-        poses[:, first], poses[:, second] = grid_first.ravel(), grid_second.ravel()
-        causes = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture)["cause"]
-        result[name] = {"axes": ["xyz"[first], "xyz"[second]], "first": spans[0].tolist(),
-                        "second": spans[1].tolist(), "causes": causes.reshape(grid_first.shape).tolist()}
+        poses = np.tile(start, (grid_first.size, 1))
+        poses[:, axes[0]], poses[:, axes[1]] = grid_first.ravel(), grid_second.ravel()
+        causes = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)["cause"]
+        result[name] = {"axes": [COORDINATES[axes[0]], COORDINATES[axes[1]]], "first": spans[0].tolist(),
+                        "second": spans[1].tolist(), "causes": causes.reshape(grid_first.shape).tolist(),
+                        "extent_mm": [list(pair) for pair in extent], "capped": capped}
     return result
 
 
-def analyze(robot, posture=None, progress=None):
-    """The analysis of ``posture`` (default: the robot's working posture, else 0) as JSON-ready
-    data: {robot, posture, available, tilt_limits, sweeps, slices}."""
+def analyze(robot, posture=None, settings=Settings(), progress=None):
+    """The analysis of ``posture`` (default: the robot's working posture) as JSON-ready data:
+    {robot, posture, available, settings, tilt_limits, sweeps, slices, direct_index_min_mm}."""
     posture = robot.working_posture if posture is None else posture
     step = progress or (lambda text: None)
+    home = home_values(robot, posture, settings)
     step("tilt limits")
-    limits = tilt_limits(robot, posture)
+    limits = tilt_limits(robot, posture, settings, home)
     step("sweeps")
-    swept = sweeps(robot, posture)
+    swept = sweeps(robot, posture, settings, home)
     step("workspace slices")
-    sliced = slices(robot, posture)
+    sliced = slices(robot, posture, settings, home)
+    free = [COORDINATES[axis] for axis in free_coordinates(robot)]
     available = {
         "direct_index": "available" if robot.has_direct_index else
         f"not available: {robot.dof} limbs (the constraints that complete the platform are not modelled)",
         "direct_singularity": "available" if robot.direct_index_min is not None else
-        "not available: no singularity: {direct_index_min} in the robot file",
+        "crossings only: no singularity: {direct_index_min} in the robot file",
         "collision": "available" if robot.collision is not None else
         "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file",
+        "tilt_limits": "available" if limits else f"not analysed: the platform cannot tilt (free: {', '.join(free)})",
+        "slices": "available" if sliced else
+        f"not analysed: fewer than two free position coordinates (free: {', '.join(free)})",
     }
-    settings = {"tilt_convention": "axis: rotations about (cos a, sin a, 0) through home",
-                "azimuths_deg": list(TILT_AZIMUTHS), "tilt_step_deg": TILT_STEP, "tilt_max_deg": TILT_MAX,
-                "sweep_angles_deg": [float(SWEEP_ANGLES[0]), float(SWEEP_ANGLES[-1])],
-                "crossing_fraction": CROSSING, "direct_index_at_home_mm": _finite_or_none(home_index(robot, posture))
-                if robot.has_direct_index else None,
-                "collision": "segments: every pair of passive links and of cranks, cranks at their angle"}
-    return {"robot": robot.name, "posture": posture, "available": available, "settings": settings,
+    described = {**asdict(settings), "tilt_convention": TILT_CONVENTIONS[settings.tilt_convention],
+                 "collision": MODELS[settings.collision], "free_coordinates": free,
+                 "azimuths": len(settings.azimuths) if limits else 0, "tilt_steps": len(settings.tilts),
+                 "sweep_angle_step_deg": SWEEP_STEP_DEG, "sweep_position_steps": SWEEP_STEPS,
+                 "slice_cells": SLICE_CELLS, "slice_rays": SLICE_RAYS,
+                 "crossing_fraction": CROSSING, "crossing_sign_of_det_j": True,
+                 "direct_index_at_home_mm": _finite_or_none(home.index_mm), "det_j_sign_at_home": home.det_sign}
+    return {"robot": robot.name, "posture": posture, "available": available, "settings": described,
             "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min}
 
 

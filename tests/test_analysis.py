@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from conftest import require_tool
-from kingen.analysis import CAUSES, segment_distance
+from kingen.analysis import CAUSES
+from kingen.collision import segment_distance
 from kingen.cli import main
 
 SWEEP_KEYS = {"value", "warning", "direct_index_mm", "min_inverse_index", "min_rod_distance_mm",
@@ -51,7 +52,8 @@ def test_what_a_robot_lacks_is_said_not_failed(tmp_path, capsys):
     data = json.loads((tmp_path / "analysis.json").read_text())
     assert data["available"]["direct_index"].startswith("not available: 3 limbs")
     assert data["available"]["collision"].startswith("not available")
-    assert all(entry["direct_index_mm"] is None for entry in data["sweeps"]["roll"])
+    assert all(entry["direct_index_mm"] is None for entry in data["sweeps"]["z"])
+    assert data["tilt_limits"] == [] and data["available"]["tilt_limits"].startswith("not analysed")
 
 
 def test_the_report_in_a_real_browser(ceart_analysis, tmp_path):

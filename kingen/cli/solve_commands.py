@@ -211,22 +211,41 @@ def fk(robot, joints, more_joints, near, json_path):
               help="Output folder [default: build/<name>/analysis].")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Also write analysis.json to this file.")
-def analyze(robot, posture, out_dir, json_path):
+@click.option("--tilt-convention", type=click.Choice(["axis", "euler"]), default="axis", show_default=True,
+              help="axis: turn about the horizontal axis (cos a, sin a, 0); euler: roll = tilt cos a, "
+                   "pitch = tilt sin a (the 6-RUS thesis's polar graph).")
+@click.option("--tilt-step", type=click.FloatRange(min=0.001, max=90.0), default=0.1, show_default=True,
+              help="Tilt step (deg): a limit is the largest multiple of it up to which every step passes.")
+@click.option("--azimuth-step", type=click.FloatRange(min=0.5, max=180.0), default=15.0, show_default=True,
+              help="Step (deg) between the azimuths of the tilt directions.")
+@click.option("--tilt-max", type=click.FloatRange(min=0.1, max=180.0), default=90.0, show_default=True,
+              help="Largest tilt (deg) tried, and the range (+-) of the angle sweeps.")
+@click.option("--collision", "collision_model", type=click.Choice(["segments", "thesis"]), default="segments",
+              show_default=True, help="segments: every pair of links and cranks, cranks at their angle; thesis: "
+                                      "pairs 1-6, 2-3, 4-5, rods as infinite lines, cranks at angle 0.")
+def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azimuth_step, tilt_max,
+            collision_model):
     """Tilt limits, sweeps and workspace slices of one posture: analysis.json, PNG figures
     and a self-contained report.html."""
     import time
 
+    from ..analysis import Settings
     from ..analysis import analyze as run_analysis
+    from ..collision import model_problem
     from ..files import default_out_dir, write_atomic
     from ..figures import figures, report_html
 
     model = load_model(robot)
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
+    problem = model_problem(model, collision_model)
+    if problem:
+        raise click.BadParameter(problem, param_hint="--collision")
+    settings = Settings(tilt_convention, tilt_step, azimuth_step, tilt_max, collision_model)
     out_dir = out_dir or default_out_dir(model) / "analysis"
     start = time.perf_counter()
     with _steps(["tilt limits", "sweeps", "workspace slices", "figures"]) as step:
-        analysis = run_analysis(model, posture, progress=step)
+        analysis = run_analysis(model, posture, settings, progress=step)
         step("figures")
         pngs = figures(analysis)
     seconds = time.perf_counter() - start
@@ -236,14 +255,23 @@ def analyze(robot, posture, out_dir, json_path):
         write_atomic(out_dir / name, data)
     if json_path is not None:
         write_atomic(json_path, text)
-    limits = analysis["tilt_limits"]
-    about = {0: "X", 90: "Y", 180: "-X", 270: "-Y"}
-    summary = ", ".join(f"about {about[int(row['azimuth_deg'])]} {row['max_tilt_deg']} deg ({row['cause']})"
-                        for row in limits if int(row["azimuth_deg"]) in about)
-    say(f"analyze {model.name}, posture {analysis['posture']}: {summary}")
+    say(f"analyze {model.name}, posture {analysis['posture']}: {_tilt_summary(analysis, settings)}")
     for name in outputs:
         say(str(out_dir / name))
     say(f"in {seconds:.1f} s")
+
+
+def _tilt_summary(analysis, settings):
+    """One line: the least tilt over the azimuths and what stops it, with the settings behind it."""
+    limits = analysis["tilt_limits"]
+    if not limits:
+        return analysis["available"]["tilt_limits"]
+    least = min(limits, key=lambda row: row["max_tilt_deg"])
+    stopped = (f"stopped by {least['cause']}" if least["cause"] != "none"
+               else f"nothing stops it up to --tilt-max {settings.tilt_max_deg:g}")
+    return (f"least tilt {least['max_tilt_deg']:g} deg towards azimuth {least['azimuth_deg']:g} ({stopped}); "
+            f"{len(limits)} azimuths every {settings.azimuth_step_deg:g} deg, steps of {settings.tilt_step_deg:g} deg, "
+            f"{settings.tilt_convention} convention, {settings.collision} collisions")
 
 
 def _steps(names):
