@@ -5,26 +5,45 @@ fewer limbs declares them, ``forward: {free: [x, y, z]}``), the others held at t
 the search starts near. Each limb closes when its passive link has its length,
 |C_i(pose) - P_i(q_i)| = l_i(q_i) (docs/conventions.md); the residuals' derivative with
 respect to a platform twist is the limb's unit wrench, so Newton-Raphson needs no
-finite differences. A translating platform with three limbs is solved in closed form
-(three spheres: at most two poses). Poses are (x, y, z) in mm and (roll, pitch, yaw) in
-radians here; the command line shows degrees.
+finite differences. How every assembly mode is found, and said:
+
+- six limbs, every coordinate free: exhaustively, as the Stewart-Gough platform the joints
+  make (:mod:`kingen.sgp`: all complex solutions, the real ones polished by Newton);
+- a translating platform with three limbs: in closed form (three spheres: at most two poses);
+- otherwise not exhaustively: Newton from seeded starts over a stated region (``search``
+  times the verification region around home), which the output names.
+
+Poses are (x, y, z) in mm and (roll, pitch, yaw) in radians here; the command line shows
+degrees.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import sgp
 from .conventions import matrix_from_pose, t6_from_matrix
 from .reference import platform_points_in_base
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 ITERATIONS = 60
 STARTS = 256
-"""Deterministic starts drawn over twice the verification region (and the given ones)."""
+"""Deterministic starts drawn over SEARCH times the verification region (and the given ones)."""
+SEARCH = 2.0
 CONVERGED = 1e-13
 """Newton stops when no step exceeds this fraction of the robot's size (mm) or of a radian."""
 SAME_POSE_MM = 1e-6
 SAME_POSE_RAD = 1e-8
+
+
+@dataclass(frozen=True)
+class AssemblyModes:
+    """The poses the joints admit (``found``, nearest first), whether they are all of them
+    (``exhaustive``) and how that is known (``method``, one line)."""
+
+    found: list
+    exhaustive: bool
+    method: str
 
 
 @dataclass(frozen=True)
@@ -118,30 +137,64 @@ def free_mask(robot):
     return np.array([name in free for name in COORDINATES])
 
 
-def starts(robot, near):
+def starts(robot, near, search=SEARCH):
     """Deterministic starts: ``near`` first, the verification home, then seeded poses over
-    twice the verification region (mm, radians)."""
-    region = robot.verification
-    home = np.concatenate([region.home[:3], np.radians(region.home[3:])])
-    half = np.concatenate([region.range[:3], np.radians(region.range[3:])]) * 2.0
-    half[3:] = np.minimum(half[3:], np.pi)
+    ``search`` times the verification region around home (mm, radians; angles at most a half turn)."""
+    home, half = search_region(robot, search)
     rng = np.random.default_rng(20261122)
     drawn = home + rng.uniform(-1.0, 1.0, (STARTS, 6)) * half
     return np.vstack([near, home, drawn])
 
 
-def assemblies(robot, joints, near):
-    """Every assembly mode for ``joints`` (dof,) (mm, rad) as Assembly objects, nearest
-    first; ``near`` (6,) (mm, rad) also gives the values of coordinates that are not free."""
+def search_region(robot, search=SEARCH):
+    """(centre (6,), half widths (6,)) of the multi-start search, mm and radians."""
+    region = robot.verification
+    home = np.concatenate([region.home[:3], np.radians(region.home[3:])])
+    half = np.concatenate([region.range[:3], np.radians(region.range[3:])]) * search
+    half[3:] = np.minimum(half[3:], np.pi)
+    return home, half
+
+
+def assemblies(robot, joints, near, search=SEARCH):
+    """AssemblyModes for ``joints`` (dof,) (mm, rad); ``near`` (6,) (mm, rad) orders them and
+    gives the values of coordinates that are not free; ``search`` widens a multi-start search."""
     joints = np.asarray(joints, dtype=float)
     near = np.asarray(near, dtype=float)
     free = free_mask(robot)
+    exhaustive = True
     if robot.dof == 3 and list(free) == [True, True, True, False, False, False]:
         candidates = _translation_closed_form(robot, joints, near)
+        method = "exhaustive: closed form (the platform point on three spheres: at most 2 poses)"
+    elif sgp.applies(robot, free):
+        solutions = sgp.solve_all(robot, joints)
+        candidates = solutions.candidates
+        exhaustive = solutions.failed == 0
+        method = (f"{'exhaustive' if exhaustive else 'not exhaustive'}: {sgp.COMPLEX_SOLUTIONS} paths tracked from a "
+                  f"generic Stewart-Gough platform to the one these joints make: {solutions.finite} complex "
+                  f"solutions, {solutions.infinite} at infinity, {solutions.failed} lost")
     else:
-        begin = starts(robot, near)
-        begin[:, ~free] = near[~free]
-        candidates, _ = newton(robot, begin, np.tile(joints, (len(begin), 1)), free)
+        exhaustive, candidates, method = _multi_start(robot, joints, near, free, search)
+    found = _polished(robot, candidates, joints, near, free)
+    if exhaustive:
+        method = f"{method}: {len(found)} real"
+    return AssemblyModes(found=found, exhaustive=exhaustive, method=method)
+
+
+def _multi_start(robot, joints, near, free, search):
+    begin = starts(robot, near, search)
+    begin[:, ~free] = near[~free]
+    candidates, _ = newton(robot, begin, np.tile(joints, (len(begin), 1)), free)
+    home, half = search_region(robot, search)
+    region = ", ".join(f"{name} {centre:g} +- {width:g}" for name, centre, width, is_free in zip(
+        COORDINATES, np.concatenate([home[:3], np.degrees(home[3:])]),
+        np.concatenate([half[:3], np.degrees(half[3:])]), free) if is_free)
+    method = (f"not exhaustive: Newton from {len(begin)} starts over {search:g} x the verification region "
+              f"({region}; mm, deg); --search widens it")
+    return False, candidates, method
+
+
+def _polished(robot, candidates, joints, near, free):
+    """Distinct converged poses among ``candidates`` after Newton, nearest ``near`` first."""
     candidates = np.asarray(candidates, dtype=float).reshape(-1, 6)
     if not len(candidates):
         return []
@@ -154,9 +207,9 @@ def assemblies(robot, joints, near):
     return found
 
 
-def best_residual(robot, joints, near):
+def best_residual(robot, joints, near, search=SEARCH):
     """The smallest residual Newton reaches from the starts (mm): how close it came."""
-    begin = starts(robot, near)
+    begin = starts(robot, near, search)
     free = free_mask(robot)
     begin[:, ~free] = np.asarray(near)[~free]
     _, residuals = newton(robot, begin, np.tile(np.asarray(joints, float), (len(begin), 1)), free)

@@ -25,7 +25,7 @@ def test_the_gantry_tau_joints_admit_two_assembly_modes(posture, other_z):
     """Three spheres: the commanded pose and its mirror image across the plane of the centres."""
     robot = load_robot("tau")
     joints = solve(robot, t6_from_pose([THESIS_POSE])).joints[0, :, posture]
-    found = assemblies(robot, joints, internal(THESIS_POSE))
+    found = assemblies(robot, joints, internal(THESIS_POSE)).found
     assert len(found) == 2
     np.testing.assert_allclose(found[0].pose, internal(THESIS_POSE), atol=1e-9)
     assert found[1].pose[2] == pytest.approx(other_z, abs=1e-3)
@@ -47,7 +47,7 @@ def test_forward_kinematics_returns_the_pose_the_joints_came_from(name):
         if posture is None:
             continue
         near = internal(pose)
-        found = assemblies(robot, joints[:, posture], near)
+        found = assemblies(robot, joints[:, posture], near).found
         assert found, f"{name}: nothing found for {pose}"
         assert np.max(np.abs(found[0].pose[free] - near[free])) < 1e-7, (name, pose, found[0].pose)
 
@@ -63,7 +63,7 @@ def test_fk_command_json_contract_and_exit_codes(capsys, tmp_path):
                  "--near", *map(str, THESIS_POSE), "--json", str(report)])
     assert code == 0
     data = json.loads(report.read_text())
-    assert set(data) == {"robot", "joints", "solutions"} and len(data["solutions"]) == 2
+    assert set(data) == {"robot", "joints", "exhaustive", "method", "solutions"} and len(data["solutions"]) == 2
     assert set(data["solutions"][0]) == {"pose", "residual_mm", "distance_from_near_mm"}
     assert data["solutions"][0]["distance_from_near_mm"] < 1e-6
     assert data["solutions"][1]["distance_from_near_mm"] == pytest.approx(1509.199, abs=1e-3)

@@ -120,7 +120,7 @@ def _predict_switch(model, t6, joints, switch, scale, units):
     moved = ", ".join(f"{name} {value * s:+.6f} {unit}" for name, value, s, unit in
                       zip(model.joint_names, change, scale, units))
     say(f"switch {first} -> {second}: the joints move by {moved}")
-    found = assemblies(model, joints[:, second], commanded)
+    found = assemblies(model, joints[:, second], commanded).found
     if not found:
         say(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP")
         return
@@ -161,8 +161,14 @@ def _indices_note(model):
                    "[default: the verification home].")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write the assembly modes as JSON.")
-def fk(robot, joints, more_joints, near, json_path):
-    """Forward kinematics: every platform pose (assembly mode) the joints admit.
+@click.option("--search", type=click.FloatRange(min=0.1, max=1000.0), default=2.0, show_default=True,
+              help="Where no exhaustive method applies: the multi-start search covers this many times the "
+                   "verification region around home.")
+def fk(robot, joints, more_joints, near, json_path, search):
+    """Forward kinematics: every platform pose (assembly mode) the joints admit, and how kingen
+    knows they are all: exhaustively for six limbs (homotopy from a generic Stewart-Gough
+    platform) and for three translating limbs (closed form); otherwise a multi-start search
+    over a stated region.
 
     Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
     import numpy as np
@@ -184,7 +190,8 @@ def fk(robot, joints, more_joints, near, json_path):
     internal = np.array(values) * model.joint_scale()
     near_pose = np.array(near if near is not None else model.verification.home, dtype=float)
     near_internal = np.concatenate([near_pose[:3], np.radians(near_pose[3:])])
-    found = assemblies(model, internal, near_internal)
+    modes = assemblies(model, internal, near_internal, search)
+    found = modes.found
     rows = [("mode", "x (mm)", "y (mm)", "z (mm)", "roll (deg)", "pitch (deg)", "yaw (deg)", "residual (mm)",
              "from near (mm)")]
     solutions = []
@@ -194,10 +201,13 @@ def fk(robot, joints, more_joints, near, json_path):
         solutions.append({"pose": pose.tolist(), "residual_mm": assembly.residual_mm, "distance_from_near_mm": distance})
         rows.append((str(number), *(f"{v:.6f}" for v in pose), f"{assembly.residual_mm:.3g}", f"{distance:.3f}"))
     if json_path is not None:
-        write_atomic(json_path, json.dumps({"robot": model.name, "joints": values, "solutions": solutions},
+        write_atomic(json_path, json.dumps({"robot": model.name, "joints": values, "exhaustive": modes.exhaustive,
+                                            "method": modes.method, "solutions": solutions},
                                            indent=2, allow_nan=False) + "\n")
+    say(modes.method)
     if not found:
-        say(f"no pose found for these joints (best residual {best_residual(model, internal, near_internal):.3g} mm)")
+        best = best_residual(model, internal, near_internal, search)
+        say(f"no pose found for these joints (best residual {best:.3g} mm)")
         return EXIT_FAILED
     print_table(rows)
     return 0
