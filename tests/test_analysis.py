@@ -1,8 +1,12 @@
 """The workspace analysis: its JSON contract, its geometry, and its report as a person sees
 it in a real browser (headless Chromium: not blank, every figure loaded, no console error)."""
 
+import copy
 import json
+import re
+import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,9 +15,13 @@ from conftest import require_tool
 from kingen.analysis import CAUSES
 from kingen.collision import segment_distance
 from kingen.cli import main
+from kingen.cli.common import load_model
+from kingen.figures import LABELS, OUTSIDE_LABEL, QUANTITIES, figure_objects, figures, report_html
 
 SWEEP_KEYS = {"value", "warning", "direct_index_mm", "min_inverse_index", "min_rod_distance_mm",
               "min_crank_distance_mm", "joints"}
+CURVES = {name for _, curves in QUANTITIES for _, name, *_ in curves}
+SCREENSHOTS = Path(__file__).resolve().parent.parent / "build" / "screenshots"
 CHROMIUM = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
             "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
@@ -56,9 +64,27 @@ def test_what_a_robot_lacks_is_said_not_failed(tmp_path, capsys):
     assert data["tilt_limits"] == [] and data["available"]["tilt_limits"].startswith("not analysed")
 
 
-def test_the_report_in_a_real_browser(ceart_analysis, tmp_path):
+@pytest.fixture(scope="module")
+def analysed(ceart_analysis, tmp_path_factory):
+    """The analysis folder of a robot, made once per module (CEART's is the shared one)."""
+    folders = {"ceart": ceart_analysis}
+
+    def folder(robot):
+        if robot not in folders:
+            folders[robot] = tmp_path_factory.mktemp(robot)
+            assert main(["analyze", robot, "-o", str(folders[robot])]) == 0
+        return folders[robot]
+
+    return folder
+
+
+@pytest.mark.parametrize("robot", ["ceart", "hexapod", "linear_delta"])
+def test_the_report_in_a_real_browser(robot, analysed, tmp_path):
+    """Every figure loads, no console error, and a full-page screenshot that is not blank,
+    kept as build/screenshots/report-<robot>.png for a person to look at."""
     require_tool("chromium", "chromium")
-    page = (ceart_analysis / "report.html").read_text()
+    folder = analysed(robot)
+    page = (folder / "report.html").read_text()
     assert "<script" not in page and 'src="data:image/png;base64,' in page
     probe = tmp_path / "probe.html"
     probe.write_text(page.replace("</body>", """<script>
@@ -66,21 +92,28 @@ window.addEventListener("load", function () {
   var images = Array.prototype.slice.call(document.images);
   var loaded = images.filter(function (image) { return image.complete && image.naturalWidth > 0; });
   document.body.setAttribute("data-images", images.length + "/" + loaded.length);
+  document.body.setAttribute("data-height", document.documentElement.scrollHeight);
 });
 </script></body>"""))
     dom = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr", "--v=0",
-                          "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()],
+                          "--virtual-time-budget=5000", "--window-size=1200,900", "--dump-dom", probe.as_uri()],
                          capture_output=True, text=True, timeout=120)
-    assert 'data-images="3/3"' in dom.stdout
+    figures = len(list(folder.glob("*.png")))
+    assert f'data-images="{figures}/{figures}"' in dom.stdout
     assert "CONSOLE" not in dom.stderr, dom.stderr
-    shot = tmp_path / "shot.png"
+    height = int(re.search(r'data-height="(\d+)"', dom.stdout).group(1))
+    shot = tmp_path / f"report-{robot}.png"
     subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile2'}", f"--screenshot={shot}",
-                    "--window-size=1200,1600", (ceart_analysis / "report.html").as_uri()],
+                    "--hide-scrollbars", f"--window-size=1200,{height}", (folder / "report.html").as_uri()],
                    capture_output=True, timeout=120)
     import matplotlib.image
 
     pixels = matplotlib.image.imread(shot)
-    assert pixels.shape[:2] == (1600, 1200) and float(pixels[..., :3].std()) > 0.05  # not blank
+    assert pixels.shape[:2] == (height, 1200) and float(pixels[..., :3].std()) > 0.05  # not blank
+    kept = SCREENSHOTS / shot.name
+    kept.parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(shot, kept)
+    print(f"screenshot of the {robot} report: {kept}")
 
 
 def test_a_crossing_of_a_direct_singularity_stops_a_tilt_without_a_threshold(tmp_path):
@@ -97,3 +130,82 @@ def test_a_crossing_of_a_direct_singularity_stops_a_tilt_without_a_threshold(tmp
     assert all(row["min_direct_index_mm"] is not None for row in data["tilt_limits"])
     rolled = {entry["value"]: entry for entry in data["sweeps"]["roll"]}
     assert rolled[-57.0]["cause"] == "direct_singularity" and rolled[0.0]["cause"] == "none"
+
+
+def delta_like(data):
+    """An analysis shaped as the coming ones of a platform that cannot tilt: x, y, z sweeps
+    only, no tilt limits, more settings, slices with more keys."""
+    shaped = copy.deepcopy(data)
+    shaped["sweeps"] = {name: shaped["sweeps"][name] for name in ("x", "y", "z")}
+    shaped["tilt_limits"] = []
+    shaped["settings"].update(azimuth_step_deg=15.0, new_setting="a value nobody planned for")
+    for entry in shaped["slices"].values():
+        entry["reaches_boundary"] = True
+    return shaped
+
+
+def colliding(data):
+    """CEART's analysis with rods 4 mm into each other at the last roll pose."""
+    shaped = copy.deepcopy(data)
+    shaped["sweeps"]["roll"][-1].update(cause="collision", min_rod_distance_mm=-4.0, min_inverse_index=0.5)
+    return shaped
+
+
+def drawn_labels(figure):
+    return {label for axes in figure.axes for label in axes.get_legend_handles_labels()[1]}
+
+
+def check_figures(analysis):
+    """What every figure promises its reader; the figures, for more checks."""
+    made = figure_objects(analysis)
+    for name, figure in made.items():
+        (legend,) = figure.legends  # one legend, the figure's, outside the data
+        for axes in figure.axes:
+            assert axes.get_legend() is None, name
+            assert axes.lines or axes.images, f"{name}: an axis with nothing on it"
+        entries = {text.get_text() for text in legend.get_texts()}
+        if name == "slices.png":
+            present = {LABELS[CAUSES[i]] for data in analysis["slices"].values() for row in data["causes"] for i in row}
+            assert entries == present | {OUTSIDE_LABEL}
+            assert all(axes.get_aspect() == 1.0 and OUTSIDE_LABEL in drawn_labels(axes.figure) for axes in figure.axes)
+        else:
+            assert entries == drawn_labels(figure), name
+    sweeps = made.get("sweeps.png")
+    for axes in sweeps.axes if sweeps else ():
+        curves = np.concatenate([line.get_xydata() for line in axes.lines if line.get_label() in CURVES])
+        for dots in axes.collections:  # limited poses sit on a curve, never at 0
+            for point in dots.get_offsets():
+                assert np.any(np.all(np.isclose(curves, point), axis=1)), point
+        if not any(line.get_label().startswith("collision") for line in axes.lines):
+            assert axes.get_ylim()[0] == 0.0
+    return made
+
+
+def test_the_figures_say_only_what_was_drawn(ceart_analysis):
+    data = json.loads((ceart_analysis / "analysis.json").read_text())
+    made = check_figures(data)
+    assert set(made) == {"tilt_limits.png", "sweeps.png", "slices.png"}
+    assert len(made["sweeps.png"].axes) == 18  # three quantities under two rows of three sweeps
+    assert "no limit" not in LABELS.values() and LABELS["none"] == "within limits"
+    polar = made["tilt_limits.png"].axes[0]
+    assert polar.get_ylim() == (0.0, data["settings"]["tilt_max_deg"])
+
+    shaped = delta_like(data)
+    made = check_figures(shaped)
+    assert set(made) == {"sweeps.png", "slices.png"} and len(made["sweeps.png"].axes) == 9
+    page = report_html(load_model("ceart"), shaped, figures(shaped), 1.0)
+    assert "Not analysed: the platform cannot tilt." in page and "tilt_limits.png" not in page
+    assert all(f"<th>{key}</th>" in page for key in shaped["settings"]) and "a value nobody planned for" in page
+    assert "no limit" not in page
+
+    crossed = colliding(data)
+    sweeps = check_figures(crossed)["sweeps.png"]
+    clearance = [axes for axes in sweeps.axes if axes.get_ylabel() == "clearance (mm)"]
+    assert clearance and all(axes.get_ylim()[0] < -4.0 for axes in clearance)
+
+
+def test_a_robot_without_clearances_draws_only_its_direct_index(analysed):
+    data = json.loads((analysed("hexapod") / "analysis.json").read_text())
+    sweeps = check_figures(data)["sweeps.png"]
+    assert {axes.get_ylabel() for axes in sweeps.axes} == {"direct index (mm)", ""}
+    assert len(sweeps.axes) == 6
