@@ -28,6 +28,22 @@ SINGULAR_TOLERANCE = 0.00001
 """Band |D| <= 1e-5 around a limb singularity (D: a limb's normalised radicand): the
 routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5 (DELMIA's ZERO_TOL)."""
 
+
+def warnings_to_exercise(robot, vocabulary=None):
+    """The warnings ``robot``'s routine can give besides WARN_GOOD_SOLUTION (within the
+    routine's ``vocabulary`` of warnings, when it has one): verify exercises each of them,
+    and the setup sheets list only these."""
+    kinds = []
+    if any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
+           for limb in robot.limbs):  # a revolute travel of a full turn or more is never exceeded
+        kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
+    if any(limb.has_radicand for limb in robot.limbs):
+        kinds.append("WARN_UNREACHABLE")
+    if any(limb.has_radicand for limb in robot.limbs) or robot.direct_index_min is not None:
+        kinds.append("WARN_SINGULAR_SOLUTION")
+    return [kind for kind in kinds if vocabulary is None or kind in vocabulary]
+
+
 UNWRITTEN_WARNING = -1
 """Sentinel put in every warning slot before a call: left there, it was never written."""
 UNWRITTEN_JOINT = float("nan")

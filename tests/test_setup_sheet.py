@@ -1,9 +1,20 @@
 """The setup sheet: what a user types into DELMIA's Inverse Kinematics dialog."""
 
+import math
 import re
 
-from kingen.model import load_robot
+import numpy as np
+import pytest
+
+from kingen.conventions import t6_from_pose
 from kingen.hosts.delmia.package import render_package
+from kingen.hosts.linuxcnc.package import render_package as render_linuxcnc
+from kingen.hosts.linuxcnc.render import robot_problem
+from kingen.model import load_robot, robots_dir, shipped_robots
+from kingen.placement import branch_words
+from kingen.reference import solve
+from kingen.routine import WARNINGS, warnings_to_exercise
+from kingen.text import markdown
 
 
 def sheet(name, target="windows"):
@@ -42,3 +53,71 @@ def test_sheet_says_when_nothing_is_read_and_no_limits_exist():
     assert "The routine reads no Length or Offset field" in text
     assert "No travel limits are declared" in text
     assert "libhexapod.so" in text
+
+
+def test_frames_are_placed_by_the_joints_of_the_robot_file(tmp_path):
+    text = sheet("hexapod")
+    assert "**Base frame:** Origin on the Z axis through the centre of the base joints, 40.205 mm on its -Z side." in text
+    assert "\\+Z is normal to their plane and points toward the platform" in text
+    assert "| leg1 | (31, 118.156, 40.205) | - | (31, 48.799, -31.45) |" in text
+    moved = tmp_path / "hexapod.yaml"
+    moved.write_text((robots_dir() / "hexapod.yaml").read_text().replace("40.205]", "50]"))
+    assert "centre of the base joints, 50 mm on its -Z side" in render_package(load_robot(moved), "linux")["SETUP.md"]
+    tau = sheet("tau")
+    assert "Every actuated joint moves along -Z." in tau and "| carriage1 | (-96.569, -185, -400) | -Z |" in tau
+
+
+def _knee_reach(limb, joint, centre):
+    """The crank tip's distance from the Z axis through ``centre``, from the crank's own formula."""
+    theta = joint + math.radians(limb.zero_offset)
+    beta = math.radians(limb.crank_direction)
+    tip = np.asarray(limb.pivot) + limb.crank_length * np.array(
+        [math.cos(theta) * math.cos(beta), math.cos(theta) * math.sin(beta), -math.sin(theta)])
+    return math.hypot(*(tip - centre)[:2])
+
+
+@pytest.mark.parametrize("name", [name for name in shipped_robots() if any(limb.branches == 2 for limb in load_robot(name).limbs)])
+def test_branch_words_hold_for_the_reference_at_the_verification_home(name):
+    robot = load_robot(name)
+    solution = solve(robot, t6_from_pose(np.asarray(robot.verification.home, dtype=float)[None]))
+    centre = np.mean([limb.base_joint() for limb in robot.limbs], axis=0)
+    words = branch_words(robot)
+    for index, limb in enumerate(robot.limbs):
+        joints, point = solution.branch_joints[0, index], solution.points[0, index]
+        if limb.model == "crank":
+            farther = int(_knee_reach(limb, joints[1], centre) > _knee_reach(limb, joints[0], centre))
+            assert words[index][farther].startswith("knee out") and words[index][1 - farther].startswith("knee in")
+        elif limb.model == "rail":
+            carriage = np.asarray(limb.rail_point) + limb.carriage_offset + (joints + limb.origin)[:, None] * limb.direction
+            axis = int(np.argmax(np.abs(limb.direction)))
+            above = int(carriage[1, axis] > point[axis])  # the branch whose carriage lies on the + side
+            assert f"on the +{'XYZ'[axis]} side" in words[index][above]
+            assert f"on the -{'XYZ'[axis]} side" in words[index][1 - above]
+    text = sheet(name)
+    for index, limb in enumerate(robot.limbs):
+        if words[index]:
+            assert f"| {robot.joint_names[index]} | {markdown(words[index][0])} | {markdown(words[index][1])} |" in text
+
+
+def test_rotary_delta_is_built_knees_out_and_the_tau_carriages_above_their_links():
+    assert all(words[1].startswith("knee out") for words in branch_words(load_robot("rotary_delta")))
+    assert all(words[0] == "carriage on the +Z side of its link's platform joint" for words in branch_words(load_robot("tau")))
+
+
+@pytest.mark.parametrize("name", shipped_robots())
+def test_sheets_list_only_the_warnings_the_routine_can_give(name):
+    robot = load_robot(name)
+    can_give = ["WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)]
+    listed = re.findall(r"^\| \d \| (WARN_\w+) \|", sheet(name), flags=re.MULTILINE)
+    assert sorted(listed) == sorted(can_give)
+    if robot_problem(robot) is None:
+        status = render_linuxcnc(robot)["SETUP.md"]
+        line = status[status.index("for this robot one of:"):].splitlines()[1]
+        assert sorted(re.findall(r"\b(\d) ", line)) == sorted(str(WARNINGS[kind]) for kind in can_give)
+
+
+def test_hexapod_sheet_says_its_only_warning_is_the_direct_index():
+    text = sheet("hexapod")
+    assert "| 5 | WARN_SINGULAR_SOLUTION | the posture's direct index at most 6.5 mm (section 8) |" in text
+    assert "WARN_JOINT_LIMITS_EXCEEDED" not in text and "WARN_UNREACHABLE" not in text
+    assert "No limb has a singular band" in sheet("exechon")

@@ -69,8 +69,6 @@ class LimbModel(Strict):
     has_radicand: ClassVar[bool] = False
     """Whether :meth:`solve` gives a normalised radicand (and the limb can be unreachable or
     singular); the C partial then classifies it with kingen_classify."""
-    branch_labels: ClassVar[tuple] = ()
-    """For two-branch models: what branch 0 and branch 1 mean, in words for the setup sheet."""
     calibratable: ClassVar[dict] = {}
     """Parameter -> the unit its dialog field is read in ('mm' or 'degrees')."""
     length_fields: ClassVar[tuple] = ()
@@ -103,6 +101,23 @@ class LimbModel(Strict):
     def passive_length(self, joint):
         """The passive link's length (mm) at joint values ``joint`` (n,)."""
         raise NotImplementedError
+
+    def base_joint(self):
+        """Where the limb's actuated joint sits on the base (3,), mm, base frame, for the setup
+        sheet's frames: by default the base side of the passive link at joint 0 (for a
+        platform point at the base origin)."""
+        return self.base_side_point(np.zeros((1, 3)), np.zeros(1))[0]
+
+    def joint_axis(self):
+        """The unit axis (3,) the joint moves along (prismatic) or turns about (revolute,
+        right-handed, positive joint values), base frame; None: no fixed axis (a leg)."""
+        return None
+
+    def branch_labels(self, platform_point, centre):
+        """For two-branch models: (branch 0, branch 1) in machine words for the setup sheet,
+        true for the platform point ``platform_point`` (3,), mm, base frame; ``centre`` (3,) is
+        the centre of the base joints. One-branch models: ()."""
+        return ()
 
     def base_side_velocity(self, joint):
         """d(base-side point)/d(joint) (n, 3), base frame: mm per mm, or mm per rad."""
@@ -154,6 +169,16 @@ class LimbModel(Strict):
     def calibration_scale(self, parameter):
         """Factor from the dialog's unit for ``parameter`` to the routine's unit."""
         return math.pi / 180.0 if self.calibratable[parameter] == "degrees" else 1.0
+
+
+def axis_words(vector):
+    """A direction in words: '+X', '-Z', ... within 0.1 degree of an axis, else its unit
+    components, '(0.6, 0, -0.8)'."""
+    unit = np.asarray(vector, dtype=float) / np.linalg.norm(vector)
+    axis = int(np.argmax(np.abs(unit)))
+    if abs(unit[axis]) >= math.cos(math.radians(0.1)):
+        return f"{'+' if unit[axis] > 0 else '-'}{'XYZ'[axis]}"
+    return "(" + ", ".join(f"{value + 0.0:.4g}" for value in unit) + ")"
 
 
 def model_name(cls):

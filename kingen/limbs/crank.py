@@ -33,7 +33,6 @@ class Crank(TwoBranchModel):
     """Geometric crank angle (degrees) reported as joint 0: theta -= zero_offset."""
 
     joint_type = REVOLUTE
-    branch_labels = ("phi + acos(K/rho)", "phi - acos(K/rho)")
     calibratable = {"zero_offset": "degrees", "crank_length": "mm", "rod_length": "mm"}
     length_fields = ("pivot", "crank_length", "rod_length", "platform_point")
     c_columns = ("joint, pivot A (mm, base frame), cos(beta), sin(beta), crank length r (mm), "
@@ -69,6 +68,27 @@ class Crank(TwoBranchModel):
         cosine, sine = np.cos(theta), np.sin(theta)
         first, third = (-sine, -cosine) if derivative else (cosine, -sine)
         return components_last([first * math.cos(beta), first * math.sin(beta), third])
+
+    def base_joint(self):
+        """The crank's pivot."""
+        return np.asarray(self.pivot, dtype=float)
+
+    def joint_axis(self):
+        """(-sin beta, cos beta, 0): a positive angle turns the crank from beta down toward -z."""
+        beta = math.radians(self.crank_direction)
+        return np.array([-math.sin(beta), math.cos(beta), 0.0])
+
+    def branch_labels(self, platform_point, centre):
+        """Knee out / knee in: which branch puts the crank's tip (the knee) farther from the
+        Z axis through ``centre`` with the rod at ``platform_point``; where both knees are as
+        far (the limb singular there), which branch turns the crank further."""
+        joints = self.solve(np.asarray(platform_point, dtype=float)[None]).values[0]
+        knees = self.base_side_point(None, joints) - np.asarray(centre, dtype=float)
+        reach = np.hypot(knees[:, 0], knees[:, 1])
+        if abs(reach[0] - reach[1]) <= 1e-9 * self.crank_length:
+            return ("crank turned further in the joint's positive sense", "crank turned less far")
+        words = ("knee out (farther from the centre axis)", "knee in (nearer the centre axis)")
+        return words if reach[0] > reach[1] else words[::-1]
 
     def actuator_segment(self, joint):
         """The crank itself, from its pivot to its tip."""

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..conventions import PRISMATIC
 from ..schema import Coordinate, Length, UnitVec3, Vec3
-from .base import LimbSolution, TwoBranchModel, c_double, c_vector, components_last
+from .base import LimbSolution, TwoBranchModel, axis_words, c_double, c_vector, components_last
 
 
 class Rail(TwoBranchModel):
@@ -26,7 +26,6 @@ class Rail(TwoBranchModel):
     """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
 
     joint_type = PRISMATIC
-    branch_labels = ("u.w - sqrt(...) (carriage nearer the rail point)", "u.w + sqrt(...)")
     calibratable = {"origin": "mm", "link_length": "mm"}
     length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
     c_columns = ("joint, rail point s (mm, base frame), direction u (unit), carriage offset d (mm), "
@@ -58,6 +57,15 @@ class Rail(TwoBranchModel):
         return {"rail_point": c_vector(self.rail_point), "direction": c_vector(self.direction),
                 "carriage_offset": c_vector(self.carriage_offset), "platform_point": c_vector(self.platform_point),
                 "link_length": c_double(self.link_length), "origin": c_double(self.origin)}
+
+    def joint_axis(self):
+        return np.asarray(self.direction, dtype=float)
+
+    def branch_labels(self, platform_point, centre):
+        """Branch 0 puts the carriage's joint on the -u side of its link's platform joint
+        (along the rail), branch 1 on the +u side, wherever the platform is."""
+        return tuple(f"carriage on the {axis_words(sign * np.asarray(self.direction))} side of its link's platform joint"
+                     for sign in (-1.0, 1.0))
 
     def singular_scale(self):
         return self.link_length

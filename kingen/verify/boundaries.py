@@ -14,7 +14,7 @@ import numpy as np
 
 from ..conventions import t6_from_pose
 from ..reference import solve
-from ..routine import WARNINGS
+from ..routine import WARNINGS, warnings_to_exercise
 from .tally import warnings_in_band
 
 RAYS = 64
@@ -34,20 +34,6 @@ reachable and unreachable, so a ray that steps over it still brackets its edge."
 OFFSETS = (1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 """Distances from the boundary tried, as fractions of the ray's length, until both poses lie
 outside the tolerance band."""
-
-
-def warnings_to_exercise(robot, vocabulary=None):
-    """The warnings ``robot``'s routine can give besides WARN_GOOD_SOLUTION (within the
-    routine's ``vocabulary`` of warnings, when it has one)."""
-    kinds = []
-    if any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
-           for limb in robot.limbs):  # a revolute travel of a full turn or more is never exceeded
-        kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
-    if any(limb.has_radicand for limb in robot.limbs):
-        kinds.append("WARN_UNREACHABLE")
-    if any(limb.has_radicand for limb in robot.limbs) or robot.direct_index_min is not None:
-        kinds.append("WARN_SINGULAR_SOLUTION")
-    return [kind for kind in kinds if vocabulary is None or kind in vocabulary]
 
 
 def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary=None):

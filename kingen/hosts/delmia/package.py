@@ -11,6 +11,8 @@ from pathlib import Path
 from ...conventions import branch_of_posture
 from ...defaults import DEFAULT_TIMEOUT, TARGETS
 from ...files import write_atomic, write_folder
+from ...placement import branch_words, frames
+from ...routine import warnings_to_exercise
 from ...schema import dialog_label
 from . import abi
 from .build import WINDOWS_DEFINES, build_plugin, library_name
@@ -25,11 +27,15 @@ WARNING_MEANINGS = {
     "WARN_SINGULAR_SOLUTION": f"a limb within {abi.SINGULAR_TOLERANCE:g} (normalised radicand) of its limb singularity",
     "WARN_UNREACHABLE": "a limb has no real solution (joints are its closest approach)",
 }
-"""What each warning means from a kingen routine, for the setup sheet (order: precedence last)."""
+"""What each warning means from a kingen routine, for the setup sheet (order: precedence last);
+the sheet lists WARN_GOOD_SOLUTION and the warnings the robot's routine can give
+(:func:`kingen.routine.warnings_to_exercise`)."""
 
 
 def sheet_view(robot, target):
-    """What the setup sheet shows, in the dialog's units (mm, degrees)."""
+    """What the setup sheet shows, in the dialog's units (mm, degrees): the frames placed by the
+    limbs' joints, each two-branch limb's branches in its model's words (true at the
+    verification home), and only the warnings the robot's routine can give."""
     two_branch = [(index, bit) for index, bit in enumerate(robot.branch_bits) if bit >= 0]
     used = {dialog_field for _, _, dialog_field, _ in robot.calibration()}
     calibration = [
@@ -48,7 +54,9 @@ def sheet_view(robot, target):
             "lower": f"{limb.travel[0]:.10g}" if limb.travel else "-",
             "upper": f"{limb.travel[1]:.10g}" if limb.travel else "-",
         })
-    branch_models = {type(robot.limbs[index]): robot.limbs[index].model for index, _ in two_branch}
+    words = branch_words(robot)
+    working = robot.posture_branches(robot.working_posture)
+    can_give = {"WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)}
     return {
         **view_model(robot),
         "description": robot.description,
@@ -59,9 +67,11 @@ def sheet_view(robot, target):
             for kind in ("length", "offset") for i in range(1, 7)
         ],
         "calibration": calibration,
+        "frames": frames(robot),
+        "home": " ".join(f"{value:g}" for value in robot.verification.home),
         "branch_limbs": [robot.joint_names[index] for index, _ in two_branch],
-        "branch_models": [{"name": name, "branch0": cls.branch_labels[0], "branch1": cls.branch_labels[1]}
-                          for cls, name in branch_models.items()],
+        "branch_words": [{"name": robot.joint_names[index], "branch0": words[index][0], "branch1": words[index][1],
+                          "working": words[index][working[index]]} for index, _ in two_branch],
         "configurations": [
             {"index": k, "digits": "".join(str(branch_of_posture(k, bit)) for _, bit in two_branch),
              "branches": [f"branch {branch_of_posture(k, bit)}" for _, bit in two_branch]}
@@ -70,7 +80,8 @@ def sheet_view(robot, target):
         "joints": joints,
         "any_limits": any(limb.travel for limb in robot.limbs),
         "warnings": [{"code": abi.WARNINGS[name], "name": name, "meaning": _meaning(robot, name, meaning)}
-                     for name, meaning in WARNING_MEANINGS.items()],
+                     for name, meaning in WARNING_MEANINGS.items() if name in can_give],
+        "limb_bands": any(limb.has_radicand for limb in robot.limbs),
         "direct_index_available": robot.has_direct_index,
         "working_posture": robot.working_posture,
         "direct_index_min": robot.direct_index_min,
@@ -79,9 +90,12 @@ def sheet_view(robot, target):
 
 
 def _meaning(robot, name, meaning):
-    if name == "WARN_SINGULAR_SOLUTION" and robot.direct_index_min is not None:
-        return f"{meaning}, or the posture's direct index at most {robot.direct_index_min:g} mm (section 7)"
-    return meaning
+    """``meaning`` as it holds for ``robot``: WARN_SINGULAR_SOLUTION names the limb band only if
+    some limb has one, the direct index only if the robot sets its threshold."""
+    if name != "WARN_SINGULAR_SOLUTION" or robot.direct_index_min is None:
+        return meaning
+    direct = f"the posture's direct index at most {robot.direct_index_min:g} mm (section 8)"
+    return f"{meaning}, or {direct}" if any(limb.has_radicand for limb in robot.limbs) else direct
 
 
 def render_package(robot, target):

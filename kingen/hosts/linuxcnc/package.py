@@ -12,8 +12,10 @@ from ... import __version__
 from ...conventions import t6_from_pose
 from ...defaults import DEFAULT_TIMEOUT
 from ...files import write_atomic, write_folder
+from ...placement import frames
 from ...reference import solve
 from ...render import template
+from ...routine import WARNINGS, warnings_to_exercise
 from .build import build_module
 from ...units import LENGTH_UNITS, robot_in_units
 from .render import TEMPLATES, module_name, source_name, view_model
@@ -28,9 +30,15 @@ def _exact(value):
     return repr(float(value))
 
 
+STATUS_WORDS = {"WARN_GOOD_SOLUTION": "good", "WARN_JOINT_LIMITS_EXCEEDED": "a joint beyond its travel",
+                "WARN_UNREACHABLE": "unreachable", "WARN_SINGULAR_SOLUTION": "singular"}
+"""The status pin's values in words; the sheet lists only those the robot's module can give."""
+
+
 def sheet_view(robot, units="mm"):
     """What the snippets and the sheet show, in the machine's ``units``: the module view plus
-    the joints' homes and limits."""
+    the joints' homes and limits, the frames placed by the limbs' joints, and only the
+    statuses the robot's module can give (:func:`kingen.routine.warnings_to_exercise`)."""
     view = view_model(robot, units)
     home = np.asarray(robot.verification.home, dtype=float)
     joints = solve(robot, t6_from_pose(home[None]), indices=False).joints[0, :, robot.working_posture]
@@ -48,7 +56,11 @@ def sheet_view(robot, units="mm"):
                     "home": _exact(joints[index] * (scale if revolute else 1.0 / LENGTH_UNITS[units]))})
     parameters = [{**parameter, "value": _exact(parameter["value"])} for parameter in view["parameters"]]
     position = home[:3] / LENGTH_UNITS[units]
-    return {**view, "ini_joints": ini, "parameters": parameters, "version": __version__,
+    can_give = ["WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)]
+    statuses = sorted((WARNINGS[name], STATUS_WORDS[name]) for name in can_give)
+    refused = [str(code) for code, _ in statuses if code in (WARNINGS["WARN_UNREACHABLE"], WARNINGS["WARN_SINGULAR_SOLUTION"])]
+    return {**view, "ini_joints": ini, "frames": frames(robot, units),
+            "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": __version__,
             "joint_count": robot.dof,
             "home_text": " ".join(_exact(value) for value in (*position, *home[3:])), "description": robot.description}
 

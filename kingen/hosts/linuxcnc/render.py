@@ -7,6 +7,7 @@ from pathlib import Path
 
 from ...errors import KingenError
 from ...limbs import c_double
+from ...placement import branch_words
 from ...render import build_info, robot_view, template
 from ...routine import SINGULAR_TOLERANCE
 from ...units import LENGTH_UNITS, robot_in_units
@@ -91,7 +92,10 @@ def _parameters(robot):
 
 
 def view_model(robot, units="mm"):
+    """What the module's source shows, in the machine's ``units``; ``branch_words`` names the
+    working posture's branches in the limb models' words (true at the verification home)."""
     check_robot(robot)
+    labels = branch_words(robot)
     robot = robot_in_units(robot, units)
     view = robot_view(robot)
     branches = robot.posture_branches(robot.working_posture)
@@ -109,7 +113,7 @@ def view_model(robot, units="mm"):
             if limited else "",
         })
     two_branch = [(index, limb) for index, limb in enumerate(robot.limbs) if limb.branches == 2]
-    words = ", ".join(f"{robot.joint_names[index]} {limb.branch_labels[branches[index]]}" for index, limb in two_branch)
+    words = ", ".join(f"{robot.joint_names[index]} {labels[index][branches[index]]}" for index, limb in two_branch)
     return {
         **view,
         "module": module_name(robot),

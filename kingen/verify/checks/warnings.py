@@ -4,8 +4,8 @@ band around a threshold (:func:`kingen.verify.tally.warnings_in_band`)."""
 import numpy as np
 
 from ...diagnose import diagnose_warnings
-from ...routine import WARNING_NAMES
-from ..boundaries import RAYS, warnings_to_exercise
+from ...routine import WARNING_NAMES, warnings_to_exercise
+from ..boundaries import RAYS
 from ..tally import WARNING_KINDS
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
