@@ -232,8 +232,8 @@ def _entry(robot, value, evaluated, i):
 def workspace_extent(robot, posture, axes, settings=Settings(), home=None):
     """(low, high, capped) per axis of ``axes`` (two position indices): the bounding box (mm)
     of the workspace at home orientation in their plane, found along SLICE_RAYS rays from
-    home (a pose is inside while no limb is unreachable and no joint limit is passed);
-    ``capped``: some ray was still inside at the search's end."""
+    home (a pose is inside while nothing limits it: cause 'none'); ``capped``: some ray was
+    still inside at the search's end."""
     start = np.array(robot.verification.home, dtype=float)
     angles = np.linspace(0.0, 2 * np.pi, SLICE_RAYS, endpoint=False)
     directions = np.column_stack([np.cos(angles), np.sin(angles)])
@@ -244,7 +244,7 @@ def workspace_extent(robot, posture, axes, settings=Settings(), home=None):
         for column, axis in enumerate(axes):
             poses[:, axis] += directions[:, column] * distances
         cause = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)["cause"]
-        return (cause != CAUSES.index("unreachable")) & (cause != CAUSES.index("joint_limits"))
+        return cause == CAUSES.index("none")
 
     low, high = np.zeros(SLICE_RAYS), np.full(SLICE_RAYS, scale)
     searching = np.ones(SLICE_RAYS, dtype=bool)

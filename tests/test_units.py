@@ -7,7 +7,7 @@ import stat
 import numpy as np
 import pytest
 
-from kingen.routine import UNWRITTEN_WARNING, WARNINGS, check_routine_name
+from kingen.routine import UNWRITTEN_WARNING, WARNINGS, check_routine_name, warnings_to_exercise
 from kingen.bench import benchmark
 from kingen.compiler import CompileError, compile_c, compiler_command
 from kingen.files import PACKAGE_MARKER as MARKER
@@ -64,10 +64,14 @@ def test_written_packages_carry_their_marker_and_crlf(tmp_path):
 
 
 def test_setup_sheet_warning_table_comes_from_the_interface():
-    sheet = render_package(load_robot("hexapod"), "windows")["SETUP.md"]
-    for name, code in WARNINGS.items():
-        assert f"| {code} | {name} |" in sheet
-    assert "within 1e-05 (normalised radicand)" in sheet
+    """The sheet lists, with the interface's codes, exactly the warnings the routine can give."""
+    for robot_name in ("hexapod", "tau"):
+        robot = load_robot(robot_name)
+        sheet = render_package(robot, "windows")["SETUP.md"]
+        possible = {"WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)}
+        for name, code in WARNINGS.items():
+            assert (f"| {code} | {name} |" in sheet) == (name in possible), (robot_name, name)
+    assert "within 1e-05 (normalised radicand)" in render_package(load_robot("tau"), "windows")["SETUP.md"]
 
 
 # --- diagnose

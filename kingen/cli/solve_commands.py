@@ -275,7 +275,7 @@ def _tilt_summary(analysis, settings):
     """One line: the least tilt over the azimuths and what stops it, with the settings behind it."""
     limits = analysis["tilt_limits"]
     if not limits:
-        return analysis["available"]["tilt_limits"]
+        return f"tilt limits {analysis['available']['tilt_limits']}"
     least = min(limits, key=lambda row: row["max_tilt_deg"])
     stopped = (f"stopped by {least['cause']}" if least["cause"] != "none"
                else f"nothing stops it up to --tilt-max {settings.tilt_max_deg:g}")
