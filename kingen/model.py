@@ -9,6 +9,7 @@ in internal units (mm, radians). Limb models come from :mod:`kingen.limbs`.
 
 import functools
 import hashlib
+import json
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -277,9 +278,16 @@ def resolve_robot_path(spec):
 def load_robot(spec):
     """Load, validate and expand a robot definition (path or shipped name)."""
     path = resolve_robot_path(spec)
-    shown = str(path)
     data, lines, raw = read_robot_file(path)
-    locate = Locator(shown, lines)
+    return robot_from_data(data, path, lines, raw)
+
+
+def robot_from_data(data, path, lines=None, raw=None):
+    """Validate and expand a robot definition given as plain data (as read from ``path``,
+    which errors name, with its ``lines`` and ``raw`` bytes; the data's JSON when not given)."""
+    if raw is None:
+        raw = json.dumps(data, sort_keys=True).encode()
+    locate = Locator(str(path), lines or {})
     try:
         document = robot_file_schema().model_validate(data)
     except ValidationError as error:

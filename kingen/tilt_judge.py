@@ -1,0 +1,96 @@
+"""The tilt judge: the largest tilt of a six-crank (6-RUS) platform towards each azimuth,
+in compiled C (templates/design/tilt_judge.c), for the design optimiser.
+
+It decides every pose exactly as :func:`kingen.analysis.tilt_limits` (the numpy reference)
+does, for robots of six cranks without travel limits, at a fraction of its cost: poses are
+judged one by one in C and each azimuth stops at its first failing step. ``tests/
+test_tilt_judge.py`` proves the two agree on random designs. Poses mm and degrees at this
+module's boundary; the C works in radians.
+"""
+
+import functools
+
+import cffi
+import numpy as np
+
+from . import __version__
+from .analysis import CAUSES, CROSSING, Settings, home_values
+from .collision import clearances
+from .compiler import compile_c, compiler_command
+from .files import cache_dir, cached, digest, write_atomic
+from .limbs.crank import Crank
+from .resources import templates_dir
+
+DECLARATIONS = """
+typedef struct {
+    double pivot[6][3]; double cos_direction[6]; double sin_direction[6]; double crank_length[6];
+    double rod_length[6]; double platform[6][3]; int branch[6]; double home[6]; double index_threshold;
+    double home_det_sign; int euler; int collision; double rod_radius, crank_radius; int cranks_collide_at_zero;
+} kingen_design;
+long kingen_tilt_table(const kingen_design *design, const double *azimuths, int count_azimuths,
+                       const double *tilts, int count_tilts, int *first_stop, int *cause);
+"""
+COLLISION_MODELS = {"segments": 1, "thesis": 2}
+
+
+def judges(robot):
+    """Whether the compiled judge decides this robot: six cranks, no travel limits."""
+    return robot.dof == 6 and all(isinstance(limb, Crank) and limb.travel is None for limb in robot.limbs)
+
+
+@functools.lru_cache(maxsize=1)
+def _library():
+    """(ffi, library): the judge compiled once per content and compiler into kingen's cache."""
+    source = (templates_dir() / "design" / "tilt_judge.c").read_text()
+    command = compiler_command()
+    folder = cache_dir() / f"tilt-judge-{digest(__version__, source, *command)[:16]}"
+    library = folder / "libkingen_tilt_judge.so"
+
+    def make():
+        write_atomic(folder / "tilt_judge.c", source)
+        compile_c([folder / "tilt_judge.c"], library, ["-O2", "-shared", "-fPIC", "-lm"])
+
+    cached(folder, library, make)
+    ffi = cffi.FFI()
+    ffi.cdef(DECLARATIONS)
+    return ffi, ffi.dlopen(str(library))
+
+
+def tilt_table(robot, posture, settings=Settings()):
+    """[(max_tilt_deg, cause)] per azimuth of ``settings``, as analysis.tilt_limits gives them
+    (the largest multiple of the tilt step up to which every step passes; 'none' up to the
+    cap), and the number of poses judged."""
+    ffi, library = _library()
+    design = ffi.new("kingen_design *")
+    branches = robot.posture_branches(posture)
+    home = np.array(robot.verification.home, dtype=float)
+    for index, limb in enumerate(robot.limbs):
+        beta = np.radians(limb.crank_direction)
+        design.pivot[index] = list(map(float, limb.pivot))
+        design.cos_direction[index], design.sin_direction[index] = float(np.cos(beta)), float(np.sin(beta))
+        design.crank_length[index], design.rod_length[index] = limb.crank_length, limb.rod_length
+        design.platform[index] = list(map(float, limb.platform_point))
+        design.branch[index] = int(branches[index])
+    design.home = [*map(float, home[:3]), *map(float, np.radians(home[3:]))]
+    at_home = home_values(robot, posture, settings)
+    thresholds = [value for value in (robot.direct_index_min, CROSSING * at_home.index_mm) if np.isfinite(value or np.nan)]
+    design.index_threshold = max(thresholds) if thresholds else 0.0
+    design.home_det_sign = at_home.det_sign
+    design.euler = int(settings.tilt_convention == "euler")
+    if robot.collision is not None:
+        design.collision = COLLISION_MODELS[settings.collision]
+        design.rod_radius = robot.collision.get("rod_radius", 0.0)
+        design.crank_radius = robot.collision.get("crank_radius", 0.0)
+        if settings.collision == "thesis":
+            _, cranks = clearances(robot, np.zeros((1, 6, 3)), np.zeros((1, 6)), "thesis")
+            design.cranks_collide_at_zero = int(cranks[0] < 0.0)
+    azimuths, tilts = settings.azimuths, settings.tilts
+    first = np.zeros(len(azimuths), dtype=np.intc)
+    cause = np.zeros(len(azimuths), dtype=np.intc)
+    judged = library.kingen_tilt_table(
+        design, ffi.from_buffer("double[]", np.ascontiguousarray(np.radians(azimuths))), len(azimuths),
+        ffi.from_buffer("double[]", np.ascontiguousarray(np.radians(tilts))), len(tilts),
+        ffi.from_buffer("int[]", first), ffi.from_buffer("int[]", cause))
+    table = [(round(float(tilts[max(stop - 1, 0)] if stop < len(tilts) else tilts[-1]), 6), CAUSES[code])
+             for stop, code in zip(first, cause)]
+    return table, int(judged)
