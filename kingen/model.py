@@ -19,6 +19,7 @@ import numpy as np
 from pydantic import AfterValidator, Field, ValidationError
 
 from .conventions import branch_of_posture
+from .design_schema import Optimize
 from .errors import KingenError
 from .hosts import name_problems
 from .layouts import Layout
@@ -115,6 +116,7 @@ def _schema_over(models):
         working_posture: Annotated[int, Field(ge=0)] = 0
         collision: Optional[Collision] = None
         units: Literal["mm", "inch"] = "mm"
+        optimize: Optional[Optimize] = None
 
     return RobotFile
 
@@ -287,7 +289,8 @@ def robot_from_data(data, path, lines=None, raw=None):
     which errors name, with its ``lines`` and ``raw`` bytes; the data's JSON when not given)."""
     if raw is None:
         raw = json.dumps(data, sort_keys=True).encode()
-    locate = Locator(str(path), lines or {})
+    lines = lines or {}
+    locate = Locator(str(path), lines)
     try:
         document = robot_file_schema().model_validate(data)
     except ValidationError as error:

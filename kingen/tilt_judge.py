@@ -14,8 +14,7 @@ import cffi
 import numpy as np
 
 from . import __version__
-from .analysis import CAUSES, CROSSING, Settings, home_values
-from .collision import clearances
+from .analysis import CAUSES, CROSSING, Settings
 from .compiler import compile_c, compiler_command
 from .files import cache_dir, cached, digest, write_atomic
 from .limbs.crank import Crank
@@ -29,6 +28,7 @@ typedef struct {
 } kingen_design;
 long kingen_tilt_table(const kingen_design *design, const double *azimuths, int count_azimuths,
                        const double *tilts, int count_tilts, int *first_stop, int *cause);
+void kingen_home(const kingen_design *design, double *index, double *det_sign, int *cranks_collide_at_zero);
 """
 COLLISION_MODELS = {"segments": 1, "thesis": 2}
 
@@ -48,7 +48,7 @@ def _library():
 
     def make():
         write_atomic(folder / "tilt_judge.c", source)
-        compile_c([folder / "tilt_judge.c"], library, ["-O2", "-shared", "-fPIC", "-lm"])
+        compile_c([folder / "tilt_judge.c"], library, ["-O3", "-funroll-loops", "-shared", "-fPIC", "-lm"])
 
     cached(folder, library, make)
     ffi = cffi.FFI()
@@ -56,34 +56,47 @@ def _library():
     return ffi, ffi.dlopen(str(library))
 
 
-def tilt_table(robot, posture, settings=Settings()):
-    """[(max_tilt_deg, cause)] per azimuth of ``settings``, as analysis.tilt_limits gives them
-    (the largest multiple of the tilt step up to which every step passes; 'none' up to the
-    cap), and the number of poses judged."""
+def home(robot, posture, settings=Settings()):
+    """(direct index mm, sign of det W, whether the thesis's cranks at angle 0 collide) at
+    the verification home, as the judge computes them (analysis.home_values in numpy)."""
+    _, values = _design(robot, posture, settings)
+    return values
+
+
+def _design(robot, posture, settings):
+    """(the C design struct, its home values) for ``robot`` in ``posture``."""
     ffi, library = _library()
     design = ffi.new("kingen_design *")
     branches = robot.posture_branches(posture)
-    home = np.array(robot.verification.home, dtype=float)
-    for index, limb in enumerate(robot.limbs):
+    position = np.array(robot.verification.home, dtype=float)
+    for number, limb in enumerate(robot.limbs):
         beta = np.radians(limb.crank_direction)
-        design.pivot[index] = list(map(float, limb.pivot))
-        design.cos_direction[index], design.sin_direction[index] = float(np.cos(beta)), float(np.sin(beta))
-        design.crank_length[index], design.rod_length[index] = limb.crank_length, limb.rod_length
-        design.platform[index] = list(map(float, limb.platform_point))
-        design.branch[index] = int(branches[index])
-    design.home = [*map(float, home[:3]), *map(float, np.radians(home[3:]))]
-    at_home = home_values(robot, posture, settings)
-    thresholds = [value for value in (robot.direct_index_min, CROSSING * at_home.index_mm) if np.isfinite(value or np.nan)]
-    design.index_threshold = max(thresholds) if thresholds else 0.0
-    design.home_det_sign = at_home.det_sign
+        design.pivot[number] = list(map(float, limb.pivot))
+        design.cos_direction[number], design.sin_direction[number] = float(np.cos(beta)), float(np.sin(beta))
+        design.crank_length[number], design.rod_length[number] = limb.crank_length, limb.rod_length
+        design.platform[number] = list(map(float, limb.platform_point))
+        design.branch[number] = int(branches[number])
+    design.home = [*map(float, position[:3]), *map(float, np.radians(position[3:]))]
     design.euler = int(settings.tilt_convention == "euler")
     if robot.collision is not None:
         design.collision = COLLISION_MODELS[settings.collision]
         design.rod_radius = robot.collision.get("rod_radius", 0.0)
         design.crank_radius = robot.collision.get("crank_radius", 0.0)
-        if settings.collision == "thesis":
-            _, cranks = clearances(robot, np.zeros((1, 6, 3)), np.zeros((1, 6)), "thesis")
-            design.cranks_collide_at_zero = int(cranks[0] < 0.0)
+    index, sign, cranks_collide = ffi.new("double *"), ffi.new("double *"), ffi.new("int *")
+    library.kingen_home(design, index, sign, cranks_collide)
+    thresholds = [value for value in (robot.direct_index_min, CROSSING * index[0]) if np.isfinite(value or np.nan)]
+    design.index_threshold = max(thresholds) if thresholds else 0.0
+    design.home_det_sign = sign[0]
+    design.cranks_collide_at_zero = int(cranks_collide[0]) if design.collision == COLLISION_MODELS["thesis"] else 0
+    return design, (float(index[0]), float(sign[0]), bool(cranks_collide[0]))
+
+
+def tilt_table(robot, posture, settings=Settings()):
+    """[(max_tilt_deg, cause)] per azimuth of ``settings``, as analysis.tilt_limits gives them
+    (the largest multiple of the tilt step up to which every step passes; 'none' up to the
+    cap), and the number of poses judged."""
+    ffi, library = _library()
+    design, _ = _design(robot, posture, settings)
     azimuths, tilts = settings.azimuths, settings.tilts
     first = np.zeros(len(azimuths), dtype=np.intc)
     cause = np.zeros(len(azimuths), dtype=np.intc)

@@ -8,6 +8,10 @@
  * (the first that holds, in this order). Lengths mm, angles radians, base frame. */
 #include <math.h>
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 #define KINGEN_UNREACHABLE 0
 #define KINGEN_DIRECT_SINGULARITY 2
 #define KINGEN_COLLISION 3
@@ -162,11 +166,12 @@ static int index_above(double W[6][6], double threshold)
     return 1;
 }
 
-/* What stops the pose R, p (mm): a KINGEN_* cause. */
-static int judge_pose(const kingen_design *design, double R[3][3], const double p[3])
+/* The crank tips and platform points (base frame) and the unit wrenches W of the pose R, p
+ * (mm); 0 when a limb is unreachable or at its own singularity (D <= 1e-5). */
+static int assemble(const kingen_design *design, double R[3][3], const double p[3], double tip[6][3],
+                    double point[6][3], double W[6][6])
 {
-    double tip[6][3], point[6][3], W[6][6];
-    int i, k, collide = design->cranks_collide_at_zero;
+    int i, k;
     for (i = 0; i < 6; i++) {
         const double *c = design->platform[i], *A = design->pivot[i];
         double g[3], a, b, kk, rho2, D, rho, cos_phi, sin_phi, cos_half, sin_half, ct, st, f[3], n;
@@ -181,7 +186,7 @@ static int judge_pose(const kingen_design *design, double R[3][3], const double 
         rho2 = a * a + b * b;
         D = rho2 > 0.0 ? (rho2 - kk * kk) / rho2 : -1.0;
         if (!(D > KINGEN_RADICAND_BAND))
-            return KINGEN_UNREACHABLE;
+            return 0;
         rho = sqrt(rho2);
         cos_phi = a / rho; sin_phi = b / rho; cos_half = kk / rho; sin_half = sqrt(D);
         if (design->branch[i] == 0) {
@@ -203,6 +208,16 @@ static int judge_pose(const kingen_design *design, double R[3][3], const double 
         W[i][4] = point[i][2] * W[i][0] - point[i][0] * W[i][2];
         W[i][5] = point[i][0] * W[i][1] - point[i][1] * W[i][0];
     }
+    return 1;
+}
+
+/* What stops the pose R, p (mm): a KINGEN_* cause. */
+static int judge_pose(const kingen_design *design, double R[3][3], const double p[3])
+{
+    double tip[6][3], point[6][3], W[6][6];
+    int i, k, collide = design->cranks_collide_at_zero;
+    if (!assemble(design, R, p, tip, point, W))
+        return KINGEN_UNREACHABLE;
     if (design->home_det_sign != 0.0 && determinant_sign(W) != (int)design->home_det_sign)
         return KINGEN_DIRECT_SINGULARITY;
     if (design->index_threshold > 0.0 && !index_above(W, design->index_threshold))
@@ -221,6 +236,82 @@ static int judge_pose(const kingen_design *design, double R[3][3], const double 
                              - 2.0 * design->crank_radius < 0.0;
     }
     return collide ? KINGEN_COLLISION : KINGEN_NONE;
+}
+
+/* The direct index (mm) at home and the sign of det W there (0: unreachable or singular),
+ * as kingen/singularity.py computes them: the Schur complement S = M_ww - M_wv M_vv^-1 M_vw
+ * of M = W^T W and the square root of its smallest eigenvalue in closed form (0 where M_vv is
+ * singular); and whether the thesis's cranks, held at angle 0, come closer than their radii
+ * for the pairs (1, 6), (2, 3), (4, 5). */
+void kingen_home(const kingen_design *design, double *index, double *det_sign, int *cranks_collide_at_zero)
+{
+    static const int pairs[3][2] = {{0, 5}, {1, 2}, {3, 4}};
+    double R[3][3], tip[6][3], point[6][3], W[6][6], M[6][6], S[3][3], X[3][3], trace, mean, off, spread, half, angle;
+    double b00, b11, b22, determinant, zero_tips[6][3];
+    int i, j, k;
+    for (i = 0; i < 6; i++) {
+        zero_tips[i][0] = design->pivot[i][0] + design->crank_length[i] * design->cos_direction[i];
+        zero_tips[i][1] = design->pivot[i][1] + design->crank_length[i] * design->sin_direction[i];
+        zero_tips[i][2] = design->pivot[i][2];
+    }
+    *cranks_collide_at_zero = 0;
+    for (k = 0; k < 3; k++)
+        *cranks_collide_at_zero |= segment_distance(design->pivot[pairs[k][0]], zero_tips[pairs[k][0]],
+                                                    design->pivot[pairs[k][1]], zero_tips[pairs[k][1]])
+                                   - 2.0 * design->crank_radius < 0.0;
+    rotation_rpy(design->home[3], design->home[4], design->home[5], R);
+    *index = NAN;
+    *det_sign = 0.0;
+    if (!assemble(design, R, design->home, tip, point, W))
+        return;
+    *det_sign = determinant_sign(W);
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++) {
+            double sum = 0.0;
+            for (k = 0; k < 6; k++)
+                sum += W[k][i] * W[k][j];
+            M[i][j] = sum;
+        }
+    trace = M[0][0] + M[1][1] + M[2][2];
+    {
+        /* M_vv^-1 M_vw by Gaussian elimination of the 3x3 force block. */
+        double A[3][6], pivot, product = 1.0;
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) { A[i][j] = M[i][j]; A[i][3 + j] = M[i][3 + j]; }
+        for (k = 0; k < 3; k++) {
+            pivot = A[k][k];
+            product *= pivot;
+            if (k == 2 && !(product > KINGEN_TRANSLATION_SINGULAR * (trace / 3.0) * (trace / 3.0) * (trace / 3.0))) {
+                *index = 0.0;
+                return;
+            }
+            for (i = 0; i < 3; i++) {
+                double m;
+                if (i == k)
+                    continue;
+                m = A[i][k] / pivot;
+                for (j = k; j < 6; j++)
+                    A[i][j] -= m * A[k][j];
+            }
+        }
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++)
+                X[i][j] = A[i][3 + j] / A[i][i];
+    }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            S[i][j] = M[3 + i][3 + j] - (M[3 + i][0] * X[0][j] + M[3 + i][1] * X[1][j] + M[3 + i][2] * X[2][j]);
+    off = S[0][1] * S[0][1] + S[0][2] * S[0][2] + S[1][2] * S[1][2];
+    mean = (S[0][0] + S[1][1] + S[2][2]) / 3.0;
+    b00 = S[0][0] - mean; b11 = S[1][1] - mean; b22 = S[2][2] - mean;
+    determinant = b00 * (b11 * b22 - S[1][2] * S[1][2]) - S[0][1] * (S[0][1] * b22 - S[1][2] * S[0][2])
+                  + S[0][2] * (S[0][1] * S[1][2] - b11 * S[0][2]);
+    spread = sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0);
+    half = spread > 0.0 ? determinant / (2.0 * spread * spread * spread) : 1.0;
+    half = half > 1.0 ? 1.0 : (half < -1.0 ? -1.0 : half);
+    angle = acos(half) / 3.0;
+    mean += 2.0 * spread * cos(angle + 2.0 * M_PI / 3.0);
+    *index = sqrt(mean > 0.0 ? mean : 0.0);
 }
 
 /* For each azimuth a (radians): the index of the first tilt (tilts, radians, ascending from

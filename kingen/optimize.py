@@ -1,0 +1,230 @@
+"""The design search: the thesis's constriction particle swarm (pymoo's PSO with w = K,
+c1' = K c1, c2' = K c2, no adaptation, no perturbation of the best), then scipy's
+trust-constr from the swarm's best, over a robot file's design problem (:mod:`kingen.design`).
+
+Particles are evaluated through a ``concurrent.futures.Executor`` (a process pool, or Dask's
+distributed executor for a cluster); the swarm's random numbers come only from the seed, so
+a search gives the same result for any number of workers. After every iteration the whole
+state is written to a checkpoint, from which ``resume`` continues to the same result as an
+uninterrupted run.
+"""
+
+import contextlib
+import copy
+import json
+import pickle
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .design import evaluate
+from .errors import KingenError
+from .files import digest, write_atomic
+
+CHECKPOINT = "checkpoint.pkl"
+
+
+def evaluate_design(problem, x):
+    """(objective_deg, table, poses judged) of one design: what a worker runs."""
+    return evaluate(problem, x)
+
+
+@dataclass
+class SearchState:
+    """Everything a search needs to continue: the pymoo algorithm (swarm, velocities, its
+    random state), the best design so far, the history of the best objective per iteration,
+    and the counts."""
+
+    algorithm: object
+    seed: int
+    fingerprint: str
+    iteration: int = 0
+    evaluations: int = 0
+    poses: int = 0
+    best_x: np.ndarray = None
+    best_objective: float = -1.0
+    best_table: list = None
+    history: list = field(default_factory=list)
+    since_improvement: int = 0
+    seconds: float = 0.0
+
+
+def fingerprint(problem):
+    """What a checkpoint must have been made for: the robot file's data with its design
+    problem, but for the number of iterations (a resumed run may go further)."""
+    data = copy.deepcopy(problem.data)
+    data["optimize"].get("search", {}).pop("iterations", None)
+    return digest(json.dumps(data, sort_keys=True, default=str))
+
+
+def new_state(problem, seed, fingerprint):
+    """A swarm of ``search.swarm`` particles for ``problem``, seeded."""
+    from pymoo.algorithms.soo.nonconvex.pso import PSO
+    from pymoo.core.problem import Problem as PymooProblem
+
+    search = problem.section.search
+    k = search.constriction
+    algorithm = PSO(pop_size=search.swarm, w=k, c1=k * search.c1, c2=k * search.c2, adaptive=False,
+                    pertube_best=False, max_velocity_rate=1.0)
+    bounds = PymooProblem(n_var=len(problem.names), n_obj=1, xl=problem.lower, xu=problem.upper)
+    algorithm.setup(bounds, seed=seed, verbose=False)
+    return SearchState(algorithm=algorithm, seed=seed, fingerprint=fingerprint)
+
+
+def save(state, folder):
+    """Checkpoint ``state`` into ``folder`` (atomically)."""
+    write_atomic(folder / CHECKPOINT, pickle.dumps(state))
+
+
+def load(folder, expected):
+    """The SearchState checkpointed in ``folder``; KingenError when there is none or it was
+    made for another problem."""
+    path = folder / CHECKPOINT
+    try:
+        state = pickle.loads(path.read_bytes())
+    except FileNotFoundError:
+        raise KingenError(f"{path}: no checkpoint to resume from (run without --resume first)") from None
+    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, TypeError, ValueError) as error:
+        raise KingenError(f"{path}: not a kingen checkpoint ({type(error).__name__})") from None
+    if not isinstance(state, SearchState) or state.fingerprint != expected:
+        raise KingenError(f"{path}: the checkpoint is of another design problem (the robot file or its "
+                          "optimize: section changed)")
+    return state
+
+
+@contextlib.contextmanager
+def executor(workers=None, scheduler=None):
+    """(executor, description): Dask's distributed executor on the cluster at ``scheduler``,
+    else a pool of ``workers`` processes (default: the usable cores)."""
+    if scheduler is not None:
+        try:
+            from distributed import Client
+        except ImportError:
+            raise KingenError("--scheduler: Dask's 'distributed' package is not installed "
+                              "(pip install 'kingen[cluster]')") from None
+        try:
+            client = Client(scheduler, timeout="20s")
+        except OSError as error:
+            raise KingenError(f"--scheduler: no Dask scheduler at {scheduler} ({error})") from None
+        with client:
+            cores = sum(client.nthreads().values())
+            yield client.get_executor(), f"a Dask cluster at {scheduler} ({cores} threads)"
+        return
+    from concurrent.futures import ProcessPoolExecutor
+
+    from .verify.processes import comparing_processes
+
+    count = workers or comparing_processes()
+    with ProcessPoolExecutor(count) as pool:
+        yield pool, f"{count} worker process{'es' if count != 1 else ''}"
+
+
+def run_swarm(problem, state, executor, folder=None, progress=None, stop=None):
+    """Iterate the swarm until ``search.iterations`` or ``search.patience`` iterations without
+    improvement; checkpoint into ``folder`` after each iteration; ``progress(state)`` after
+    each. Returns the state."""
+    search = problem.section.search
+    started = time.perf_counter() - state.seconds
+    while state.iteration < search.iterations and state.since_improvement < search.patience:
+        if stop is not None and stop():
+            break
+        offspring = state.algorithm.ask()
+        designs = offspring.get("X")
+        results = list(executor.map(evaluate_design, [problem] * len(designs), designs))
+        objectives = np.array([result[0] for result in results])
+        offspring.set("F", -objectives[:, None])
+        state.algorithm.tell(infills=offspring)
+        state.iteration += 1
+        state.evaluations += len(designs)
+        state.poses += sum(result[2] for result in results)
+        best = int(np.argmax(objectives))
+        if objectives[best] > state.best_objective:
+            state.best_objective, state.best_x, state.best_table = float(objectives[best]), designs[best].copy(), \
+                results[best][1]
+            state.since_improvement = 0
+        else:
+            state.since_improvement += 1
+        state.history.append(state.best_objective)
+        state.seconds = time.perf_counter() - started
+        if folder is not None:
+            save(state, folder)
+        if progress is not None:
+            progress(state)
+    return state
+
+
+def refine(problem, state, executor):
+    """scipy's trust-constr from the swarm's best, maximising the objective within the
+    bounds with central differences of the refine section's absolute steps; returns
+    (design, objective, table, evaluations). Keeps the swarm's best unless it finds better."""
+    from scipy.optimize import Bounds, minimize
+
+    settings = problem.section.refine
+    if settings.method == "none" or state.best_x is None:
+        return state.best_x, state.best_objective, state.best_table, 0
+    steps = np.where(problem.angles, settings.angle_step, settings.length_step)
+    count = [0]
+    best = [state.best_x.copy(), state.best_objective, state.best_table]
+
+    def value(x):
+        objective, table, _ = evaluate_design(problem, x)
+        count[0] += 1
+        if objective > best[1]:
+            best[:] = [np.array(x, dtype=float), objective, table]
+        return -objective
+
+    def gradient(x):
+        plus = [np.clip(x + step * unit, problem.lower, problem.upper) for unit, step in zip(np.eye(len(x)), steps)]
+        minus = [np.clip(x - step * unit, problem.lower, problem.upper) for unit, step in zip(np.eye(len(x)), steps)]
+        points = plus + minus
+        results = list(executor.map(evaluate_design, [problem] * len(points), points))
+        count[0] += len(points)
+        for point, result in zip(points, results):
+            if result[0] > best[1]:
+                best[:] = [np.array(point, dtype=float), result[0], result[1]]
+        values = np.array([-result[0] for result in results])
+        widths = np.array([high[i] - low[i] for i, (high, low) in enumerate(zip(plus, minus))])
+        return (values[:len(x)] - values[len(x):]) / np.where(widths > 0, widths, 1.0)
+
+    with warnings.catch_warnings():  # a piecewise-constant objective: quasi-Newton warns of flat steps
+        warnings.simplefilter("ignore")
+        minimize(value, state.best_x, jac=gradient, method="trust-constr",
+                 bounds=Bounds(problem.lower, problem.upper), options={"maxiter": settings.iterations, "verbose": 0})
+    return best[0], best[1], best[2], count[0]
+
+
+
+def result(problem, state, best, refined_evaluations, workers, seconds):
+    """optimization.json's data for the search ``state`` and the ``best`` (design, objective,
+    table) after refinement."""
+    from .design import evaluate, settings_of
+
+    design, objective, table = best
+    start = problem.start()
+    start_objective, start_table, _ = evaluate(problem, start)
+    azimuths = settings_of(problem.section.objective).azimuths
+    robot = problem.robot(design)
+    search = problem.section.search
+    return {
+        "robot": robot.name, "posture": problem.posture(robot),
+        "objective_deg": objective, "start_objective_deg": start_objective,
+        "variables": [{"name": name, "value": float(value), "start": float(first), "lower": float(low),
+                       "upper": float(high)} for name, value, first, low, high in
+                      zip(problem.names, design, start, problem.lower, problem.upper)],
+        "tilt_table": _rows(azimuths, table), "start_tilt_table": _rows(azimuths, start_table),
+        "history": list(state.history), "iterations": state.iteration,
+        "stopped_by": "iterations" if state.iteration >= search.iterations else (
+            "patience" if state.since_improvement >= search.patience else "interrupted"),
+        "swarm_objective_deg": state.best_objective, "refinement_evaluations": refined_evaluations,
+        "evaluations": state.evaluations + refined_evaluations, "poses": state.poses, "seconds": seconds,
+        "seed": state.seed, "workers": workers,
+        "settings": {"objective": problem.section.objective.model_dump(), "search": {
+            **search.model_dump(), "constriction": search.constriction}, "refine": problem.section.refine.model_dump()},
+    }
+
+
+def _rows(azimuths, table):
+    return [{"azimuth_deg": float(azimuth), "max_tilt_deg": tilt, "cause": cause}
+            for azimuth, (tilt, cause) in zip(azimuths, table)]

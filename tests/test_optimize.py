@@ -1,0 +1,126 @@
+"""kingen optimize: reproducible for a seed on any number of workers and on a Dask cluster,
+resumable to the same result, its outputs complete (a robot file that builds and verifies,
+the JSON contract, a report a browser shows), bad input refused in one line."""
+
+import io
+import json
+import subprocess
+
+import pytest
+from ruamel.yaml import YAML
+
+from conftest import require_tool
+from kingen import optimize as search
+from kingen.cli import main
+from kingen.design import Problem
+from kingen.model import resolve_robot_path
+from kingen.robot_file import read_robot_file
+
+SMALL = {"search": {"swarm": 6, "iterations": 4, "c1": 2.8, "c2": 1.3},
+         "refine": {"iterations": 2}, "objective": {"posture": 21, "tilt_convention": "euler", "tilt_step": 1,
+                                                      "azimuth_step": 8, "tilt_max": 120, "collision": "thesis"}}
+
+
+@pytest.fixture(scope="module")
+def small_file(tmp_path_factory):
+    """rus_optimized with a small swarm and a coarse azimuth step: seconds, not minutes."""
+    data = read_robot_file(resolve_robot_path("rus_optimized"))[0]
+    data["optimize"] = {**data["optimize"], **SMALL}
+    data.pop("golden", None)
+    path = tmp_path_factory.mktemp("design") / "rus_small.yaml"
+    buffer = io.StringIO()
+    YAML().dump({**data, "name": "rus_small"}, buffer)
+    path.write_text(buffer.getvalue())
+    return path
+
+
+def _run(small_file, folder, *extra):
+    assert main(["optimize", str(small_file), "-o", str(folder), "--seed", "5", *extra]) == 0
+    return json.loads((folder / "optimization.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def two_workers(small_file, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("two")
+    return _run(small_file, folder, "--workers", "2"), folder
+
+
+def test_outputs_and_json_contract(two_workers, small_file):
+    result, folder = two_workers
+    assert {"objective_deg", "evaluations", "seconds", "variables", "tilt_table", "history", "settings",
+            "seed"} <= set(result)
+    assert result["objective_deg"] >= result["swarm_objective_deg"] >= max(result["history"][:1])
+    assert result["evaluations"] >= 6 * 4 and len(result["history"]) == 4 and len(result["tilt_table"]) == 45
+    assert min(row["max_tilt_deg"] for row in result["tilt_table"]) == result["objective_deg"]
+    assert result["settings"]["search"]["constriction"] == pytest.approx(0.7298, abs=1e-4)
+    design = folder / "rus_small_optimized.yaml"
+    assert main(["verify", str(design), "--samples", "500", "-o", str(folder / "build")]) == 0
+    data = read_robot_file(design)[0]
+    problem = Problem(data, design)
+    assert list(problem.start()) == pytest.approx([variable["value"] for variable in result["variables"]], abs=1e-6)
+
+
+def test_the_same_seed_gives_the_same_search_on_one_worker(two_workers, small_file, tmp_path):
+    result, _ = two_workers
+    other = _run(small_file, tmp_path, "--workers", "1")
+    for key in ("objective_deg", "history", "variables", "tilt_table", "evaluations"):
+        assert other[key] == result[key]
+
+
+def test_a_dask_cluster_gives_the_same_result(two_workers, small_file, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    result, _ = two_workers
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        other = _run(small_file, tmp_path, "--scheduler", cluster.scheduler_address)
+    assert other["workers"].startswith("a Dask cluster")
+    for key in ("objective_deg", "history", "variables"):
+        assert other[key] == result[key]
+
+
+def test_a_stopped_run_resumes_to_the_same_result(two_workers, small_file, tmp_path, monkeypatch):
+    result, _ = two_workers
+    calls = {"count": 0}
+    original = search.save
+
+    def stop_after_two(state, folder):
+        original(state, folder)
+        calls["count"] += 1
+        if calls["count"] == 2:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(search, "save", stop_after_two)
+    assert main(["optimize", str(small_file), "-o", str(tmp_path), "--seed", "5", "--workers", "1"]) == 130
+    assert (tmp_path / search.CHECKPOINT).is_file() and not (tmp_path / "optimization.json").exists()
+    monkeypatch.setattr(search, "save", original)
+    resumed = _run(small_file, tmp_path, "--workers", "1", "--resume")
+    for key in ("objective_deg", "history", "variables", "evaluations"):
+        assert resumed[key] == result[key]
+
+
+def test_bad_input_is_one_line(small_file, tmp_path, capsys):
+    assert main(["optimize", "hexapod", "-o", str(tmp_path / "a")]) == 2
+    assert "optimize: no design problem in this robot file" in capsys.readouterr().err
+    assert main(["optimize", str(small_file), "-o", str(tmp_path / "b"), "--resume"]) == 2
+    assert "no checkpoint to resume from" in capsys.readouterr().err
+    data = read_robot_file(small_file)[0]
+    data["optimize"]["variables"][0]["field"] = "layout.crank_directoins"
+    bad = tmp_path / "bad.yaml"
+    buffer = io.StringIO()
+    YAML().dump(data, buffer)
+    bad.write_text(buffer.getvalue())
+    assert main(["optimize", str(bad), "-o", str(tmp_path / "c")]) == 2
+    error = capsys.readouterr().err.strip()
+    assert len(error.splitlines()) == 1 and "optimize.variables[0].field" in error
+    assert not (tmp_path / "c").exists()
+
+
+def test_the_report_in_a_real_browser(two_workers):
+    require_tool("chromium", "chromium")
+    _, folder = two_workers
+    page = (folder / "report.html").read_text()
+    assert "<script" not in page and page.count('src="data:image/png;base64,') == 2
+    shot = folder / "report.png"
+    subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--window-size=1200,2400",
+                    f"--screenshot={shot}", (folder / "report.html").as_uri()], check=True, capture_output=True,
+                   timeout=120)
+    assert shot.stat().st_size > 20000
