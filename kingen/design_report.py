@@ -39,8 +39,8 @@ def polar_comparison(result):
                      label=f"best design stopped by {LABELS.get(cause, cause)}")
     axes.set_ylim(0.0, cap)
     axes.set_rlabel_position(67.5)
-    axes.set_title(f"{result['robot']}: largest tilt towards each azimuth (deg; outer circle {cap:g} deg, "
-                   "the largest searched)", fontsize=10)
+    axes.set_title(f"{result['robot']}: largest tilt towards each azimuth\n"
+                   f"radius: tilt (deg), outer circle {cap:g} deg, the largest searched", fontsize=10)
     figure.legend(loc="outside lower center", ncol=1, fontsize=8, frameon=False)
     return _png(figure)
 

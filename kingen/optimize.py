@@ -13,6 +13,7 @@ import contextlib
 import copy
 import json
 import pickle
+import signal
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -94,6 +95,11 @@ def load(folder, expected):
     return state
 
 
+def _ignore_interrupts():
+    """In a worker: Ctrl-C is the parent's to handle (it checkpoints and stops the pool)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @contextlib.contextmanager
 def executor(workers=None, scheduler=None):
     """(executor, description): Dask's distributed executor on the cluster at ``scheduler``,
@@ -117,7 +123,7 @@ def executor(workers=None, scheduler=None):
     from .verify.processes import comparing_processes
 
     count = workers or comparing_processes()
-    with ProcessPoolExecutor(count) as pool:
+    with ProcessPoolExecutor(count, initializer=_ignore_interrupts) as pool:
         yield pool, f"{count} worker process{'es' if count != 1 else ''}"
 
 
