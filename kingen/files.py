@@ -7,11 +7,13 @@ sibling folder that then takes the target's place. The cache (``$KINGEN_CACHE``,
 stamp records the hash of what they built.
 """
 
+import contextlib
 import hashlib
 import json
 import os
 import pwd
 import shutil
+import stat
 import tempfile
 from pathlib import Path
 
@@ -28,21 +30,72 @@ def umask():
 
 
 def write_atomic(path, content, executable=False):
-    """Write text or bytes to ``path`` through a temporary file and a rename. The file gets
-    the permissions the user's umask gives a new file (0644 under umask 022; 0755 when
-    ``executable``), never the temporary file's 0600."""
+    """Write text or bytes to ``path`` whole or not at all, through a temporary file and a
+    rename; the file gets the permissions the user's umask gives a new file (0644 under umask
+    022; 0755 when ``executable``), never the temporary file's 0600. A symbolic link is kept
+    and its target written. An existing file that is not a regular file (a device such as
+    /dev/null or /dev/stdout, a FIFO) is written in place, never replaced. Folders made for
+    the file are removed again when it cannot be written. KingenError names ``path`` and the
+    cause (a full disk, a folder without permission)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     data = content.encode() if isinstance(content, str) else content
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:
+        status = os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        status = None
+    except OSError as error:
+        raise KingenError(f"{path}: cannot write ({error.strerror or error})") from None
+    if status is not None and stat.S_ISDIR(status.st_mode):
+        raise KingenError(f"{path}: is a folder, not a file")
+    if status is not None and not stat.S_ISREG(status.st_mode):
+        try:
+            with open(path, "wb") as stream:
+                stream.write(data)
+        except OSError as error:
+            raise KingenError(f"{path}: cannot write ({error.strerror or error})") from None
+        return
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    created = _missing_folders(target.parent)
+    temporary = None
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
         with os.fdopen(handle, "wb") as stream:
             stream.write(data)
         os.chmod(temporary, (0o777 if executable else 0o666) & ~umask())
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
+        os.replace(temporary, target)
+    except BaseException as error:
+        if temporary is not None:
+            Path(temporary).unlink(missing_ok=True)
+        for folder in reversed(created):
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        if isinstance(error, OSError):
+            raise KingenError(f"{path}: cannot write ({error.strerror or error})") from None
         raise
+
+
+def _missing_folders(folder):
+    """The folders from the first missing ancestor of ``folder`` down to it, outermost first."""
+    missing = []
+    while not folder.exists() and folder != folder.parent:
+        missing.append(folder)
+        folder = folder.parent
+    return list(reversed(missing))
+
+
+def writable_folder(folder):
+    """Refuse (KingenError) an output folder kingen could not write, before any work: the
+    folder, or its nearest existing ancestor that kingen would create it in, must be a
+    writable folder."""
+    folder = Path(folder)
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise KingenError(f"{folder}: {existing} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise KingenError(f"{folder}: folder {existing} is not writable")
 
 
 def default_out_dir(robot):
@@ -129,15 +182,68 @@ def _password_home():
         return ""
 
 
-def cached(folder, library, make):
-    """``library`` in cache ``folder``, made by ``make()`` unless the folder's stamp records
-    exactly its hash (a truncated or foreign file is rebuilt, never trusted)."""
+def cached(folder, library, make, sources=()):
+    """``library`` in cache ``folder``, made by ``make()`` unless it is there intact: the
+    folder and the cache above it private to this user (see private_folder), every file of
+    ``sources`` ({path in folder: text}, what ``make`` writes) holding exactly the text kingen
+    computes, and the library holding the hash the stamp beside it records (a truncated or
+    foreign file is rebuilt, never trusted)."""
+    private_folder(folder.parent)
+    private_folder(folder)
     stamp = folder / "stamp.json"
-    if read_stamp(stamp, "library_sha256") == file_digest(library) is not None:
+    texts = dict(sources)
+    intact = all(_reads(folder / name) == text for name, text in texts.items())
+    for path in (library, stamp, *(folder / name for name in texts)):
+        private_file(path)
+    if intact and read_stamp(stamp, "library_sha256") == file_digest(library) is not None:
         return
+    mask = os.umask(0o077)  # what kingen caches is this user's alone, whatever the umask
     try:
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
         make()
         write_atomic(stamp, json.dumps({"library_sha256": file_digest(library)}) + "\n")
     except PermissionError as error:
         raise KingenError(f"kingen's cache folder {folder} is not writable ({error.strerror}): "
                           "set KINGEN_CACHE to a folder of your own") from None
+    finally:
+        os.umask(mask)
+
+
+def _reads(path):
+    try:
+        return Path(path).read_text()
+    except (OSError, UnicodeDecodeError):
+        return None
+
+
+def private_folder(folder):
+    """Refuse (KingenError) a cache folder kingen would run code from that another user could
+    have written: one owned by another user, writable by group or others, or a symlink (as
+    git's safe.directory refuses a repository another user owns). A missing folder is fine:
+    kingen creates it, private."""
+    try:
+        status = os.lstat(folder)
+    except FileNotFoundError:
+        return
+    if stat.S_ISLNK(status.st_mode) or not stat.S_ISDIR(status.st_mode):
+        problem = "is a symbolic link" if stat.S_ISLNK(status.st_mode) else "is not a folder"
+    elif status.st_uid != os.getuid():
+        problem = f"is owned by another user (uid {status.st_uid})"
+    elif status.st_mode & 0o022:
+        problem = f"is writable by {'others' if status.st_mode & 0o002 else 'its group'}"
+    else:
+        return
+    raise KingenError(f"kingen's cache folder {folder} {problem}: kingen will not run code another user could "
+                      "have put there; set KINGEN_CACHE to a folder of your own")
+
+
+def private_file(path):
+    """Refuse (KingenError) a cached file another user owns or may write; a missing one is fine."""
+    try:
+        status = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if stat.S_ISREG(status.st_mode) and status.st_uid == os.getuid() and not status.st_mode & 0o022:
+        return
+    raise KingenError(f"kingen's cached file {path} is not a private regular file of this user: kingen will not "
+                      "use it; set KINGEN_CACHE to a folder of your own")

@@ -50,7 +50,7 @@ def _library():
         write_atomic(folder / "tilt_judge.c", source)
         compile_c([folder / "tilt_judge.c"], library, ["-O3", "-funroll-loops", "-shared", "-fPIC", "-lm"])
 
-    cached(folder, library, make)
+    cached(folder, library, make, {"tilt_judge.c": source})
     ffi = cffi.FFI()
     ffi.cdef(DECLARATIONS)
     return ffi, ffi.dlopen(str(library))

@@ -20,8 +20,23 @@ EXIT_INTERNAL = 3
 DEFAULT_HOST = "delmia"
 
 ROBOT = click.argument("robot", metavar="ROBOT")
+
+
+def _out_folder(context, parameter, path):
+    """An output folder is checked before the work, not after it: it, or the existing folder
+    it would be made in, must be a writable folder."""
+    from ..files import writable_folder
+
+    if path is not None:
+        try:
+            writable_folder(path)
+        except KingenError as error:
+            raise click.BadParameter(str(error)) from None
+    return path
+
+
 OUT_DIR = click.option(
-    "-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+    "-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None, callback=_out_folder,
     help="Output folder [default: build/<name>].",
 )
 
@@ -43,12 +58,56 @@ def _routine_name(context, parameter, value):
     return value
 
 
+def _pose(context, parameter, values):
+    """A pose option: six finite numbers, x y z within +/-MAX_MM mm, angles within +/-720 degrees."""
+    from ..schema import MAX_DEGREES
+
+    if values is not None and not (all(math.isfinite(v) for v in values) and all(abs(v) <= MAX_MM for v in values[:3])
+                                   and all(abs(v) <= MAX_DEGREES for v in values[3:])):
+        raise click.BadParameter(f"x y z must be finite and within +/-{MAX_MM:g} mm, angles within "
+                                 f"+/-{MAX_DEGREES:g} degrees")
+    return values
+
+
+RIGID = 1e-6
+"""How far T6's rotation may be from orthonormal (largest entry of |R^T R - I|) to be taken as one."""
+
+
+def _t6(context, parameter, values):
+    """A T6 option: 16 finite numbers, rows n, o, a, p each ending in 0, 0, 0, 1, position
+    within +/-MAX_MM mm, and n, o, a a right-handed orthonormal frame (a rigid transform)."""
+    if values is None:
+        return values
+    import numpy as np
+
+    matrix = np.asarray(values, dtype=float).reshape(4, 4)
+    if not np.all(np.isfinite(matrix)):
+        raise click.BadParameter("16 finite numbers expected")
+    if not np.array_equal(matrix[:, 3], [0.0, 0.0, 0.0, 1.0]):
+        raise click.BadParameter("each row n, o, a, p ends in its 0/1 entry: 0 0 0 1")
+    if np.max(np.abs(matrix[3, :3])) > MAX_MM:
+        raise click.BadParameter(f"the position p must be within +/-{MAX_MM:g} mm")
+    rotation = matrix[:3, :3]
+    miss = float(np.max(np.abs(rotation @ rotation.T - np.eye(3))))
+    if miss > RIGID or np.linalg.det(rotation) < 0:
+        raise click.BadParameter(f"not a rigid transform: rows n, o, a are not a right-handed orthonormal frame "
+                                 f"(largest |R R^T - I| entry {miss:.3g}, determinant {np.linalg.det(rotation):.3g})")
+    return values
+
+
 def _output_file(context, parameter, path):
-    """Report paths are checked before the run, not after it."""
+    """Report paths are checked before the run, not after it: a folder that exists and may be
+    written, or an existing file that is not a regular one (/dev/stdout, a FIFO) and may be
+    written in place; a symbolic link is judged by its target."""
     if path is not None:
-        folder = path.parent
         if path.is_dir():
             raise click.BadParameter(f"{path} is a folder")
+        if path.exists() and not path.is_file():
+            if not os.access(path, os.W_OK):
+                raise click.BadParameter(f"{path} is not writable")
+            return path
+        target = Path(os.path.realpath(path)) if path.is_symlink() else path
+        folder = target.parent
         if not folder.is_dir():
             raise click.BadParameter(f"folder {folder} does not exist")
         if not os.access(folder, os.W_OK):

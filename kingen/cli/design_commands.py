@@ -10,12 +10,12 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
-from .common import ROBOT, _output_file, cli, finite, load_model, say
+from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model, say
 
 
 @cli.command()
 @ROBOT
-@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None, callback=_out_folder,
               help="Output and checkpoint folder [default: build/<name>/optimize].")
 @click.option("--seed", type=click.IntRange(min=0), default=1, show_default=True,
               help="The swarm's seed: the same seed gives the same search on any number of workers.")

@@ -10,8 +10,9 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
-from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, calibration_options, cli,
-                     finite, in_child, load_model, print_table, routine_to_check, say, shorten, solve_job)
+from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _out_folder, _output_file, _pose, _t6,
+                     calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check, say,
+                     shorten, solve_job)
 
 
 @cli.command("list")
@@ -30,9 +31,9 @@ def list_robots():
 @cli.command()
 @ROBOT
 @OUT_DIR
-@click.option("--pose", nargs=6, type=float, metavar="X Y Z ROLL PITCH YAW",
+@click.option("--pose", nargs=6, type=float, metavar="X Y Z ROLL PITCH YAW", callback=_pose,
               help="Platform pose: mm and degrees, R = Rz(yaw) Ry(pitch) Rx(roll).")
-@click.option("--t6", nargs=16, type=float, metavar="16 NUMBERS",
+@click.option("--t6", nargs=16, type=float, metavar="16 NUMBERS", callback=_t6,
               help="DELMIA's T6, row by row: n, o, a, p rows, each with its 0/1 last entry.")
 @click.option("--degrees", is_flag=True, help="Show revolute joints in degrees (the plugin works in radians).")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -81,7 +82,7 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     say(f"routine returned {calls.returned[0]}")
     say(_indices_note(model))
     if switch is not None:
-        _predict_switch(model, matrix[0], expected.joints[0], switch, scale, units)
+        _predict_switch(model, matrix[0], expected, switch, scale, units)
     if json_path is not None:
         write_atomic(json_path, json.dumps(finite({
             "robot": model.name, "routine": routine, "t6": matrix[0].tolist(), "returned": int(calls.returned[0]),
@@ -100,16 +101,23 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     return 0
 
 
-def _predict_switch(model, t6, joints, switch, scale, units):
-    """What a host that recomputes the TCP from posture B's joints may do after A -> B."""
+def _predict_switch(model, t6, expected, switch, scale, units):
+    """What a host that recomputes the TCP from posture B's joints may do after A -> B; no
+    prediction when A or B is unreachable at the pose."""
     import numpy as np
 
     from ..conventions import pose_from_t6, wrap_angle
     from ..forward import assemblies
+    from ..routine import WARNINGS
 
     first, second = switch
     if max(first, second) >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--switch")
+    unreachable = [k for k in (first, second) if expected.warnings[0, k] == WARNINGS["WARN_UNREACHABLE"]]
+    if unreachable:
+        say(f"switch {first} -> {second}: posture {unreachable[0]} is unreachable at this pose; no switch to predict")
+        return
+    joints = expected.joints[0]
     if not model.has_forward:
         say(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)")
         return
@@ -156,7 +164,7 @@ def _indices_note(model):
               help="The joints, mm (prismatic) and degrees (revolute), space-separated in one argument "
                    "or as the remaining arguments.")
 @click.argument("more_joints", nargs=-1, type=click.UNPROCESSED, metavar="")
-@click.option("--near", nargs=6, type=float, default=None, metavar="X Y Z ROLL PITCH YAW",
+@click.option("--near", nargs=6, type=float, default=None, metavar="X Y Z ROLL PITCH YAW", callback=_pose,
               help="The pose to measure distances from and to take non-free coordinates from "
                    "[default: the verification home].")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -217,7 +225,7 @@ def fk(robot, joints, more_joints, near, json_path, search):
 @ROBOT
 @click.option("--posture", type=click.IntRange(min=0), default=None,
               help="The posture (assembly mode) to analyse [default: the robot's working_posture].")
-@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None, callback=_out_folder,
               help="Output folder [default: build/<name>/analysis].")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Also write analysis.json to this file.")

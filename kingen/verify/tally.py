@@ -250,6 +250,10 @@ def _rows(result, keep):
                               and getattr(result, item.name).shape[:1] == (count,)})
 
 
+ZERO_LENGTH = 1e-9
+"""A passive link shorter than this fraction of the robot's size has no direction: singular."""
+
+
 def closure_error(robot, expected, solutions):
     """(largest |closure residual| / passive-link length, joints judged): each limb's joint
     of each of its branches, as the routine returned it in the first posture taking that
@@ -257,7 +261,8 @@ def closure_error(robot, expected, solutions):
     values check holds every other posture to the same reference. Only postures the
     reference calls reachable count; NaN joints count as infinitely wrong. Limbs in their
     singular band are left out: there, with -1e-5 <= D < 0, the joint is the limb's closest
-    approach, which misses closing by design (by up to D l / 2)."""
+    approach, which misses closing by design (by up to D l / 2); so are links of no length
+    (at most ZERO_LENGTH of the robot's size)."""
     representative = representative_postures(robot)
     reachable = expected.warnings != UNREACHABLE
     closing = np.abs(expected.radicands) > SINGULAR_TOLERANCE + WARNING_BAND
@@ -269,7 +274,8 @@ def closure_error(robot, expected, solutions):
             with np.errstate(all="ignore"):
                 relative = miss / length
             relative = np.where(np.isfinite(relative), relative, np.inf)
-            judged = reachable[:, posture] & closing[:, index]
+            # A link of no length (a leg whose ends meet) is singular: nothing to close.
+            judged = reachable[:, posture] & closing[:, index] & ~(length <= ZERO_LENGTH * robot.size_mm)
             judged_count += int(np.count_nonzero(judged))
             if np.any(judged):
                 worst = max(worst, float(np.max(np.where(judged, relative, 0.0))))

@@ -41,7 +41,7 @@ def host_support(timeout=DEFAULT_TIMEOUT):
         write_atomic(folder / "kingen_host.c", source)
         compile_c([folder / "kingen_host.c"], library, [*STRICT_C89, *SHARED_FLAGS, f"-I{include}"], timeout=timeout)
 
-    cached(folder, library, make)
+    cached(folder, library, make, {"include/shlibdefs.h": header, "kingen_host.c": source})
     return include, library
 
 
@@ -67,7 +67,7 @@ def windows_host_import_library(timeout=DEFAULT_TIMEOUT):
                   [*STRICT_C89, "-O2", "-shared", f"-I{include}", f"-Wl,--out-implib,{import_library}"],
                   compiler=command, timeout=timeout)
 
-    cached(folder, import_library, make)
+    cached(folder, import_library, make, {"kingen_host.c": host_source()})
     return import_library
 
 

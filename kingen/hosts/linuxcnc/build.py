@@ -46,7 +46,7 @@ def harness(timeout=DEFAULT_TIMEOUT):
         write_atomic(folder / "kingen_hal.c", source)
         compile_c([folder / "kingen_hal.c"], library, list(HARNESS_FLAGS), timeout=timeout)
 
-    cached(folder, library, make)
+    cached(folder, library, make, {"kingen_hal.c": source})
     return library
 
 
