@@ -7,6 +7,7 @@ sibling folder that then takes the target's place. The cache (``$KINGEN_CACHE``,
 stamp records the hash of what they built.
 """
 
+import contextlib
 import hashlib
 import json
 import os
@@ -28,16 +29,25 @@ def umask():
 
 
 def write_atomic(path, content, executable=False):
-    """Write text or bytes to ``path`` through a temporary file and a rename. The file gets
-    the permissions the user's umask gives a new file (0644 under umask 022; 0755 when
-    ``executable``), never the temporary file's 0600."""
+    """Write text or bytes to ``path`` through a temporary file and a rename (see
+    :func:`atomic_file`): ``path`` holds either its old content or all of ``content``."""
+    data = content.encode() if isinstance(content, str) else content
+    with atomic_file(path, executable) as stream:
+        stream.write(data)
+
+
+@contextlib.contextmanager
+def atomic_file(path, executable=False):
+    """A binary stream to a temporary file beside ``path``, which takes ``path``'s place when
+    the block ends normally; on any exception it is removed and ``path`` is left as it was.
+    The file gets the permissions the user's umask gives a new file (0644 under umask 022;
+    0755 when ``executable``), never the temporary file's 0600."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    data = content.encode() if isinstance(content, str) else content
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:
         with os.fdopen(handle, "wb") as stream:
-            stream.write(data)
+            yield stream
         os.chmod(temporary, (0o777 if executable else 0o666) & ~umask())
         os.replace(temporary, path)
     except BaseException:
