@@ -24,9 +24,13 @@ def read_limited(path, limit, what):
     except OSError as error:
         raise located(path, None, None, f"cannot be read: {error.strerror}") from None
     if len(data) > limit:
-        size = f"{limit >> 20} MB" if limit >= 1 << 20 else f"{limit // 1000} kB"
-        raise located(path, None, None, f"larger than {size}; {what}")
+        raise located(path, None, None, f"larger than {size_text(limit)}; {what}")
     return data
+
+
+def size_text(limit):
+    """A byte limit in words: '64 MB' (MiB), '100 kB'."""
+    return f"{limit >> 20} MB" if limit >= 1 << 20 else f"{limit // 1000} kB"
 
 
 class PluginDefect(KingenError):

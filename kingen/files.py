@@ -30,15 +30,23 @@ def umask():
 
 
 def write_atomic(path, content, executable=False):
-    """Write text or bytes to ``path`` whole or not at all, through a temporary file and a
-    rename; the file gets the permissions the user's umask gives a new file (0644 under umask
-    022; 0755 when ``executable``), never the temporary file's 0600. A symbolic link is kept
-    and its target written. An existing file that is not a regular file (a device such as
-    /dev/null or /dev/stdout, a FIFO) is written in place, never replaced. Folders made for
-    the file are removed again when it cannot be written. KingenError names ``path`` and the
-    cause (a full disk, a folder without permission)."""
-    path = Path(path)
+    """Write text or bytes to ``path`` whole or not at all (see :func:`atomic_file`)."""
     data = content.encode() if isinstance(content, str) else content
+    with atomic_file(path, executable) as stream:
+        stream.write(data)
+
+
+@contextlib.contextmanager
+def atomic_file(path, executable=False):
+    """A binary stream whose bytes reach ``path`` whole or not at all: written to a temporary
+    file beside it that takes its place when the block ends normally; on any exception the
+    temporary file and the folders made for it are removed and ``path`` is left as it was.
+    The file gets the permissions the user's umask gives a new file (0644 under umask 022;
+    0755 when ``executable``), never the temporary file's 0600. A symbolic link is kept and
+    its target written. An existing file that is not a regular file (a device such as
+    /dev/null or /dev/stdout, a FIFO) is written in place, never replaced. KingenError names
+    ``path`` and the cause (a full disk, a folder without permission)."""
+    path = Path(path)
     try:
         status = os.stat(path)
     except (FileNotFoundError, NotADirectoryError):
@@ -50,7 +58,7 @@ def write_atomic(path, content, executable=False):
     if status is not None and not stat.S_ISREG(status.st_mode):
         try:
             with open(path, "wb") as stream:
-                stream.write(data)
+                yield stream
         except OSError as error:
             raise KingenError(f"{path}: cannot write ({error.strerror or error})") from None
         return
@@ -61,7 +69,7 @@ def write_atomic(path, content, executable=False):
         target.parent.mkdir(parents=True, exist_ok=True)
         handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
         with os.fdopen(handle, "wb") as stream:
-            stream.write(data)
+            yield stream
         os.chmod(temporary, (0o777 if executable else 0o666) & ~umask())
         os.replace(temporary, target)
     except BaseException as error:

@@ -7,11 +7,16 @@ items ``build``, ``interface``, ``values``, ``warnings``, ``closure``, ``jacobia
 it, so ``-k "tau and golden"`` selects them. Each file is built and verified once per
 process (in a child process, as ``kingen verify`` does); a failing item shows its checks'
 details and diagnoses, and points at the robot file's line. ``--kingen-samples N`` sets the
-poses (default 2000), ``--kingen-host NAME`` the host (default delmia). Works with
-pytest-xdist and ``--junitxml``.
+poses (default 2000; below 1 is a usage error), ``--kingen-host NAME`` the host (default
+delmia). A robot file reached twice (through a symlink, a symlink loop) is collected once,
+under the first path found; a robot file that cannot be read (a dangling symlink) is a
+failing ``build`` item. A snapshot verify refuses fails the ``snapshot`` item alone: the
+other items are verified without it. Works with pytest-xdist and ``--junitxml``.
 """
 
+import argparse
 import atexit
+import os
 import shutil
 import tempfile
 from pathlib import Path
@@ -37,11 +42,23 @@ def item_checks(host):
     return {name: tuple(checks) for name, checks in items.items()}
 
 
+def sample_count(text):
+    """``--kingen-samples``'s value: a whole number of poses, at least 1; else
+    argparse.ArgumentTypeError (pytest makes it a usage error)."""
+    try:
+        count = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of poses") from None
+    if count < 1:
+        raise argparse.ArgumentTypeError(f"{count} poses: give at least 1")
+    return count
+
+
 def pytest_addoption(parser):
     group = parser.getgroup("kingen", "kingen robot definitions as tests")
     group.addoption("--kingen", action="append", default=[], metavar="DIR",
                     help="collect every robot YAML in DIR as kingen tests (repeatable)")
-    group.addoption("--kingen-samples", type=int, default=None, metavar="N",
+    group.addoption("--kingen-samples", type=sample_count, default=None, metavar="N",
                     help=f"poses each robot is verified on (default {DEFAULT_SAMPLES})")
     group.addoption("--kingen-host", default="delmia", metavar="NAME",
                     help="the host each robot is built for and verified against (default delmia)")
@@ -70,20 +87,62 @@ def _within(path, folder):
         return False
 
 
+_COLLECTED = pytest.StashKey[set]()
+
+
+def _first_time(config, path):
+    """True the first time this session meets the file at real path ``path`` (however reached)."""
+    seen = config.stash.setdefault(_COLLECTED, set())
+    real = os.path.realpath(path)
+    if real in seen:
+        return False
+    seen.add(real)
+    return True
+
+
+def _is_robot_file(path, config):
+    """Whether ``path`` names a robot YAML lying in a kingen folder (a symlink by where it
+    lies, wherever it points)."""
+    location = Path(os.path.realpath(path.parent)) / path.name
+    return path.suffix in ROBOT_SUFFIXES and any(location.is_relative_to(folder) for folder in _folders(config))
+
+
 def pytest_collect_file(file_path, parent):
-    if file_path.suffix in ROBOT_SUFFIXES and any(_within(file_path, folder) for folder in _folders(parent.config)):
+    """A RobotFile for a robot YAML in a kingen folder, unless this session already
+    collected the file it is (by real path)."""
+    if _is_robot_file(file_path, parent.config) and _first_time(parent.config, file_path):
         return RobotFile.from_parent(parent, path=file_path)
     return None
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_make_collect_report(collector):
+    """A folder's collection also gives its robot files that pytest passes over because they
+    cannot be opened (dangling symlinks): each is a RobotFile whose ``build`` item fails."""
+    report = yield
+    if (isinstance(collector, pytest.Directory) and report.passed
+            and any(_within(collector.path, folder) for folder in _folders(collector.config))):
+        for entry in sorted(os.scandir(collector.path), key=lambda entry: entry.name):
+            path = Path(entry.path)
+            if (entry.is_symlink() and not path.exists() and _is_robot_file(path, collector.config)
+                    and _first_time(collector.config, path)):
+                report.result.append(RobotFile.from_parent(collector, path=path))
+    return report
 
 
 class RobotFile(pytest.File):
     """A robot YAML: built and verified once, on first use, by any of its items."""
 
     def collect(self):
-        from .errors import KingenError
+        from .errors import KingenError, located
         from .model import load_robot
         from .snapshot import snapshot_path
 
+        if not self.path.exists():
+            problem = located(self.path, None, None, f"the symlink's target {os.readlink(self.path)} does not exist"
+                              if self.path.is_symlink() else "does not exist")
+            yield KingenItem.from_parent(self, name="build", problem=str(problem))
+            return
         try:
             robot = load_robot(self.path)
         except KingenError as error:
@@ -98,9 +157,15 @@ class RobotFile(pytest.File):
             yield KingenItem.from_parent(self, name="snapshot", line=1)
 
     def outcome(self):
-        """(report, problem): the verification of this file, run once per process."""
+        """(report, problem, snapshot problem): the verification of this file, run once per
+        process whatever its end (an exception is raised again to every item asking)."""
         if not hasattr(self, "_outcome"):
-            self._outcome = self._verify()
+            try:
+                self._outcome = self._verify()
+            except Exception as error:
+                self._outcome = error
+        if isinstance(self._outcome, Exception):
+            raise self._outcome
         return self._outcome
 
     def _verify(self):
@@ -108,16 +173,22 @@ class RobotFile(pytest.File):
         from .snapshot import load, snapshot_path
         from .verify import VerifyOptions, verify_library
 
-        samples = self.config.getoption("kingen_samples") or DEFAULT_SAMPLES
+        samples = self.config.getoption("kingen_samples")
+        samples = DEFAULT_SAMPLES if samples is None else samples
+        snapshot, snapshot_problem = None, None
+        if snapshot_path(self.path).is_file():
+            try:
+                snapshot = load(snapshot_path(self.path), self.robot)
+            except KingenError as error:
+                snapshot_problem = str(error)
         try:
             host = _host(self.config)
-            snapshot = load(snapshot_path(self.path), self.robot) if snapshot_path(self.path).is_file() else None
             result = host.build(self.robot, _build_folder() / self.robot.name)
             report = verify_library(self.robot, result.library, result.routine,
                                     VerifyOptions(samples=samples, snapshot=snapshot, processes=None), host=host)
         except KingenError as error:
-            return None, str(error)
-        return report, None
+            return None, str(error), snapshot_problem
+        return report, None, snapshot_problem
 
 
 class KingenFailure(Exception):
@@ -133,7 +204,9 @@ class KingenItem(pytest.Item):
     def runtest(self):
         if self.problem is not None:
             raise KingenFailure(self.problem)
-        report, problem = self.parent.outcome()
+        report, problem, snapshot_problem = self.parent.outcome()
+        if self.name == "snapshot" and snapshot_problem is not None:
+            raise KingenFailure(snapshot_problem)
         if problem is not None:
             raise KingenFailure(("the build failed: " if self.name == "build" else "not verified: ") + problem)
         names = item_checks(_host(self.config)).get(self.name, (self.name,))

@@ -7,8 +7,10 @@ refused before it can cost time or memory. Every refusal is one located
 - at most ``MAX_FILE_BYTES`` of UTF-8 text;
 - at most ``MAX_DEPTH`` levels of nested collections (checked on the raw text for flow
   brackets, whose parsing is quadratic in depth, then on the parser's events);
-- anchors and aliases are allowed, but the document they expand to has at most
-  ``MAX_NODES`` nodes, and an alias may not refer to a collection that contains it;
+- anchors and aliases are allowed, but each anchor is defined once (YAML 1.2 lets a later
+  ``&a`` redefine an earlier one, which a reader of ``*a`` easily misses), the document
+  they expand to has at most ``MAX_NODES`` nodes, and an alias may not refer to a
+  collection that contains it;
 - one document; keys are text and appear once per mapping; no tags;
 - numbers follow YAML 1.2 (``031`` is 31, ``6:39`` is text, ``3.99413e2`` is a number);
 - text holds no control, bidi or other invisible characters (they could disguise what a
@@ -134,11 +136,19 @@ class _Collection:
 
 
 def _check_events(events, shown):
-    """Depth, expanded size and duplicate keys from the parser's events, before anything is built."""
+    """Depth, expanded size, duplicate keys and anchors from the parser's events, before
+    anything is built (so ruamel's warnings about them never reach stderr)."""
     sizes = {}
+    anchors = {}
     stack = []
     for event in events:
         line = event.start_mark.line + 1
+        if getattr(event, "anchor", None) and not isinstance(event, AliasEvent):
+            if event.anchor in anchors:
+                path = stack[-1].child_path() if stack else ()
+                raise located(shown, line, dotted(path), f"anchor &{event.anchor} is defined again (first on line "
+                                                         f"{anchors[event.anchor]}); give each anchor its own name")
+            anchors[event.anchor] = line
         if isinstance(event, CollectionStartEvent):
             path = stack[-1].child_path() if stack else ()
             stack.append(_Collection(path, event.anchor, isinstance(event, MappingStartEvent)))

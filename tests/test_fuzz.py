@@ -4,7 +4,11 @@
   build, verify and pass: kingen's plugin and reference agree wherever they are.
 - Random mutations of valid robot files, in their text and in their structure, end in
   exit 0 or 2 within seconds, with one error line, never a traceback, and leave no files.
+- Random mutations of a recorded snapshot are refused in one line naming the file, or
+  checked; any text given to the pytest plugin's --kingen-samples is a count or refused.
 """
+
+import argparse
 
 import json
 import math
@@ -14,9 +18,14 @@ from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from kingen.hosts.delmia.build import build_plugin
 from kingen.cli import main
+from kingen.errors import KingenError
 from kingen.hosts.delmia.loader import Plugin
 from kingen.model import load_robot, robots_dir, shipped_robots
+from kingen.pytest_plugin import sample_count
+from kingen.reference import solve as reference_solve
 from kingen.robot_file import read_robot_file
+from kingen.snapshot import load as load_snapshot
+from kingen.verify.checks.snapshot import check as check_snapshot
 from kingen.verify import VerifyOptions, verify
 
 FUZZ = settings(deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
@@ -198,3 +207,43 @@ def test_structure_mutations_end_in_exit_0_or_2(capsys, tmp_path_factory, name, 
     mutant = data.draw(structure_mutations(document))
     text = json.dumps(mutant, allow_nan=True)
     assert_exit_0_or_2_and_no_files(capsys, tmp_path_factory.mktemp("mutant"), text)
+
+
+@pytest.fixture(scope="module")
+def tau_snapshot(tmp_path_factory):
+    """tau's snapshot of 4 poses as kingen records it, as data."""
+    path = tmp_path_factory.mktemp("snapshot") / "tau.golden.json"
+    assert main(["golden", "record", "tau", "-o", str(path), "--samples", "4"]) == 0
+    return json.loads(path.read_text())
+
+
+@settings(FUZZ, max_examples=150)
+@given(data=st.data())
+def test_snapshot_mutations_are_refused_in_one_line_or_checked(tmp_path_factory, tau_snapshot, data):
+    mutant = data.draw(structure_mutations(json.loads(json.dumps(tau_snapshot))))
+    path = tmp_path_factory.mktemp("snapshot") / "tau.golden.json"
+    path.write_text(json.dumps(mutant, allow_nan=True))
+    robot = load_robot("tau")
+    try:
+        snapshot = load_snapshot(path, robot)
+    except KingenError as error:
+        assert str(error).startswith(f"{path}: ") and "\n" not in str(error), str(error)
+        return
+
+    def call(t6):
+        solution = reference_solve(robot, t6)
+        return solution.joints, solution.warnings
+
+    result = check_snapshot(robot, snapshot, call)
+    assert result.name == "snapshot" and result.detail.startswith(f"{len(snapshot.entries)} recorded poses")
+
+
+@settings(FUZZ, max_examples=200)
+@given(text=st.one_of(st.integers(-10 ** 6, 10 ** 6).map(str), st.text(max_size=12)))
+def test_any_kingen_samples_text_is_a_count_or_refused(text):
+    try:
+        count = sample_count(text)
+    except argparse.ArgumentTypeError as error:
+        assert str(error) and "\n" not in str(error)
+        return
+    assert isinstance(count, int) and count >= 1 and count == int(text)

@@ -221,3 +221,18 @@ def _state(pid):
             return stream.read().rsplit(")", 1)[1].split()[0]
     except OSError:
         return "gone"
+
+
+def test_a_reused_yaml_anchor_is_one_error_line_without_ruamels_warning(tmp_path):
+    robot = tmp_path / "probe.yaml"
+    robot.write_text(ROBOT.replace("base_point: [0, 0, 0], platform_point: [0, 0, 0]",
+                                   "base_point: &p [0, 0, 0], platform_point: &p [0, 0, 0]"))
+    result = run_kingen(tmp_path, "render", str(robot), "-o", str(tmp_path / "out"))
+    assert result.returncode == 2
+    assert result.stderr == (f"kingen: error: {robot}:4: limbs[0].platform_point: anchor &p is defined again "
+                             "(first on line 4); give each anchor its own name\n")
+    assert not (tmp_path / "out").exists()
+    robot.write_text(ROBOT.replace("base_point: [0, 0, 0], platform_point: [0, 0, 0]",
+                                   "base_point: &p [0, 0, 0], platform_point: *p"))
+    result = run_kingen(tmp_path, "render", str(robot), "-o", str(tmp_path / "out"))
+    assert result.returncode == 0 and result.stderr == ""

@@ -1,6 +1,7 @@
 """kingen inside the user's own pytest: robot files as test files, golden values and
 snapshots as items, stale libraries caught by their build information."""
 
+import json
 import shutil
 
 import pytest
@@ -76,3 +77,77 @@ def test_info_reads_a_library_without_loading_it(tmp_path, capsys):
     assert out[1].startswith("format: ELF 64-bit shared object")
     assert out[2:5] == ["robot: exechon", "routine: kin_exechon", "dof: 3, postures: 1"]
     assert out[5] == f"definition sha256: {__import__('hashlib').sha256((robots_dir() / 'exechon.yaml').read_bytes()).hexdigest()}"
+
+
+@pytest.mark.parametrize("count, words", [("-5", "-5 poses: give at least 1"), ("0", "0 poses: give at least 1"),
+                                          ("many", "'many' is not a whole number of poses")])
+def test_a_bad_sample_count_is_a_usage_error(folder, count, words):
+    result = folder.runpytest_subprocess("--kingen", ".", "-p", "no:cacheprovider", f"--kingen-samples={count}")
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    assert f"error: argument --kingen-samples: {words}" in result.stderr.str()
+
+
+def test_a_robot_file_reached_twice_is_collected_once(folder):
+    (folder.path / "loop").symlink_to(".")
+    (folder.path / "twin.yaml").symlink_to("tau.yaml")
+    result = folder.runpytest_subprocess("--kingen", ".", "-p", "no:cacheprovider", "--co", "-q")
+    items = [line for line in result.stdout.lines if "::" in line]
+    assert items == [f"tau.yaml::{name}" for name in ("build", "interface", "values", "warnings", "closure",
+                                                       "jacobian", "golden[0]", "golden[1]")]
+
+
+def test_a_dangling_robot_symlink_is_a_failing_item(folder):
+    (folder.path / "gone.yaml").symlink_to("nowhere.yaml")
+    (folder.path / "sub").mkdir()
+    (folder.path / "sub" / "lost.yml").symlink_to("/no/such/robot.yml")
+    result = run(folder, "-k", "gone or lost")
+    result.assert_outcomes(failed=2)
+    text = result.stdout.str()
+    assert f"{folder.path / 'gone.yaml'}: the symlink's target nowhere.yaml does not exist" in text
+    assert f"{folder.path / 'sub' / 'lost.yml'}: the symlink's target /no/such/robot.yml does not exist" in text
+    assert "FAILED gone.yaml::build" in text and "FAILED sub/lost.yml::build" in text
+
+
+COUNTING = """
+import kingen.verify
+
+calls = []
+verify_library = kingen.verify.verify_library
+
+
+def counting(*arguments, **keywords):
+    calls.append(1)
+    FAILING
+    return verify_library(*arguments, **keywords)
+
+
+kingen.verify.verify_library = counting
+
+
+def pytest_unconfigure(config):
+    with open("verify_calls.txt", "w") as stream:
+        stream.write(str(len(calls)))
+"""
+
+
+def test_a_bad_snapshot_fails_the_snapshot_item_alone_and_verify_runs_once(folder):
+    snapshot = folder.path / "tau.golden.json"
+    assert main(["golden", "record", str(folder.path / "tau.yaml"), "-o", str(snapshot), "--samples", "5"]) == 0
+    data = json.loads(snapshot.read_text())
+    data["entries"][0]["warnings"][0] = 2 ** 70
+    snapshot.write_text(json.dumps(data))
+    folder.makeconftest(COUNTING.replace("FAILING", "pass"))
+    result = run(folder)
+    result.assert_outcomes(passed=8, failed=1)
+    text = result.stdout.str()
+    assert "FAILED tau.yaml::snapshot" in text and "Traceback" not in text and "internal error" not in text
+    assert f"{snapshot}: entries.0.warnings.0: 1180591620717411303424 is not a warning code (0, 1, 2, 5)" in text
+    assert (folder.path / "verify_calls.txt").read_text() == "1"
+
+
+def test_an_error_inside_verify_is_reported_to_every_item_from_one_run(folder):
+    folder.makeconftest(COUNTING.replace("FAILING", "raise RuntimeError('broken inside verify')"))
+    result = run(folder)
+    result.assert_outcomes(failed=8)
+    assert result.stdout.str().count("RuntimeError: broken inside verify") >= 8
+    assert (folder.path / "verify_calls.txt").read_text() == "1"

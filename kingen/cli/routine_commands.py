@@ -11,7 +11,7 @@ import click
 from ..defaults import MAX_PROCESSES, TARGETS
 from ..text import counted
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, cli, host_target, in_child,
-                     load_model, plugin_options, processes_text, routine_to_check, say, solve_job, calibration_options)
+                     load_model, plugin_options, processes_text, routine_to_check, say, calibration_options)
 
 MAX_BENCH_CALLS = 100_000_000
 
@@ -163,31 +163,42 @@ def golden():
 @ROBOT
 @plugin_options
 @click.option("--samples", type=click.IntRange(min=1, max=100000), default=100, show_default=True,
-              help="Poses to record.")
+              help="Poses to record (at most what fits in the 64 MB verify --golden reads).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the poses.")
 @click.option("-o", "--output", "output", type=click.Path(dir_okay=False, path_type=Path), required=True,
               callback=_output_file, help="The snapshot file to write (rewritten whole).")
 @HOST
 @TIMEOUT
 def golden_record(robot, library, source, routine, samples, seed, output, host, timeout):
-    """Record a snapshot from the reference, or from a trusted plugin (--plugin/--source)."""
-    from ..files import write_atomic
-    from ..snapshot import record, sample_t6
+    """Record a snapshot from the reference, or from a trusted plugin (--plugin/--source).
+
+    A count whose file verify --golden would refuse as too large is refused before anything
+    is computed. The entries are written as they are computed, a chunk at a time (memory
+    does not grow with --samples); OUTPUT is replaced only by the complete file."""
+    from ..snapshot import check_fits, recording, t6_chunks
+    from ..verify import chunk_size
 
     model = load_model(robot)
-    t6 = sample_t6(model, samples, seed)
+    chunk = chunk_size(model)
     if library is None and source is None:
         if routine is not None:
             raise click.UsageError("--routine needs --plugin or --source")
         from ..reference import solve as reference_solve
 
-        expected = reference_solve(model, t6)
-        joints, warnings, recorded_from = expected.joints, expected.warnings, "the reference"
+        recorded_from = "the reference"
+        check_fits(model, samples, recorded_from, seed)
+        with recording(output, model, recorded_from, samples, seed) as snapshot:
+            for t6 in t6_chunks(model, samples, seed, chunk):
+                expected = reference_solve(model, t6)
+                snapshot.add(t6, expected.joints, expected.warnings)
     else:
         library, routine = routine_to_check(model, host, None, library, source, routine, timeout)
-        calls = in_child(solve_job, (host, model, library, routine, t6, None, None), timeout, host)
-        joints, warnings, recorded_from = calls.solutions, calls.warnings, f"plugin {Path(library).name} ({routine})"
-    write_atomic(output, record(model, t6, joints, warnings, recorded_from, samples, seed))
+        recorded_from = f"plugin {Path(library).name} ({routine})"
+        check_fits(model, samples, recorded_from, seed)
+        poses = t6_chunks(model, samples, seed, chunk)  # the child's poses, drawn here again
+        with recording(output, model, recorded_from, samples, seed) as snapshot:
+            in_child(_record_job, (host, model, library, routine, samples, seed, chunk), timeout, host,
+                     lambda kind, calls: snapshot.add(next(poses), *calls))
     say(f"{output}: {samples} poses x {model.postures} postures recorded from {recorded_from}")
 
 
@@ -211,6 +222,18 @@ def info(library):
     if "host" in details:
         say(f"host: {details['host']}" + (f", the robot file's posture {details['posture']}" if "posture" in details else ""))
     return 0
+
+
+def _record_job(channel, host, model, library, routine, samples, seed, chunk):
+    """In a child process: the routine's (solutions, warnings) for a snapshot's poses, sent
+    chunk by chunk as they are computed."""
+    from ..snapshot import t6_chunks
+
+    plugin = host.load(library, routine, model)
+    channel.stage("the routine's calls")
+    for t6 in t6_chunks(model, samples, seed, chunk):
+        calls = plugin.call(t6, None, None)
+        channel.send("chunk", (calls.solutions, calls.warnings))
 
 
 def _bench_job(channel, model, host, library, routine, calls, floor):
