@@ -10,8 +10,9 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
+from ..text import shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, calibration_options, cli,
-                     finite, in_child, load_model, print_table, routine_to_check, say, shorten, solve_job)
+                     finite, in_child, load_model, print_table, routine_to_check, say, solve_job)
 
 
 @cli.command("list")
