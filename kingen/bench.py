@@ -12,10 +12,12 @@ import statistics
 import time
 
 from .conventions import t6_from_pose
+from .errors import PluginDefect
 from .isolation import captured_output
 from .poses import sample_poses
 from .reference import solve
-from .verify import VerifyOptions, verify
+from .text import shorten
+from .verify import VerifyOptions, verify, verify_library
 
 PER_CALL_LIMIT = 20000
 """The per-call cffi path is slow; it is timed on at most this many poses."""
@@ -24,6 +26,8 @@ ROUNDS = 9
 """Rounds of timings in turns when routines are compared."""
 VERIFY_LIMIT = 200000
 """verify's poses per second are measured on at most this many poses."""
+FLOOR_SAMPLES = 2000
+"""Poses a floor is verified on before it is timed."""
 
 
 def _best_seconds(function, repeats, passes=1, tick=None):
@@ -87,3 +91,19 @@ def compare(robot, plugins, calls=200000, seed=0, repeats=ROUNDS, tick=None):
             for label, run in runners.items():
                 timings[label].append(_best_seconds(run, 1, passes, tick) / (pool * passes) * 1e9)
     return {label: {"min": min(values), "median": statistics.median(values)} for label, values in timings.items()}
+
+
+def verify_floor(robot, host, library, shown, timeout):
+    """Verify the compiled floor ``library`` (built from the source ``shown``) as
+    ``kingen verify --source`` would, on FLOOR_SAMPLES poses, in a child process bounded by
+    ``timeout``. Returns only when every check passes; otherwise raises PluginDefect naming
+    the first failing check: a floor that computes other joints (zeros, say) would make any
+    ratio meaningless, so it is never timed."""
+    options = VerifyOptions(samples=FLOOR_SAMPLES, timeout=timeout)
+    report = verify_library(robot, library, host.routine_name(robot), options, host=host)
+    if report.passed:
+        return
+    first = report.failures[0]
+    raise PluginDefect(f"the floor {shown} fails verification on {FLOOR_SAMPLES} poses ({len(report.failures)} "
+                       f"failed checks; first {first.name}: {shorten(first.detail, 160)}); it is not timed "
+                       f"(kingen verify with --source {shown} gives the whole report)", check=first.name)

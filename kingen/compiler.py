@@ -1,14 +1,17 @@
 """The system C compiler, run safely: its command from ``$CC``, no stdin, its own process
-group killed whole past a timeout, bounded memory and file size, and its first error turned
-into one KingenError naming file and line. Every host compiles through :func:`compile_c`."""
+group killed whole past a timeout, bounded memory and file size, a private temporary folder
+removed after it, and its first error turned into one KingenError naming file and line.
+Every host compiles through :func:`compile_c`."""
 
 import os
 import re
 import resource
 import shlex
+import shutil
 import signal
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 
 from .defaults import DEFAULT_TIMEOUT
@@ -49,23 +52,43 @@ def _limit_compiler():
 
 def run_compiler(command, timeout):
     """Run a compiler command: no stdin, its own process group (killed whole past ``timeout``
-    seconds), bounded memory and output. Returns (exit status, stderr text)."""
-    with tempfile.TemporaryFile() as errors:
-        try:
-            process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=errors, stderr=errors,
-                                       env={**os.environ, "LC_ALL": "C"}, start_new_session=True,
-                                       preexec_fn=_limit_compiler)
-        except (FileNotFoundError, PermissionError, NotADirectoryError):
-            raise KingenError(f"C compiler '{command[0]}' not found or not executable: "
-                              "install one or set CC") from None
-        try:
-            status = process.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            raise KingenError(f"compiler did not finish in {timeout:g} s (--timeout, $KINGEN_TIMEOUT)") from None
-        finally:
-            _kill_group(process)
-        errors.seek(0)
-        return status, errors.read(64 << 10).decode(errors="replace")
+    seconds), bounded memory and output, and a fresh temporary folder of its own ($TMPDIR,
+    $TMP and $TEMP in its environment; gcc's ``cc*.s`` and the like go there). That folder
+    is removed once the compiler's group is killed, however this ends: a compiler error,
+    the timeout, or SIGTERM (which the CLI turns into SystemExit). Returns (exit status,
+    stderr text)."""
+    scratch = tempfile.mkdtemp(prefix="kingen-cc-")
+    private = {"TMPDIR": scratch, "TMP": scratch, "TEMP": scratch}
+    try:
+        with tempfile.TemporaryFile() as errors:
+            try:
+                process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=errors, stderr=errors,
+                                           env={**os.environ, "LC_ALL": "C", **private}, start_new_session=True,
+                                           preexec_fn=_limit_compiler)
+            except (FileNotFoundError, PermissionError, NotADirectoryError):
+                raise KingenError(f"C compiler '{command[0]}' not found or not executable: "
+                                  "install one or set CC") from None
+            try:
+                status = process.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                raise KingenError(f"compiler did not finish in {timeout:g} s (--timeout, $KINGEN_TIMEOUT)") from None
+            finally:
+                _kill_group(process)
+            errors.seek(0)
+            return status, errors.read(64 << 10).decode(errors="replace")
+    finally:
+        _remove_folder(scratch)
+
+
+def _remove_folder(folder, attempts=20):
+    """Remove ``folder`` and what is in it; a killed compiler's helpers (cc1, as) may still
+    finish a file they were creating as they die, so a folder that is not gone yet is tried
+    again a few times, 50 ms apart."""
+    for _ in range(attempts):
+        shutil.rmtree(folder, ignore_errors=True)
+        if not os.path.lexists(folder):
+            return
+        time.sleep(0.05)
 
 
 def _kill_group(process):

@@ -7,7 +7,8 @@ checks and at last its result. The parent waits at most ``timeout`` seconds for 
 message, so a routine that stops making progress (an endless loop, a sleep per call)
 is killed and named with the stage it was in; a child that dies (a segfault, a call to
 ``exit()``) becomes a :class:`ChildFailure` naming the signal or exit status and the
-stage. The child dies with the parent (``PR_SET_PDEATHSIG`` on Linux), and the parent
+stage, and one killed from outside (SIGKILL from the out-of-memory killer, say) says so
+rather than blaming the routine. The child dies with the parent (``PR_SET_PDEATHSIG`` on Linux), and the parent
 kills it on the way out of any exception, SIGTERM included (the CLI turns SIGTERM into
 ``SystemExit``).
 """
@@ -88,6 +89,9 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     finally:
         receiver.close()
         _end(child)
+    if killed_from_outside(child.exitcode):
+        return None, ChildFailure("crash", stage, f"the host process was {killer(child.exitcode)} during {stage}, "
+                                                 "not ended by the routine: run it again")
     return None, ChildFailure("crash", stage, f"the plugin ended the host process ({ending(child.exitcode)}) "
                                              f"during {stage}")
 
@@ -98,6 +102,25 @@ def ending(exit_code):
     if exit_code is not None and exit_code < 0:
         return f"signal {signal.Signals(-exit_code).name}"
     return f"exit status {exit_code}"
+
+
+OUTSIDE_SIGNALS = (signal.SIGKILL, signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
+"""Signals that come from outside a process (the out-of-memory killer, ``kill``, a closed
+terminal), never from a fault of the code it runs: a crashing routine ends its process with
+SIGSEGV, SIGBUS, SIGFPE, SIGILL or SIGABRT."""
+
+
+def killed_from_outside(exit_code):
+    """Whether multiprocessing's ``exit_code`` says the process was killed by one of
+    OUTSIDE_SIGNALS (rather than crashing, exiting or finishing)."""
+    return exit_code is not None and exit_code < 0 and -exit_code in OUTSIDE_SIGNALS
+
+
+def killer(exit_code):
+    """For a process killed_from_outside: 'killed by signal SIGKILL (9) from outside (possibly
+    the out-of-memory killer)'; the hint only for SIGKILL, the one that killer sends."""
+    hint = " (possibly the out-of-memory killer)" if -exit_code == signal.SIGKILL else ""
+    return f"killed by {ending(exit_code)} ({-exit_code}) from outside{hint}"
 
 
 def _end(child):

@@ -20,7 +20,7 @@ from pydantic import AfterValidator, Field, ValidationError
 
 from .conventions import branch_of_posture
 from .design_schema import Optimize
-from .errors import KingenError
+from .errors import KingenError, refuse_special_file
 from .hosts import name_problems
 from .layouts import Layout
 from .located import Locator, diagnostic
@@ -264,13 +264,15 @@ def shipped_robots():
 
 
 def resolve_robot_path(spec):
-    """A YAML path as given, or the shipped robot of that name."""
+    """A YAML path as given, or the shipped robot of that name; else KingenError, which says
+    so when the path is a FIFO, device or folder (never opened)."""
     path = Path(spec)
     if path.is_file():
         return path
     shipped = robots_dir() / f"{spec}.yaml"
     if path.suffix == "" and shipped.is_file():
         return shipped
+    refuse_special_file(path)
     raise KingenError(
         f"{spec}: no such robot file, and no shipped robot of that name "
         f"(shipped: {', '.join(shipped_robots())})"

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .design import evaluate
-from .errors import KingenError
+from .errors import KingenError, refuse_special_file
 from .files import digest, write_atomic
 
 CHECKPOINT = "checkpoint.pkl"
@@ -83,6 +83,7 @@ def load(folder, expected):
     """The SearchState checkpointed in ``folder``; KingenError when there is none or it was
     made for another problem."""
     path = folder / CHECKPOINT
+    refuse_special_file(path)
     try:
         state = pickle.loads(path.read_bytes())
     except FileNotFoundError:

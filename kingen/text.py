@@ -45,6 +45,13 @@ def one_line(text):
     return printable(" ".join(str(text).split()))
 
 
+def shorten(text, width):
+    """``text`` on one line (runs of whitespace become one space), cut to at most ``width``
+    characters, the cut marked with '...'."""
+    text = " ".join(text.split())
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
 def c_text(text):
     """``text`` safe inside a C block comment or a C string literal of generated code.
 

@@ -66,7 +66,7 @@ def test_a_library_built_before_an_edit_fails_the_definition_check(tmp_path, cap
     code = main(["verify", str(path), "--plugin", str(tmp_path / "b" / "libtau.so"), "--samples", "200"])
     out = capsys.readouterr().out
     assert code == 1
-    assert "FAILED definition: built by kingen 0.1.0 from another definition of 'tau'" in out
+    assert "FAILED definition: the library says it was built by kingen 0.1.0 from another definition of 'tau'" in out
 
 
 def test_info_reads_a_library_without_loading_it(tmp_path, capsys):

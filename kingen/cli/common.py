@@ -11,7 +11,7 @@ import click
 
 from .. import __version__
 from ..defaults import DEFAULT_TIMEOUT, MAX_MM
-from ..errors import KingenError, PluginDefect
+from ..errors import KingenError, PluginDefect, refuse_special_file
 from ..text import printable
 
 EXIT_FAILED = 1
@@ -206,9 +206,13 @@ def in_child(job, arguments, timeout, host, on_message=None):
 
 def routine_to_check(model, host, out_dir, library=None, source=None, routine=None, timeout=DEFAULT_TIMEOUT):
     """(library path, routine) to check: kingen's own build for ``host``, a given library, or
-    a compiled hand-written source."""
+    a compiled hand-written source. A given file that is a FIFO, device or folder is refused
+    before anything opens it."""
     if library is not None and source is not None:
         raise click.UsageError("give at most one of --plugin and --source")
+    for given in (library, source):
+        if given is not None:
+            refuse_special_file(given)
     own = host.routine_name(model)
     if library is None and source is None:
         if routine is not None and routine != own:
@@ -252,11 +256,6 @@ def finite(data):
 def processes_text(count):
     """'1 process', '2 processes': how many compared verify's poses."""
     return f"{count} process" if count == 1 else f"{count} processes"  # 'es': not text.counted
-
-
-def shorten(text, width):
-    text = " ".join(text.split())
-    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 def print_table(rows):

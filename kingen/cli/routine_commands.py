@@ -128,15 +128,21 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
 @HOST
 @TIMEOUT
 def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, host, timeout):
-    """Print ns per routine call (C batch driver, per-call cffi) and poses per second."""
+    """Print ns per routine call (C batch driver, per-call cffi) and poses per second.
+
+    A --floor is verified first (on a few thousand poses, as verify --source would) and refused
+    when it fails a check: only a correct floor gives a meaningful ratio."""
+    from ..bench import verify_floor
     from ..files import write_atomic
 
     model = load_model(robot)
-    library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
-    model = host.as_seen(model)
+    seen = host.as_seen(model)
     floor = None
     if floor_source is not None:
-        floor = host.build_source(floor_source, (out_dir or host.out_dir(model)) / "floor", timeout=timeout)
+        floor = host.build_source(floor_source, (out_dir or host.out_dir(seen)) / "floor", timeout=timeout)
+        verify_floor(seen, host, floor, floor_source, timeout)
+    library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
+    model = seen
     figures = in_child(_bench_job, (model, host, library, routine, calls, floor), timeout, host)
     say(f"bench {model.name} ({routine}, {model.postures} postures, {figures['calls']} calls)")
     say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
@@ -205,22 +211,26 @@ def golden_record(robot, library, source, routine, samples, seed, output, host, 
 @cli.command()
 @click.argument("library", type=click.Path(dir_okay=False, exists=True, path_type=Path))
 def info(library):
-    """What a compiled library says about itself (read from its bytes, never loaded)."""
+    """What a compiled library says about itself (read from its bytes, never loaded).
+
+    Its build information is a label the library carries, not a proof of who built it."""
     from ..library_info import binary_format, build_info
 
     details = build_info(library)
     say(f"library: {library}")
     say(f"format: {binary_format(library)}")
     if details is None:
-        say("kingen build information: none (not built by kingen)")
+        say("kingen build information: none (the library carries no kingen build-info string)")
         return 0
     say(f"robot: {details.get('robot', '?')}")
     say(f"routine: {details.get('routine', '?')}")
     say(f"dof: {details.get('dof', '?')}, postures: {details.get('postures', '?')}")
     say(f"definition sha256: {details.get('sha256', '?')}")
-    say(f"kingen version: {details.get('kingen', '?')}")
+    say(f"says it was built by: kingen {details.get('kingen', '?')}")
     if "host" in details:
         say(f"host: {details['host']}" + (f", the robot file's posture {details['posture']}" if "posture" in details else ""))
+    say("note: the lines above are the library's build information, a label it carries, not a proof "
+        "that kingen built it")
     return 0
 
 

@@ -10,9 +10,10 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
+from ..text import shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _out_folder, _output_file, _pose, _t6,
                      calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check, say,
-                     shorten, solve_job)
+                     solve_job)
 
 
 @cli.command("list")

@@ -24,7 +24,7 @@ becomes a failed check instead of a dead, silent or stuck kingen.
 import time
 
 from ..errors import PluginDefect
-from ..isolation import ending, keep_freed_memory, run_in_child
+from ..isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
 from ..poses import chunk_bounds
 from .checks import PHASES, Check, Context, by_need
 from .options import VerifyOptions, report_tolerance_mm, value_tolerance_mm
@@ -154,15 +154,26 @@ def _compare_samples(context, progress, printed, phase):
         merge(report, tally, printed, part)
     report.seconds = time.perf_counter() - start
     report.posture_statistics = posture_statistics(robot, tally)
-    crashes = [Check("crash", False, f"a comparing process ended ({ending(code)}) during poses {begin} to "
-                                     f"{begin + count - 1} of seed {options.seed}, which ran to the end when compared "
-                                     "again in the first process: the routine crashed or exited all the same "
-                                     "(--processes 1 compares every pose in one process)")
-               for begin, count, code in deaths]
+    crashes = [Check("crash", False, _death(begin, count, code, options.seed)) for begin, count, code in deaths]
     context.tally = tally
     phase(PHASES["compared poses"])
     with printed.capture():
         return crashes + _sample_checks(context)
+
+
+def _death(begin, count, code, seed):
+    """What the ``crash`` check says of a comparing process that died during poses ``begin``
+    .. ``begin + count - 1`` (which then ran to the end in the first process): the routine
+    crashed or exited there, or, for a process killed_from_outside, something outside killed
+    it, which is no crash of the routine but leaves the run disturbed."""
+    where = f"during poses {begin} to {begin + count - 1} of seed {seed}"
+    if killed_from_outside(code):
+        return (f"a comparing process was {killer(code)} {where}, not ended by the routine; those poses ran to the "
+                "end when compared again in the first process, but the run was disturbed: run it again "
+                "(--processes 1 needs the least memory)")
+    return (f"a comparing process ended ({ending(code)}) {where}, which ran to the end when compared again in the "
+            "first process: the routine crashed or exited all the same (--processes 1 compares every pose in one "
+            "process)")
 
 
 def _sample_checks(context):

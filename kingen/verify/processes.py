@@ -135,10 +135,12 @@ def compared_chunks(robot, calibrated, plugin, options, bounds, processes, phase
     """(first index, pose count, _Part) chunk by chunk, in order, for the chunks ``bounds``
     (chunk_bounds) of PoseStream's poses. With ``processes`` (process_count) above 1, the
     other comparing processes (_Helpers, forked before chunk 0) each compare the chunks
-    _taker gives them, ahead of this one, which draws and compares only its own. If one dies (the routine crashed or exited there), its chunks are drawn
-    and compared here again, so that a crash is named by this process's stage as always;
-    if they run to the end here, (first index, pose count, exit code) of the chunk it died
-    in is appended to ``deaths``: the routine crashed all the same."""
+    _taker gives them, ahead of this one, which draws and compares only its own. If one dies
+    (the routine crashed or exited there, or something outside killed it: the out-of-memory
+    killer, say), its chunks are drawn and compared here again, so that a crash is named by
+    this process's stage as always; if they run to the end here, (first index, pose count,
+    exit code) of the chunk it died in is appended to ``deaths``, for the ``crash`` check to
+    tell which of those it was (kingen.isolation.killed_from_outside)."""
     global _chunk_job
     _chunk_job = (robot, calibrated, plugin, options)
     stream = PoseStream(robot, options.seed)

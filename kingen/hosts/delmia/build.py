@@ -15,7 +15,7 @@ from pathlib import Path
 from ... import __version__
 from ...compiler import CompileError, compile_c, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
-from ...errors import KingenError
+from ...errors import KingenError, refuse_special_file
 from ...files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
 from .pe import dll_exports
@@ -142,6 +142,7 @@ def build_legacy(source, out_dir, timeout=DEFAULT_TIMEOUT):
 
     A source that does not compile raises KingenError with the compiler's first error."""
     source = Path(source)
+    refuse_special_file(source)
     if not source.is_file():
         raise KingenError(f"{source}: no such C source")
     include, _ = host_support(timeout)

@@ -20,7 +20,7 @@ from pathlib import Path
 import cffi
 import numpy as np
 
-from ...errors import KingenError, PluginDefect
+from ...errors import KingenError, PluginDefect, refuse_special_file
 from ...routine import Calls, check_routine_name
 from . import abi
 from .build import host_support
@@ -60,6 +60,7 @@ def _dlopen(path):
     """dlopen ``path``; a file replaced since it was first loaded here is loaded from a copy
     (the dynamic loader would otherwise hand back the old image)."""
     path = Path(path).resolve()
+    refuse_special_file(path)
     if not path.is_file():
         raise KingenError(f"{path}: no such plugin library")
     stat = path.stat()

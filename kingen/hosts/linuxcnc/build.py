@@ -10,7 +10,7 @@ from pathlib import Path
 from ... import __version__
 from ...compiler import CompileError, compile_c, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
-from ...errors import KingenError
+from ...errors import KingenError, refuse_special_file
 from ...files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
 from .render import harness_source, module_name, render, source_name
@@ -84,6 +84,7 @@ def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
     """Compile a hand-written module source (a stock module's, say) as LinuxCNC's build would;
     warnings allowed. Returns the module's path."""
     source = Path(source)
+    refuse_special_file(source)
     if not source.is_file():
         raise KingenError(f"{source}: no such C source")
     library = Path(out_dir) / f"{source.stem}.so"

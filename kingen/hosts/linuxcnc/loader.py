@@ -16,7 +16,7 @@ import cffi
 import numpy as np
 
 from ...conventions import pose_from_t6
-from ...errors import KingenError, PluginDefect
+from ...errors import KingenError, PluginDefect, refuse_special_file
 from ...routine import WARNINGS, Calls
 from .build import harness
 from .render import translating
@@ -69,6 +69,7 @@ class Module:
     def __init__(self, library, routine, robot, setp=None, inch=False):
         hal = _hal()
         path = Path(library).resolve()
+        refuse_special_file(path)
         if not path.is_file():
             raise KingenError(f"{path}: no such module")
         folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))

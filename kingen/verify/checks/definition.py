@@ -1,5 +1,7 @@
-"""``definition``: whether the library was built from this robot file (the sha256 its build
-information carries; :mod:`kingen.library_info`), read from its bytes, never loaded."""
+"""``definition``: whether the library says it was built from this robot file (the sha256 its
+build information carries; :mod:`kingen.library_info`), read from its bytes, never loaded.
+That information is a label the library carries, not a proof: the check catches a stale
+build, not a forged one, and says so."""
 
 from ...library_info import build_info
 from ...report import not_exercised
@@ -7,18 +9,19 @@ from .base import Check, VerifyCheck
 
 
 def definition_check(robot, library):
-    """``definition``: whether the library was built from this robot file (the sha256 it
-    carries), from another one, or not by kingen (then the check passes, saying so)."""
+    """``definition``: passes when the library's build information names this robot file's
+    sha256, fails when it names another; not exercised when it carries none. Its text says
+    what the library claims, never that kingen built it."""
     info = build_info(library)
     if info is None:
-        return not_exercised("definition", "the library carries no kingen build information (not built by "
-                                           "kingen): its definition cannot be traced")
+        return not_exercised("definition", "the library carries no kingen build information: its definition "
+                                           "cannot be traced")
+    says = f"the library says it was built by kingen {info.get('kingen', '?')}"
     if info.get("sha256") == robot.sha256:
-        return Check("definition", True, f"built by kingen {info.get('kingen', '?')} from this robot file "
-                                         f"(sha256 {robot.sha256[:16]})")
-    return Check("definition", False, f"built by kingen {info.get('kingen', '?')} from another definition of "
-                                      f"'{info.get('robot', '?')}': the library says sha256 "
-                                      f"{info.get('sha256', '?')[:16]}, {robot.path.name} has {robot.sha256[:16]}: "
+        return Check("definition", True, f"{says} from this robot file (sha256 {robot.sha256[:16]}; a label it "
+                                         "carries, not a proof)")
+    return Check("definition", False, f"{says} from another definition of '{info.get('robot', '?')}' (sha256 "
+                                      f"{info.get('sha256', '?')[:16]}), {robot.path.name} has {robot.sha256[:16]}: "
                                       "rebuild it from the reviewed file")
 
 
