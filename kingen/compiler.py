@@ -11,6 +11,7 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -57,27 +58,44 @@ def run_compiler(command, timeout):
     is removed once the compiler's group is killed, however this ends: a compiler error,
     the timeout, or SIGTERM (which the CLI turns into SystemExit). Returns (exit status,
     stderr text)."""
-    scratch = tempfile.mkdtemp(prefix="kingen-cc-")
+    try:
+        scratch = tempfile.mkdtemp(prefix="kingen-cc-")
+    except OSError as error:
+        raise KingenError(f"{tempfile.gettempdir()}: no temporary folder for the compiler "
+                          f"({error.strerror or error}; $TMPDIR)") from None
     private = {"TMPDIR": scratch, "TMP": scratch, "TEMP": scratch}
     try:
-        with tempfile.TemporaryFile() as errors:
-            try:
-                process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=errors, stderr=errors,
-                                           env={**os.environ, "LC_ALL": "C", **private}, start_new_session=True,
-                                           preexec_fn=_limit_compiler)
-            except (FileNotFoundError, PermissionError, NotADirectoryError):
-                raise KingenError(f"C compiler '{command[0]}' not found or not executable: "
-                                  "install one or set CC") from None
-            try:
-                status = process.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                raise KingenError(f"compiler did not finish in {timeout:g} s (--timeout, $KINGEN_TIMEOUT)") from None
-            finally:
-                _kill_group(process)
-            errors.seek(0)
-            return status, errors.read(64 << 10).decode(errors="replace")
+        try:
+            process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                       stderr=subprocess.STDOUT, env={**os.environ, "LC_ALL": "C", **private},
+                                       start_new_session=True, preexec_fn=_limit_compiler)
+        except (FileNotFoundError, PermissionError, NotADirectoryError):
+            raise KingenError(f"C compiler '{command[0]}' not found or not executable: "
+                              "install one or set CC") from None
+        output = []
+        reader = threading.Thread(target=_keep_head, args=(process.stdout, output, 64 << 10), daemon=True)
+        reader.start()
+        try:
+            status = process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise KingenError(f"compiler did not finish in {timeout:g} s (--timeout, $KINGEN_TIMEOUT)") from None
+        finally:
+            _kill_group(process)
+            reader.join(timeout=5)
+            process.stdout.close()
+        return status, b"".join(output).decode(errors="replace")
     finally:
         _remove_folder(scratch)
+
+
+def _keep_head(stream, kept, limit):
+    """Read ``stream`` to its end through a pipe (no file, so a full disk cannot swallow the
+    compiler's own "No space left on device"), keeping its first ``limit`` bytes."""
+    size = 0
+    for block in iter(lambda: stream.read(8192), b""):
+        if size < limit:
+            kept.append(block[:limit - size])
+            size += len(kept[-1])
 
 
 def _remove_folder(folder, attempts=20):

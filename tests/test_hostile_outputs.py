@@ -178,3 +178,14 @@ def test_a_full_disk_names_the_file_and_leaves_no_folders(tmp_path):
     error = done.stderr.strip()
     assert len(error.splitlines()) == 1 and "No space left on device" in error and "/deep/er/" in error
     assert "deep" not in done.stdout.split("exit 2")[-1]  # the folders made for the file are gone
+
+
+def test_a_full_tmpdir_says_so_when_building(tmp_path):
+    """The compiler's messages travel through a pipe, not a file in the full $TMPDIR."""
+    require_root()
+    done = in_private_mounts(
+        'mount -t tmpfs -o size=64k tmpfs "$MNT" && head -c 60000 /dev/zero > "$MNT/filler" || true; '
+        'TMPDIR="$MNT" "$PY" -m kingen.cli build tau -o "$MNT/../out" && echo "exit 0" || echo "exit $?"', tmp_path)
+    assert "exit 2" in done.stdout, done.stdout + done.stderr
+    error = done.stderr.strip()
+    assert len(error.splitlines()) == 1 and "No space left on device" in error, error
