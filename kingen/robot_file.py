@@ -52,6 +52,8 @@ def read_robot_file(path):
         document = yaml.load(text)
     except MarkedYAMLError as error:
         raise _yaml_error(error, shown) from None
+    except TypeError:  # ruamel hashing a key that is a list or a mapping ("? [a]: b")
+        raise located(shown, None, None, "YAML: a key must be text, not a list or a mapping") from None
     except (YAMLError, ValueError, RecursionError) as error:
         problem = str(error).splitlines()[0]
         if "integer string conversion" in problem:

@@ -189,3 +189,11 @@ def test_a_full_tmpdir_says_so_when_building(tmp_path):
     assert "exit 2" in done.stdout, done.stdout + done.stderr
     error = done.stderr.strip()
     assert len(error.splitlines()) == 1 and "No space left on device" in error, error
+
+
+def test_a_key_that_is_a_collection_is_bad_input(tmp_path, capsys):
+    """Found by the fuzz test: '? pair_angles: [...]' made ruamel hash a mapping (exit 3)."""
+    robot = tmp_path / "complex_key.yaml"
+    robot.write_text("name: k\ndescription: d\n? pair_angles: [0, 120]\n")
+    assert main(["build", str(robot), "-o", str(tmp_path / "out")]) == 2
+    assert "a key must be text" in capsys.readouterr().err
