@@ -15,10 +15,7 @@ other items are verified without it. Works with pytest-xdist and ``--junitxml``.
 """
 
 import argparse
-import atexit
 import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import pytest
@@ -183,9 +180,10 @@ class RobotFile(pytest.File):
                 snapshot_problem = str(error)
         try:
             host = _host(self.config)
-            result = host.build(self.robot, _build_folder() / self.robot.name)
+            result = host.build(self.robot, _build_folder(host, self.robot))
             report = verify_library(self.robot, result.library, result.routine,
-                                    VerifyOptions(samples=samples, snapshot=snapshot, processes=None), host=host)
+                                    VerifyOptions(samples=samples, snapshot=snapshot, processes=_processes()),
+                                    host=host)
         except KingenError as error:
             return None, str(error), snapshot_problem
         return report, None, snapshot_problem
@@ -240,13 +238,22 @@ def _host(config):
     return get_host(config.getoption("kingen_host"))
 
 
-_folder = None
+def _processes():
+    """Comparing processes per verification: one in a pytest-xdist worker (the workers
+    already share the cores), else verify's default (one per usable core)."""
+    return 1 if os.environ.get("PYTEST_XDIST_WORKER") else None
 
 
-def _build_folder():
-    """A build folder for this process (pytest-xdist workers build side by side)."""
-    global _folder
-    if _folder is None:
-        _folder = Path(tempfile.mkdtemp(prefix="kingen-pytest-"))
-        atexit.register(shutil.rmtree, _folder, True)
-    return _folder
+def _build_folder(host, robot):
+    """Where a robot is built: a folder of kingen's cache named by the host, kingen's version
+    and the robot file's content, so that a later session (or another xdist worker) finds the
+    build done; the build inside it is content-addressed too (a stamp of the source, compiler
+    and flags), so nothing stale is ever used."""
+    from . import __version__
+    from .files import cache_dir, digest, private_folder
+
+    root = cache_dir() / "pytest-builds"
+    for folder in (cache_dir(), root):
+        private_folder(folder)
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    return root / f"{robot.name}-{digest(__version__, host.name, robot.sha256)[:16]}"

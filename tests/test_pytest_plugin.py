@@ -151,3 +151,17 @@ def test_an_error_inside_verify_is_reported_to_every_item_from_one_run(folder):
     result.assert_outcomes(failed=8)
     assert result.stdout.str().count("RuntimeError: broken inside verify") >= 8
     assert (folder.path / "verify_calls.txt").read_text() == "1"
+
+
+def test_a_second_session_builds_nothing(folder, tmp_path, monkeypatch):
+    """Robots are built in kingen's cache, named by content: a warm session reuses the
+    libraries (same bytes, same file) instead of compiling again."""
+    monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
+    run(folder).assert_outcomes(passed=8)
+    libraries = sorted((tmp_path / "cache" / "pytest-builds").glob("*/libtau.so"))
+    assert len(libraries) == 1
+    before = libraries[0].stat()
+    run(folder).assert_outcomes(passed=8)
+    after = libraries[0].stat()
+    assert (after.st_ino, after.st_mtime_ns) == (before.st_ino, before.st_mtime_ns)
+
