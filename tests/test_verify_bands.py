@@ -80,3 +80,18 @@ def test_a_joint_may_differ_only_within_its_singular_bound(rail, radicand, shift
     assert bound == pytest.approx(16 * np.finfo(float).eps * 100 / math.sqrt(radicand), rel=1e-3)
     assert report.singular_entries == 2 and report.max_abs_error_mm == 0.0
     assert report.singular_out_of_bound == (0 if within else 2)
+
+
+def test_a_carriage_far_along_its_rail_is_held_to_its_own_rounding(tmp_path, capsys):
+    """Found by the fuzz test: a 150 m link whose carriage runs 590 m along its rail. In the
+    singular band the joint's rounding grows with (590 m / 150 m)^2, beyond a bound scaled by
+    the link alone; the bound now scales by the joint's reach too, and kingen's own routine passes."""
+    from kingen.cli import main
+
+    robot = tmp_path / "far.yaml"
+    robot.write_text(
+        "name: far\ndescription: a carriage far along its rail\nlimbs:\n"
+        "  - {model: rail, rail_point: [58593.75, 50000.0, 0.0], direction: [0.9922778767136677, "
+        "0.12403473458920847, 0.0], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 150000.0}\n"
+        "verification: {home: [12500.0, 25000.0, -37500.0, 0, 0, 0], range: [20000.0, 20000.0, 20000.0, 0, 0, 0]}\n")
+    assert main(["verify", str(robot), "-o", str(tmp_path / "out")]) == 0, capsys.readouterr().out

@@ -23,9 +23,17 @@ def singular_bounds(robot, reference_solution, fixed=None):
     is ill-conditioned in its limb's singular band, and wherever its conditioning bound
     CONDITIONING_FACTOR * scale / sqrt(|D|) exceeds its fixed bound ``fixed`` ((dof,), mm or
     rad; when given): just outside the band of a long link the square root is as
-    ill-conditioned as inside it, so the bound does not drop there."""
+    ill-conditioned as inside it, so the bound does not drop there. For a prismatic joint
+    the scale is the larger of its link's length and reach^2 / that length (reach: the
+    larger of the robot's size_mm and the joint's own magnitude): the radicand's rounding
+    grows with the coordinates it is computed from."""
     radicands = reference_solution.radicands
     scale = np.array([limb.singular_scale() for limb in robot.limbs])
+    # A length's radicand is computed from coordinates as large as the robot or the joint
+    # (a carriage far along its rail): its rounding grows with (that / link)^2.
+    with np.errstate(invalid="ignore"):
+        reach = np.fmax(robot.size_mm, np.nanmax(np.abs(reference_solution.branch_joints), axis=2))
+    scale = np.where(robot.revolute, scale, np.maximum(scale, reach ** 2 / scale))
     in_band = np.abs(radicands) <= SINGULAR_TOLERANCE + WARNING_BAND
     eps = np.finfo(float).eps
     with np.errstate(invalid="ignore"):
