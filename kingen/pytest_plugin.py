@@ -69,8 +69,6 @@ def _folders(config):
 
 
 def pytest_configure(config):
-    config.addinivalue_line("markers", "xdist_group(name): run these items on one pytest-xdist worker "
-                                       "(with --dist loadgroup); kingen marks each robot file's items")
     for folder in _folders(config):
         if not folder.is_dir():
             raise pytest.UsageError(f"--kingen / kingen_robots: {folder} is not a folder")
@@ -200,8 +198,6 @@ class KingenItem(pytest.Item):
         super().__init__(**kwargs)
         self.problem = problem
         self.line = line
-        # with pytest-xdist's --dist loadgroup, one worker runs (and verifies) a robot file
-        self.add_marker(pytest.mark.xdist_group(name=self.path.name))
 
     def runtest(self):
         if self.problem is not None:

@@ -165,11 +165,3 @@ def test_a_second_session_builds_nothing(folder, tmp_path, monkeypatch):
     after = libraries[0].stat()
     assert (after.st_ino, after.st_mtime_ns) == (before.st_ino, before.st_mtime_ns)
 
-
-def test_with_loadgroup_one_worker_verifies_a_robot_file(folder):
-    """Under pytest-xdist's --dist loadgroup every item of a robot file goes to one worker,
-    so the robot is built and verified once."""
-    result = run(folder, "-n", "2", "--dist", "loadgroup", "-v")
-    result.assert_outcomes(passed=8)
-    workers = {line.split("]")[0].lstrip("[") for line in result.outlines if "tau.yaml::" in line and "PASSED" in line}
-    assert len(workers) == 1, result.outlines
