@@ -16,8 +16,8 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from .collision import MODELS, clearances
-from .conventions import matrix_from_pose, t6_from_matrix
-from .forward import COORDINATES, closure_derivative
+from .conventions import matrix_from_pose, rpy_from_rotation, t6_from_matrix
+from .forward import COORDINATES, closure_derivative, unit_wrenches
 from .reference import solve
 from .routine import WARNINGS
 from .singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
@@ -122,26 +122,15 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
 def _det_sign(robot, t6, points, joints):
     """Sign of det d(closure residuals)/d(free coordinates) (n,): over the platform twist
     for six limbs (free of any angle convention), over the free pose coordinates otherwise."""
-    wrenches = np.empty(points.shape[:2] + (6,))
-    for index, limb in enumerate(robot.limbs):
-        direction = limb.force_direction(points[:, index], joints[:, index])
-        wrenches[:, index] = np.concatenate([direction, np.cross(points[:, index], direction)], axis=-1)
+    wrenches = unit_wrenches(robot, points, joints)
     free = free_coordinates(robot)
     if len(free) == 6:
         square = wrenches
     else:
-        square = closure_derivative(wrenches, _poses_of(t6), free)
+        poses = np.concatenate([t6[:, 3, :3], rpy_from_rotation(np.swapaxes(t6[:, :3, :3], 1, 2))], axis=1)
+        square = closure_derivative(wrenches, poses, free)
     with np.errstate(invalid="ignore"):
         return np.nan_to_num(np.sign(np.linalg.det(square)))
-
-
-def _poses_of(t6):
-    """Poses (n, 6) mm and radians of T6 (n, 4, 4), R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
-    pitch = np.arcsin(np.clip(-rotation[:, 2, 0], -1.0, 1.0))
-    roll = np.arctan2(rotation[:, 2, 1], rotation[:, 2, 2])
-    yaw = np.arctan2(rotation[:, 1, 0], rotation[:, 0, 0])
-    return np.column_stack([t6[:, 3, :3], roll, pitch, yaw])
 
 
 def tilted_t6(robot, azimuths, tilts, convention="axis"):

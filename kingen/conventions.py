@@ -94,11 +94,17 @@ def pose_from_t6(t6):
     """Poses (..., 6) x y z in mm and roll pitch yaw in degrees from DELMIA's T6 (..., 4, 4);
     pitch in [-90, 90] degrees (the inverse of t6_from_pose away from pitch = +/-90)."""
     t6 = np.asarray(t6, dtype=float)
-    rotation = np.swapaxes(t6[..., :3, :3], -1, -2)
+    angles = rpy_from_rotation(np.swapaxes(t6[..., :3, :3], -1, -2))
+    return np.concatenate([t6[..., 3, :3], np.degrees(angles)], axis=-1)
+
+
+def rpy_from_rotation(rotation):
+    """(roll, pitch, yaw) (..., 3) in radians of rotation matrices (..., 3, 3) with
+    R = Rz(yaw) Ry(pitch) Rx(roll); pitch in [-pi/2, pi/2]."""
     roll = np.arctan2(rotation[..., 2, 1], rotation[..., 2, 2])
     pitch = np.arcsin(np.clip(-rotation[..., 2, 0], -1.0, 1.0))
     yaw = np.arctan2(rotation[..., 1, 0], rotation[..., 0, 0])
-    return np.concatenate([t6[..., 3, :3], np.degrees(np.stack([roll, pitch, yaw], -1))], axis=-1)
+    return np.stack([roll, pitch, yaw], -1)
 
 
 def wrap_angle(angle):

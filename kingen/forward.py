@@ -66,13 +66,19 @@ def closure(robot, poses, joints):
     wrenches (n, dof, 6) of the force lines there (the residuals' twist derivative)."""
     points = platform_points_in_base(t6_of(poses), [limb.platform_point for limb in robot.limbs])
     residuals = np.empty(points.shape[:2])
+    for index, limb in enumerate(robot.limbs):
+        residuals[:, index] = limb.closure_residual(points[:, index], joints[:, index])
+    return residuals, unit_wrenches(robot, points, joints)
+
+
+def unit_wrenches(robot, points, joints):
+    """Unit wrenches [f; C x f] (n, dof, 6) of the limbs' force lines, at their platform
+    points C (n, dof, 3, base frame, mm) for joints (n, dof): moments in mm."""
     wrenches = np.empty(points.shape[:2] + (6,))
     for index, limb in enumerate(robot.limbs):
-        point, joint = points[:, index], joints[:, index]
-        residuals[:, index] = limb.closure_residual(point, joint)
-        direction = limb.force_direction(point, joint)
-        wrenches[:, index] = np.concatenate([direction, np.cross(point, direction)], axis=-1)
-    return residuals, wrenches
+        direction = limb.force_direction(points[:, index], joints[:, index])
+        wrenches[:, index] = np.concatenate([direction, np.cross(points[:, index], direction)], axis=-1)
+    return wrenches
 
 
 def pose_jacobian(poses):

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .conventions import rpy_from_rotation
 from .vendor.fksgp import solver66
 
 COMPLEX_SOLUTIONS = 40
@@ -97,7 +98,7 @@ def solve_platform(base, platform, lengths):
     matrix, d = _cayley(s)
     rotations = turn_base @ (matrix / d[:, None, None]) @ turn_platform.T
     translations = base[0] + scale * t @ turn_base.T - rotations @ platform[0]
-    poses = np.column_stack([translations, _angles(rotations)]) if len(s) else np.empty((0, 6))
+    poses = np.column_stack([translations, rpy_from_rotation(rotations)]) if len(s) else np.empty((0, 6))
     return Solutions(candidates=poses, finite=int(np.count_nonzero(finite)),
                      infinite=int(np.count_nonzero(status == 2)), failed=int(np.count_nonzero(status == 0)))
 
@@ -261,10 +262,3 @@ def _track(start, target, unknowns):
     status[status == -1] = 0
     return ends, status
 
-
-def _angles(rotations):
-    """(roll, pitch, yaw) (n, 3) radians of rotation matrices (n, 3, 3), R = Rz Ry Rx."""
-    roll = np.arctan2(rotations[:, 2, 1], rotations[:, 2, 2])
-    pitch = np.arcsin(np.clip(-rotations[:, 2, 0], -1.0, 1.0))
-    yaw = np.arctan2(rotations[:, 1, 0], rotations[:, 0, 0])
-    return np.column_stack([roll, pitch, yaw])

@@ -9,7 +9,7 @@ import pytest
 
 from kingen import sgp
 from kingen.cli import main
-from kingen.conventions import matrix_from_pose, t6_from_pose
+from kingen.conventions import matrix_from_pose, rpy_from_rotation, t6_from_pose
 from kingen.forward import _polished, assemblies, free_mask, newton, starts
 from kingen.model import load_robot
 from kingen.reference import solve
@@ -39,7 +39,7 @@ def test_dietmaier_geometry_has_40_real_assembly_modes(tmp_path):
     """Every one of the 40 solutions is real, and fk lists all 40, polished."""
     scale = 1000.0  # mm
     rotation = np.array(DIETMAIER_POSE_R)
-    roll, pitch, yaw = sgp._angles(rotation[None])[0]
+    roll, pitch, yaw = rpy_from_rotation(rotation)
     home = [*(np.array(DIETMAIER_POSE_T) * scale), *np.degrees([roll, pitch, yaw])]
     robot_file = _legs_file(tmp_path / "dietmaier.yaml", np.array(DIETMAIER_BASE) * scale,
                             np.array(DIETMAIER_PLATFORM) * scale, home)
