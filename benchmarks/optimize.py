@@ -69,7 +69,7 @@ def _optimize(path, folder, *options):
 def speedup():
     """Designs a second through the executor on 1 and 2 workers: 120 designs near the thesis's
     optimum (what a converging swarm evaluates), and a short search from random starts."""
-    from kingen.optimize import evaluate_design, executor
+    from kingen.optimize import executor
 
     problem = Problem(read_robot_file(PATH)[0], PATH)
     rng = np.random.default_rng(0)
@@ -78,9 +78,9 @@ def speedup():
     rates = {}
     for workers in (1, 2):
         with executor(workers) as (pool, _):
-            list(pool.map(evaluate_design, [problem] * workers, designs[:workers]))  # start the workers
+            list(pool.map(evaluate, [problem] * workers, designs[:workers]))  # start the workers
             started = time.perf_counter()
-            list(pool.map(evaluate_design, [problem] * len(designs), designs))
+            list(pool.map(evaluate, [problem] * len(designs), designs))
             rates[workers] = len(designs) / (time.perf_counter() - started)
         print(f"| near the optimum, {workers} worker(s) | {rates[workers]:.1f} designs/s | "
               f"{rates[workers] / workers:.1f} designs/s a core |")

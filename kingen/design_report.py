@@ -3,19 +3,12 @@ starting design's, the convergence of the swarm's best, and the self-contained H
 that holds them (kingen/optimize.py runs the search)."""
 
 import base64
-import io
 
 import numpy as np
 from matplotlib.figure import Figure
 
-from .figures import COLOURS, LABELS
+from .figures import COLOURS, LABELS, png
 from .render import template
-
-
-def _png(figure):
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=110)
-    return buffer.getvalue()
 
 
 def polar_comparison(result):
@@ -42,7 +35,7 @@ def polar_comparison(result):
     axes.set_title(f"{result['robot']}: largest tilt towards each azimuth\n"
                    f"radius: tilt (deg), outer circle {cap:g} deg, the largest searched", fontsize=10)
     figure.legend(loc="outside lower center", ncol=1, fontsize=8, frameon=False)
-    return _png(figure)
+    return png(figure)
 
 
 def convergence(result):
@@ -58,7 +51,7 @@ def convergence(result):
     axes.set_ylim(0.0, max(max(history, default=0.0), result["objective_deg"]) * 1.1 + 1.0)
     axes.grid(alpha=0.3)
     figure.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
-    return _png(figure)
+    return png(figure)
 
 
 def report_html(result, pngs):

@@ -35,7 +35,8 @@ QUANTITIES = (
 """Rows of the sweep figure: an axis label (one quantity) and its curves (key, label, style, colour)."""
 
 
-def _png(figure):
+def png(figure):
+    """The figure as PNG bytes (110 dpi)."""
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
@@ -276,7 +277,7 @@ def figure_objects(analysis):
 
 def figures(analysis):
     """{file name: PNG bytes} of every figure the analysis has data for."""
-    return {name: _png(figure) for name, figure in figure_objects(analysis).items()}
+    return {name: png(figure) for name, figure in figure_objects(analysis).items()}
 
 
 def counts(analysis):

@@ -97,9 +97,8 @@ def writable_folder(folder):
     folder, or its nearest existing ancestor that kingen would create it in, must be a
     writable folder."""
     folder = Path(folder)
-    existing = folder
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
+    missing = _missing_folders(folder)
+    existing = missing[0].parent if missing else folder
     if not existing.is_dir():
         raise KingenError(f"{folder}: {existing} is not a folder")
     if not os.access(existing, os.W_OK | os.X_OK):

@@ -20,16 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .design import evaluate
+from .design import evaluate, settings_of
 from .errors import KingenError, refuse_special_file
 from .files import digest, write_atomic
 
 CHECKPOINT = "checkpoint.pkl"
-
-
-def evaluate_design(problem, x):
-    """(objective_deg, table, poses judged) of one design: what a worker runs."""
-    return evaluate(problem, x)
 
 
 @dataclass
@@ -139,7 +134,7 @@ def run_swarm(problem, state, executor, folder=None, progress=None, stop=None):
             break
         offspring = state.algorithm.ask()
         designs = offspring.get("X")
-        results = list(executor.map(evaluate_design, [problem] * len(designs), designs))
+        results = list(executor.map(evaluate, [problem] * len(designs), designs))
         objectives = np.array([result[0] for result in results])
         offspring.set("F", -objectives[:, None])
         state.algorithm.tell(infills=offspring)
@@ -176,7 +171,7 @@ def refine(problem, state, executor):
     best = [state.best_x.copy(), state.best_objective, state.best_table]
 
     def value(x):
-        objective, table, _ = evaluate_design(problem, x)
+        objective, table, _ = evaluate(problem, x)
         count[0] += 1
         if objective > best[1]:
             best[:] = [np.array(x, dtype=float), objective, table]
@@ -186,7 +181,7 @@ def refine(problem, state, executor):
         plus = [np.clip(x + step * unit, problem.lower, problem.upper) for unit, step in zip(np.eye(len(x)), steps)]
         minus = [np.clip(x - step * unit, problem.lower, problem.upper) for unit, step in zip(np.eye(len(x)), steps)]
         points = plus + minus
-        results = list(executor.map(evaluate_design, [problem] * len(points), points))
+        results = list(executor.map(evaluate, [problem] * len(points), points))
         count[0] += len(points)
         for point, result in zip(points, results):
             if result[0] > best[1]:
@@ -202,12 +197,9 @@ def refine(problem, state, executor):
     return best[0], best[1], best[2], count[0]
 
 
-
 def result(problem, state, best, refined_evaluations, workers, seconds):
     """optimization.json's data for the search ``state`` and the ``best`` (design, objective,
     table) after refinement."""
-    from .design import evaluate, settings_of
-
     design, objective, table = best
     start = problem.start()
     start_objective, start_table, _ = evaluate(problem, start)

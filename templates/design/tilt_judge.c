@@ -130,12 +130,9 @@ static int determinant_sign(double W[6][6])
     return sign;
 }
 
-static int index_above(double W[6][6], double threshold)
+/* M = W^T W's lower triangle (j <= i), M = sum_i w_i w_i^T over the limbs' unit wrenches. */
+static void gram(double W[6][6], double M[6][6])
 {
-    /* Whether the direct index exceeds threshold: M - threshold^2 diag(0, 0, 0, 1, 1, 1)
-     * positive definite (LDL^T pivots all positive), M = sum_i w_i w_i^T; false when M_vv is
-     * singular (kingen/singularity.py's translation singularity). */
-    double M[6][6], pivot[6], trace;
     int i, j, k;
     for (i = 0; i < 6; i++)
         for (j = 0; j <= i; j++) {
@@ -144,6 +141,16 @@ static int index_above(double W[6][6], double threshold)
                 sum += W[k][i] * W[k][j];
             M[i][j] = sum;
         }
+}
+
+static int index_above(double W[6][6], double threshold)
+{
+    /* Whether the direct index exceeds threshold: M - threshold^2 diag(0, 0, 0, 1, 1, 1)
+     * positive definite (LDL^T pivots all positive), M = sum_i w_i w_i^T; false when M_vv is
+     * singular (kingen/singularity.py's translation singularity). */
+    double M[6][6], pivot[6], trace;
+    int i, j, k;
+    gram(W, M);
     trace = M[0][0] + M[1][1] + M[2][2];
     for (i = 3; i < 6; i++)
         M[i][i] -= threshold * threshold;
@@ -265,13 +272,10 @@ void kingen_home(const kingen_design *design, double *index, double *det_sign, i
     if (!assemble(design, R, design->home, tip, point, W))
         return;
     *det_sign = determinant_sign(W);
+    gram(W, M);
     for (i = 0; i < 6; i++)
-        for (j = 0; j < 6; j++) {
-            double sum = 0.0;
-            for (k = 0; k < 6; k++)
-                sum += W[k][i] * W[k][j];
-            M[i][j] = sum;
-        }
+        for (j = i + 1; j < 6; j++)
+            M[i][j] = M[j][i];
     trace = M[0][0] + M[1][1] + M[2][2];
     {
         /* M_vv^-1 M_vw by Gaussian elimination of the 3x3 force block. */
