@@ -92,28 +92,41 @@ def _model_tables(robot):
     return list(tables.values())
 
 
-def ldl_test_lines(size=6, shifted=(3, 4, 5)):
-    """Straight-line C (C89 declarations first) that returns 1 from the enclosing function
-    unless ``first + second - KINGEN_DIRECT_MIN^2 I`` on the ``shifted`` diagonal entries is
-    positive definite: an LDL^T factorisation unrolled at generation time (u = l d kept, one
-    division per pivot), stopping at the first pivot <= 0. ``first`` and ``second`` are packed
-    lower triangles, row by row."""
-    names = [f"a{r}{c}" for r in range(size) for c in range(r + 1)]
-    below = [(r, c) for c in range(size) for r in range(c + 1, size)]
-    lines = [f"double {', '.join(names)};",
-             f"double {', '.join(f'd{j}' for j in range(size))}, {', '.join(f'r{j}' for j in range(size - 1))};",
-             f"double {', '.join(f'u{r}{c}, l{r}{c}' for r, c in below)};"]
-    lines += [f"{name} = first[{k}] + second[{k}];" for k, name in enumerate(names)]
-    lines += [f"a{j}{j} -= KINGEN_DIRECT_MIN * KINGEN_DIRECT_MIN;" for j in shifted]
-    for j in range(size):
-        lines += [f"d{j} = {' - '.join([f'a{j}{j}'] + [f'u{j}{k} * l{j}{k}' for k in range(j)])};",
-                  f"if (!(d{j} > 0.0))", "    return 1;"]
-        if j + 1 < size:
-            lines.append(f"r{j} = 1.0 / d{j};")
-        for r in range(j + 1, size):
-            lines += [f"u{r}{j} = {' - '.join([f'a{r}{j}'] + [f'u{r}{k} * l{j}{k}' for k in range(j)])};",
-                      f"l{r}{j} = u{r}{j} * r{j};"]
-    return lines
+def schur_test_lines(entry):
+    """Straight-line C89 (declarations first) that sets ``double margin``: positive exactly when
+    M - KINGEN_DIRECT_MIN^2 diag(0, 0, 0, 1, 1, 1) is positive definite (the direct index lies
+    above the threshold), else zero, negative or NaN. ``entry`` formats M's packed entry k
+    (lower triangle, row by row) as a C expression, e.g. ``"first[{k}] + second[{k}]"``.
+
+    Division-free and branch-free, so a loop over postures vectorises: with M's force block
+    A, mixed block B (moment rows) and moment block C, the test holds exactly when A's
+    leading minors a00, j22 = a00 a11 - a10^2 and det A are positive and so are the leading
+    minors of X = det(A) (C - d^2 I) - B adj(A) B^T, which is det(A) times the Schur
+    complement minus d^2 I (docs/conventions.md, 'Force lines and the direct index').
+    margin is their minimum; det X, taken last, involves every entry, so a NaN anywhere in M
+    reaches margin."""
+    names = {(r, c): f"a{r}{c}" for r in range(3) for c in range(r + 1)}
+    names.update({(3 + r, c): f"b{r}{c}" for r in range(3) for c in range(3)})
+    names.update({(3 + r, 3 + c): f"c{r}{c}" for r in range(3) for c in range(r + 1)})
+    declarations = [f"double {names[pair]} = {entry.format(k=k)};" for k, pair in enumerate(PACKED)]
+    adjugate = {(0, 0): "a11 * a22 - a21 * a21", (1, 1): "a00 * a22 - a20 * a20", (2, 2): "a00 * a11 - a10 * a10",
+                (1, 0): "a20 * a21 - a10 * a22", (2, 0): "a10 * a21 - a11 * a20", (2, 1): "a10 * a20 - a00 * a21"}
+    declarations += [f"double j{r}{c} = {value};" for (r, c), value in adjugate.items()]
+    declarations.append("double det = a00 * j00 + a10 * j10 + a20 * j20, shift = det * KINGEN_DIRECT_MIN * KINGEN_DIRECT_MIN;")
+
+    def adj(r, c):
+        return f"j{max(r, c)}{min(r, c)}"
+
+    declarations += [f"double p{r}{c} = {' + '.join(f'b{r}{k} * {adj(k, c)}' for k in range(3))};"
+                     for r in range(3) for c in range(3)]
+    declarations += [f"double x{r}{c} = det * c{r}{c}{' - shift' if r == c else ''}"
+                     f" - ({' + '.join(f'p{r}{k} * b{c}{k}' for k in range(3))});" for r in range(3) for c in range(r + 1)]
+    declarations += ["double y11 = x00 * x11 - x10 * x10;",
+                     "double y22 = x00 * (x11 * x22 - x21 * x21) - x10 * (x10 * x22 - x21 * x20)"
+                     " + x20 * (x10 * x21 - x11 * x20);",
+                     "double margin = a00;"]
+    return declarations + [f"margin = margin < {minor} ? margin : {minor};"
+                           for minor in ("j22", "det", "x00", "y11", "y22")]
 
 
 def gram_lines():
@@ -182,7 +195,7 @@ def robot_view(robot):
         "direct_index": robot.direct_index_min is not None,
         "jacobian": False,
         "low_bits": partial_sum_split(robot)[0],
-        "ldl_lines": ldl_test_lines(),
+        "schur_lines": schur_test_lines("high[{k}][h] + low[{k}][l]"),
         "gram_lines": gram_lines(),
         "partial_sums": partial_sums(robot),
         "direct_index_min": c_double(robot.direct_index_min or 0.0),

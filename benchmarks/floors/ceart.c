@@ -36,7 +36,7 @@ static const double floor_origin[3] = { 0.0, 0.0, 0.0 };
 DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[4][4],
                         double solutions[][POSTURES], int warnings[], void *pData)
 {
-    double value[DOF][2], line[DOF][2][21], high[8][21], low[8][21];
+    double value[DOF][2], line[DOF][2][21], high[21][8], low[21][8], margin[POSTURES];
     int i, k, branch, worst = FLOOR_OK;
     (void)link_lengths; (void)pData;
     if (!kin_check_definition(DOF, POSTURES))
@@ -100,21 +100,23 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
             warnings[k] = floor_warning[worst];
         return worst == FLOOR_UNREACHABLE;
     }
-    /* A posture's M: the sum over cranks 0-2 (digits 5-3) plus the sum over cranks 3-5. */
+    /* A posture's M: the sum over cranks 0-2 (digits 5-3) plus the sum over cranks 3-5, kept
+     * entry by entry so that the loop over the low digits below runs along memory. */
     for (k = 0; k < 8; k++) {
         const int b0 = (k >> 2) & 1, b1 = (k >> 1) & 1, b2 = k & 1;
         int n;
         for (n = 0; n < 21; n++) {
-            high[k][n] = line[0][b0][n] + line[1][b1][n] + line[2][b2][n];
-            low[k][n] = line[3][b0][n] + line[4][b1][n] + line[5][b2][n];
+            high[n][k] = line[0][b0][n] + line[1][b1][n] + line[2][b2][n];
+            low[n][k] = line[3][b0][n] + line[4][b1][n] + line[5][b2][n];
         }
     }
-    for (k = 0; k < POSTURES; k++) {
-        double m[21];
-        int n;
-        for (n = 0; n < 21; n++)
-            m[n] = high[k >> 3][n] + low[k & 7][n];
-        warnings[k] = floor_direct_singular(m, DIRECT_MIN) ? WARN_SINGULAR_SOLUTION : WARN_GOOD_SOLUTION;
+#define POSTURE_ENTRY(n) (high[n][k >> 3] + low[n][j])
+    for (k = 0; k < POSTURES; k += 8) {
+        int j;
+        for (j = 0; j < 8; j++)
+            FLOOR_DIRECT_MARGIN(POSTURE_ENTRY, DIRECT_MIN, margin[k + j])
     }
+    for (k = 0; k < POSTURES; k++)
+        warnings[k] = margin[k] > 0.0 ? WARN_GOOD_SOLUTION : WARN_SINGULAR_SOLUTION;
     return 0;
 }

@@ -88,65 +88,46 @@ static void floor_add_line(double m[21], const double c[3], const double f[3])
     m[15] += w5 * w0; m[16] += w5 * w1; m[17] += w5 * w2; m[18] += w5 * w3; m[19] += w5 * w4; m[20] += w5 * w5;
 }
 
-/* 1 when M - d^2 diag(0, 0, 0, 1, 1, 1) is not positive definite: the direct index is at
- * most d. LDL^T written out (u = l p), stopping at the first pivot p <= 0. */
-static int floor_direct_singular(const double m[21], double d)
-{
-    double p0, p1, p2, p3, p4, p5, r0, r1, r2, r3, r4;
-    double u10, u20, u30, u40, u50, u21, u31, u41, u51, u32, u42, u52, u43, u53, u54;
-    double l10, l20, l30, l40, l50, l21, l31, l41, l51, l32, l42, l52, l43, l53, l54;
-    p0 = m[0];
-    if (!(p0 > 0.0))
-        return 1;
-    r0 = 1.0 / p0;
-    u10 = m[1];
-    l10 = u10 * r0;
-    u20 = m[3];
-    l20 = u20 * r0;
-    u30 = m[6];
-    l30 = u30 * r0;
-    u40 = m[10];
-    l40 = u40 * r0;
-    u50 = m[15];
-    l50 = u50 * r0;
-    p1 = m[2] - u10 * l10;
-    if (!(p1 > 0.0))
-        return 1;
-    r1 = 1.0 / p1;
-    u21 = m[4] - u20 * l10;
-    l21 = u21 * r1;
-    u31 = m[7] - u30 * l10;
-    l31 = u31 * r1;
-    u41 = m[11] - u40 * l10;
-    l41 = u41 * r1;
-    u51 = m[16] - u50 * l10;
-    l51 = u51 * r1;
-    p2 = m[5] - u20 * l20 - u21 * l21;
-    if (!(p2 > 0.0))
-        return 1;
-    r2 = 1.0 / p2;
-    u32 = m[8] - u30 * l20 - u31 * l21;
-    l32 = u32 * r2;
-    u42 = m[12] - u40 * l20 - u41 * l21;
-    l42 = u42 * r2;
-    u52 = m[17] - u50 * l20 - u51 * l21;
-    l52 = u52 * r2;
-    p3 = m[9] - d * d - u30 * l30 - u31 * l31 - u32 * l32;
-    if (!(p3 > 0.0))
-        return 1;
-    r3 = 1.0 / p3;
-    u43 = m[13] - u40 * l30 - u41 * l31 - u42 * l32;
-    l43 = u43 * r3;
-    u53 = m[18] - u50 * l30 - u51 * l31 - u52 * l32;
-    l53 = u53 * r3;
-    p4 = m[14] - d * d - u40 * l40 - u41 * l41 - u42 * l42 - u43 * l43;
-    if (!(p4 > 0.0))
-        return 1;
-    r4 = 1.0 / p4;
-    u54 = m[19] - u50 * l40 - u51 * l41 - u52 * l42 - u53 * l43;
-    l54 = u54 * r4;
-    p5 = m[20] - d * d - u50 * l50 - u51 * l51 - u52 * l52 - u53 * l53 - u54 * l54;
-    return !(p5 > 0.0);
-}
+/* margin = a value positive exactly when M - d^2 diag(0, 0, 0, 1, 1, 1) is positive definite
+ * (the direct index lies above d), M given entry by entry as ENTRY(n) (packed lower triangle,
+ * row by row) with force block A, moment rows of the mixed block B and moment block C: A's
+ * leading minors and those of X = det(A) (C - d^2 I) - B adj(A) B^T positive (Sylvester,
+ * Schur complement), margin their least. No division and no branch, so a loop over
+ * postures around it vectorises; a macro, so ENTRY may index the caller's partial sums. */
+#define FLOOR_DIRECT_MARGIN(ENTRY, d, margin)                                                          \
+    {                                                                                                  \
+        const double a00 = ENTRY(0), a10 = ENTRY(1), a11 = ENTRY(2), a20 = ENTRY(3), a21 = ENTRY(4);   \
+        const double a22 = ENTRY(5), b00 = ENTRY(6), b01 = ENTRY(7), b02 = ENTRY(8), c00 = ENTRY(9);   \
+        const double b10 = ENTRY(10), b11 = ENTRY(11), b12 = ENTRY(12), c10 = ENTRY(13);               \
+        const double c11 = ENTRY(14), b20 = ENTRY(15), b21 = ENTRY(16), b22 = ENTRY(17);               \
+        const double c20 = ENTRY(18), c21 = ENTRY(19), c22 = ENTRY(20);                                \
+        const double adj00 = a11 * a22 - a21 * a21, adj11 = a00 * a22 - a20 * a20;                    \
+        const double adj22 = a00 * a11 - a10 * a10, adj10 = a20 * a21 - a10 * a22;                    \
+        const double adj20 = a10 * a21 - a11 * a20, adj21 = a10 * a20 - a00 * a21;                    \
+        const double det = a00 * adj00 + a10 * adj10 + a20 * adj20, shift = det * (d) * (d);           \
+        const double q00 = b00 * adj00 + b01 * adj10 + b02 * adj20;                                    \
+        const double q01 = b00 * adj10 + b01 * adj11 + b02 * adj21;                                    \
+        const double q02 = b00 * adj20 + b01 * adj21 + b02 * adj22;                                    \
+        const double q10 = b10 * adj00 + b11 * adj10 + b12 * adj20;                                    \
+        const double q11 = b10 * adj10 + b11 * adj11 + b12 * adj21;                                    \
+        const double q12 = b10 * adj20 + b11 * adj21 + b12 * adj22;                                    \
+        const double q20 = b20 * adj00 + b21 * adj10 + b22 * adj20;                                    \
+        const double q21 = b20 * adj10 + b21 * adj11 + b22 * adj21;                                    \
+        const double q22 = b20 * adj20 + b21 * adj21 + b22 * adj22;                                    \
+        const double x00 = det * c00 - shift - (q00 * b00 + q01 * b01 + q02 * b02);                    \
+        const double x10 = det * c10 - (q10 * b00 + q11 * b01 + q12 * b02);                            \
+        const double x11 = det * c11 - shift - (q10 * b10 + q11 * b11 + q12 * b12);                    \
+        const double x20 = det * c20 - (q20 * b00 + q21 * b01 + q22 * b02);                            \
+        const double x21 = det * c21 - (q20 * b10 + q21 * b11 + q22 * b12);                            \
+        const double x22 = det * c22 - shift - (q20 * b20 + q21 * b21 + q22 * b22);                    \
+        const double minor2 = x00 * x11 - x10 * x10;                                                   \
+        const double minor3 = x00 * (x11 * x22 - x21 * x21) - x10 * (x10 * x22 - x21 * x20)            \
+                              + x20 * (x10 * x21 - x11 * x20);                                         \
+        double least = a00 < adj22 ? a00 : adj22;                                                      \
+        least = least < det ? least : det;                                                             \
+        least = least < x00 ? least : x00;                                                             \
+        least = least < minor2 ? least : minor2;                                                       \
+        (margin) = least < minor3 ? least : minor3; /* NaN anywhere in M: minor3, so margin, NaN */    \
+    }
 
 #endif

@@ -22,6 +22,7 @@ DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T
                           double solutions[][1], int warnings[], void *pData)
 {
     double m[21] = { 0.0 };
+    double margin;
     int i, finite = 1;
     (void)link_lengths; (void)link_offsets; (void)pData;
     if (!kin_check_definition(DOF, 1))
@@ -39,7 +40,8 @@ DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T
             q = 0.0;
         }
         solutions[i][0] = q;
-        f[0] /= length; f[1] /= length; f[2] /= length;
+        length = 1.0 / length;
+        f[0] *= length; f[1] *= length; f[2] *= length;
         floor_add_line(m, c, f);
     }
     if (!finite) {
@@ -48,6 +50,8 @@ DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T
         warnings[0] = WARN_UNREACHABLE;
         return 1;
     }
-    warnings[0] = floor_direct_singular(m, DIRECT_MIN) ? WARN_SINGULAR_SOLUTION : WARN_GOOD_SOLUTION;
+#define GRAM_ENTRY(n) (m[n])
+    FLOOR_DIRECT_MARGIN(GRAM_ENTRY, DIRECT_MIN, margin)
+    warnings[0] = margin > 0.0 ? WARN_GOOD_SOLUTION : WARN_SINGULAR_SOLUTION;
     return 0;
 }
