@@ -74,7 +74,7 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
             worst = status;
         if (worst < FLOOR_SINGULAR) {
             double rho = sqrt(rho2), sin_half = sqrt(radicand);
-            double cp = a / rho, sp = b / rho;
+            double per_rho = 1.0 / rho, cp = a * per_rho, sp = b * per_rho;
             double ct[2], st[2];
             ct[0] = cp * cosine - sp * sin_half;
             st[0] = sp * cosine + cp * sin_half;
@@ -83,9 +83,9 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
             for (branch = 0; branch < 2; branch++) {
                 double f[3];
                 int n;
-                f[0] = (g[0] - CRANK * ct[branch] * cb) / ROD;
-                f[1] = (g[1] - CRANK * ct[branch] * sb) / ROD;
-                f[2] = (g[2] + CRANK * st[branch]) / ROD;
+                f[0] = (g[0] - CRANK * ct[branch] * cb) * (1.0 / ROD);
+                f[1] = (g[1] - CRANK * ct[branch] * sb) * (1.0 / ROD);
+                f[2] = (g[2] + CRANK * st[branch]) * (1.0 / ROD);
                 for (n = 0; n < 21; n++)
                     line[i][branch][n] = 0.0;
                 floor_add_line(line[i][branch], c, f);
