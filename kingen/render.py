@@ -129,9 +129,12 @@ def schur_test_lines(entry):
                            for minor in ("j22", "det", "x00", "y11", "y22")]
 
 
-def gram_lines():
-    """C statements filling gram[21], the packed lower triangle of w w^T, from w0 .. w5."""
-    return [f"gram[{k}] = w{r} * w{c};" for k, (r, c) in enumerate(PACKED)]
+def gram_lines(accumulate):
+    """C statements that fill gram[21] with the packed lower triangle of w w^T (from w0 .. w5),
+    or add it to gram[21] when ``accumulate``: a routine with one posture sums its lines
+    straight into M, without a table of lines."""
+    operator = "+=" if accumulate else "="
+    return [f"gram[{k}] {operator} w{r} * w{c};" for k, (r, c) in enumerate(PACKED)]
 
 
 def partial_sums(robot):
@@ -195,8 +198,10 @@ def robot_view(robot):
         "direct_index": robot.direct_index_min is not None,
         "jacobian": False,
         "low_bits": partial_sum_split(robot)[0],
-        "schur_lines": schur_test_lines("high[{k}][h] + low[{k}][l]"),
-        "gram_lines": gram_lines(),
+        "split_sums": bool(partial_sum_split(robot)[1]),
+        "schur_lines": schur_test_lines("high[{k} * KINGEN_HIGH + h] + low[{k} * KINGEN_LOW + l]"
+                                     if partial_sum_split(robot)[1] else "high[{k} * KINGEN_HIGH + h]"),
+        "gram_lines": gram_lines(accumulate=robot.postures == 1),
         "partial_sums": partial_sums(robot),
         "direct_index_min": c_double(robot.direct_index_min or 0.0),
         "degree": c_double(math.pi / 180.0),

@@ -41,6 +41,7 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
     (void)link_lengths; (void)pData;
     if (!kin_check_definition(DOF, POSTURES))
         return 1;
+    FLOOR_UNROLL
     for (i = 0; i < DOF; i++) {
         const double cb = direction[i][0], sb = direction[i][1];
         double c[3], g[3], a, b, kk, rho2, radicand, cosine, half, phi, zero;
@@ -92,22 +93,39 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
             }
         }
     }
-    for (k = 0; k < POSTURES; k++)
-        for (i = 0; i < DOF; i++)
-            solutions[i][k] = value[i][(k >> (5 - i)) & 1];
+    for (i = 0; i < DOF; i++) { /* crank i takes branch 0 in blocks of 2^(5 - i) postures, then branch 1 */
+        const int block = 1 << (5 - i);
+        int j;
+        for (k = 0; k < POSTURES; k += 2 * block)
+            for (j = 0; j < block; j++) {
+                solutions[i][k + j] = value[i][0];
+                solutions[i][k + block + j] = value[i][1];
+            }
+    }
     if (worst >= FLOOR_SINGULAR) {
         for (k = 0; k < POSTURES; k++)
             warnings[k] = floor_warning[worst];
         return worst == FLOOR_UNREACHABLE;
     }
     /* A posture's M: the sum over cranks 0-2 (digits 5-3) plus the sum over cranks 3-5, kept
-     * entry by entry so that the loop over the low digits below runs along memory. */
-    for (k = 0; k < 8; k++) {
-        const int b0 = (k >> 2) & 1, b1 = (k >> 1) & 1, b2 = k & 1;
-        int n;
-        for (n = 0; n < 21; n++) {
-            high[n][k] = line[0][b0][n] + line[1][b1][n] + line[2][b2][n];
-            low[n][k] = line[3][b0][n] + line[4][b1][n] + line[5][b2][n];
+     * entry by entry so that the loop over the low digits below runs along memory; each sum
+     * of three lines from the four sums of the first two. */
+    for (k = 0; k < 21; k++) {
+        int triple;
+        for (triple = 0; triple < 2; triple++) {
+            double (*first)[21] = line[3 * triple], (*second)[21] = line[3 * triple + 1];
+            double (*third)[21] = line[3 * triple + 2];
+            double *sum = triple == 0 ? high[k] : low[k];
+            const double s00 = first[0][k] + second[0][k], s01 = first[0][k] + second[1][k];
+            const double s10 = first[1][k] + second[0][k], s11 = first[1][k] + second[1][k];
+            sum[0] = s00 + third[0][k];
+            sum[1] = s00 + third[1][k];
+            sum[2] = s01 + third[0][k];
+            sum[3] = s01 + third[1][k];
+            sum[4] = s10 + third[0][k];
+            sum[5] = s10 + third[1][k];
+            sum[6] = s11 + third[0][k];
+            sum[7] = s11 + third[1][k];
         }
     }
 #define POSTURE_ENTRY(n) (high[n][k >> 3] + low[n][j])

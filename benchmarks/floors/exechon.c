@@ -19,6 +19,7 @@ DllExport int kin_exechon(double link_lengths[], double link_offsets[], double T
     (void)link_offsets; (void)pData;
     if (!kin_check_definition(DOF, 1))
         return 1;
+    FLOOR_UNROLL
     for (i = 0; i < DOF; i++) {
         double d[3], q;
         floor_point(T6, platform[i], base[i], d);

@@ -14,6 +14,12 @@
 #define FLOOR_SINGULAR_TOL 1e-5
 #define FLOOR_PI 3.14159265358979323846
 #define FLOOR_FINITE(x) ((x) - (x) == 0.0)
+/* Unroll the loop over the limbs, so each limb's table row folds into constants. */
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__TINYC__)
+#define FLOOR_UNROLL _Pragma("GCC unroll 8")
+#else
+#define FLOOR_UNROLL
+#endif
 
 /* Severities, worst last: the warning of each. */
 enum { FLOOR_OK, FLOOR_LIMITS, FLOOR_SINGULAR, FLOOR_UNREACHABLE };

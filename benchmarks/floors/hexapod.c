@@ -27,6 +27,7 @@ DllExport int kin_hexapod(double link_lengths[], double link_offsets[], double T
     (void)link_lengths; (void)link_offsets; (void)pData;
     if (!kin_check_definition(DOF, 1))
         return 1;
+    FLOOR_UNROLL
     for (i = 0; i < DOF; i++) {
         double c[3], f[3], length, q;
         floor_point(T6, platform[i], floor_origin, c);

@@ -28,6 +28,7 @@ DllExport int kin_tau(double link_lengths[], double link_offsets[], double T6[4]
     (void)pData;
     if (!kin_check_definition(DOF, POSTURES))
         return 1;
+    FLOOR_UNROLL
     for (i = 0; i < DOF; i++) {
         double l = floor_field(link_lengths, i, 1.0, link[i]);
         double origin = floor_field(link_offsets, i, 1.0, 0.0);

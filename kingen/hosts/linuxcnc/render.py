@@ -8,7 +8,7 @@ from pathlib import Path
 from ...errors import KingenError
 from ...limbs import c_double
 from ...placement import branch_words
-from ...render import build_info, robot_view, schur_test_lines, template
+from ...render import build_info, gram_lines, robot_view, schur_test_lines, template
 from ...routine import SINGULAR_TOLERANCE
 from ...units import LENGTH_UNITS, robot_in_units
 
@@ -129,6 +129,7 @@ def view_model(robot, units="mm"):
         "direct_index": True,
         "jacobian": True,
         "schur_lines": schur_test_lines("m[{k}]"),
+        "gram_lines": gram_lines(accumulate=True),
         "direct_index_min": c_double(robot.direct_index_min) if robot.direct_index_min is not None else None,
         "singular_tolerance": c_double(SINGULAR_TOLERANCE),
         "parameters": _parameters(robot),
