@@ -13,8 +13,10 @@ FLOORS = Path(__file__).resolve().parent.parent / "benchmarks" / "floors"
 ROBOTS = sorted(path.stem for path in FLOORS.glob("*.c"))
 
 
-def test_every_limb_family_has_a_floor():
-    assert ROBOTS == ["ceart", "exechon", "hexapod", "tau"]
+def test_every_limb_family_and_every_direct_index_robot_has_a_floor():
+    """One floor per limb family (crank, leg, rail, legs with travel limits), and one for every
+    shipped robot with a direct-index threshold, where the generated code's speed matters most."""
+    assert ROBOTS == ["ceart", "exechon", "flexapod", "hexapod", "iwf", "rus_optimized", "tau"]
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
