@@ -50,3 +50,16 @@ def test_processes_and_scheduler_are_exclusive():
 
 def test_no_scheduler_is_bad_input(tmp_path):
     assert main(["verify", "hexapod", "--samples", "10", "-o", str(tmp_path), "--scheduler", "tcp://127.0.0.1:9"]) == 2
+
+
+def test_a_routine_that_crashes_a_worker_still_fails(tmp_path):
+    """Its chunk's job fails on the cluster, is compared again in verify's own child, and
+    the crash is named there with its poses."""
+    distributed = pytest.importorskip("distributed")
+    from test_hostile import plugin_source, verify_source
+
+    crashing = plugin_source(ROUTINE="if (T6[3][0] > 19.0) *(volatile int *)8 = 1;")  # 2.5 % of the region's poses
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        result = verify_source(tmp_path, crashing, "--scheduler", cluster.scheduler_address)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED crash: the plugin ended the host process (signal SIGSEGV) during poses 0 to 199" in result.stdout
