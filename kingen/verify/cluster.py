@@ -12,6 +12,7 @@ a crash is named as always; if it runs to the end here, it is reported as a deat
 
 import hashlib
 import itertools
+import shutil
 import tempfile
 from collections import deque
 from dataclasses import dataclass
@@ -49,7 +50,7 @@ def chunk_job(robot, calibrated, loaded_from, options):
 
 
 _loaded = {}
-"""Per worker process: the loaded routine of each library digest (and its folder)."""
+"""Per worker process: the loaded routine of each library digest."""
 
 
 def compare_on_worker(job, begin, size):
@@ -57,9 +58,12 @@ def compare_on_worker(job, begin, size):
     (the first chunk keeps its poses for the diagnoses, as locally)."""
     if job.digest not in _loaded:
         folder = Path(tempfile.mkdtemp(prefix="kingen-worker-"))
-        path = folder / f"{job.digest[:16]}.so"
-        path.write_bytes(job.library)
-        _loaded[job.digest] = job.host.load(path, job.routine, job.robot)
+        try:
+            path = folder / f"{job.digest[:16]}.so"
+            path.write_bytes(job.library)
+            _loaded[job.digest] = job.host.load(path, job.routine, job.robot)
+        finally:  # the loaded library stays mapped; its file is not needed again
+            shutil.rmtree(folder, ignore_errors=True)
     processes.set_chunk_job(job.robot, job.calibrated, _loaded[job.digest], job.options)
     stream = PoseStream(job.robot, job.options.seed)
     stream.skip(begin)
