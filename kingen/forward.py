@@ -21,7 +21,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import sgp
 from .conventions import matrix_from_pose, t6_from_matrix
 from .reference import platform_points_in_base
 
@@ -164,6 +163,8 @@ def search_region(robot, search=SEARCH):
 def assemblies(robot, joints, near, search=SEARCH):
     """AssemblyModes for ``joints`` (dof,) (mm, rad); ``near`` (6,) (mm, rad) orders them and
     gives the values of coordinates that are not free; ``search`` widens a multi-start search."""
+    from . import sgp  # here: it loads scipy (about 0.6 s), which nothing else verify runs needs
+
     joints = np.asarray(joints, dtype=float)
     near = np.asarray(near, dtype=float)
     free = free_mask(robot)

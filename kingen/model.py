@@ -180,9 +180,10 @@ class Robot:
     def dof(self):
         return len(self.limbs)
 
-    @property
+    @functools.cached_property
     def branch_bits(self):
-        """Per limb: its binary digit in the posture number (most significant first), or -1."""
+        """Per limb: its binary digit in the posture number (most significant first), or -1
+        (computed once: a Robot is frozen)."""
         two_branch = [i for i, limb in enumerate(self.limbs) if limb.branches == 2]
         bits = [-1] * self.dof
         for rank, index in enumerate(two_branch):
@@ -233,10 +234,11 @@ class Robot:
                 limbs[index] = limbs[index].model_copy(update={parameter: value})
         return replace(self, limbs=tuple(limbs))
 
-    @property
+    @functools.cached_property
     def size_mm(self):
         """The largest magnitude of any length or coordinate of the robot and its verification
-        region, mm: the scale floating-point rounding is relative to."""
+        region, mm: the scale floating-point rounding is relative to (computed once: a Robot is
+        frozen)."""
         values = [abs(h) + abs(r) for h, r in zip(self.verification.home[:3], self.verification.range[:3])]
         for limb in self.limbs:
             for name in limb.length_fields:

@@ -2,18 +2,16 @@
 c1' = K c1, c2' = K c2, no adaptation, no perturbation of the best), then scipy's
 trust-constr from the swarm's best, over a robot file's design problem (:mod:`kingen.design`).
 
-Particles are evaluated through a ``concurrent.futures.Executor`` (a process pool, or Dask's
+Particles are evaluated through :func:`kingen.executors.executor` (a process pool, or Dask's
 distributed executor for a cluster); the swarm's random numbers come only from the seed, so
 a search gives the same result for any number of workers. After every iteration the whole
 state is written to a checkpoint, from which ``resume`` continues to the same result as an
 uninterrupted run.
 """
 
-import contextlib
 import copy
 import json
 import pickle
-import signal
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -89,38 +87,6 @@ def load(folder, expected):
         raise KingenError(f"{path}: the checkpoint is of another design problem (the robot file or its "
                           "optimize: section changed)")
     return state
-
-
-def _ignore_interrupts():
-    """In a worker: Ctrl-C is the parent's to handle (it checkpoints and stops the pool)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-@contextlib.contextmanager
-def executor(workers=None, scheduler=None):
-    """(executor, description): Dask's distributed executor on the cluster at ``scheduler``,
-    else a pool of ``workers`` processes (default: the usable cores)."""
-    if scheduler is not None:
-        try:
-            from distributed import Client
-        except ImportError:
-            raise KingenError("--scheduler: Dask's 'distributed' package is not installed "
-                              "(pip install 'kingen[cluster]')") from None
-        try:
-            client = Client(scheduler, timeout="20s")
-        except OSError as error:
-            raise KingenError(f"--scheduler: no Dask scheduler at {scheduler} ({error})") from None
-        with client:
-            cores = sum(client.nthreads().values())
-            yield client.get_executor(), f"a Dask cluster at {scheduler} ({cores} threads)"
-        return
-    from concurrent.futures import ProcessPoolExecutor
-
-    from .verify.processes import comparing_processes
-
-    count = workers or comparing_processes()
-    with ProcessPoolExecutor(count, initializer=_ignore_interrupts) as pool:
-        yield pool, f"{count} worker process{'es' if count != 1 else ''}"
 
 
 def run_swarm(problem, state, executor, folder=None, progress=None, stop=None):

@@ -38,6 +38,7 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
 
     Exit 0 with a design, 2 bad input, 130 when stopped (the checkpoint continues it: --resume)."""
     from .. import optimize as search
+    from ..executors import executor
     from ..design import Problem, design_yaml
     from ..design_report import convergence, polar_comparison, report_html
     from ..files import default_out_dir, write_atomic
@@ -58,7 +59,8 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
         say(f"resuming at iteration {state.iteration} (best {state.best_objective:g} deg) from {out_dir}")
     else:
         state = search.new_state(problem, seed, fingerprint)
-    with search.executor(workers, scheduler) as (pool, described):
+    with executor(workers, scheduler) as opened:
+        pool, described = opened.pool, opened.description
         with _progress(problem.section.search.iterations, state) as progress:
             try:
                 search.run_swarm(problem, state, pool, out_dir, progress)

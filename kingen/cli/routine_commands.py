@@ -79,11 +79,14 @@ def package(robot, out_dir, target, host, timeout):
 @click.option("--processes", type=click.IntRange(min=1, max=MAX_PROCESSES), default=None,
               help="Processes comparing the poses (the same report whatever the number)  "
                    "[default: one per core].")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Compare the poses on a Dask cluster (its scheduler's address, e.g. tcp://host:8786) instead of "
+                   "local processes (the same report); needs the 'distributed' package.")
 @calibration_options
 @HOST
 @TIMEOUT
 def verify(robot, out_dir, library, source, routine, samples, seed, json_path, junit_path, snapshot_path, processes,
-           link_lengths, link_offsets, host, timeout):
+           scheduler, link_lengths, link_offsets, host, timeout):
     """Compare a routine with the reference: exit 0 when all agree, 1 when not.
 
     By default builds ROBOT's plugin (if needed); --plugin or --source verify any routine
@@ -94,12 +97,14 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     from ..snapshot import load as load_snapshot
     from ..verify import VerifyOptions, chunk_size, verify_library
 
+    if processes is not None and scheduler is not None:
+        raise click.UsageError("give at most one of --processes and --scheduler")
     model = load_model(robot)
     snapshot = load_snapshot(snapshot_path, model) if snapshot_path is not None else None
     library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
     model = host.as_seen(model)
     options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
-                            timeout=timeout, snapshot=snapshot, processes=processes)
+                            timeout=timeout, snapshot=snapshot, processes=processes, scheduler=scheduler)
     with _progress(samples, chunk_size(model)) as progress:
         report = verify_library(model, library, routine, options, progress, host=host)
     print_report(report, library)

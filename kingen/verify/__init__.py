@@ -23,26 +23,29 @@ becomes a failed check instead of a dead, silent or stuck kingen.
 
 import time
 
-from ..errors import PluginDefect
+from ..errors import KingenError, PluginDefect
 from ..isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
 from ..poses import chunk_bounds
 from .checks import PHASES, Check, Context, by_need
 from .options import VerifyOptions, report_tolerance_mm, value_tolerance_mm
 from .boundaries import boundary_poses
+from .cluster import ClusterChunks
 from .processes import Printed, chunk_size, compare_poses, compared_chunks, empty_report, merge, process_count
 from .tally import Tally, posture_statistics
 
 __all__ = ["VerifyOptions", "chunk_size", "report_tolerance_mm", "value_tolerance_mm", "verify", "verify_library"]
 
 
-def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on_check=None):
+def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on_check=None, loaded_from=None):
     """Check the loaded routine ``plugin`` against ``robot``'s reference on ``options.samples``
     seeded poses, its golden values and its host's contract: the checks of ``plugin.checks``
     but those that need the library file. ``progress(done)`` is called after each chunk,
     ``phase(text)`` before each stage and ``on_check(check)`` as each check is decided (all
     optional). The calibration fields of ``options`` are passed to the routine and the
     reference alike; golden values are checked with empty fields (the published geometry).
-    What the routine prints on stdout/stderr is reported as a notice."""
+    What the routine prints on stdout/stderr is reported as a notice. ``loaded_from`` (host,
+    library path, routine name) is where ``plugin`` came from: what the workers of a cluster
+    load (``options.scheduler``)."""
     report = empty_report(robot, plugin.routine, options)
     report.interface_checks = _interface_names(plugin.checks)
     phase = phase or (lambda text: None)
@@ -62,7 +65,7 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
 
     run("routine")
     if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
-        decided(_compare_samples(context, progress, printed, phase))
+        decided(_compare_samples(context, progress, printed, phase, loaded_from))
         run("golden values")
         if options.snapshot is not None:
             run("snapshot")
@@ -123,23 +126,22 @@ def _verify_job(channel, robot, library, routine, host, options):
     with printed.capture():
         plugin = host.load(library, routine, robot)
     report = verify(robot, plugin, options, progress=lambda done: channel.send("progress", done),
-                    phase=channel.stage, on_check=lambda check: channel.send("check", check))
+                    phase=channel.stage, on_check=lambda check: channel.send("check", check),
+                    loaded_from=(host, library, routine))
     if printed.bytes:
         report.notices.insert(0, f"loading the library printed {printed.bytes} bytes on stdout/stderr "
                                  f"(first line: {printed.first_line!r})")
     return report
 
 
-def _compare_samples(context, progress, printed, phase):
+def _compare_samples(context, progress, printed, phase, loaded_from):
     """Compare the sampled poses chunk by chunk, then run the checks that judge them."""
     robot, plugin, report, options = context.robot, context.routine, context.report, context.options
     tally = Tally.start(robot.calibrated(options.link_lengths, options.link_offsets))
     start = time.perf_counter()
     bounds = chunk_bounds(options.samples, chunk_size(robot))
-    report.processes = process_count(options, len(bounds))
     deaths = []
-    for begin, count, part in compared_chunks(robot, tally.calibrated, plugin, options, bounds, report.processes,
-                                              phase, deaths):
+    for begin, count, part in _sample_parts(context, tally.calibrated, bounds, loaded_from, phase, deaths):
         merge(report, tally, printed, part)
         if progress is not None:
             progress(begin + count)
@@ -161,12 +163,33 @@ def _compare_samples(context, progress, printed, phase):
         return crashes + _sample_checks(context)
 
 
+def _sample_parts(context, calibrated, bounds, loaded_from, phase, deaths):
+    """(first index, pose count, _Part) of the chunks ``bounds``, in order: compared by local
+    processes (compared_chunks), or by a cluster's workers with ``options.scheduler``
+    (kingen.verify.cluster); sets the report's ``processes``; failed ones go to ``deaths``."""
+    robot, plugin, report, options = context.robot, context.routine, context.report, context.options
+    if options.scheduler is None:
+        report.processes = process_count(options, len(bounds))
+        yield from compared_chunks(robot, calibrated, plugin, options, bounds, report.processes, phase, deaths)
+        return
+    if loaded_from is None:
+        raise KingenError("--scheduler: the routine must be verified from its library file")
+    with ClusterChunks(robot, calibrated, plugin, options, bounds, loaded_from, phase) as cluster:
+        report.processes = cluster.count
+        yield from cluster.parts()
+    deaths.extend(cluster.deaths)
+
+
 def _death(begin, count, code, seed):
     """What the ``crash`` check says of a comparing process that died during poses ``begin``
     .. ``begin + count - 1`` (which then ran to the end in the first process): the routine
     crashed or exited there, or, for a process killed_from_outside, something outside killed
-    it, which is no crash of the routine but leaves the run disturbed."""
+    it, which is no crash of the routine but leaves the run disturbed. ``code`` is a text for
+    a cluster's job (kingen.verify.cluster)."""
     where = f"during poses {begin} to {begin + count - 1} of seed {seed}"
+    if isinstance(code, str):  # a cluster's job: what failed, not an exit code
+        return (f"a cluster worker's job failed ({code}) {where}, which ran to the end when compared again in this "
+                "process: the routine crashed or exited on the worker, or the cluster lost it: run it again")
     if killed_from_outside(code):
         return (f"a comparing process was {killer(code)} {where}, not ended by the routine; those poses ran to the "
                 "end when compared again in the first process, but the run was disturbed: run it again "

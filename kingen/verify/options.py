@@ -31,6 +31,9 @@ class VerifyOptions:
     processes: Optional[int] = 1
     """Processes comparing the sampled poses: 1 keeps everything in the calling process, more
     fork the others (compared_chunks); None: comparing_processes(), one per core."""
+    scheduler: Optional[str] = None
+    """A Dask scheduler's address (tcp://host:8786): the poses are compared by its cluster's
+    workers instead (kingen.verify.cluster; ``processes`` does not apply)."""
 
 
 def report_tolerance_mm(robot):

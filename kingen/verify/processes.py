@@ -104,16 +104,22 @@ class _Part:
     printed_first_line: str
 
 
+def set_chunk_job(robot, calibrated, plugin, options):
+    """What compare_poses compares in this process: ``robot``'s reference (``calibrated``: with
+    the options' fields applied) against the loaded routine ``plugin``."""
+    global _chunk_job
+    _chunk_job = (robot, calibrated, plugin, options)
+
+
 def _compare_chunk(poses, first=False):
-    """Call the routine on ``poses`` (m, 6), solve the reference and compare: a _Part (with
-    the poses kept for diagnoses only for the ``first`` chunk; nothing else heavy, so
-    that it travels between processes cheaply)."""
+    """One of the sample's chunks: compare_poses (tests count and fail these)."""
     return compare_poses(poses, first)
 
 
 def compare_poses(poses, first=False):
-    """_compare_chunk's work, for poses that are not one of the sample's chunks (the warnings'
-    boundary poses), in this process, after compared_chunks."""
+    """Call the routine on ``poses`` (m, 6; mm, degrees), solve the reference and compare: a
+    _Part (with the poses kept for diagnoses only for the ``first`` chunk; nothing else
+    heavy, so that it travels between processes cheaply), for set_chunk_job's routine."""
     robot, calibrated, plugin, options = _chunk_job
     report = empty_report(robot, plugin.routine, options)
     tally = Tally.start(calibrated)
@@ -141,8 +147,7 @@ def compared_chunks(robot, calibrated, plugin, options, bounds, processes, phase
     this process's stage as always; if they run to the end here, (first index, pose count,
     exit code) of the chunk it died in is appended to ``deaths``, for the ``crash`` check to
     tell which of those it was (kingen.isolation.killed_from_outside)."""
-    global _chunk_job
-    _chunk_job = (robot, calibrated, plugin, options)
+    set_chunk_job(robot, calibrated, plugin, options)
     stream = PoseStream(robot, options.seed)
     helpers = _Helpers(robot, options, bounds, processes) if processes > 1 else None
     try:

@@ -1,0 +1,65 @@
+"""verify's JSON report is a contract: the same counts, verdicts and statistics whoever
+compares the poses and however fast. Recorded reports of small samples (tests/data/verify_reports,
+written by this version's comparison before it was sped up) must come out again, and a run on
+a Dask cluster (--scheduler) must give the report a local run gives."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from kingen.cli import main
+
+REPORTS = Path(__file__).parent / "data" / "verify_reports"
+TIMING = ("seconds", "poses_per_second")
+"""The only fields of a report that may differ between two runs of the same verification."""
+RUNS = {"hexapod": ["--samples", "20000", "--seed", "3"], "ceart": ["--samples", "4000", "--seed", "1"],
+        "tau": ["--samples", "20000", "--seed", "2"]}
+"""Each recorded report's robot and options: several chunks each (CEART's and the hexapod's
+direct index, the Gantry-Tau's travel limits)."""
+
+
+def _report(tmp_path, robot, *extra):
+    path = tmp_path / f"{robot}.json"
+    code = main(["verify", robot, *RUNS[robot], "-o", str(tmp_path / "build" / robot), "--json", str(path), *extra])
+    report = json.loads(path.read_text())
+    for name in TIMING:
+        report.pop(name)
+    return code, report
+
+
+@pytest.mark.parametrize("robot", sorted(RUNS))
+def test_reports_are_those_recorded(robot, tmp_path):
+    code, report = _report(tmp_path, robot, "--processes", "2")
+    expected = json.loads((REPORTS / f"{robot}.json").read_text())
+    assert code == (0 if expected["passed"] else 1)
+    assert report == expected
+
+
+def test_a_dask_cluster_gives_the_report_local_processes_give(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    local = _report(tmp_path, "hexapod", "--processes", "2")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        remote = _report(tmp_path, "hexapod", "--scheduler", cluster.scheduler_address)
+    assert remote == local
+
+
+def test_processes_and_scheduler_are_exclusive():
+    assert main(["verify", "hexapod", "--processes", "2", "--scheduler", "tcp://127.0.0.1:1"]) == 2
+
+
+def test_no_scheduler_is_bad_input(tmp_path):
+    assert main(["verify", "hexapod", "--samples", "10", "-o", str(tmp_path), "--scheduler", "tcp://127.0.0.1:9"]) == 2
+
+
+def test_a_routine_that_crashes_a_worker_still_fails(tmp_path):
+    """Its chunk's job fails on the cluster, is compared again in verify's own child, and
+    the crash is named there with its poses."""
+    distributed = pytest.importorskip("distributed")
+    from test_hostile import plugin_source, verify_source
+
+    crashing = plugin_source(ROUTINE="if (T6[3][0] > 19.0) *(volatile int *)8 = 1;")  # 2.5 % of the region's poses
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        result = verify_source(tmp_path, crashing, "--scheduler", cluster.scheduler_address)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED crash: the plugin ended the host process (signal SIGSEGV) during poses 0 to 199" in result.stdout
