@@ -11,7 +11,8 @@ poses (default 2000; below 1 is a usage error), ``--kingen-host NAME`` the host 
 delmia). A robot file reached twice (through a symlink, a symlink loop) is collected once,
 under the first path found; a robot file that cannot be read (a dangling symlink) is a
 failing ``build`` item. A snapshot verify refuses fails the ``snapshot`` item alone: the
-other items are verified without it. Works with pytest-xdist and ``--junitxml``.
+other items are verified without it. Works with pytest-xdist (under ``-n N`` a robot file's
+items go to one worker, so each robot is verified once) and ``--junitxml``.
 """
 
 import argparse
@@ -125,6 +126,29 @@ def pytest_make_collect_report(collector):
                     and _first_time(collector.config, path)):
                 report.result.append(RobotFile.from_parent(collector, path=path))
     return report
+
+
+def robot_scope(nodeid):
+    """The work unit of an item under pytest-xdist: a robot file's items share one, the file
+    (``robots/tau.yaml``), so one worker verifies each robot once; any other item is its own."""
+    path = nodeid.split("::", 1)[0]
+    return path if path != nodeid and path.endswith(ROBOT_SUFFIXES) else nodeid
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """Under pytest-xdist's default distribution (``-n N`` alone, ``--dist load``) with kingen
+    folders collected: xdist's scope scheduling with robot_scope's units, decided in the
+    controlling process alone (workers need nothing). Otherwise None: xdist's own choice."""
+    if config.getvalue("dist") != "load" or not _folders(config):
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class RobotScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            return robot_scope(nodeid)
+
+    return RobotScheduling(config, log)
 
 
 class RobotFile(pytest.File):

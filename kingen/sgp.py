@@ -28,7 +28,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .conventions import rpy_from_rotation
-from .vendor.fksgp import solver66
 
 COMPLEX_SOLUTIONS = 40
 """How many complex solutions the general Stewart-Gough platform has."""
@@ -119,7 +118,10 @@ def _frames():
 @functools.lru_cache(maxsize=1)
 def _start_system():
     """(geometry (a, b, l^2), unknowns (40, 6) complex): a generic geometry from SEED and its
-    40 solutions from the elimination template."""
+    40 solutions from the elimination template (imported here: it loads scipy, which a
+    verify that never asks for every assembly mode does not need)."""
+    from .vendor.fksgp import solver66
+
     rng = np.random.default_rng(SEED)
     while True:
         platform = np.vstack([np.zeros(3), rng.uniform(-1.0, 1.0, (5, 3))])

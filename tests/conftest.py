@@ -24,6 +24,13 @@ SHIPPED = shipped_robots()
 
 @pytest.fixture(scope="session")
 def build_root(tmp_path_factory):
+    """Where ``built`` compiles: one folder for the whole run, which pytest-xdist's workers
+    share (each build is stamped and written atomically, so a worker reuses another's
+    library instead of compiling it again)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = tmp_path_factory.getbasetemp().parent / "plugins"
+        root.mkdir(exist_ok=True)
+        return root
     return tmp_path_factory.mktemp("plugins")
 
 

@@ -8,6 +8,7 @@ import pytest
 
 from kingen.cli import main
 from kingen.model import robots_dir
+from kingen.pytest_plugin import robot_scope
 
 pytest_plugins = ["pytester"]
 
@@ -165,3 +166,25 @@ def test_a_second_session_builds_nothing(folder, tmp_path, monkeypatch):
     after = libraries[0].stat()
     assert (after.st_ino, after.st_mtime_ns) == (before.st_ino, before.st_mtime_ns)
 
+
+
+def test_under_xdist_each_robot_files_items_run_on_one_worker(folder):
+    """``-n 2`` alone: the plugin's scheduler keeps a robot file's items together, so each
+    robot is verified once, on one worker (pytest-xdist's own would spread them)."""
+    shutil.copy(robots_dir() / "exechon.yaml", folder.path / "exechon.yaml")
+    result = run(folder, "-n", "2", "-v")
+    result.assert_outcomes(passed=16)
+    workers = {}
+    for line in result.stdout.lines:
+        if " PASSED " in line and line.startswith("[gw"):
+            workers.setdefault(line.split(" PASSED ")[1].split("::")[0], set()).add(line.split("]")[0])
+    assert sorted(workers) == ["exechon.yaml", "tau.yaml"]
+    assert all(len(used) == 1 for used in workers.values()), workers
+
+
+@pytest.mark.parametrize("nodeid, scope", [("robots/tau.yaml::golden[1]", "robots/tau.yaml"),
+                                           ("sub/lost.yml::build", "sub/lost.yml"),
+                                           ("tests/test_cli.py::test_help", "tests/test_cli.py::test_help"),
+                                           ("tests/a.yaml.py::test_x[b.yaml]", "tests/a.yaml.py::test_x[b.yaml]")])
+def test_robot_scope_groups_a_robot_files_items_only(nodeid, scope):
+    assert robot_scope(nodeid) == scope

@@ -63,7 +63,9 @@ def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary
 
 def _boundaries(robot, home, directions, kinds):
     """(warning, boundaries found, poses on both sides) for each of ``kinds`` that the rays
-    home + t directions (0 <= t <= 1) meet; ``robot`` calibrated as the routine is called."""
+    home + t directions (0 <= t <= 1) meet; ``robot`` calibrated as the routine is called.
+    The brackets of every warning are bisected together, one reference solve per step for
+    all of them (each pose is solved on its own, so batching changes no pose)."""
     def warnings_at(fractions, rays):
         poses = home + fractions[:, None] * directions[rays]
         return solve(robot, t6_from_pose(poses)), poses
@@ -72,37 +74,56 @@ def _boundaries(robot, home, directions, kinds):
     steps = np.linspace(0.0, 1.0, STEPS + 1)
     grid, _ = warnings_at(np.tile(steps, rays_count), np.repeat(np.arange(rays_count), STEPS + 1))
     grid_warnings = grid.warnings.reshape(rays_count, STEPS + 1, -1)
+    met, rays, lows, postures, codes = [], [], [], [], []
     for kind in kinds:
-        codes = [WARNINGS[name] for name in PAST[kind]]
-        hits = np.isin(grid_warnings, codes)  # (rays, steps, postures)
-        rays, lows, postures = [], [], []
+        kind_codes = [WARNINGS[name] for name in PAST[kind]]
+        hits = np.isin(grid_warnings, kind_codes)  # (rays, steps, postures)
+        count = 0
         for ray in range(rays_count):
             changes = np.argwhere(~hits[ray, :-1] & hits[ray, 1:])  # (step, posture) where it turns into kind
             if len(changes):
                 rays.append(ray)
                 lows.append(changes[0][0])
                 postures.append(changes[0][1])
-            if len(rays) == PER_WARNING:
+                codes.append(kind_codes + [-1] * (len(WARNINGS) - len(kind_codes)))  # -1: no code
+                count += 1
+            if count == PER_WARNING:
                 break
-        if not rays:
-            continue
-        rays, postures = np.array(rays), np.array(postures)
-        low, high = steps[np.array(lows)], steps[np.array(lows) + 1]
-        for _ in range(BISECTIONS):
-            middle = 0.5 * (low + high)
-            solution, _ = warnings_at(middle, rays)
-            inside = np.isin(solution.warnings[np.arange(len(rays)), postures], codes)
-            high, low = np.where(inside, middle, high), np.where(inside, low, middle)
-        yield kind, len(rays), _both_sides(robot, warnings_at, rays, low, high)
+        if count:
+            met.append((kind, count))
+    if not met:
+        return
+    rays, postures, codes = np.array(rays), np.array(postures), np.array(codes)
+    low, high = steps[np.array(lows)], steps[np.array(lows) + 1]
+    for _ in range(BISECTIONS):
+        middle = 0.5 * (low + high)
+        solution, _ = warnings_at(middle, rays)
+        inside = np.any(solution.warnings[np.arange(len(rays)), postures][:, None] == codes, axis=1)
+        high, low = np.where(inside, middle, high), np.where(inside, low, middle)
+    sides = _both_sides(robot, warnings_at, rays, low, high)
+    first = 0
+    for kind, count in met:
+        yield kind, count, _chosen(sides, range(first, first + count))
+        first += count
 
 
 def _both_sides(robot, warnings_at, rays, low, high):
-    """A pose before and one after each bracketed boundary, as near as the tolerance band allows."""
-    chosen = {}
+    """For each offset of OFFSETS and side (before, after) of each bracketed boundary: the
+    poses there and which of them lie outside the tolerance band."""
+    sides = []
     for offset in OFFSETS:
         for side, fractions in (("before", np.clip(low - offset, 0.0, None)), ("after", high + offset)):
             solution, poses = warnings_at(fractions, rays)
-            clear = ~np.any(warnings_in_band(robot, solution), axis=1)
-            for index in np.flatnonzero(clear):
+            sides.append((side, poses, ~np.any(warnings_in_band(robot, solution), axis=1)))
+    return sides
+
+
+def _chosen(sides, brackets):
+    """A pose before and one after each of ``brackets`` (indices into the bisected rays), as
+    near its boundary as the tolerance band allows."""
+    chosen = {}
+    for side, poses, clear in sides:
+        for index in brackets:
+            if clear[index]:
                 chosen.setdefault((side, index), poses[index])
     return np.array(list(chosen.values())) if chosen else np.zeros((0, 6))
