@@ -1,7 +1,14 @@
-"""Golden values for the leg robots from LinuxCNC's own genhexkins (Debian's
-linuxcnc-uspace, /usr/lib/linuxcnc/modules/genhexkins.so), not from kingen's reference:
+"""Golden values from LinuxCNC's own kinematics modules (Debian's linuxcnc-uspace,
+/usr/lib/linuxcnc/modules), not from kingen's reference:
 
-    python tools/golden_genhexkins.py hexapod flexapod stewart_gough_example
+    python tools/golden_linuxcnc.py hexapod flexapod stewart_gough_example
+    python tools/golden_linuxcnc.py linuxcnc_hexapod linear_delta rotary_delta
+
+The stock robots (LinuxCNC's sample hexapod, linear and rotary delta) are at their modules'
+default geometry: the module is loaded as shipped, given each pose in the robot file's
+units, and its joints are the golden joints as they stand (genhexkins: absolute strut
+lengths, reference_length 0; the deltas: carriage heights, crank degrees, at the working
+posture 7). For the other leg robots:
 
 genhexkins is loaded through the HAL stand-in kingen's LinuxCNC tests use, on a mm machine,
 its base.N / platform.N pins set to the robot file's points (for the Stewart-Gough layout,
@@ -22,11 +29,16 @@ from kingen.hosts.linuxcnc.loader import Module
 from kingen.model import load_robot
 from kingen.robot_file import read_robot_file
 
-GENHEXKINS = Path("/usr/lib/linuxcnc/modules/genhexkins.so")
+MODULES = Path("/usr/lib/linuxcnc/modules")
+GENHEXKINS = MODULES / "genhexkins.so"
+STOCK = {"linuxcnc_hexapod": "genhexkins", "linear_delta": "lineardeltakins", "rotary_delta": "rotarydeltakins"}
 POSES = {
     "hexapod": ([12.5, -7.25, 470.0, 3.5, -2.25, 6.0], [-31.0, 22.0, 452.5, -6.0, 4.5, -9.0]),
     "flexapod": ([9.5, -14.0, 505.0, -2.5, 3.0, 7.5], [-21.0, 17.5, 488.0, 5.0, -4.0, -6.5]),
     "stewart_gough_example": ([6.0, -11.0, 262.0, 2.0, -3.5, 4.0], [-14.5, 9.0, 238.0, -4.0, 2.5, -3.0]),
+    "linuxcnc_hexapod": ([0.6, -0.35, 20.8, 4.0, -3.0, 5.0], [-1.1, 0.9, 19.2, -6.0, 5.0, -7.5]),  # inch, deg
+    "linear_delta": ([35.0, -20.0, 22.0, 0, 0, 0], [-50.0, 42.5, 5.0, 0, 0, 0]),  # mm
+    "rotary_delta": ([1.5, -0.8, -13.2, 0, 0, 0], [-2.1, 1.7, -15.5, 0, 0, 0]),  # inch
 }
 
 
@@ -68,8 +80,33 @@ def genhexkins_lengths(name, poses):
     return joints[:, :6], np.asarray(reference, dtype=float)
 
 
+def stock_joints(name, poses):
+    """The stock module's joints at ``poses`` (file units), as loaded with no pin set."""
+    robot = load_robot(name)
+    module = Module(MODULES / f"{STOCK[name]}.so", STOCK[name], robot)
+    world = np.zeros((len(poses), 9))
+    world[:, :6] = poses
+    joints, returns, _ = module.inverse(world)
+    assert np.all(returns == 0), returns
+    return joints[:, :robot.dof], robot.working_posture
+
+
+def stock_entries(name):
+    joints, posture = stock_joints(name, np.array(POSES[name], dtype=float))
+    tolerance = "0.000001"
+    for pose, values in zip(POSES[name], joints):
+        print(f"  - source: >\n      LinuxCNC 2.9 {STOCK[name]} as shipped (kinematicsInverse, Debian linuxcnc-uspace),\n"
+              "      at a non-symmetric pose: its joints as they stand (tools/golden_linuxcnc.py).\n"
+              f"    pose: {list(pose)}\n" + (f"    posture: {posture}\n" if posture else "")
+              + f"    joints: [{', '.join(f'{value:.9f}' for value in values)}]\n    tolerance: {tolerance}")
+
+
 def main(names):
     for name in names:
+        if name in STOCK:
+            print(f"# {name}")
+            stock_entries(name)
+            continue
         poses = POSES[name]
         lengths, reference = genhexkins_lengths(name, np.array(poses, dtype=float))
         print(f"# {name}")
@@ -78,7 +115,7 @@ def main(names):
             print("  - source: >\n      LinuxCNC 2.9 genhexkins (kinematicsInverse, Debian linuxcnc-uspace) with this\n"
                   "      file's base and platform points, at a non-symmetric pose: its absolute strut\n"
                   f"      lengths {', '.join(f'{value:.6f}' for value in strut)} mm minus L0\n"
-                  "      (tools/golden_genhexkins.py).\n"
+                  "      (tools/golden_linuxcnc.py).\n"
                   f"    pose: {list(pose)}\n    joints: [{joints}]\n    tolerance: 0.000005")
 
 
