@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import random_t6
-from kingen.diagnose import _ranges, diagnose, diagnose_warnings
+from kingen.diagnose import MATCH, NAMED_SCALES, _ranges, diagnose, diagnose_warnings
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.routine import WARNINGS
@@ -198,3 +198,23 @@ def test_a_routine_that_always_answers_good_is_told_what_the_reference_finds():
                                           (np.full((2, 2), SINGULAR), np.full((2, 2), SINGULAR))])
 def test_agreeing_warnings_need_no_diagnosis(mine, theirs):
     assert diagnose_warnings(mine, theirs, NAMES) == []
+
+
+@pytest.mark.parametrize("scale, label", NAMED_SCALES)
+def test_every_named_scale_is_named(scale, label):
+    robot, t6, expected = case("hexapod", count=12)
+    joints = expected.joints.copy()
+    joints[:, 4] = scale * expected.joints[:, 4]
+    assert findings(robot, t6, joints, expected) == [f"joint 4 (leg5) is scaled by {scale:.9g} ({label})"]
+
+
+@pytest.mark.parametrize("jitter, explained", [(0.6 * MATCH, True), (1.5 * MATCH, False)])
+def test_an_offset_explains_the_data_only_within_match(jitter, explained):
+    """A constant +3 mm with alternating +/-jitter: the median is 3 mm, the residual the jitter."""
+    robot, t6, expected = case("hexapod", count=12)
+    joints = expected.joints.copy()
+    joints[:, 2] += 3.0 + jitter * np.where(np.arange(12) % 2 == 0, 1.0, -1.0)[:, None]
+    text = findings(robot, t6, joints, expected)
+    assert len(text) == 1
+    assert text[0].startswith("joint 2 (leg3) is off by a constant +3 mm") == explained
+    assert text[0].startswith("joint 2 (leg3) disagrees by up to 3 mm") == (not explained)

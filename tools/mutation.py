@@ -4,7 +4,7 @@ table per file. Run on demand, not in CI (docs/contributing.md):
 
     pip install -e ".[mutation]"
     python tools/mutation.py list                         # mutants per file
-    nice -n 19 python tools/mutation.py run --sample 300 --seed 1 [--files GLOB ...]
+    nice -n 19 python tools/mutation.py run --sample 300 --seed 1 [--files GLOB ...] [--rerun-survivors]
     python tools/mutation.py table                        # the per-file table of the results so far
     python tools/mutation.py show KEY                     # one mutant's diff
 
@@ -48,15 +48,15 @@ TESTS = {
                                             "tests/test_forward.py", "tests/test_legacy.py"],
     "kingen/verify/[!t]*.py": _VERIFY + ["tests/test_verify_processes.py", "tests/test_exercised.py",
                                          "tests/test_legacy.py"],
-    "kingen/reference.py": ["tests/test_reference.py", "tests/test_golden_values.py", "tests/test_golden_lines.py",
-                            "tests/test_calibration.py", "tests/test_verify_bands.py"],
-    "kingen/singularity.py": ["tests/test_singularity.py", "tests/test_verdicts.py", "tests/test_reference.py",
-                              "tests/test_verify_columns.py"],
-    "kingen/forward.py": ["tests/test_forward.py", "tests/test_assembly_modes.py"],
+    "kingen/reference.py": ["tests/test_reference.py", "tests/test_verdicts.py", "tests/test_golden_values.py",
+                            "tests/test_golden_lines.py", "tests/test_calibration.py", "tests/test_verify_bands.py"],
+    "kingen/singularity.py": ["tests/test_numerics.py", "tests/test_singularity.py", "tests/test_verdicts.py",
+                              "tests/test_reference.py", "tests/test_verify_columns.py", "tests/test_golden_values.py"],
+    "kingen/forward.py": ["tests/test_numerics.py", "tests/test_forward.py", "tests/test_assembly_modes.py"],
     "kingen/diagnose.py": ["tests/test_diagnoses.py", "tests/test_legacy.py"],
     "kingen/limbs/*.py": ["tests/test_reference.py", "tests/test_golden_values.py", "tests/test_singularity.py",
                           "tests/test_calibration.py", "tests/test_limb_registry.py"],
-    "kingen/robot_file.py": ["tests/test_model.py", "tests/test_limits.py"],
+    "kingen/robot_file.py": ["tests/test_numerics.py", "tests/test_model.py", "tests/test_limits.py"],
     "kingen/text.py": ["tests/test_model.py", "tests/test_hostile_outputs.py", "tests/test_limits.py"],
     "kingen/isolation.py": ["tests/test_hostile.py"],
     "templates/limbs/*.c.j2": _C,
@@ -167,6 +167,8 @@ def run(arguments):
     every = [(path, key, apply) for path in chosen for key, apply in mutants_of(path)]
     sample = random.Random(arguments.seed).sample(every, min(arguments.sample, len(every))) if arguments.sample else every
     done = load_results()
+    if arguments.rerun_survivors:  # the tests changed since: judge the survivors again
+        done = {key: entry for key, entry in done.items() if entry["status"] != "survived"}
     todo = [item for item in sample if item[1] not in done]
     print(f"{len(every)} mutants in {len(chosen)} files; sample {len(sample)}, {len(todo)} still to run", flush=True)
     if not todo:
@@ -268,6 +270,7 @@ def main():
         command.add_argument("--survivors", action="store_true", help="table: also list the surviving mutants")
         command.add_argument("--sample", type=int, default=0, help="run: a random sample of this many (0: all)")
         command.add_argument("--seed", type=int, default=1)
+        command.add_argument("--rerun-survivors", action="store_true", help="run: judge surviving mutants again")
     commands.add_parser("show").add_argument("key")
     arguments = parser.parse_args()
     return {"list": list_mutants, "run": run, "table": table, "show": show}[arguments.command](arguments)
