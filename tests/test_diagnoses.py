@@ -218,3 +218,63 @@ def test_an_offset_explains_the_data_only_within_match(jitter, explained):
     assert len(text) == 1
     assert text[0].startswith("joint 2 (leg3) is off by a constant +3 mm") == explained
     assert text[0].startswith("joint 2 (leg3) disagrees by up to 3 mm") == (not explained)
+
+
+def test_a_crank_offset_is_measured_across_the_half_turn():
+    """+170 degrees on a crank near +32 degrees wraps to about -158: the offset is the wrapped
+    difference, +170 degrees, not -190."""
+    robot, t6, expected = case("ceart", count=20)
+    joints = expected.joints.copy()
+    joints[:, 1] = np.angle(np.exp(1j * (joints[:, 1] + math.radians(170.0))))
+    assert findings(robot, t6, joints, expected) == [
+        "joint 1 (crank2) is off by a constant +2.96706 rad on every pose and posture: a wrong crank zero (+170 deg)"]
+
+
+def test_two_postures_in_the_other_order_are_named(tmp_path):
+    path = tmp_path / "one_rail.yaml"
+    path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
+                    "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
+                    "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    robot = load_robot(path)
+    _, t6 = random_t6(robot, 10, 1)
+    expected = solve(robot, t6)
+    assert findings(robot, t6, expected.joints[:, :, ::-1].copy(), expected) == [
+        "postures are in another order: plugin posture -> reference posture 0->1, 1->0 (permutation [1, 0]; kingen "
+        "numbers postures with the first two-branch limb most significant, branch 0 first)"]
+
+
+def given_reference(joint_values, mine_values, count=10):
+    """diagnose on the hexapod with joint 0 of the reference set to ``joint_values`` (n,) and
+    the routine's to ``mine_values`` (n,), every other joint agreeing."""
+    robot, t6, expected = case("hexapod", count=count)
+    reference = expected.joints.copy()
+    reference[:, 0, 0] = joint_values
+    mine = reference.copy()
+    mine[:, 0, 0] = mine_values
+    return diagnose(robot, t6, mine, reference, expected.warnings)
+
+
+def test_a_reference_joint_of_zero_everywhere_has_no_scale():
+    noise = np.linspace(-1.0, 1.0, 10) ** 3
+    assert given_reference(np.zeros(10), noise) == [
+        "joint 0 (leg1) disagrees by up to 1 mm (worst on pose 0); no constant offset, sign flip, scale, joint swap "
+        "or posture order explains it"]
+
+
+def test_a_scale_of_small_values_is_named():
+    theirs = np.linspace(1e-3, 2e-3, 10)  # their sum of squares is far below 1
+    assert given_reference(theirs, 3.0 * theirs) == ["joint 0 (leg1) is scaled by 3 (a unit or gear-ratio error)"]
+
+
+@pytest.mark.parametrize("scale, jitter, explained", [(1000.0, 0.5e-3, True), (1.5, 1.8e-6, False), (1.5, 1.2e-6, True)])
+def test_a_scale_explains_within_match_times_the_scale(scale, jitter, explained):
+    theirs = np.linspace(50.0, 80.0, 10)
+    text = given_reference(theirs, scale * theirs + jitter * (-1.0) ** np.arange(10))
+    assert len(text) == 1 and (" is scaled by " in text[0]) == explained
+
+
+@pytest.mark.parametrize("error, label", [(0.5e-6, "inches instead of mm"), (1.5e-6, "a unit or gear-ratio error")])
+def test_a_scale_is_named_within_1e_6_relative(error, label):
+    theirs = np.linspace(50.0, 80.0, 10)
+    text = given_reference(theirs, theirs / 25.4 * (1.0 + error))
+    assert text[0].endswith(f"({label})")
