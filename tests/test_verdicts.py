@@ -225,3 +225,24 @@ def test_a_rail_at_its_singular_radicand_is_counted_by_its_own_bound(tmp_path):
     statistics = posture_statistics(robot, tally)
     assert [(s["right"], s["wrong"]) for s in statistics] == [(1, 1), (2, 0)]
     assert report.singular_entries == 2 and report.singular_out_of_bound == 0
+
+
+def test_closure_judges_every_reachable_branch_outside_the_singular_band_and_fails_a_wrong_joint(tmp_path):
+    """The one rail at 6 regular poses (2 branches each), 1 pose in its singular band
+    (x = 100 sqrt(1 - 1e-7): D = 1e-7) and 2 unreachable ones: 12 joints judged."""
+    from kingen.verify.tally import closure_error
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    poses = ([[x, 0, -50, 0, 0, 0] for x in (0, 20, 40, 60, 80, 95)] + [[100 * math.sqrt(1 - 1e-7), 0, -50, 0, 0, 0]]
+             + [[150, 0, -50, 0, 0, 0], [0, 150, -50, 0, 0, 0]])
+    expected = solve(robot, t6_from_pose(poses))
+    assert expected.warnings[:, 0].tolist() == [GOOD] * 6 + [SINGULAR] + [UNREACHABLE] * 2
+    worst, judged = closure_error(robot, expected, expected.joints)
+    assert judged == 12 and worst <= 1e-15
+    wrong = expected.joints.copy()
+    wrong[3, 0, 1] += 1e-4  # pose 3 (x = 60): the carriage moves 1e-4 mm along the rail
+    worst, judged = closure_error(robot, expected, wrong)
+    # |N - carriage| changes by 1e-4 times the cosine between link and rail, sqrt(1 - 0.6^2) = 0.8
+    assert judged == 12 and worst == pytest.approx(0.8e-4 / 100, rel=1e-3)
