@@ -169,3 +169,32 @@ def test_crank_angles_far_from_a_turn_are_not_rounded_by_the_reference():
     shifted = limb.solve(points)
     difference = np.angle(np.exp(1j * (plain.values - shifted.values - math.radians(700.0))))
     assert np.max(np.abs(difference)) < 1e-12
+
+
+@pytest.mark.parametrize("scale", [1e-3, 0.3, 1.0, 1e4])
+def test_positive_definiteness_after_a_shift_agrees_with_lapack(scale):
+    """Sylvester's criterion on A - shift I (what the warnings decide the direct index's side
+    with) against the sign of LAPACK's smallest eigenvalue, on matrices of every size."""
+    from kingen.singularity import _positive_definite
+
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.normal(size=(400, 3, 3)))
+    eigenvalues = scale * rng.uniform(0.05, 1.0, (400, 3))
+    matrices = q @ (eigenvalues[:, :, None] * np.swapaxes(q, 1, 2))
+    for shift in (0.0, 0.3 * scale, 0.6 * scale):
+        smallest = np.linalg.eigvalsh(matrices)[:, 0] - shift
+        clear = np.abs(smallest) > 1e-9 * scale
+        decided = _positive_definite(as_entries(matrices), shift)
+        assert np.array_equal(decided[clear], (smallest > 0)[clear])
+        assert decided.any() and not decided.all() or shift == 0.0
+
+
+@pytest.mark.parametrize("smallest_pivot, singular", [(1e-13, True), (1e-11, False)])
+def test_a_force_block_is_translation_singular_below_1e_12_of_its_trace_cubed(smallest_pivot, singular):
+    """M_vv = diag(1, 1, p) (trace about 2, (trace / 3)^3 = 0.296): singular, index 0, when the
+    product of its pivots p is below 1e-12 x 0.296; else the Schur complement's index, here
+    M_ww = 4 I with no coupling: sqrt(4) = 2 mm."""
+    gram = np.zeros((6, 6))
+    gram[:3, :3] = np.diag([1.0, 1.0, smallest_pivot])
+    gram[3:, 3:] = 4.0 * np.eye(3)
+    assert direct_index(gram) == (0.0 if singular else pytest.approx(2.0))

@@ -105,6 +105,10 @@ def test_a_warning_may_differ_beside_the_direct_index_threshold_only_inside_the_
     assert (report.warnings_in_band, report.warning_mismatches) == ((1, 0) if excused else (0, 1))
 
 
+def test_verify_draws_10000_poses_unless_told():
+    assert VerifyOptions().samples == 10000  # README, Commands: verify's --samples, default 10000
+
+
 def test_an_unwritten_warning_is_never_excused_inside_a_band(leg):
     t6 = t6_from_pose([[0.0, 0.0, 200.0 + WARNING_BAND / 3, 0.0, 0.0, 0.0]])
     expected = solve(leg, t6)
