@@ -4,7 +4,7 @@ table per file. Run on demand, not in CI (docs/contributing.md):
 
     pip install -e ".[mutation]"
     python tools/mutation.py list                         # mutants per file
-    nice -n 19 python tools/mutation.py run --sample 300 --seed 1 [--files GLOB ...] [--rerun-survivors]
+    nice -n 19 python tools/mutation.py run --sample 300 --seed 1 [--files GLOB ...] [--rerun-survivors [--only-survivors]]
     python tools/mutation.py table                        # the per-file table of the results so far
     python tools/mutation.py show KEY                     # one mutant's diff
 
@@ -168,9 +168,12 @@ def run(arguments):
     every = [(path, key, apply) for path in chosen for key, apply in mutants_of(path)]
     sample = random.Random(arguments.seed).sample(every, min(arguments.sample, len(every))) if arguments.sample else every
     done = load_results()
+    survivors = {key for key, entry in done.items() if entry["status"] == "survived"}
     if arguments.rerun_survivors:  # the tests changed since: judge the survivors again
         done = {key: entry for key, entry in done.items() if entry["status"] != "survived"}
     todo = [item for item in sample if item[1] not in done]
+    if arguments.only_survivors:  # and nothing else
+        todo = [item for item in every if item[1] in survivors]
     print(f"{len(every)} mutants in {len(chosen)} files; sample {len(sample)}, {len(todo)} still to run", flush=True)
     if not todo:
         return table(arguments)
@@ -272,6 +275,8 @@ def main():
         command.add_argument("--sample", type=int, default=0, help="run: a random sample of this many (0: all)")
         command.add_argument("--seed", type=int, default=1)
         command.add_argument("--rerun-survivors", action="store_true", help="run: judge surviving mutants again")
+        command.add_argument("--only-survivors", action="store_true",
+                             help="run: judge only the surviving mutants again (with --rerun-survivors)")
     commands.add_parser("show").add_argument("key")
     arguments = parser.parse_args()
     return {"list": list_mutants, "run": run, "table": table, "show": show}[arguments.command](arguments)
