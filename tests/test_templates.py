@@ -22,13 +22,19 @@ SINGULAR = WARNINGS["WARN_SINGULAR_SOLUTION"]
 
 
 def hexaglide(direct_index_min):
-    """Six vertical rails at radius 300 mm, every 60 degrees; platform points at radius 100,
-    12 degrees to alternate sides of each rail; links of 250 mm; 64 postures."""
+    """Six rails at radius 300 mm, every 60 degrees, each leaning 10 degrees outwards and 5
+    degrees sideways from vertical (so that every component of each direction counts);
+    platform points at radius 100, 12 degrees to alternate sides of each rail; links of
+    250 mm; 64 postures."""
     rows = []
     for i in range(6):
         rail, point = math.radians(60 * i), math.radians(60 * i + (12 if i % 2 else -12))
+        lean, side = math.radians(10), math.radians(5)
+        direction = np.array([math.sin(lean) * math.cos(rail) - math.sin(side) * math.sin(rail),
+                              math.sin(lean) * math.sin(rail) + math.sin(side) * math.cos(rail), 1.0])
+        direction = ", ".join(f"{value:.12f}" for value in direction / np.linalg.norm(direction))
         rows.append(f"  - {{name: rail{i + 1}, model: rail, rail_point: [{300 * math.cos(rail):.3f}, "
-                    f"{300 * math.sin(rail):.3f}, 0], direction: [0, 0, 1], carriage_offset: [0, 0, 0], "
+                    f"{300 * math.sin(rail):.3f}, 0], direction: [{direction}], carriage_offset: [0, 0, 0], "
                     f"platform_point: [{100 * math.cos(point):.3f}, {100 * math.sin(point):.3f}, 0], link_length: 250}}")
     return ("name: hexaglide\ndescription: six vertical rails, a Hexaglide-like example\nlimbs:\n" + "\n".join(rows)
             + f"\nsingularity: {{direct_index_min: {direct_index_min}}}\n"
@@ -52,7 +58,7 @@ def loaded(tmp_path, text, name):
 
 def test_a_rail_robot_warns_at_its_direct_index_threshold_as_the_reference(tmp_path):
     robot, plugin = loaded(tmp_path, hexaglide(15), "hexaglide")
-    _, t6 = random_t6(robot, 3000, seed=3)
+    _, t6 = random_t6(robot, 5000, seed=3)
     calls, expected = plugin.call(t6), solve(robot, t6)
     assert joint_errors(calls.solutions, expected.joints, robot.revolute).max() <= 1e-9
     np.testing.assert_array_equal(calls.warnings, expected.warnings)
@@ -64,7 +70,7 @@ def test_a_rail_robot_warns_at_its_direct_index_threshold_as_the_reference(tmp_p
     # and near the threshold itself (where the reference computes the index exactly, else
     # only its side): postures on both sides of 15 mm.
     near = np.isfinite(expected.direct_index) & regular_limbs
-    assert near.sum() >= 10 and np.any(near & by_index) and np.any(near & (expected.warnings == 0))
+    assert near.sum() >= 5 and np.any(near & by_index) and np.any(near & (expected.warnings == 0))
 
 
 def test_a_rail_robot_with_a_direct_index_threshold_passes_verify(tmp_path, capsys):
