@@ -250,3 +250,11 @@ def test_closure_judges_every_reachable_branch_outside_the_singular_band_and_fai
     worst, judged = closure_error(robot, expected, wrong)
     # |N - carriage| changes by 1e-4 times the cosine between link and rail, sqrt(1 - 0.6^2) = 0.8
     assert judged == 12 and worst == pytest.approx(0.8e-4 / 100, rel=1e-3)
+
+
+def test_the_jacobian_check_with_no_regular_posture_judges_nothing_and_says_so():
+    robot = load_robot("stewart_gough_example")
+    check = jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()[-1:])  # only the pose beyond travel
+    assert (check.passed, check.exercised, check.judged) == (True, False, 0)
+    assert check.detail == ("no reachable, regular joint-posture among the 1 poses to differentiate (every one is "
+                            "near a limb singularity or unreachable)")
