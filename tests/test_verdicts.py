@@ -258,3 +258,30 @@ def test_the_jacobian_check_with_no_regular_posture_judges_nothing_and_says_so()
     assert (check.passed, check.exercised, check.judged) == (True, False, 0)
     assert check.detail == ("no reachable, regular joint-posture among the 1 poses to differentiate (every one is "
                             "near a limb singularity or unreachable)")
+
+
+def test_a_snapshot_names_exactly_the_entries_that_differ(tmp_path, capsys):
+    """A recorded snapshot of tau with one joint moved by 1 mm (pose 1, carriage2, posture 3)
+    and one warning changed (pose 2, posture 5): the check fails and lists those two."""
+    import json
+
+    from kingen.cli import main
+
+    snapshot = tmp_path / "tau.golden.json"
+    assert main(["golden", "record", "tau", "-o", str(snapshot), "--samples", "3"]) == 0
+    data = json.loads(snapshot.read_text())
+    recorded_joint = data["entries"][1]["joints"][1][3]
+    data["entries"][1]["joints"][1][3] = recorded_joint + 1.0
+    assert data["entries"][2]["warnings"][5] == GOOD
+    data["entries"][2]["warnings"][5] = SINGULAR
+    snapshot.write_text(json.dumps(data))
+    capsys.readouterr()
+    report = tmp_path / "report.json"
+    assert main(["verify", "tau", "--golden", str(snapshot), "--samples", "50", "-o", str(tmp_path / "out"),
+                 "--json", str(report)]) == 1
+    check = next(check for check in json.loads(report.read_text())["checks"] if check["name"] == "snapshot")
+    assert not check["passed"]
+    assert "1 joints beyond" in check["detail"] and "1 warnings differ" in check["detail"]
+    assert check["diagnoses"] == [
+        f"pose 1 posture 3 carriage2: recorded {recorded_joint + 1.0:.9g}, now {recorded_joint:.9g} mm",
+        "pose 2 posture 5: recorded warning WARN_SINGULAR_SOLUTION, now WARN_GOOD_SOLUTION"]
