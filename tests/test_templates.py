@@ -80,6 +80,7 @@ def test_a_rail_robot_with_a_direct_index_threshold_passes_verify(tmp_path, caps
     out = capsys.readouterr().out
     assert code == 0, out
     assert "WARN_SINGULAR_SOLUTION 16" in out  # boundaries of the singular warning found and compared
+    assert "; the reference's warnings: " in out and " WARN_GOOD_SOLUTION, " in out.split("the reference's warnings: ")[1]
 
 
 @pytest.mark.parametrize("zero_offset", [700, -700, 540, -400, 359.5])

@@ -285,3 +285,24 @@ def test_a_snapshot_names_exactly_the_entries_that_differ(tmp_path, capsys):
     assert check["diagnoses"] == [
         f"pose 1 posture 3 carriage2: recorded {recorded_joint + 1.0:.9g}, now {recorded_joint:.9g} mm",
         "pose 2 posture 5: recorded warning WARN_SINGULAR_SOLUTION, now WARN_GOOD_SOLUTION"]
+
+
+def test_just_outside_the_band_a_long_link_is_held_to_its_conditioning_bound(tmp_path):
+    """A 20 m rail at D = 1e-3, outside the singular band: its bound 16 eps x 20 m / sqrt(1e-3)
+    (about 2.2e-9 mm) exceeds the fixed 1e-9 mm, so a joint off by the mean of the two is
+    within it (README, 'What verify proves': a 20 m rail up to |D| of about 5e-3)."""
+    from kingen.verify.tally import singular_bounds
+
+    path = tmp_path / "long_rail.yaml"
+    path.write_text(RAIL.replace("link_length: 100", "link_length: 20000").replace("one_rail", "long_rail")
+                    .replace("home: [50, 0, -50, 0, 0, 0]", "home: [5000, 0, -50, 0, 0, 0]"))
+    robot = load_robot(path)
+    t6 = t6_from_pose([[20000 * math.sqrt(1 - 1e-3), 0, -50, 0, 0, 0]])
+    expected = solve(robot, t6)
+    assert expected.radicands[0, 0] == pytest.approx(1e-3, rel=1e-6)
+    fixed = np.array([1e-9])
+    bound = singular_bounds(robot, expected, fixed)[0, 0]
+    assert bound > 2e-9 and singular_bounds(robot, expected)[0, 0] == 0.0  # only the fixed bound brings it in
+    shift = (bound + 1e-9) / 2
+    report, _ = compared(robot, t6, calls_of(expected, None, expected.joints + shift), expected)
+    assert report.singular_entries == 2 and report.singular_out_of_bound == 0 and report.max_abs_error_mm == 0.0
