@@ -172,8 +172,8 @@ def run(arguments):
     if arguments.rerun_survivors:  # the tests changed since: judge the survivors again
         done = {key: entry for key, entry in done.items() if entry["status"] != "survived"}
     todo = [item for item in sample if item[1] not in done]
-    if arguments.only_survivors:  # and nothing else
-        todo = [item for item in every if item[1] in survivors]
+    if arguments.only_survivors:  # and nothing else (listed equivalents stay as they are)
+        todo = [item for item in every if item[1] in survivors - set(equivalents())]
     print(f"{len(every)} mutants in {len(chosen)} files; sample {len(sample)}, {len(todo)} still to run", flush=True)
     if not todo:
         return table(arguments)
