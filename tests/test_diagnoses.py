@@ -200,8 +200,13 @@ def test_agreeing_warnings_need_no_diagnosis(mine, theirs):
     assert diagnose_warnings(mine, theirs, NAMES) == []
 
 
-@pytest.mark.parametrize("scale, label", NAMED_SCALES)
+@pytest.mark.parametrize("scale, label", [
+    (1e-3, "metres instead of mm"), (1e3, "micrometres instead of mm"), (1 / 25.4, "inches instead of mm"),
+    (180 / math.pi, "degrees instead of radians"), (math.pi / 180, "radians read as degrees")])
 def test_every_named_scale_is_named(scale, label):
+    """The unit factors themselves (1 m = 1000 mm, 1 in = 25.4 mm, 1 rad = 180 / pi degrees),
+    written here, not read from kingen."""
+    assert len(NAMED_SCALES) == 5
     robot, t6, expected = case("hexapod", count=12)
     joints = expected.joints.copy()
     joints[:, 4] = scale * expected.joints[:, 4]
