@@ -173,7 +173,7 @@ def run(arguments):
         done = {key: entry for key, entry in done.items() if entry["status"] != "survived"}
     todo = [item for item in sample if item[1] not in done]
     if arguments.only_survivors:  # and nothing else (listed equivalents stay as they are)
-        todo = [item for item in every if item[1] in survivors - set(equivalents())]
+        todo = [item for item in every if item[1] in survivors and item[1].strip() not in equivalents()]
     print(f"{len(every)} mutants in {len(chosen)} files; sample {len(sample)}, {len(todo)} still to run", flush=True)
     if not todo:
         return table(arguments)
@@ -213,7 +213,7 @@ def table(arguments):
     listed = equivalents()
     rows = {}
     for entry in results.values():
-        status = "equivalent" if entry["key"] in listed and entry["status"] == "survived" else entry["status"]
+        status = "equivalent" if entry["key"].strip() in listed and entry["status"] == "survived" else entry["status"]
         rows.setdefault(entry["file"], {}).setdefault(status, []).append(entry)
     print("| file | mutants | killed | timeout | survived | equivalent | stillborn | score | time |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -231,6 +231,10 @@ def table(arguments):
         for path in sorted(rows):
             for entry in rows[path].get("survived", []):
                 print(f"  {entry['key']}")
+        print("\nEquivalent (tools/mutation_equivalent.txt):")
+        for path in sorted(rows):
+            for entry in rows[path].get("equivalent", []):
+                print(f"  {entry['key']}  # {listed[entry['key'].strip()]}")
     return 0
 
 
