@@ -50,7 +50,8 @@ def test_analysis_json_contract(ceart_analysis):
     assert all(SWEEP_KEYS <= set(entry) for entries in data["sweeps"].values() for entry in entries)
     about_y = data["tilt_limits"][6]
     assert {key: about_y[key] for key in ("azimuth_deg", "max_tilt_deg", "cause")} == {
-        "azimuth_deg": 90.0, "max_tilt_deg": 23.9, "cause": "unreachable"}
+        "azimuth_deg": 90.0, "max_tilt_deg": 23.9, "cause": "unreachable"}  # derived independently:
+    # tests/test_golden_values.py, the cranks reach at +23.9 degrees about Y and not at 24.0
     assert about_y["min_direct_index_mm"] > 29.3  # above CEART's threshold all the way
     assert (ceart_analysis / "copy.json").read_text() == (ceart_analysis / "analysis.json").read_text()
 

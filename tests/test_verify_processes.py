@@ -61,3 +61,38 @@ def test_a_containers_cpu_quota_bounds_the_processes(tmp_path, monkeypatch, file
     monkeypatch.setattr(verify_module.os, "sched_getaffinity", lambda pid: set(range(64)))
     assert verify_module.cpu_quota() == cores
     assert verify_module.comparing_processes() == (cores or verify_module.MAX_PROCESSES)
+
+
+class FlippedWarnings:
+    """``plugin`` answering WARN_SINGULAR_SOLUTION for WARN_GOOD_SOLUTION (and back) wherever
+    T6's x exceeds ``x``."""
+
+    def __init__(self, plugin, x):
+        self._plugin, self._x = plugin, x
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        flip = (t6.reshape(-1, 4, 4)[:, 3, 0] > self._x)[:, None] & ((calls.warnings == 0) | (calls.warnings == 5))
+        calls.warnings[flip] = 5 - calls.warnings[flip]
+        return calls
+
+
+def test_merged_counts_add_up_whatever_the_processes(plugin):
+    """Warnings flipped on the poses right of home (about half of them, drawn uniformly about
+    home): the mismatches are counted, positive and the same for 1 and 2 processes; the
+    per-posture statistics split right and wrong joints about evenly."""
+    robot, routine = plugin("tau")
+    counts = []
+    for processes in (1, 2):
+        report = verify(robot, FlippedWarnings(wrong_on_some_poses(routine, robot.verification.home[0]),
+                                               robot.verification.home[0]),
+                        VerifyOptions(samples=2 * chunk_size(robot) + 5, processes=processes))
+        counts.append({name: getattr(report, name) for name in verify_module.REPORT_COUNTS})
+        right = sum(row["right"] for row in report.posture_statistics)
+        wrong = sum(row["wrong"] for row in report.posture_statistics)
+        assert 0.35 < wrong / (right + wrong) < 0.65
+    assert counts[0] == counts[1] and counts[0]["warning_mismatches"] > 1000
+    assert all(value >= 0 for value in counts[0].values())

@@ -1,0 +1,219 @@
+"""Numerical building blocks pinned from both sides of each bound, against independent
+computations: the closed-form smallest eigenvalue (the direct index analyze uses) against
+LAPACK (numpy.linalg.eigvalsh); trilateration against points whose distances are known;
+forward kinematics' acceptance bounds (SAME_POSE_MM, SAME_POSE_RAD, 1e-9 of the size);
+the robot-file reader's depth and value limits at their exact values."""
+
+import math
+
+import numpy as np
+import pytest
+
+from kingen import forward
+from kingen.errors import KingenError
+from kingen.forward import SAME_POSE_MM, SAME_POSE_RAD, _polished, _same, _three_spheres
+from kingen.model import load_robot
+from kingen.robot_file import MAX_DEPTH, MAX_NODES, read_robot_file
+from kingen.singularity import PACKED, _exact_smallest_eigenvalue, _smallest_eigenvalue, direct_index, \
+    direct_index_of_entries
+
+
+def as_entries(matrices):
+    return {(i, j): matrices[:, i, j] for i in range(3) for j in range(i, 3)}
+
+
+@pytest.mark.parametrize("scale, spread", [(1.0, 1.0), (1e6, 1.0), (1e4, 1e-3), (1.0, 1e-6)])
+def test_the_closed_form_smallest_eigenvalue_agrees_with_lapack(scale, spread):
+    """Symmetric positive semi-definite 3x3 matrices Q diag(l) Q^T, eigenvalues l drawn as
+    scale x (1 + spread x u): clustered (spread 1e-6) and well spread."""
+    rng = np.random.default_rng(11)
+    q, _ = np.linalg.qr(rng.normal(size=(500, 3, 3)))
+    eigenvalues = scale * (1.0 + spread * rng.uniform(-0.9, 5.0, (500, 3)))
+    matrices = q @ (eigenvalues[:, :, None] * np.swapaxes(q, 1, 2))
+    lapack = np.linalg.eigvalsh(matrices)
+    closed = _smallest_eigenvalue(as_entries(matrices))
+    assert np.max(np.abs(closed - lapack[:, 0]) / lapack[:, 2]) < 1e-9
+    assert np.allclose(_exact_smallest_eigenvalue(as_entries(matrices), np.ones(500, bool)), lapack[:, 0],
+                       rtol=0, atol=1e-12 * scale)
+
+
+def test_the_closed_form_smallest_eigenvalue_of_repeated_eigenvalues():
+    """A multiple of the identity gives its value (the 0 / 0 the code guards); a repeated
+    eigenvalue puts acos at +/-1, where the closed form loses half the digits: its error is
+    about sqrt(eps) x the largest eigenvalue there (hence LAPACK within EXACT_WINDOW = 1e-4
+    of a threshold), measured 5e-9 x 9 for diag(2, 2, 9)."""
+    matrices = np.array([np.eye(3) * 7.5, np.diag([2.0, 2.0, 9.0]), np.diag([4.0, 1.0, 4.0])])
+    assert _smallest_eigenvalue(as_entries(matrices)).tolist() == pytest.approx([7.5, 2.0, 1.0], rel=1e-7)
+    assert _smallest_eigenvalue(as_entries(matrices[:1]))[0] == 7.5
+
+
+def test_the_direct_index_in_closed_form_agrees_with_lapack_on_a_robot():
+    """direct_index_of_entries uses the closed form away from exact_near (here 1e9 mm, far
+    from every value) and LAPACK near it (exact_near None: everywhere)."""
+    rng = np.random.default_rng(5)
+    wrenches = rng.normal(size=(300, 6, 6)) * np.array([1, 1, 1, 300, 300, 300])
+    gram = np.swapaxes(wrenches, 1, 2) @ wrenches
+    entries = np.stack([gram[:, i, j] for i, j in PACKED])
+    closed = direct_index_of_entries(entries, exact_near=1e9)
+    exact = direct_index(gram)
+    # Independently: sqrt of the smallest eigenvalue of M_ww - M_wv M_vv^-1 M_vw, by numpy.
+    schur = gram[:, 3:, 3:] - gram[:, 3:, :3] @ np.linalg.solve(gram[:, :3, :3], gram[:, :3, 3:])
+    numpy_index = np.sqrt(np.maximum(np.linalg.eigvalsh(schur)[:, 0], 0.0))
+    assert np.allclose(exact, numpy_index, rtol=1e-9)
+    assert np.max(np.abs(closed - numpy_index) / np.sqrt(np.linalg.eigvalsh(schur)[:, 2])) < 1e-7
+
+
+CENTRES = np.array([[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 100.0, 0.0]])
+
+
+def radii_to(point, centres=CENTRES):
+    return np.linalg.norm(centres - np.asarray(point), axis=1)
+
+
+def test_three_spheres_meet_at_both_mirror_points():
+    found = _three_spheres(CENTRES, radii_to([30.0, 40.0, 50.0]))
+    assert len(found) == 2
+    np.testing.assert_allclose(sorted(found, key=lambda p: -p[2]), [[30, 40, 50], [30, 40, -50]], atol=1e-12)
+
+
+def test_three_spheres_tangent_in_their_plane_meet_once():
+    found = _three_spheres(CENTRES, radii_to([30.0, 40.0, 0.0]))
+    assert len(found) == 1
+    np.testing.assert_allclose(found[0], [30, 40, 0], atol=1e-6)
+
+
+def test_three_spheres_that_miss_each_other_meet_nowhere():
+    assert _three_spheres(CENTRES, radii_to([30.0, 40.0, 0.0]) * np.array([0.5, 0.5, 0.5])) == []
+
+
+@pytest.mark.parametrize("centres", [
+    np.array([[5.0, 5.0, 5.0], [5.0, 5.0, 5.0], [0.0, 100.0, 0.0]]),     # first two coincide
+    np.array([[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [100.0, 0.0, 0.0]]),  # last two coincide
+    np.array([[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [250.0, 0.0, 0.0]]),  # collinear
+])
+def test_three_spheres_with_coincident_or_collinear_centres_give_no_isolated_point(centres):
+    """Their intersection, where there is one, is a circle: no isolated pose to report, and no crash."""
+    assert _three_spheres(centres, np.array([120.0, 120.0, 120.0])) == []
+
+
+@pytest.mark.parametrize("offset_mm, offset_rad, same", [
+    (0.5 * SAME_POSE_MM, 0.0, True), (2.0 * SAME_POSE_MM, 0.0, False),
+    (0.0, 0.5 * SAME_POSE_RAD, True), (0.0, 2.0 * SAME_POSE_RAD, False)])
+def test_two_poses_are_the_same_assembly_only_within_the_bounds(offset_mm, offset_rad, same):
+    pose = np.array([10.0, -20.0, 400.0, 0.1, -0.2, 0.3])
+    other = pose + np.array([0.0, offset_mm, 0.0, 0.0, 0.0, offset_rad])
+    assert _same(pose, other) == same
+
+
+@pytest.mark.parametrize("relative, kept", [(0.5e-9, True), (2e-9, False)])
+def test_an_assembly_is_kept_only_with_a_residual_within_1e_9_of_the_size(monkeypatch, relative, kept):
+    robot = load_robot("hexapod")
+    residual = relative * robot.size_mm
+    monkeypatch.setattr(forward, "newton", lambda robot, poses, joints, free: (np.array(poses), np.full(len(poses), residual)))
+    found = _polished(robot, [[0, 0, 465, 0, 0, 0]], np.zeros(6), np.array([0, 0, 465, 0, 0, 0.0]), np.ones(6, bool))
+    assert len(found) == (1 if kept else 0)
+
+
+def test_assemblies_are_ordered_by_distance_and_duplicates_dropped(monkeypatch):
+    robot = load_robot("hexapod")
+    monkeypatch.setattr(forward, "newton", lambda robot, poses, joints, free: (np.array(poses), np.zeros(len(poses))))
+    candidates = [[0, 0, 500, 0, 0, 0], [0, 0, 470, 0, 0, 0], [0, 0, 500 + 0.5 * SAME_POSE_MM, 0, 0, 0],
+                  [0, 0, 440, 0, 0, 0]]
+    found = _polished(robot, candidates, np.zeros(6), np.array([0, 0, 465, 0, 0, 0.0]), np.ones(6, bool))
+    assert [assembly.pose[2] for assembly in found] == [470, 440, 500]  # 5, 25 and 35 mm from 465
+
+
+def read(tmp_path, text):
+    path = tmp_path / "r.yaml"
+    path.write_text(text)
+    return read_robot_file(path)[0]
+
+
+def test_flow_nesting_is_refused_beyond_max_depth_before_parsing(tmp_path):
+    assert MAX_DEPTH == 32
+    depth = MAX_DEPTH - 1  # the top-level mapping is one level: 31 brackets make 32
+    assert read(tmp_path, "a: " + "[" * depth + "]" * depth + "\n")["a"] is not None
+    with pytest.raises(KingenError, match=r":1: nested deeper than 32 levels"):
+        read(tmp_path, "a: " + "[" * (MAX_DEPTH + 1) + "]" * (MAX_DEPTH + 1) + "\n")
+    # Unclosed: only the check on the raw text, before the parser, names the depth.
+    with pytest.raises(KingenError, match=r":2: nested deeper than 32 levels"):
+        read(tmp_path, "b: 1\na: " + "[" * (MAX_DEPTH + 1) + "\n")
+    # Brackets in quotes and comments are text, not nesting.
+    assert read(tmp_path, "a: '" + "[" * 40 + "'  # " + "{" * 40 + "\nb: \"" + "{" * 40 + "\"\n")["b"] == "{" * 40
+
+
+def values(aliases, padding):
+    """A document of 1 (top mapping) + 1 (key a) + 1001 (a list of 1000) + 2 (key b, its list)
+    + 1001 per alias of a + 2 (key c, its list) + ``padding`` values."""
+    return ("a: &a [" + "1, " * 999 + "1]\nb: [" + ", ".join(["*a"] * aliases) + "]\nc: ["
+            + ", ".join(["2"] * padding) + "]\n")
+
+
+def test_a_document_may_expand_to_exactly_max_nodes_values(tmp_path):
+    assert MAX_NODES == 100_000
+    assert 1 + 1 + 1001 + 2 + 98 * 1001 + 2 + 895 == MAX_NODES
+    assert len(read(tmp_path, values(98, 895))["c"]) == 895
+    with pytest.raises(KingenError, match=r":3: expands to more than 100000 values"):
+        read(tmp_path, values(98, 896))
+    with pytest.raises(KingenError, match=r"expands to more than 100000 values"):
+        read(tmp_path, values(120, 1))
+
+
+def test_crank_angles_far_from_a_turn_are_not_rounded_by_the_reference():
+    """math.remainder wraps exactly: the reference's wrapped joint plus the offset is the
+    geometric angle modulo 2 pi (checked on a crank offset by 700 degrees)."""
+    robot = load_robot("ceart")
+    limb = robot.limbs[0].model_copy(update={"zero_offset": 700.0})
+    points = np.array([[robot.limbs[0].platform_point[0], robot.limbs[0].platform_point[1], -700.0]])
+    plain = robot.limbs[0].solve(points)
+    shifted = limb.solve(points)
+    difference = np.angle(np.exp(1j * (plain.values - shifted.values - math.radians(700.0))))
+    assert np.max(np.abs(difference)) < 1e-12
+
+
+@pytest.mark.parametrize("scale", [1e-3, 0.3, 1.0, 1e4])
+def test_positive_definiteness_after_a_shift_agrees_with_lapack(scale):
+    """Sylvester's criterion on A - shift I (what the warnings decide the direct index's side
+    with) against the sign of LAPACK's smallest eigenvalue, on matrices of every size."""
+    from kingen.singularity import _positive_definite
+
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.normal(size=(400, 3, 3)))
+    eigenvalues = scale * rng.uniform(0.05, 1.0, (400, 3))
+    matrices = q @ (eigenvalues[:, :, None] * np.swapaxes(q, 1, 2))
+    for shift in (0.0, 0.3 * scale, 0.6 * scale):
+        smallest = np.linalg.eigvalsh(matrices)[:, 0] - shift
+        clear = np.abs(smallest) > 1e-9 * scale
+        decided = _positive_definite(as_entries(matrices), shift)
+        assert np.array_equal(decided[clear], (smallest > 0)[clear])
+        assert decided.any() and not decided.all() or shift == 0.0
+
+
+@pytest.mark.parametrize("smallest_pivot, singular", [(1e-13, True), (1e-11, False)])
+def test_a_force_block_is_translation_singular_below_1e_12_of_its_trace_cubed(smallest_pivot, singular):
+    """M_vv = diag(1, 1, p) (trace about 2, (trace / 3)^3 = 0.296): singular, index 0, when the
+    product of its pivots p is below 1e-12 x 0.296; else the Schur complement's index, here
+    M_ww = 4 I with no coupling: sqrt(4) = 2 mm."""
+    gram = np.zeros((6, 6))
+    gram[:3, :3] = np.diag([1.0, 1.0, smallest_pivot])
+    gram[3:, 3:] = 4.0 * np.eye(3)
+    assert direct_index(gram) == (0.0 if singular else pytest.approx(2.0))
+
+
+@pytest.mark.parametrize("entry", [(0, 0), (1, 1), (2, 2), (3, 3), (4, 4), (5, 5)])
+def test_a_gram_with_an_infinite_diagonal_entry_has_index_0(entry):
+    """README, Singularities: the index is 0 where M is not finite (an overflowed pose)."""
+    gram = np.eye(6)
+    gram[entry] = np.inf
+    assert direct_index(gram) == 0.0
+
+
+def test_a_crank_whose_platform_point_lies_on_its_axis_is_unreachable_with_finite_joints():
+    """Pivot (200, 0, 0), crank turning in the x-z plane (direction 0 degrees): a platform
+    point on the line through the pivot along y has a = b = 0 (rho = 0): no crank angle
+    reaches it; the joints stay finite (README, Warnings)."""
+    robot = load_robot("ceart")
+    limb = robot.limbs[0].model_copy(update={"pivot": (200.0, 0.0, 0.0), "crank_direction": 0.0})
+    solution = limb.solve(np.array([[200.0, 50.0, 0.0]]))
+    assert solution.radicand.tolist() == [-1.0]
+    assert np.all(np.isfinite(solution.values))

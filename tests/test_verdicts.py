@@ -1,0 +1,308 @@
+"""verify's verdicts on constructed cases, each boundary from both sides and each count exact.
+
+- The warning band has three parts (README, 'What verify proves'): a radicand within
+  WARNING_BAND of +/-1e-5 (tests/test_verify_bands.py), a joint within WARNING_BAND of a
+  travel limit, a direct index within WARNING_BAND relative of direct_index_min. Each is
+  pinned here by poses built to lie a third of the band inside and thirty bands outside, on
+  both sides of each limit.
+- The Jacobian check is given routines it must fail and is asserted on how many
+  joint-postures it compared.
+- Per-posture statistics are asserted entry by entry on poses whose outcome is constructed.
+
+Every expected number follows from the construction stated beside it."""
+
+import math
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from kingen.conventions import t6_from_pose
+from kingen.model import load_robot
+from kingen.reference import solve
+from kingen.report import Report
+from kingen.routine import WARNING_BAND, WARNINGS, Calls
+from kingen.verify.checks.jacobian import jacobian_check
+from kingen.verify.options import VerifyOptions
+from kingen.verify.tally import Tally, accumulate, posture_statistics, warnings_in_band
+
+GOOD, LIMITS = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]
+SINGULAR, UNREACHABLE = WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]
+
+PLUMB_LEG = """\
+name: plumb_leg
+description: One leg from the base origin to the platform origin, its joint the absolute length.
+limbs:
+  - {model: leg, base_point: [0, 0, 0], platform_point: [0, 0, 0], reference_length: 0, travel: [100, 200]}
+verification: {home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
+"""
+"""Its joint at pose (0, 0, z) is z: the travel limits 100 and 200 mm are met at z = 100, 200."""
+
+
+def calls_of(expected, warnings=None, solutions=None):
+    warnings = expected.warnings if warnings is None else warnings
+    return Calls(returned=np.where(np.all(expected.warnings == UNREACHABLE, axis=1), 1, 0).astype(np.intc),
+                 solutions=(expected.joints if solutions is None else solutions).copy(),
+                 warnings=np.asarray(warnings, dtype=np.intc).copy(), faults=np.zeros(len(warnings), dtype=np.intc))
+
+
+def compared(robot, t6, calls, expected):
+    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    tally = Tally.start(robot)
+    accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+    return report, tally
+
+
+@pytest.fixture
+def leg(tmp_path):
+    path = tmp_path / "plumb_leg.yaml"
+    path.write_text(PLUMB_LEG)
+    return load_robot(path)
+
+
+@pytest.mark.parametrize("limit", [100.0, 200.0])
+@pytest.mark.parametrize("offset, excused", [(WARNING_BAND / 3, True), (-WARNING_BAND / 3, True),
+                                             (30 * WARNING_BAND, False), (-30 * WARNING_BAND, False)])
+def test_a_warning_may_differ_beside_a_travel_limit_only_inside_the_band(leg, limit, offset, excused):
+    t6 = t6_from_pose([[0.0, 0.0, limit + offset, 0.0, 0.0, 0.0]])
+    expected = solve(leg, t6)
+    assert abs(expected.joints[0, 0, 0] - (limit + offset)) < WARNING_BAND / 10
+    outside = offset < 0 if limit == 100.0 else offset > 0
+    assert expected.warnings[0, 0] == (LIMITS if outside else GOOD)
+    assert bool(warnings_in_band(leg, expected)[0, 0]) == excused
+    flipped = np.where(expected.warnings == LIMITS, GOOD, LIMITS)
+    report, _ = compared(leg, t6, calls_of(expected, flipped), expected)
+    assert (report.warnings_in_band, report.warning_mismatches) == ((1, 0) if excused else (0, 1))
+
+
+def test_far_from_its_limits_a_leg_is_never_in_the_band(leg):
+    t6 = t6_from_pose([[0.0, 0.0, z, 0.0, 0.0, 0.0] for z in (50.0, 150.0, 250.0)])
+    expected = solve(leg, t6)
+    assert expected.warnings[:, 0].tolist() == [LIMITS, GOOD, LIMITS]
+    assert not np.any(warnings_in_band(leg, expected))
+
+
+HEXAPOD_POSE = [[10.0, -5.0, 470.0, 2.0, -1.0, 3.0]]
+"""A regular pose of the hexapod (index near 13 mm): the threshold is set relative to the
+reference's own index there, so which side the pose lies on is the construction."""
+
+
+@pytest.mark.parametrize("relative, excused", [(WARNING_BAND / 3, True), (-WARNING_BAND / 3, True),
+                                               (30 * WARNING_BAND, False), (-30 * WARNING_BAND, False)])
+def test_a_warning_may_differ_beside_the_direct_index_threshold_only_inside_the_band(relative, excused):
+    robot = load_robot("hexapod")
+    t6 = t6_from_pose(HEXAPOD_POSE)
+    index = float(solve(replace(robot, direct_index_min=None), t6, indices=True).direct_index[0, 0])
+    assert 5.0 < index < 30.0
+    threshold = index / (1.0 + relative)  # relative > 0: the index is above the threshold (good)
+    moved = replace(robot, direct_index_min=threshold)
+    expected = solve(moved, t6)
+    assert expected.warnings[0, 0] == (GOOD if relative > 0 else SINGULAR)
+    assert bool(warnings_in_band(moved, expected)[0, 0]) == excused
+    flipped = np.where(expected.warnings == SINGULAR, GOOD, SINGULAR)
+    report, _ = compared(moved, t6, calls_of(expected, flipped), expected)
+    assert (report.warnings_in_band, report.warning_mismatches) == ((1, 0) if excused else (0, 1))
+
+
+def test_verify_draws_10000_poses_unless_told():
+    assert VerifyOptions().samples == 10000  # README, Commands: verify's --samples, default 10000
+
+
+def test_an_unwritten_warning_is_never_excused_inside_a_band(leg):
+    t6 = t6_from_pose([[0.0, 0.0, 200.0 + WARNING_BAND / 3, 0.0, 0.0, 0.0]])
+    expected = solve(leg, t6)
+    report, _ = compared(leg, t6, calls_of(expected, [[-1]]), expected)
+    assert (report.warnings_in_band, report.warning_mismatches) == (0, 1)
+
+
+class Routine:
+    """The reference as a routine, its joints changed by ``change(t6, joints)`` (in place)."""
+
+    def __init__(self, robot, change=None):
+        self.robot, self.change = robot, change
+
+    def reset_host(self):
+        pass
+
+    def call(self, t6, link_lengths=None, link_offsets=None):
+        joints = solve(self.robot, t6, link_lengths, link_offsets).joints.copy()
+        if self.change:
+            self.change(np.asarray(t6), joints)
+        return SimpleNamespace(solutions=joints)
+
+
+def sg_t6():
+    """Five poses of the Stewart-Gough example inside its leg travel 10..140 mm (joints 49 to
+    86 mm: WARN_GOOD_SOLUTION), and one beyond it (z = 340: every leg 153.7 mm,
+    WARN_JOINT_LIMITS_EXCEEDED), which the check leaves out."""
+    poses = [[0, 0, 250, 0, 0, 0], [10, -5, 255, 2, -1, 3], [-12, 9, 245, -3, 2, -4],
+             [5, 14, 260, 1, 3, 2], [-9, -10, 240, 4, -2, 6], [0, 0, 340, 0, 0, 0]]
+    return t6_from_pose(poses)
+
+
+def test_the_jacobian_check_compares_every_regular_joint_posture_and_passes_the_reference():
+    robot = load_robot("stewart_gough_example")
+    t6 = sg_t6()
+    assert solve(robot, t6).warnings[:, 0].tolist() == [GOOD] * 5 + [LIMITS]
+    check = jacobian_check(robot, Routine(robot), VerifyOptions(), t6)
+    assert check.passed and check.judged == 5 * 6  # five good poses x six legs x one posture
+    assert "on 30 regular joint-postures of 6 poses" in check.detail
+
+
+@pytest.mark.parametrize("change", [
+    pytest.param(lambda t6, joints: joints.__imul__(1.001), id="scaled by 1.001"),
+    pytest.param(lambda t6, joints: joints.__setitem__((slice(None), 2), joints[:, 2] + 1e-3 * t6[:, 3, 0, None]),
+                 id="one leg drifts with x"),
+    pytest.param(lambda t6, joints: joints.__setitem__((slice(None), 0), joints[:, 0] + 1e-4 * (t6[:, 3, 2, None] - 250) ** 2),
+                 id="one leg curved in z"),
+])
+def test_the_jacobian_check_fails_a_routine_whose_rates_are_wrong(change):
+    robot = load_robot("stewart_gough_example")
+    check = jacobian_check(robot, Routine(robot, change), VerifyOptions(), sg_t6())
+    assert not check.passed and check.judged == 30
+
+
+def test_the_jacobian_check_passes_a_constant_offset():
+    """A constant offset changes no rate: the values check catches it, not this one."""
+    robot = load_robot("stewart_gough_example")
+    check = jacobian_check(robot, Routine(robot, lambda t6, joints: joints.__iadd__(5.0)), VerifyOptions(), sg_t6())
+    assert check.passed and check.judged == 30
+
+
+RAIL = """\
+name: one_rail
+description: One rail along -z through the origin, link 100 mm to the platform origin.
+limbs:
+  - {model: rail, rail_point: [0, 0, 0], direction: [0, 0, -1], carriage_offset: [0, 0, 0],
+     platform_point: [0, 0, 0], link_length: 100}
+verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
+"""
+"""At (x, 0, z), |x| < 100, its two carriage positions are -z -/+ sqrt(100^2 - x^2) (u = -z):
+two postures, both reachable; beyond x = 100 neither is."""
+
+
+def test_per_posture_statistics_count_each_outcome_exactly(tmp_path):
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    poses = [[50, 0, -50, 0, 0, 0]] * 4 + [[60, 0, -40, 0, 0, 0]] * 3 + [[150, 0, -50, 0, 0, 0]] * 2
+    t6 = t6_from_pose(poses)
+    expected = solve(robot, t6)
+    assert expected.warnings.tolist() == [[GOOD, GOOD]] * 7 + [[UNREACHABLE, UNREACHABLE]] * 2
+    joints, warnings = expected.joints.copy(), expected.warnings.copy()
+    joints[0, 0, 1] += 2e-6          # pose 0: posture 1 solved wrong, by 2e-6 mm
+    joints[1, 0, 0] -= 5e-7          # pose 1: posture 0 solved wrong, by 5e-7 mm
+    joints[2, 0, 1] += 3e-10         # pose 2: within 1e-9 mm: right
+    warnings[3, 0] = UNREACHABLE     # pose 3: posture 0 called unreachable wrongly
+    warnings[4] = UNREACHABLE        # pose 4: both postures called unreachable wrongly
+    warnings[7, 1] = GOOD            # pose 7: posture 1 "solved" where the reference cannot: missed
+    calls = calls_of(expected, warnings, joints)
+    report, tally = compared(robot, t6, calls, expected)
+    statistics = posture_statistics(robot, tally)
+    # posture 0: right at poses 0, 2, 5, 6 (4); wrong at 1; unreachable wrongly at 3, 4; missed none
+    # posture 1: right at poses 1, 2, 3, 5, 6 (5); wrong at 0; unreachable wrongly at 4; missed at 7
+    assert [(s["right"], s["wrong"], s["unreachable_wrongly"], s["missed"]) for s in statistics] == [
+        (4, 1, 2, 0), (5, 1, 1, 1)]
+    assert statistics[0]["worst_error_mm"] == pytest.approx(5e-7, rel=1e-6)
+    assert statistics[1]["worst_error_mm"] == pytest.approx(2e-6, rel=1e-6)
+    assert statistics[0]["worst_error_rad"] is None
+    assert report.max_abs_error_mm == pytest.approx(2e-6, rel=1e-6)
+    assert tally.reachable_poses == 7 and tally.returns_wrong == 0
+    # warnings: 4 differ (pose 3 posture 0, pose 4 both, pose 7 posture 1), none in a band
+    assert (report.warning_mismatches, report.warnings_in_band) == (4, 0)
+    assert tally.warning_counts.tolist() == [14 if kind == "WARN_GOOD_SOLUTION" else 4 if kind == "WARN_UNREACHABLE"
+                                            else 0 for kind in WARNINGS]
+
+
+def test_a_rail_at_its_singular_radicand_is_counted_by_its_own_bound(tmp_path):
+    """At x = 100 sqrt(1 - D) the normalised radicand is D (the rail's construction)."""
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0], [50, 0, -50, 0, 0, 0]])
+    expected = solve(robot, t6)
+    joints = expected.joints.copy()
+    joints[0, 0, :] += 1e-8  # within 16 eps x 100 / sqrt(1e-12) = 3.6e-6 mm
+    joints[1, 0, 0] += 1e-8  # outside the band: beyond 1e-9 mm, wrong
+    report, tally = compared(robot, t6, calls_of(expected, None, joints), expected)
+    statistics = posture_statistics(robot, tally)
+    assert [(s["right"], s["wrong"]) for s in statistics] == [(1, 1), (2, 0)]
+    assert report.singular_entries == 2 and report.singular_out_of_bound == 0
+
+
+def test_closure_judges_every_reachable_branch_outside_the_singular_band_and_fails_a_wrong_joint(tmp_path):
+    """The one rail at 6 regular poses (2 branches each), 1 pose in its singular band
+    (x = 100 sqrt(1 - 1e-7): D = 1e-7) and 2 unreachable ones: 12 joints judged."""
+    from kingen.verify.tally import closure_error
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    poses = ([[x, 0, -50, 0, 0, 0] for x in (0, 20, 40, 60, 80, 95)] + [[100 * math.sqrt(1 - 1e-7), 0, -50, 0, 0, 0]]
+             + [[150, 0, -50, 0, 0, 0], [0, 150, -50, 0, 0, 0]])
+    expected = solve(robot, t6_from_pose(poses))
+    assert expected.warnings[:, 0].tolist() == [GOOD] * 6 + [SINGULAR] + [UNREACHABLE] * 2
+    worst, judged = closure_error(robot, expected, expected.joints)
+    assert judged == 12 and worst <= 1e-15
+    wrong = expected.joints.copy()
+    wrong[3, 0, 1] += 1e-4  # pose 3 (x = 60): the carriage moves 1e-4 mm along the rail
+    worst, judged = closure_error(robot, expected, wrong)
+    # |N - carriage| changes by 1e-4 times the cosine between link and rail, sqrt(1 - 0.6^2) = 0.8
+    assert judged == 12 and worst == pytest.approx(0.8e-4 / 100, rel=1e-3)
+
+
+def test_the_jacobian_check_with_no_regular_posture_judges_nothing_and_says_so():
+    robot = load_robot("stewart_gough_example")
+    check = jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()[-1:])  # only the pose beyond travel
+    assert (check.passed, check.exercised, check.judged) == (True, False, 0)
+    assert check.detail == ("no reachable, regular joint-posture among the 1 poses to differentiate (every one is "
+                            "near a limb singularity or unreachable)")
+
+
+def test_a_snapshot_names_exactly_the_entries_that_differ(tmp_path, capsys):
+    """A recorded snapshot of tau with one joint moved by 1 mm (pose 1, carriage2, posture 3)
+    and one warning changed (pose 2, posture 5): the check fails and lists those two."""
+    import json
+
+    from kingen.cli import main
+
+    snapshot = tmp_path / "tau.golden.json"
+    assert main(["golden", "record", "tau", "-o", str(snapshot), "--samples", "3"]) == 0
+    data = json.loads(snapshot.read_text())
+    recorded_joint = data["entries"][1]["joints"][1][3]
+    data["entries"][1]["joints"][1][3] = recorded_joint + 1.0
+    assert data["entries"][2]["warnings"][5] == GOOD
+    data["entries"][2]["warnings"][5] = SINGULAR
+    snapshot.write_text(json.dumps(data))
+    capsys.readouterr()
+    report = tmp_path / "report.json"
+    assert main(["verify", "tau", "--golden", str(snapshot), "--samples", "50", "-o", str(tmp_path / "out"),
+                 "--json", str(report)]) == 1
+    check = next(check for check in json.loads(report.read_text())["checks"] if check["name"] == "snapshot")
+    assert not check["passed"]
+    assert "1 joints beyond" in check["detail"] and "1 warnings differ" in check["detail"]
+    assert check["diagnoses"] == [
+        f"pose 1 posture 3 carriage2: recorded {recorded_joint + 1.0:.9g}, now {recorded_joint:.9g} mm",
+        "pose 2 posture 5: recorded warning WARN_SINGULAR_SOLUTION, now WARN_GOOD_SOLUTION"]
+
+
+def test_just_outside_the_band_a_long_link_is_held_to_its_conditioning_bound(tmp_path):
+    """A 20 m rail at D = 1e-3, outside the singular band: its bound 16 eps x 20 m / sqrt(1e-3)
+    (about 2.2e-9 mm) exceeds the fixed 1e-9 mm, so a joint off by the mean of the two is
+    within it (README, 'What verify proves': a 20 m rail up to |D| of about 5e-3)."""
+    from kingen.verify.tally import singular_bounds
+
+    path = tmp_path / "long_rail.yaml"
+    path.write_text(RAIL.replace("link_length: 100", "link_length: 20000").replace("one_rail", "long_rail")
+                    .replace("home: [50, 0, -50, 0, 0, 0]", "home: [5000, 0, -50, 0, 0, 0]"))
+    robot = load_robot(path)
+    t6 = t6_from_pose([[20000 * math.sqrt(1 - 1e-3), 0, -50, 0, 0, 0]])
+    expected = solve(robot, t6)
+    assert expected.radicands[0, 0] == pytest.approx(1e-3, rel=1e-6)
+    fixed = np.array([1e-9])
+    bound = singular_bounds(robot, expected, fixed)[0, 0]
+    assert bound > 2e-9 and singular_bounds(robot, expected)[0, 0] == 0.0  # only the fixed bound brings it in
+    shift = (bound + 1e-9) / 2
+    report, _ = compared(robot, t6, calls_of(expected, None, expected.joints + shift), expected)
+    assert report.singular_entries == 2 and report.singular_out_of_bound == 0 and report.max_abs_error_mm == 0.0
