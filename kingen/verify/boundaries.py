@@ -10,6 +10,8 @@ bisection, and a pose just before and one just after it join the sample, each ou
 tolerance band in which routine and reference may disagree (mm, degrees; kingen.poses).
 """
 
+import math
+
 import numpy as np
 
 from ..conventions import t6_from_pose
@@ -26,7 +28,6 @@ FAR = 4.0
 """Then, for a warning not met, translations up to this many times the robot's size."""
 PER_WARNING = 16
 """Boundaries kept per warning: two poses each."""
-BISECTIONS = 48
 PAST = {"WARN_JOINT_LIMITS_EXCEEDED": ("WARN_JOINT_LIMITS_EXCEEDED",), "WARN_UNREACHABLE": ("WARN_UNREACHABLE",),
         "WARN_SINGULAR_SOLUTION": ("WARN_SINGULAR_SOLUTION", "WARN_UNREACHABLE")}
 """The warnings on the far side of each warning's boundary: the limb singular band lies between
@@ -34,6 +35,9 @@ reachable and unreachable, so a ray that steps over it still brackets its edge."
 OFFSETS = (1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 """Distances from the boundary tried, as fractions of the ray's length, until both poses lie
 outside the tolerance band."""
+BISECTIONS = math.ceil(math.log2(10.0 / (STEPS * OFFSETS[0])))
+"""Halvings of a grid step that leave its bracket at most a tenth of the smallest offset
+wide (22): each pose then lies between 1 and 1.1 times its offset from the boundary."""
 
 
 def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary=None):
