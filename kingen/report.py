@@ -80,7 +80,8 @@ class Report:
     tolerance_rad: float = 1e-9
     boundary_poses: dict = field(default_factory=dict)
     """{poses: how many poses on warnings' boundaries joined the sample, boundaries_found:
-    {warning: boundaries found}} (kingen.verify.boundaries)."""
+    {warning, or direct_index_min for the direct index's threshold: boundaries found}}
+    (kingen.verify.boundaries)."""
     interface_checks: tuple = ()
     """Names of the host's interface checks (their failures are listed as ``interface_failures``)."""
     posture_statistics: list = field(default_factory=list)

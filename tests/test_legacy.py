@@ -411,7 +411,9 @@ def test_thesis_crank_routine_fails_where_limbs_reach_their_singular_band(capsys
         "values", "warnings", "return value", "closure"]
     assert "postures answer WARN_UNREACHABLE where the reference says WARN_SINGULAR_SOLUTION" in diagnoses(data)
     assert "postures answer WARN_GOOD_SOLUTION where the reference says WARN_SINGULAR_SOLUTION" in diagnoses(data)
-    assert data["boundary_poses"]["boundaries_found"] == {"WARN_UNREACHABLE": 16, "WARN_SINGULAR_SOLUTION": 16}
+    # 16 boundaries per warning (PER_WARNING); CEART's direct-index threshold is met by no ray.
+    assert data["boundary_poses"]["boundaries_found"] == {"WARN_UNREACHABLE": 16, "WARN_SINGULAR_SOLUTION": 16,
+                                                          "direct_index_min": 0}
 
 
 def test_crank_angles_in_degrees_are_named(capsys, tmp_path):

@@ -306,3 +306,39 @@ def test_just_outside_the_band_a_long_link_is_held_to_its_conditioning_bound(tmp
     shift = (bound + 1e-9) / 2
     report, _ = compared(robot, t6, calls_of(expected, None, expected.joints + shift), expected)
     assert report.singular_entries == 2 and report.singular_out_of_bound == 0 and report.max_abs_error_mm == 0.0
+
+
+@pytest.mark.parametrize("name", ["iwf", "rus_optimized"])
+@pytest.mark.parametrize("relative", [1e-3, -1e-3])
+def test_a_routine_deciding_the_direct_index_a_little_off_its_threshold_fails(name, relative, tmp_path):
+    """A routine built with direct_index_min 0.1 % above or below the robot's (a wrong
+    certificate, a rounded constant) differs from the reference only where the index lies
+    within 0.1 % of the threshold: the poses beside the index's own boundary
+    (kingen.verify.boundaries.DIRECT_INDEX), sought apart from the cranks' singular band that
+    also gives WARN_SINGULAR_SOLUTION, must catch it."""
+    from kingen.hosts.delmia.build import build_plugin
+    from kingen.hosts.delmia.loader import Plugin
+    from kingen.verify import verify
+
+    robot = load_robot(name)
+    built = build_plugin(replace(robot, direct_index_min=robot.direct_index_min * (1.0 + relative)), tmp_path)
+    report = verify(robot, Plugin(built.library, built.routine), VerifyOptions(samples=200))
+    assert report.boundary_poses["boundaries_found"]["direct_index_min"] == 16  # PER_WARNING
+    warnings = next(check for check in report.checks if check.name == "warnings")
+    assert not warnings.passed and report.warning_mismatches > 0, warnings.detail
+
+
+def test_a_threshold_no_pose_reaches_is_said_not_exercised(plugin):
+    """CEART's reachable poses keep every posture's direct index far above its 29.3 mm (the
+    smallest at the verification home is about 457 mm): its threshold is never met, which
+    the warnings check says instead of claiming it, while the warning passes on its other
+    cause (the cranks' singular band)."""
+    from kingen.verify import verify
+
+    robot, routine = plugin("ceart")
+    report = verify(robot, routine, VerifyOptions(samples=200))
+    warnings = next(check for check in report.checks if check.name == "warnings")
+    assert report.boundary_poses["boundaries_found"]["direct_index_min"] == 0 and warnings.passed
+    assert warnings.detail.endswith("the direct-index threshold (direct_index_min 29.3 mm) not exercised: no "
+                                    "compared posture's index is at or below it and no ray from the verification "
+                                    "home met it")

@@ -1,5 +1,9 @@
 """Poses on both sides of every warning's boundary, added to verify's sample so that each
-warning a robot can give is exercised (a routine that never gives one fails ``warnings``).
+warning a robot can give is exercised (a routine that never gives one fails ``warnings``),
+and so is each threshold behind a warning that another cause also gives: the direct index's
+(``direct_index_min``), whose boundary differs from the limbs' singular band that also gives
+WARN_SINGULAR_SOLUTION, so a routine deciding the index wrongly near its threshold fails
+even where the singular band's poses pass.
 
 Uniform poses rarely land near a boundary: the limb singular band is 2e-5 wide in the
 normalised radicand, a direct-index threshold or a travel limit may lie outside the
@@ -32,6 +36,8 @@ PAST = {"WARN_JOINT_LIMITS_EXCEEDED": ("WARN_JOINT_LIMITS_EXCEEDED",), "WARN_UNR
         "WARN_SINGULAR_SOLUTION": ("WARN_SINGULAR_SOLUTION", "WARN_UNREACHABLE")}
 """The warnings on the far side of each warning's boundary: the limb singular band lies between
 reachable and unreachable, so a ray that steps over it still brackets its edge."""
+DIRECT_INDEX = "direct_index_min"
+"""The boundary sought where the reference's direct index falls to the robot's threshold."""
 OFFSETS = (1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 """Distances from the boundary tried, as fractions of the ray's length, until both poses lie
 outside the tolerance band."""
@@ -40,15 +46,37 @@ BISECTIONS = math.ceil(math.log2(10.0 / (STEPS * OFFSETS[0])))
 wide (22): each pose then lies between 1 and 1.1 times its offset from the boundary."""
 
 
+def boundaries_to_seek(robot, vocabulary=None):
+    """The boundaries verify seeks for ``robot``'s routine (of ``vocabulary``, when it has
+    one): each warning it can give (routine.warnings_to_exercise), then DIRECT_INDEX when a
+    direct-index threshold gives WARN_SINGULAR_SOLUTION besides a limb's singular band (alone,
+    its boundary is that warning's)."""
+    kinds = warnings_to_exercise(robot, vocabulary)
+    if (robot.direct_index_min is not None and "WARN_SINGULAR_SOLUTION" in kinds
+            and any(limb.has_radicand for limb in robot.limbs)):
+        kinds.append(DIRECT_INDEX)
+    return kinds
+
+
+def threshold_boundaries(robot, found):
+    """How many boundaries of the direct index's threshold ``found`` (boundary_poses's)
+    holds, or None when none was sought (no threshold, or a routine without the warning)."""
+    if DIRECT_INDEX in found:
+        return found[DIRECT_INDEX]
+    if robot.direct_index_min is not None and "WARN_SINGULAR_SOLUTION" in found:
+        return found["WARN_SINGULAR_SOLUTION"]  # the threshold is that warning's only cause
+    return None
+
+
 def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary=None):
-    """(poses (m, 6) in mm and degrees, {warning: boundaries found}) on both sides of each
-    warning's boundary, seeded; the same poses whatever the number of processes. Rays first
-    span the verification region (``REACH`` times its half-widths); a warning they do not meet
-    is sought again along translations up to ``FAR`` times the robot's size."""
+    """(poses (m, 6) in mm and degrees, {boundary: boundaries found}) on both sides of each
+    boundary of boundaries_to_seek, seeded; the same poses whatever the number of processes.
+    Rays first span the verification region (``REACH`` times its half-widths); a boundary
+    they do not meet is sought again along translations up to ``FAR`` times the robot's size."""
     region = robot.verification
     home, widths = np.asarray(region.home, dtype=float), np.asarray(region.range, dtype=float)
     generator = np.random.default_rng([seed, 0x626f756e64])  # apart from the sample's own stream
-    kinds = warnings_to_exercise(robot, vocabulary)
+    kinds = boundaries_to_seek(robot, vocabulary)
     calibrated = robot.calibrated(link_lengths, link_offsets)
     far = np.zeros((RAYS, 6))
     far[:, :3] = generator.normal(size=(RAYS, 3))
@@ -65,10 +93,20 @@ def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary
     return (np.concatenate(poses) if poses else np.zeros((0, 6))), found
 
 
+def _beyond(robot, kind, solution):
+    """(n, postures) whether each posture of the reference's ``solution`` lies beyond the
+    boundary ``kind``: it gives one of PAST's warnings, or for DIRECT_INDEX its direct index
+    is at most the threshold (never where it has none: unreachable)."""
+    if kind == DIRECT_INDEX:
+        with np.errstate(invalid="ignore"):
+            return solution.direct_index <= robot.direct_index_min
+    return np.isin(solution.warnings, [WARNINGS[name] for name in PAST[kind]])
+
+
 def _boundaries(robot, home, directions, kinds):
-    """(warning, boundaries found, poses on both sides) for each of ``kinds`` that the rays
+    """(boundary, boundaries found, poses on both sides) for each of ``kinds`` that the rays
     home + t directions (0 <= t <= 1) meet; ``robot`` calibrated as the routine is called.
-    The brackets of every warning are bisected together, one reference solve per step for
+    The brackets of every boundary are bisected together, one reference solve per step for
     all of them (each pose is solved on its own, so batching changes no pose)."""
     def warnings_at(fractions, rays):
         poses = home + fractions[:, None] * directions[rays]
@@ -77,19 +115,17 @@ def _boundaries(robot, home, directions, kinds):
     rays_count = len(directions)
     steps = np.linspace(0.0, 1.0, STEPS + 1)
     grid, _ = warnings_at(np.tile(steps, rays_count), np.repeat(np.arange(rays_count), STEPS + 1))
-    grid_warnings = grid.warnings.reshape(rays_count, STEPS + 1, -1)
-    met, rays, lows, postures, codes = [], [], [], [], []
+    met, rays, lows, postures, bracket_kinds = [], [], [], [], []
     for kind in kinds:
-        kind_codes = [WARNINGS[name] for name in PAST[kind]]
-        hits = np.isin(grid_warnings, kind_codes)  # (rays, steps, postures)
+        hits = _beyond(robot, kind, grid).reshape(rays_count, STEPS + 1, -1)  # (rays, steps, postures)
         count = 0
         for ray in range(rays_count):
-            changes = np.argwhere(~hits[ray, :-1] & hits[ray, 1:])  # (step, posture) where it turns into kind
+            changes = np.argwhere(~hits[ray, :-1] & hits[ray, 1:])  # (step, posture) where it crosses
             if len(changes):
                 rays.append(ray)
                 lows.append(changes[0][0])
                 postures.append(changes[0][1])
-                codes.append(kind_codes + [-1] * (len(WARNINGS) - len(kind_codes)))  # -1: no code
+                bracket_kinds.append(kind)
                 count += 1
             if count == PER_WARNING:
                 break
@@ -97,12 +133,15 @@ def _boundaries(robot, home, directions, kinds):
             met.append((kind, count))
     if not met:
         return
-    rays, postures, codes = np.array(rays), np.array(postures), np.array(codes)
+    rays, postures, bracket_kinds = np.array(rays), np.array(postures), np.array(bracket_kinds)
     low, high = steps[np.array(lows)], steps[np.array(lows) + 1]
     for _ in range(BISECTIONS):
         middle = 0.5 * (low + high)
         solution, _ = warnings_at(middle, rays)
-        inside = np.any(solution.warnings[np.arange(len(rays)), postures][:, None] == codes, axis=1)
+        inside = np.zeros(len(rays), dtype=bool)
+        for kind, _ in met:
+            mine = bracket_kinds == kind
+            inside[mine] = _beyond(robot, kind, solution)[mine, postures[mine]]
         high, low = np.where(inside, middle, high), np.where(inside, low, middle)
     sides = _both_sides(robot, warnings_at, rays, low, high)
     first = 0

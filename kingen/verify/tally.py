@@ -93,6 +93,9 @@ class Tally:
     """Of ``reachable_poses``, those beside warnings' boundaries (not drawn in the region)."""
     boundary_first: tuple = None
     """As ``first``, for the poses beside warnings' boundaries (kingen.verify.boundaries)."""
+    direct_index_below: int = 0
+    """Postures the reference reaches with a direct index at most the robot's
+    direct_index_min: those that exercise its threshold from below."""
 
     @classmethod
     def start(cls, calibrated):
@@ -105,7 +108,8 @@ class Tally:
     def add(self, other):
         """Add the totals of a later chunk (its ``first`` counts only when none is kept yet)."""
         self.warning_counts = self.warning_counts + other.warning_counts
-        for name in ("returns_wrong", "reachable_poses", "aborted", "closure_checked", "faulty_calls"):
+        for name in ("returns_wrong", "reachable_poses", "aborted", "closure_checked", "faulty_calls",
+                     "direct_index_below"):
             setattr(self, name, getattr(self, name) + getattr(other, name))
         self.fault_bits |= other.fault_bits
         self.closure_worst = max(self.closure_worst, other.closure_worst)
@@ -145,6 +149,9 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected):
     tally.returns_wrong += int(np.count_nonzero(calls.returned != np.where(none_reachable, 1, 0)))
     tally.reachable_poses += int(np.count_nonzero(~none_reachable))
     tally.warning_counts += np.array([np.count_nonzero(expected.warnings == WARNINGS[kind]) for kind in WARNING_KINDS])
+    if expected.direct_index is not None and robot.direct_index_min is not None:
+        with np.errstate(invalid="ignore"):  # NaN where unreachable: not counted
+            tally.direct_index_below += int(np.count_nonzero(expected.direct_index <= robot.direct_index_min))
     closure_worst, closure_checked = closure_error(tally.calibrated, expected, calls.solutions)
     tally.closure_worst = max(tally.closure_worst, closure_worst)
     tally.closure_checked += closure_checked

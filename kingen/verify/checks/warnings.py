@@ -5,7 +5,7 @@ import numpy as np
 
 from ...diagnose import diagnose_warnings
 from ...routine import WARNING_NAMES, warnings_to_exercise
-from ..boundaries import RAYS
+from ..boundaries import DIRECT_INDEX, RAYS, threshold_boundaries
 from ..tally import WARNING_KINDS
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
@@ -35,6 +35,9 @@ class Warnings(VerifyCheck):
         if missing:
             detail += (f"; not exercised: {', '.join(missing)} (the robot can give it, no compared pose did): "
                        "widen the verification region or check the robot's limits")
+        threshold = threshold_boundaries(context.robot, boundary.get("boundaries_found", {}))
+        if threshold is not None:
+            detail += "; " + _threshold_exercise(context.robot.direct_index_min, tally.direct_index_below, threshold)
         check = Check("warnings", report.warning_mismatches == 0 and not missing, detail, judged=judged)
         if report.warning_mismatches:
             if tally.boundary_first is not None:
@@ -42,3 +45,15 @@ class Warnings(VerifyCheck):
                 reference_warnings = np.concatenate([reference_warnings, tally.boundary_first[4]])
             check.diagnoses = diagnose_warnings(warnings, reference_warnings, WARNING_NAMES)
         return [check]
+
+
+def _threshold_exercise(threshold, below, boundaries):
+    """What exercised the direct index's threshold (``threshold`` mm): ``below`` compared
+    postures at or under it, ``boundaries`` of it found along the rays. Never reached, it is
+    not exercised, which no routine could change: said, not failed (the warning itself is
+    judged by its other causes' poses, or missing)."""
+    if not below and not boundaries:
+        return (f"the direct-index threshold ({DIRECT_INDEX} {threshold:g} mm) not exercised: no compared "
+                f"posture's index is at or below it and no ray from the verification home met it")
+    return (f"the direct-index threshold ({DIRECT_INDEX} {threshold:g} mm): {below} compared postures at or "
+            f"below it, {boundaries} of its boundaries found along the rays")
