@@ -10,6 +10,9 @@ from dataclasses import dataclass
 
 from .errors import KingenError
 
+SCHEDULER_TIMEOUT = "20s"
+"""How long a Dask scheduler given by ``--scheduler`` may take to answer."""
+
 
 @dataclass(frozen=True)
 class Workers:
@@ -31,7 +34,8 @@ def _ignore_interrupts():
 def executor(workers=None, scheduler=None):
     """An open Workers: Dask's distributed executor on the cluster at ``scheduler`` (an address
     such as tcp://host:8786), else a pool of ``workers`` processes (default: the usable cores).
-    KingenError when ``distributed`` is not installed or no scheduler answers within 20 s."""
+    KingenError when ``distributed`` is not installed or no scheduler answers within
+    SCHEDULER_TIMEOUT."""
     if scheduler is not None:
         try:
             from distributed import Client
@@ -39,7 +43,7 @@ def executor(workers=None, scheduler=None):
             raise KingenError("--scheduler: Dask's 'distributed' package is not installed "
                               "(pip install 'kingen[cluster]')") from None
         try:
-            client = Client(scheduler, timeout="20s")
+            client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
         except OSError as error:
             raise KingenError(f"--scheduler: no Dask scheduler at {scheduler} ({error})") from None
         with client:

@@ -48,8 +48,12 @@ def test_processes_and_scheduler_are_exclusive():
     assert main(["verify", "hexapod", "--processes", "2", "--scheduler", "tcp://127.0.0.1:1"]) == 2
 
 
-def test_no_scheduler_is_bad_input(tmp_path):
+def test_no_scheduler_is_bad_input(tmp_path, monkeypatch, capsys):
+    """Nothing listens on port 9: after the scheduler timeout (20 s; 1 s here) a one-line error, exit 2."""
+    monkeypatch.setattr("kingen.executors.SCHEDULER_TIMEOUT", "1s")
     assert main(["verify", "hexapod", "--samples", "10", "-o", str(tmp_path), "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("kingen: error: --scheduler: no Dask scheduler at tcp://127.0.0.1:9 (Timed out") and err.count("\n") == 1, err
 
 
 def test_a_routine_that_crashes_a_worker_still_fails(tmp_path):
