@@ -1,6 +1,7 @@
 """Speed figures of kingen, printed as Markdown (for the README's 'Speed' section).
 
     python benchmarks/run.py [--calls N] [--verify-samples N] [--memory-samples N] [--robots ceart,hexapod,...]
+                             [--pytest-runs N]
 
 1. Each hand-written floor (benchmarks/floors/<robot>.c) must pass `kingen verify --source`.
 2. `kingen bench <robot> --floor ...` times the generated routine against its floor in
@@ -8,14 +9,21 @@
 3. `kingen verify <robot> --samples N` wall time and peak memory (of kingen and its
    children; with --memory-samples, the first robot once more with that many poses), and
    the start-up of `kingen --version` and of a command that reads a robot (`kingen render`).
+4. `pytest --kingen` on a copy of every shipped robot file (the pytest plugin, as a CI job
+   runs it): wall time cold (a new, empty kingen cache each run) and warm (the cache one
+   untimed run filled), in one process and with `-n 2` (when pytest-xdist is installed),
+   the four taken in turns, ``--pytest-runs`` rounds (0: skipped).
 
 Figures are printed, never asserted: the machine they ran on is printed with them.
 """
 
 import argparse
+import importlib.util
 import json
 import os
 import platform
+import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -25,6 +33,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 FLOORS = HERE / "floors"
+ROBOTS = HERE.parent / "robots"
 KINGEN = [sys.executable, "-m", "kingen.cli"]
 
 
@@ -37,6 +46,36 @@ def run(arguments):
     seconds = time.perf_counter() - start
     process.returncode = os.waitstatus_to_exitcode(status)
     return process.returncode, output, seconds, usage.ru_maxrss / 1024.0
+
+
+def pytest_plugin_times(scratch, rounds):
+    """{(cache, workers): [wall seconds]} and the item count of ``pytest --kingen`` on a copy of
+    the shipped robot files, cold (a new empty cache per run) and warm (the cache one untimed
+    run filled), serial and with ``-n 2`` (only when pytest-xdist is installed), taken in turns."""
+    folder = Path(scratch) / "plugin"
+    shutil.copytree(ROBOTS, folder / "robots")
+    # The folder named twice: once for --kingen, once as what pytest collects (nothing else).
+    command = [sys.executable, "-m", "pytest", "--kingen", "robots", "robots", "-q", "-p", "no:cacheprovider"]
+    variants = [("cold", ()), ("warm", ())]
+    if importlib.util.find_spec("xdist") is not None:
+        variants += [("cold", ("-n", "2")), ("warm", ("-n", "2"))]
+    warm_cache = folder / "warm-cache"
+    times, items = {}, None
+    for number in range(rounds + 1):  # run 0 fills the warm cache and is not counted
+        for cache, workers in variants:
+            cache_folder = warm_cache if cache == "warm" else Path(tempfile.mkdtemp(dir=folder))
+            start = time.perf_counter()
+            result = subprocess.run([*command, *workers], cwd=folder, capture_output=True, text=True,
+                                    env={**os.environ, "KINGEN_CACHE": str(cache_folder)})
+            seconds = time.perf_counter() - start
+            if cache == "cold":
+                shutil.rmtree(cache_folder)
+            if result.returncode != 0:
+                raise SystemExit(f"pytest --kingen failed (exit {result.returncode}):\n{result.stdout[-2000:]}")
+            items = int(re.search(r"(\d+) passed", result.stdout).group(1))
+            if number:
+                times.setdefault((cache, workers), []).append(seconds)
+    return times, items
 
 
 def machine():
@@ -54,6 +93,8 @@ def main():
     parser.add_argument("--robots", default=",".join(sorted(path.stem for path in FLOORS.glob("*.c"))))
     parser.add_argument("--memory-samples", type=int, default=0,
                         help="Also verify the first robot with this many poses (peak memory, e.g. 4000000).")
+    parser.add_argument("--pytest-runs", type=int, default=5,
+                        help="Rounds of pytest --kingen on the shipped robots, cold and warm (0: skip).")
     options = parser.parse_args()
     robots = options.robots.split(",")
     print(f"Machine: {machine()}\n")
@@ -88,6 +129,18 @@ def main():
         for arguments in (["--version"], ["render", robots[0], "-o", f"{scratch}/{robots[0]}-render"]):
             starts = [run(arguments)[2] for _ in range(5)]
             print(f"| kingen {' '.join(arguments[:2])} (start-up, median of 5) | 0 | {statistics.median(starts):.2f} | |")
+        if options.pytest_runs:
+            times, items = pytest_plugin_times(scratch, options.pytest_runs)
+            robot_files = len(list(ROBOTS.glob("*.yaml")))
+            print(f"\n| `pytest --kingen robots robots -q -p no:cacheprovider`, {robot_files} robot files, {items} items "
+                  f"| cold wall s (min / median of {options.pytest_runs}) | warm wall s (min / median) |")
+            print("| --- | --- | --- |")
+            for workers in ((), ("-n", "2")):
+                if ("cold", workers) not in times:
+                    continue
+                cold, warm = times["cold", workers], times["warm", workers]
+                print(f"| {' '.join(workers) or 'one process'} | {min(cold):.2f} / {statistics.median(cold):.2f} "
+                      f"| {min(warm):.2f} / {statistics.median(warm):.2f} |", flush=True)
 
 
 if __name__ == "__main__":
