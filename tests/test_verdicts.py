@@ -22,7 +22,7 @@ from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.report import Report
-from kingen.routine import WARNING_BAND, WARNINGS, Calls
+from kingen.routine import INPUTS_MODIFIED, WARNING_BAND, WARNINGS, Calls
 from kingen.verify.checks.jacobian import jacobian_check
 from kingen.verify.options import VerifyOptions
 from kingen.verify.tally import Tally, accumulate, posture_statistics, warnings_in_band
@@ -342,3 +342,83 @@ def test_a_threshold_no_pose_reaches_is_said_not_exercised(plugin):
     assert warnings.detail.endswith("the direct-index threshold (direct_index_min 29.3 mm) not exercised: no "
                                     "compared posture's index is at or below it and no ray from the verification "
                                     "home met it")
+
+
+def test_a_snapshot_of_angles_compares_them_a_turn_apart_as_equal(tmp_path):
+    """CEART's cranks (rad): a recorded snapshot of the reference, edited so that pose 0's
+    crank1 in posture 0 reads a full turn (2 pi) more, the same angle, and pose 1's crank2 in
+    posture 3 reads 1e-3 rad more, beyond the 1e-8 rad tolerance; the definition's digest
+    edited too. The reference itself, checked against it, differs in that one joint only, named
+    with its unit, and the digest is named by its first 16 hex digits."""
+    import json
+
+    from kingen.cli import main
+    from kingen.snapshot import load
+    from kingen.verify.checks.snapshot import check
+
+    robot = load_robot("ceart")
+    path = tmp_path / "ceart.golden.json"
+    assert main(["golden", "record", "ceart", "-o", str(path), "--samples", "3"]) == 0
+    data = json.loads(path.read_text())
+    assert data["joint_units"] == ["rad"] * 6 and data["tolerance"] == {"mm": 1e-6, "rad": 1e-8}
+    assert data["entries"][0]["warnings"][0] != UNREACHABLE and data["entries"][1]["warnings"][3] != UNREACHABLE
+    data["entries"][0]["joints"][0][0] += 2 * math.pi
+    moved = data["entries"][1]["joints"][1][3]
+    data["entries"][1]["joints"][1][3] = moved + 1e-3
+    data["definition_sha256"] = "0123456789abcdef" + "0" * 48
+    path.write_text(json.dumps(data))
+    snapshot = load(path, robot)
+
+    def call(t6):
+        reference = solve(robot, t6)
+        return reference.joints, reference.warnings
+
+    result = check(robot, snapshot, call)
+    assert not result.passed
+    assert result.detail == ("3 recorded poses x 64 postures (the reference, kingen 0.1.0): 1 joints beyond 1e-06 mm / "
+                             "1e-08 rad, 0 warnings differ")
+    assert result.diagnoses == [
+        f"pose 1 posture 3 crank2: recorded {moved + 1e-3:.9g}, now {moved:.9g} rad",
+        f"recorded from another definition (sha256 0123456789abcdef; the robot file has {robot.sha256[:16]}): "
+        "record it again if the change was meant"]
+
+
+def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
+    """accumulate keeps running totals over the chunks of a verification: the one rail's chunk
+    of the per-posture case (4 warnings differ, 2 joints wrong, 7 reachable poses) plus a pose
+    in its singular band (D = 1e-12, both joints 1e-8 mm off: within the band's bound), given
+    twice to the same report and tally, counts everything twice and keeps the same worst."""
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    poses = ([[50, 0, -50, 0, 0, 0]] * 4 + [[60, 0, -40, 0, 0, 0]] * 3 + [[150, 0, -50, 0, 0, 0]] * 2
+             + [[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0]])
+    t6 = t6_from_pose(poses)
+    expected = solve(robot, t6)
+    joints, warnings = expected.joints.copy(), expected.warnings.copy()
+    joints[0, 0, 1] += 2e-6
+    joints[1, 0, 0] -= 5e-7
+    joints[9, 0, :] += 1e-8
+    warnings[3, 0] = UNREACHABLE
+    warnings[4] = UNREACHABLE
+    warnings[7, 1] = GOOD
+    calls = calls_of(expected, warnings, joints)
+    calls.faults[5] = INPUTS_MODIFIED  # a faulty call whose outputs are still compared
+    calls.faults[8] = 1  # a call stopped at a faulting write (pose 8, unreachable): left out
+    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    tally = Tally.start(robot)
+    counts = []
+    for _ in range(2):
+        accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+        counts.append((report.warning_mismatches, report.warnings_in_band, report.singular_entries,
+                       report.singular_out_of_bound, tally.returns_wrong, tally.reachable_poses, tally.faulty_calls,
+                       tally.aborted, tally.closure_checked, tally.fault_bits, tally.posture_counts.tolist(),
+                       tally.warning_counts.tolist()))
+    # 4 warnings differ (poses 3, 4 twice, 7), none in a band; the singular pose's 2 entries in its
+    # band, within its bound; 8 reachable poses (0-6, 9); 2 faulty calls, 1 aborted; closure judges
+    # both branches of poses 0-6 (the singular pose's limb is in its band): 14
+    assert counts[0][:10] == (4, 0, 2, 0, 0, 8, 2, 1, 14, INPUTS_MODIFIED | 1)
+    assert counts[1][:9] == tuple(2 * value for value in counts[0][:9]) and counts[1][9] == counts[0][9]
+    assert counts[1][10] == (2 * np.array(counts[0][10])).tolist()
+    assert counts[1][11] == (2 * np.array(counts[0][11])).tolist()
+    assert report.max_abs_error_mm == pytest.approx(2e-6, rel=1e-6)
