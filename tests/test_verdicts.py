@@ -422,3 +422,20 @@ def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
     assert counts[1][10] == (2 * np.array(counts[0][10])).tolist()
     assert counts[1][11] == (2 * np.array(counts[0][11])).tolist()
     assert report.max_abs_error_mm == pytest.approx(2e-6, rel=1e-6)
+    # the poses kept for diagnoses are the compared ones, the aborted pose 8 left out
+    kept = np.arange(len(t6)) != 8
+    assert np.array_equal(tally.first[0], t6[kept]) and np.array_equal(tally.first[1], joints[kept])
+    assert np.array_equal(tally.first[3], expected.joints[kept])
+
+
+def test_a_chunk_whose_every_call_was_stopped_counts_only_its_faults(tmp_path):
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[50, 0, -50, 0, 0, 0], [60, 0, -40, 0, 0, 0]])
+    expected = solve(robot, t6)
+    calls = calls_of(expected)
+    calls.faults[:] = 1
+    report, tally = compared(robot, t6, calls, expected)
+    assert (tally.faulty_calls, tally.aborted, tally.fault_bits, tally.reachable_poses, tally.first) == (2, 2, 1, 0, None)
+    assert tally.warning_counts.sum() == 0 and tally.posture_counts.sum() == 0 and report.warning_mismatches == 0

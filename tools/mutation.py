@@ -41,6 +41,9 @@ EQUIVALENT = Path(__file__).resolve().parent / "mutation_equivalent.txt"
 _VERIFY = ["tests/test_verdicts.py", "tests/test_verify_bands.py", "tests/test_verify_columns.py"]
 _REPORTS = ["tests/test_verify_reports.py::test_reports_are_those_recorded"]
 """verify's recorded reports: every check's detail, count and statistic word for word (a few seconds)."""
+_CHILD = ["tests/test_verify_reports.py::test_a_dask_cluster_gives_the_report_local_processes_give",
+          "tests/test_hostile.py::test_what_a_constructor_prints_is_a_notice_and_stays_out_of_the_output"]
+"""A cluster's report against a local one, what a library prints as it loads (about 15 s)."""
 _C = ["tests/test_templates.py", "tests/test_golden_values.py", "tests/test_calibration.py", "tests/test_plugin.py"]
 TESTS = {
     # target (a glob of repository paths) -> the test files that cover it, fastest first
@@ -50,7 +53,7 @@ TESTS = {
                                             "tests/test_templates.py", "tests/test_forward.py", "tests/test_legacy.py"]
                                  + _REPORTS,
     "kingen/verify/[!t]*.py": _VERIFY + ["tests/test_verify_processes.py", "tests/test_exercised.py",
-                                         "tests/test_legacy.py"] + _REPORTS,
+                                         "tests/test_legacy.py"] + _REPORTS + _CHILD,
     "kingen/reference.py": ["tests/test_reference.py", "tests/test_verdicts.py", "tests/test_golden_values.py",
                             "tests/test_golden_lines.py", "tests/test_calibration.py", "tests/test_verify_bands.py"]
                            + _REPORTS,
