@@ -439,3 +439,77 @@ def test_a_chunk_whose_every_call_was_stopped_counts_only_its_faults(tmp_path):
     report, tally = compared(robot, t6, calls, expected)
     assert (tally.faulty_calls, tally.aborted, tally.fault_bits, tally.reachable_poses, tally.first) == (2, 2, 1, 0, None)
     assert tally.warning_counts.sum() == 0 and tally.posture_counts.sum() == 0 and report.warning_mismatches == 0
+
+
+def test_each_pytest_item_reports_its_checks():
+    """README, 'Robot definitions in your own pytest': the items build, interface, values,
+    warnings, closure, jacobian (golden[i] and snapshot report their own). values, warnings,
+    closure and jacobian report their namesake check; build the library's definition;
+    interface the loaded routine's contract (loading, the interface checks, return values,
+    buffers, determinism, a crash or a timeout). The round trip is in verify's report only."""
+    from kingen.hosts import get_host
+    from kingen.pytest_plugin import item_checks
+
+    assert item_checks(get_host("delmia")) == {
+        "build": ("definition",),
+        "interface": ("load", "get_kin_config", "kin_check_definition", "refusal", "non-finite T6", "return value",
+                      "buffers", "determinism", "crash", "timeout"),
+        "values": ("values",), "warnings": ("warnings",), "closure": ("closure",), "jacobian": ("jacobian",)}
+
+
+def values_context(tmp_path):
+    """The Values check's context after the plumb leg's twelve reachable poses (z 110 to 165 mm,
+    inside its travel) compared with the reference's own joints: every error 0."""
+    from kingen.verify.checks.base import Context
+
+    path = tmp_path / "plumb_leg.yaml"
+    path.write_text(PLUMB_LEG)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[0.0, 0.0, 110.0 + 5 * k, 0.0, 0.0, 0.0] for k in range(12)])
+    expected = solve(robot, t6)
+    report, tally = compared(robot, t6, calls_of(expected), expected)
+    return Context(robot=robot, options=VerifyOptions(), report=report, tally=tally)
+
+
+@pytest.mark.parametrize("field", ["max_abs_error_mm", "max_abs_error_rad"])
+def test_the_value_bounds_are_inclusive(tmp_path, field):
+    """'within 1e-9 mm and rad' (README): an error of exactly the bound passes, the next float
+    above it fails; so does one entry beyond its singular band's bound."""
+    from kingen.verify.checks.values import Values
+
+    context = values_context(tmp_path)
+    bound = context.report.tolerance_mm if field.endswith("mm") else context.report.tolerance_rad
+    setattr(context.report, field, bound)
+    assert Values().run(context)[0].passed
+    setattr(context.report, field, np.nextafter(bound, np.inf))
+    assert not Values().run(context)[0].passed
+    setattr(context.report, field, 0.0)
+    context.report.singular_out_of_bound = 1
+    assert not Values().run(context)[0].passed
+
+
+class Recorder(float):
+    """A bound that records the value compared with it (``value <= bound`` asks the bound first)."""
+
+    seen = []
+
+    def __ge__(self, other):
+        Recorder.seen.append(other)
+        return float(self) >= other
+
+
+def test_the_jacobian_tolerance_is_inclusive(monkeypatch):
+    """The reference's worst relative difference on the Stewart-Gough example, recorded, then
+    made the tolerance: the check passes at it and fails at the next float below."""
+    from kingen.verify.checks import jacobian as module
+
+    robot = load_robot("stewart_gough_example")
+    Recorder.seen.clear()
+    monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", Recorder(1e-6))
+    assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    worst = Recorder.seen[-1]
+    assert 0.0 < worst < 1e-6
+    monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", worst)
+    assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", np.nextafter(worst, 0.0))
+    assert not jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
