@@ -189,11 +189,16 @@ def test_positive_definiteness_after_a_shift_agrees_with_lapack(scale):
         assert decided.any() and not decided.all() or shift == 0.0
 
 
-@pytest.mark.parametrize("smallest_pivot, singular", [(1e-13, True), (1e-11, False)])
+BLOCK_LIMIT = 1e-12 * (2.0 / 3.0) ** 3
+"""diag(1, 1, p)'s limit: 1e-12 x (trace / 3)^3, the trace 2 + p within 1e-12 of 2."""
+
+
+@pytest.mark.parametrize("smallest_pivot, singular", [(1e-13, True), (1e-11, False), (0.9 * BLOCK_LIMIT, True),
+                                                      (1.1 * BLOCK_LIMIT, False)])
 def test_a_force_block_is_translation_singular_below_1e_12_of_its_trace_cubed(smallest_pivot, singular):
     """M_vv = diag(1, 1, p) (trace about 2, (trace / 3)^3 = 0.296): singular, index 0, when the
-    product of its pivots p is below 1e-12 x 0.296; else the Schur complement's index, here
-    M_ww = 4 I with no coupling: sqrt(4) = 2 mm."""
+    product of its pivots p is below 1e-12 x 0.296 (BLOCK_LIMIT; 10 % either side of it too);
+    else the Schur complement's index, here M_ww = 4 I with no coupling: sqrt(4) = 2 mm."""
     gram = np.zeros((6, 6))
     gram[:3, :3] = np.diag([1.0, 1.0, smallest_pivot])
     gram[3:, 3:] = 4.0 * np.eye(3)
@@ -217,3 +222,19 @@ def test_a_crank_whose_platform_point_lies_on_its_axis_is_unreachable_with_finit
     solution = limb.solve(np.array([[200.0, 50.0, 0.0]]))
     assert solution.radicand.tolist() == [-1.0]
     assert np.all(np.isfinite(solution.values))
+
+
+def test_newton_steps_are_at_most_a_fifth_of_the_size_and_of_a_turn():
+    """forward._limited: a step of the robot's whole size shrinks to a fifth of it, one of a
+    whole turn to a fifth of a turn (0.4 pi), every coordinate by the same factor (the
+    direction kept); a step within both limits is kept as it is."""
+    from kingen.forward import _limited
+
+    size = 500.0
+    steps = np.array([[size, 0.0, 50.0, 0.0, 0.0, 0.0],
+                      [0.0, 0.0, 0.0, 0.0, 2 * math.pi, 0.1],
+                      [10.0, -20.0, 30.0, 0.1, -0.2, 0.3]])
+    limited = _limited(steps, size, np.ones(6, dtype=bool))
+    assert np.allclose(limited[0], [size / 5, 0.0, 10.0, 0.0, 0.0, 0.0], rtol=1e-15, atol=0)
+    assert np.allclose(limited[1], [0.0, 0.0, 0.0, 0.0, 0.4 * math.pi, 0.02], rtol=1e-15, atol=0)
+    assert np.array_equal(limited[2], steps[2])
