@@ -103,3 +103,57 @@ def test_non_finite_t6_is_unreachable_with_zero_joints():
     assert np.all(solution.warnings[1] == UNREACHABLE)
     assert np.all(solution.joints[1] == 0.0)
     assert np.all(solution.warnings[0] != UNREACHABLE)
+
+
+def test_a_rail_near_its_singular_band_keeps_its_small_root(tmp_path):
+    """One rail along -z through the origin, link 100 mm, platform point at the pose: at
+    (x, 0, z) its carriage positions are -z -/+ sqrt(100^2 - x^2) (u = -z). At
+    x = 100 sqrt(1 - 1e-5) the root is sqrt(1e4 x 1e-5) = 0.316 mm (a radicand of 0.1 mm^2,
+    D = 1e-5 normalised): both joints must keep it, however small."""
+    import math
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
+                    "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
+                    "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    robot = load_robot(path)
+    x = 100 * math.sqrt(1 - 1e-5)
+    root = math.sqrt(100 ** 2 - x ** 2)
+    assert root == pytest.approx(math.sqrt(0.1), rel=1e-6)
+    joints = solve(robot, t6_from_pose([[x, 0, -50, 0, 0, 0]])).joints[0, 0]
+    assert joints == pytest.approx([50 - root, 50 + root], rel=1e-9)
+
+
+def test_a_leg_of_no_reference_length_blames_no_absolute_length():
+    """A leg whose reference length is 0 already reports absolute lengths: an offset of any
+    size, even within 1e-9 of that 0, is a wrong reference length, never 'absolute strut
+    length' (which needs a positive reference length it equals)."""
+    from kingen.limbs.leg import Leg
+
+    leg = Leg(model="leg", base_point=[0, 0, 0], platform_point=[0, 0, 0], reference_length=0)
+    for offset in (5e-10, 22.913):
+        assert leg.explain_offset(offset).startswith("a wrong reference length")
+    positive = Leg(model="leg", base_point=[0, 0, 0], platform_point=[0, 0, 0], reference_length=399.413)
+    assert positive.explain_offset(399.413 + 1e-7).startswith("the routine reports the leg's absolute strut length")
+
+
+def test_each_model_names_the_collision_radius_of_its_passive_link():
+    """README, robot file: collision: {leg_radius, rod_radius, crank_radius}; a leg is its own
+    passive link (leg_radius), a crank's and a rail's link is a rod (rod_radius). CEART's
+    rods of 15 mm radius: every rod clearance is 30 mm less than with no radius."""
+    from dataclasses import replace
+
+    from kingen.collision import clearances
+    from kingen.limbs.crank import Crank
+    from kingen.limbs.leg import Leg
+    from kingen.limbs.rail import Rail
+
+    assert (Leg.passive_radius, Crank.passive_radius, Rail.passive_radius) == ("leg_radius", "rod_radius", "rod_radius")
+    robot = load_robot("ceart")
+    assert robot.collision == {"rod_radius": 15, "crank_radius": 15.5}
+    _, t6 = random_t6(robot, 5, 3)
+    expected = solve(robot, t6)
+    joints = expected.joints[:, :, 0]
+    with_radius, _ = clearances(robot, expected.points, joints)
+    without, _ = clearances(replace(robot, collision={"crank_radius": 15.5}), expected.points, joints)
+    assert with_radius == pytest.approx(without - 30.0, abs=1e-9)
