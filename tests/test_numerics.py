@@ -238,3 +238,15 @@ def test_newton_steps_are_at_most_a_fifth_of_the_size_and_of_a_turn():
     assert np.allclose(limited[0], [size / 5, 0.0, 10.0, 0.0, 0.0, 0.0], rtol=1e-15, atol=0)
     assert np.allclose(limited[1], [0.0, 0.0, 0.0, 0.0, 0.4 * math.pi, 0.02], rtol=1e-15, atol=0)
     assert np.array_equal(limited[2], steps[2])
+
+
+def test_forward_results_are_values_that_cannot_change():
+    """AssemblyModes and Assembly are frozen: a result handed out cannot be altered afterwards."""
+    import dataclasses
+
+    modes = forward.AssemblyModes(found=[], exhaustive=True, method="closed form")
+    assembly = forward.Assembly(pose=np.zeros(6), residual_mm=0.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        modes.exhaustive = False
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        assembly.residual_mm = 1.0
