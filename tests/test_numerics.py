@@ -263,3 +263,14 @@ def test_a_singular_leading_minor_is_not_positive_definite_whatever_the_last_rou
     entries = as_entries(matrix[None])
     assert _shifted(entries, 0.0)[1] > 0  # the rounded determinant alone would say positive
     assert not _positive_definite(entries, 0.0)[0]
+
+
+@pytest.mark.parametrize("index, name", list(enumerate(["x", "y", "z", "roll", "pitch", "yaw"])))
+def test_each_named_coordinate_frees_its_own_pose_coordinate(index, name):
+    """README, robot file: forward: {free: [...]} names pose coordinates x, y, z, roll, pitch,
+    yaw (the pose's order): freeing one name frees that coordinate alone; naming none frees all."""
+    from dataclasses import replace
+
+    robot = load_robot("exechon")
+    assert forward.free_mask(replace(robot, forward_free=(name,))).tolist() == [k == index for k in range(6)]
+    assert forward.free_mask(replace(robot, forward_free=None)).tolist() == [True] * 6
