@@ -274,3 +274,16 @@ def test_each_named_coordinate_frees_its_own_pose_coordinate(index, name):
     robot = load_robot("exechon")
     assert forward.free_mask(replace(robot, forward_free=(name,))).tolist() == [k == index for k in range(6)]
     assert forward.free_mask(replace(robot, forward_free=None)).tolist() == [True] * 6
+
+
+def test_three_spheres_missing_by_exactly_the_allowance_still_meet():
+    """Trilateration accepts a negative z^2 down to -1e-9 r0^2 inclusive (rounding of spheres
+    that touch). Centres 0, (2^17, 0, 0), (0, 4, 0) and radii 1e5, r1, 1e5: y = 16 / 8 = 2
+    exactly, and r1 (found by a search over consecutive floats) makes x = 100000.00003 with
+    r0^2 - x^2 - y^2 = -10 = -1e-9 r0^2 exactly in floating point: one point, at z = 0."""
+    centres = np.array([[0.0, 0.0, 0.0], [2.0 ** 17, 0.0, 0.0], [0.0, 4.0, 0.0]])
+    radii = np.array([1e5, 31071.999873450026, 1e5])
+    x = (radii[0] ** 2 - radii[1] ** 2 + centres[1, 0] ** 2) / (2 * centres[1, 0])
+    assert (x, radii[0] ** 2 - x ** 2 - 2.0 ** 2) == (100000.00003, -1e-9 * radii[0] ** 2)
+    found = _three_spheres(centres, radii)
+    assert len(found) == 1 and np.array_equal(found[0], [100000.00003, 2.0, 0.0])
