@@ -386,8 +386,9 @@ def test_a_snapshot_of_angles_compares_them_a_turn_apart_as_equal(tmp_path):
 def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
     """accumulate keeps running totals over the chunks of a verification: the one rail's chunk
     of the per-posture case (4 warnings differ, 2 joints wrong, 7 reachable poses) plus a pose
-    in its singular band (D = 1e-12, both joints 1e-8 mm off: within the band's bound), given
-    twice to the same report and tally, counts everything twice and keeps the same worst."""
+    in its singular band (D = 1e-12, one joint 1e-8 mm off, within the band's bound, the other
+    1e-5 mm, beyond it), given twice to the same report and tally, counts everything twice and
+    keeps the same worst."""
     path = tmp_path / "one_rail.yaml"
     path.write_text(RAIL)
     robot = load_robot(path)
@@ -398,7 +399,8 @@ def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
     joints, warnings = expected.joints.copy(), expected.warnings.copy()
     joints[0, 0, 1] += 2e-6
     joints[1, 0, 0] -= 5e-7
-    joints[9, 0, :] += 1e-8
+    joints[9, 0, 0] += 1e-8  # within the singular pose's bound, 16 eps x 100 / sqrt(1e-12) = 3.6e-6 mm
+    joints[9, 0, 1] += 1e-5  # beyond it
     warnings[3, 0] = UNREACHABLE
     warnings[4] = UNREACHABLE
     warnings[7, 1] = GOOD
@@ -415,9 +417,9 @@ def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
                        tally.aborted, tally.closure_checked, tally.fault_bits, tally.posture_counts.tolist(),
                        tally.warning_counts.tolist()))
     # 4 warnings differ (poses 3, 4 twice, 7), none in a band; the singular pose's 2 entries in its
-    # band, within its bound; 8 reachable poses (0-6, 9); 2 faulty calls, 1 aborted; closure judges
-    # both branches of poses 0-6 (the singular pose's limb is in its band): 14
-    assert counts[0][:10] == (4, 0, 2, 0, 0, 8, 2, 1, 14, INPUTS_MODIFIED | 1)
+    # band, one beyond its bound; 8 reachable poses (0-6, 9); 2 faulty calls, 1 aborted; closure
+    # judges both branches of poses 0-6 (the singular pose's limb is in its band): 14
+    assert counts[0][:10] == (4, 0, 2, 1, 0, 8, 2, 1, 14, INPUTS_MODIFIED | 1)
     assert counts[1][:9] == tuple(2 * value for value in counts[0][:9]) and counts[1][9] == counts[0][9]
     assert counts[1][10] == (2 * np.array(counts[0][10])).tolist()
     assert counts[1][11] == (2 * np.array(counts[0][11])).tolist()
@@ -513,3 +515,72 @@ def test_the_jacobian_tolerance_is_inclusive(monkeypatch):
     assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
     monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", np.nextafter(worst, 0.0))
     assert not jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+
+
+def test_closure_leaves_out_a_link_of_at_most_zero_length_inclusive(leg):
+    """The plumb leg (reference length 0: its passive link is the joint itself) at z = 150 mm,
+    answered with a joint of exactly ZERO_LENGTH x the robot's size: a link that short has no
+    direction and is not judged; the next float above it is, and misses closing by about 150 mm."""
+    from kingen.verify.tally import ZERO_LENGTH, closure_error
+
+    expected = solve(leg, t6_from_pose([[0.0, 0.0, 150.0, 0.0, 0.0, 0.0]]))
+    shortest = ZERO_LENGTH * leg.size_mm
+    assert closure_error(leg, expected, np.full_like(expected.joints, shortest)) == (0.0, 0)
+    worst, judged = closure_error(leg, expected, np.full_like(expected.joints, np.nextafter(shortest, np.inf)))
+    assert judged == 1 and worst == pytest.approx(150.0 / shortest, rel=1e-6)
+
+
+def test_a_singular_entry_exactly_at_its_bound_is_right(tmp_path):
+    """The one rail at D = 1e-12 (x = 100 sqrt(1 - 1e-12)), its reference joints replaced by 0
+    (a constructed reference: the comparison, not the solver, is under test), so a routine
+    answering exactly the band's bound b errs by exactly b: within it, right; the next float
+    above b is beyond it, wrong, and counted out of bound."""
+    from kingen.verify.tally import singular_bounds
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0]])
+    solved = solve(robot, t6)
+    expected = replace(solved, branch_joints=np.zeros_like(solved.branch_joints))  # every posture's joint 0
+    bound = singular_bounds(robot, expected, np.array([1e-9]))[0, 0]
+    assert bound > 1e-9
+    for answer, wrong in ((bound, 0), (np.nextafter(bound, np.inf), 1)):
+        report, tally = compared(robot, t6, calls_of(expected, None, np.full_like(expected.joints, answer)), expected)
+        statistics = posture_statistics(robot, tally)
+        assert [(row["right"], row["wrong"]) for row in statistics] == [(1 - wrong, wrong)] * 2
+        assert (report.singular_entries, report.singular_out_of_bound) == (2, 2 * wrong)
+
+
+class GoodOrUnreachable:
+    """``plugin`` as a routine that tells only good from unreachable (a LinuxCNC module without
+    a status pin): its other warnings read as WARN_GOOD_SOLUTION."""
+
+    warning_vocabulary = ("WARN_GOOD_SOLUTION", "WARN_UNREACHABLE")
+
+    def __init__(self, plugin):
+        self._plugin = plugin
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        calls.warnings[calls.warnings != UNREACHABLE] = GOOD
+        return calls
+
+
+def test_a_routine_of_fewer_warnings_is_judged_on_those_and_the_detail_says_so(plugin):
+    """The hexapod's reference gives WARN_JOINT_LIMITS_EXCEEDED and WARN_SINGULAR_SOLUTION
+    besides good and unreachable; a routine that tells only good from unreachable is judged
+    by the reference read the same way: no mismatch, and the detail, after its counts, says
+    which warnings the routine tells."""
+    from kingen.verify import verify
+
+    robot, routine = plugin("hexapod")
+    report = verify(robot, GoodOrUnreachable(routine), VerifyOptions(samples=200))
+    warnings = next(check for check in report.checks if check.name == "warnings")
+    assert warnings.passed and report.warning_mismatches == 0
+    assert warnings.detail.startswith("0 mismatches, 0 inside the tolerance band, over ")
+    assert ("; the routine tells only WARN_GOOD_SOLUTION, WARN_UNREACHABLE (the reference's others read as good)"
+            in warnings.detail)

@@ -68,7 +68,7 @@ TESTS = {
     "kingen/robot_file.py": ["tests/test_numerics.py", "tests/test_model.py", "tests/test_limits.py"],
     "kingen/text.py": ["tests/test_model.py", "tests/test_hostile_outputs.py", "tests/test_limits.py"],
     "kingen/isolation.py": ["tests/test_hostile.py"],
-    "templates/limbs/*.c.j2": _C + _REPORTS,
+    "templates/limbs/*.c.j2": _C + _REPORTS + ["tests/test_linuxcnc.py"],
     "kingen/hosts/delmia/templates/kin_robot.c.j2": _C + ["tests/test_exercised.py"] + _REPORTS,
 }
 C_ROBOTS = {"templates/limbs/leg.c.j2": "hexapod", "templates/limbs/rail.c.j2": "tau",
