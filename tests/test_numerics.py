@@ -287,3 +287,16 @@ def test_three_spheres_missing_by_exactly_the_allowance_still_meet():
     assert (x, radii[0] ** 2 - x ** 2 - 2.0 ** 2) == (100000.00003, -1e-9 * radii[0] ** 2)
     found = _three_spheres(centres, radii)
     assert len(found) == 1 and np.array_equal(found[0], [100000.00003, 2.0, 0.0])
+
+
+def test_the_multi_start_search_spans_search_times_the_region_and_at_most_half_a_turn():
+    """forward.search_region: centred on the verification home (mm, radians), half widths
+    ``search`` times the region's (angles in radians), angles capped at pi (a half turn)."""
+    robot = load_robot("exechon")
+    region = robot.verification
+    home, half = forward.search_region(robot, 2.0)
+    assert np.array_equal(home, np.concatenate([region.home[:3], np.radians(region.home[3:])]))
+    assert np.array_equal(half[:3], 2.0 * np.asarray(region.range[:3], dtype=float))
+    assert np.array_equal(half[3:], np.minimum(2.0 * np.radians(region.range[3:]), np.pi))
+    _, wide = forward.search_region(robot, 1e6)
+    assert wide[3:].tolist() == [np.pi] * 3 and np.all(wide[:3] == 1e6 * np.asarray(region.range[:3], dtype=float))

@@ -584,3 +584,16 @@ def test_a_routine_of_fewer_warnings_is_judged_on_those_and_the_detail_says_so(p
     assert warnings.detail.startswith("0 mismatches, 0 inside the tolerance band, over ")
     assert ("; the routine tells only WARN_GOOD_SOLUTION, WARN_UNREACHABLE (the reference's others read as good)"
             in warnings.detail)
+
+
+def test_every_check_needs_one_of_the_stages_verify_has():
+    """checks.base.NEEDS lists what a check can need, in the order verify has it; every check a
+    host composes needs one of them, and the library checks come first (before anything loads)."""
+    from kingen.hosts import get_host
+    from kingen.verify.checks.base import NEEDS
+
+    assert NEEDS == ("library", "routine", "sampled calls", "compared poses", "golden values", "snapshot")
+    for name in ("delmia", "linuxcnc"):
+        needs = [check.needs for check in get_host(name).checks]
+        assert set(needs) <= set(NEEDS), name
+        assert needs[0] == "library"
