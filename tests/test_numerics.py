@@ -300,3 +300,40 @@ def test_the_multi_start_search_spans_search_times_the_region_and_at_most_half_a
     assert np.array_equal(half[3:], np.minimum(2.0 * np.radians(region.range[3:]), np.pi))
     _, wide = forward.search_region(robot, 1e6)
     assert wide[3:].tolist() == [np.pi] * 3 and np.all(wide[:3] == 1e6 * np.asarray(region.range[:3], dtype=float))
+
+
+def test_newton_stops_at_its_first_step_within_1e_13_of_the_size(monkeypatch):
+    """forward.CONVERGED: Newton stops when no step exceeds 1e-13 of the robot's size (mm) or of a
+    radian, and not before. Newton's steps from starts near the Stewart-Gough example's home
+    are recorded (|step| / scale, translations then rotations); among seeded starts one takes a
+    step whose rotations reach between 1e-13 and 2e-13 rad, its translations within 1e-13 of the
+    size: Newton goes on after it and stops at the next, the first wholly within 1e-13, which is
+    not 0 (so a stricter stop would go on)."""
+    from kingen.conventions import t6_from_pose
+    from kingen.reference import solve
+
+    robot = load_robot("stewart_gough_example")
+    home = np.asarray(robot.verification.home, dtype=float)
+    target = np.concatenate([home[:3], np.radians(home[3:])])
+    joints = solve(robot, t6_from_pose([home])).joints[0, :, 0]
+    free = forward.free_mask(robot)
+    scale = np.array([robot.size_mm] * 3 + [1.0] * 3)
+    limited, steps = forward._limited, []
+
+    def recorded(step, size_mm, free):
+        step = limited(step, size_mm, free)
+        steps.append(np.abs(step[0]) / scale[free])
+        return step
+
+    monkeypatch.setattr(forward, "_limited", recorded)
+    rng = np.random.default_rng(1)
+    for _ in range(100):
+        steps.clear()
+        start = target + rng.normal(size=6) * np.where(scale > 1, 1e-3 * robot.size_mm, 1e-3) * rng.uniform(0.1, 10)
+        forward.newton(robot, start[None], joints[None], free)
+        if any(1e-13 < size[3:].max() <= 2e-13 and size[:3].max() <= 1e-13 for size in steps):
+            break
+    else:
+        pytest.fail("no start took a step of 1e-13 to 2e-13 rad with translations within 1e-13")
+    largest = [size.max() for size in steps]
+    assert 0.0 < largest[-1] <= 1e-13 and all(size > 1e-13 for size in largest[:-1]), largest

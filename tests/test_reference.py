@@ -157,3 +157,19 @@ def test_each_model_names_the_collision_radius_of_its_passive_link():
     with_radius, _ = clearances(robot, expected.points, joints)
     without, _ = clearances(replace(robot, collision={"crank_radius": 15.5}), expected.points, joints)
     assert with_radius == pytest.approx(without - 30.0, abs=1e-9)
+
+
+def test_a_parameter_in_degrees_is_scaled_to_radians_and_lengths_are_not():
+    """LimbModel.calibration_scale: what a dialog value of a parameter is multiplied by, from
+    its unit word in ``calibratable`` (README: a crank's zero_offset in degrees, lengths in mm)."""
+    import math
+
+    from kingen.limbs.crank import Crank
+    from kingen.limbs.rail import Rail
+
+    crank = load_robot("ceart").limbs[0]
+    assert isinstance(crank, Crank)
+    assert crank.calibration_scale("zero_offset") == math.pi / 180.0
+    assert crank.calibration_scale("crank_length") == crank.calibration_scale("rod_length") == 1.0
+    rail = load_robot("tau").limbs[0]
+    assert isinstance(rail, Rail) and rail.calibration_scale("origin") == rail.calibration_scale("link_length") == 1.0
