@@ -173,3 +173,18 @@ def test_a_parameter_in_degrees_is_scaled_to_radians_and_lengths_are_not():
     assert crank.calibration_scale("crank_length") == crank.calibration_scale("rod_length") == 1.0
     rail = load_robot("tau").limbs[0]
     assert isinstance(rail, Rail) and rail.calibration_scale("origin") == rail.calibration_scale("link_length") == 1.0
+
+
+def test_a_crank_whose_knees_are_equally_far_names_its_branches_by_turn():
+    """Crank.branch_labels: where both knees are as far from the centre axis (here the axis
+    through the crank's own pivot, the platform point level with the pivot and 650 mm out
+    along the crank's plane, so the branches are mirror images: angles +/- the same half
+    angle), the branches are named by which turns the crank further."""
+    import math
+
+    limb = load_robot("ceart").limbs[0]
+    beta = math.radians(limb.crank_direction)
+    pivot = np.asarray(limb.pivot, dtype=float)
+    point = pivot + 650.0 * np.array([math.cos(beta), math.sin(beta), 0.0])
+    assert limb.branch_labels(point, pivot) == ("crank turned further in the joint's positive sense",
+                                                "crank turned less far")
