@@ -597,3 +597,47 @@ def test_every_check_needs_one_of_the_stages_verify_has():
         needs = [check.needs for check in get_host(name).checks]
         assert set(needs) <= set(NEEDS), name
         assert needs[0] == "library"
+
+
+def test_a_warning_the_robot_can_give_but_no_pose_gave_fails_and_says_what_to_do(tmp_path):
+    """The plumb leg's twelve poses inside its travel (values_context: all WARN_GOOD_SOLUTION),
+    no boundary poses: the travel limits' warning, which the leg can give, was never
+    exercised, so warnings fails and says how to exercise it."""
+    from kingen.verify.checks.warnings import Warnings
+
+    context = values_context(tmp_path)
+    [check] = Warnings().run(context)
+    assert not check.passed and check.judged == 12
+    assert check.detail == (
+        "0 mismatches, 0 inside the tolerance band, over 12 postures of 12 sampled poses and 0 poses beside warnings' "
+        "boundaries (boundaries found along 64 rays: none sought); the reference's warnings: 12 WARN_GOOD_SOLUTION; "
+        "not exercised: WARN_JOINT_LIMITS_EXCEEDED (the robot can give it, no compared pose did): widen the "
+        "verification region or check the robot's limits")
+
+
+@pytest.mark.parametrize("tolerance, places", [(0.0003, 4), (0.02, 2), (5.0, 0), (0.0, 6)])
+def test_a_golden_tolerance_is_shown_to_its_leading_digit(tolerance, places):
+    """golden.decimals (its docstring): 0.0003 -> 4, 0.02 -> 2, 5 -> 0; no tolerance (exact) -> 6."""
+    from kingen.verify.checks.golden import decimals
+
+    assert decimals(tolerance) == places
+
+
+def test_a_library_built_from_another_definition_is_named_with_both_digests(tmp_path):
+    """The one rail built, then its file changed by one comment line: definition fails, naming
+    the library's digest, the file's, and what to do, word for word."""
+    import kingen
+    from kingen.hosts.delmia.build import build_plugin
+    from kingen.verify.checks.definition import definition_check
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    built = build_plugin(load_robot(path), tmp_path / "build")
+    old = load_robot(path).sha256
+    path.write_text(RAIL + "# reviewed again\n")
+    robot = load_robot(path)
+    check = definition_check(robot, built.library)
+    assert not check.passed and old != robot.sha256
+    assert check.detail == (f"the library says it was built by kingen {kingen.__version__} from another definition of "
+                            f"'one_rail' (sha256 {old[:16]}), one_rail.yaml has {robot.sha256[:16]}: rebuild it from "
+                            "the reviewed file")
