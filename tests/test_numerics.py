@@ -337,3 +337,20 @@ def test_newton_stops_at_its_first_step_within_1e_13_of_the_size(monkeypatch):
         pytest.fail("no start took a step of 1e-13 to 2e-13 rad with translations within 1e-13")
     largest = [size.max() for size in steps]
     assert 0.0 < largest[-1] <= 1e-13 and all(size > 1e-13 for size in largest[:-1]), largest
+
+
+def test_a_multi_start_search_is_never_called_exhaustive_and_says_where_it_looked():
+    """The Exechon (free: z, roll, pitch; fewer than six limbs, no closed form) at its home:
+    Newton from the pose itself, the home and STARTS seeded starts over SEARCH = 2 times its
+    verification region (home (0, 50, -1250) mm, 0 deg; range 200 mm in z, 10 deg): not
+    exhaustive, and the region it searched is named coordinate by coordinate."""
+    from kingen.conventions import t6_from_pose
+    from kingen.reference import solve
+
+    robot = load_robot("exechon")
+    home = np.asarray(robot.verification.home, dtype=float)
+    joints = solve(robot, t6_from_pose([home])).joints[0, :, 0]
+    modes = forward.assemblies(robot, joints, np.concatenate([home[:3], np.radians(home[3:])]))
+    assert not modes.exhaustive and len(modes.found) >= 1
+    assert modes.method == (f"not exhaustive: Newton from {forward.STARTS + 2} starts over 2 x the verification region "
+                            "(z -1250 +- 400, roll 0 +- 20, pitch 0 +- 20; mm, deg); --search widens it")
