@@ -140,7 +140,8 @@ def test_a_leg_of_no_reference_length_blames_no_absolute_length():
 def test_each_model_names_the_collision_radius_of_its_passive_link():
     """README, robot file: collision: {leg_radius, rod_radius, crank_radius}; a leg is its own
     passive link (leg_radius), a crank's and a rail's link is a rod (rod_radius). CEART's
-    rods of 15 mm radius: every rod clearance is 30 mm less than with no radius."""
+    rods of 15 mm radius: every rod clearance is 30 mm less than with no radius; so for its
+    cranks' 15.5 mm, 31 mm."""
     from dataclasses import replace
 
     from kingen.collision import clearances
@@ -157,6 +158,10 @@ def test_each_model_names_the_collision_radius_of_its_passive_link():
     with_radius, _ = clearances(robot, expected.points, joints)
     without, _ = clearances(replace(robot, collision={"crank_radius": 15.5}), expected.points, joints)
     assert with_radius == pytest.approx(without - 30.0, abs=1e-9)
+    # and its cranks (from pivot to tip) of 15.5 mm radius: every crank clearance 31 mm less
+    _, cranks = clearances(robot, expected.points, joints)
+    _, bare = clearances(replace(robot, collision={"rod_radius": 15}), expected.points, joints)
+    assert np.all(np.isfinite(cranks)) and cranks == pytest.approx(bare - 31.0, abs=1e-9)
 
 
 def test_a_parameter_in_degrees_is_scaled_to_radians_and_lengths_are_not():
