@@ -354,3 +354,18 @@ def test_a_multi_start_search_is_never_called_exhaustive_and_says_where_it_looke
     assert not modes.exhaustive and len(modes.found) >= 1
     assert modes.method == (f"not exhaustive: Newton from {forward.STARTS + 2} starts over 2 x the verification region "
                             "(z -1250 +- 400, roll 0 +- 20, pitch 0 +- 20; mm, deg); --search widens it")
+
+
+def test_the_seeded_starts_spread_over_the_whole_search_region():
+    """forward.starts: ``near`` first, then the home, then STARTS seeded poses drawn uniformly
+    over home +/- the search region's half widths: inside it, and on both sides of home in
+    every coordinate (256 uniform draws all on one side would have odds of 2^-256)."""
+    robot = load_robot("exechon")
+    home, half = forward.search_region(robot)
+    near = home + 0.1 * half
+    begin = forward.starts(robot, near)
+    assert len(begin) == forward.STARTS + 2
+    assert np.array_equal(begin[0], near) and np.array_equal(begin[1], home)
+    drawn = begin[2:]
+    assert np.all(np.abs(drawn - home) <= half)
+    assert np.all(drawn.min(axis=0) < home) and np.all(drawn.max(axis=0) > home)

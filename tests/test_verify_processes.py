@@ -185,3 +185,22 @@ def test_a_library_verified_in_a_child_reports_its_progress_chunk_by_chunk(built
                             progress=done.append, host=get_host("delmia"))
     assert report.passed
     assert done == [size, 2 * size, 3 * size, 3 * size + 5]
+
+
+def test_a_chunk_a_cluster_lost_is_compared_here_keeping_the_first_chunks_poses(plugin):
+    """kingen.verify.cluster: a chunk whose job failed on the cluster is drawn and compared in
+    this process, the same poses as there; the first chunk (poses from 0) keeps its poses for
+    the diagnoses as it would have on the worker, a later one does not."""
+    from types import SimpleNamespace
+
+    from kingen.verify.cluster import ClusterChunks
+    from kingen.verify.processes import set_chunk_job
+
+    robot, routine = plugin("tau")
+    options = VerifyOptions(samples=40, processes=1)
+    set_chunk_job(robot, robot, routine, options)
+    chunks = ClusterChunks.__new__(ClusterChunks)
+    chunks._local, chunks._job = (robot, robot, routine, options), SimpleNamespace(options=options)
+    first, later = chunks._compare_here(0, 20), chunks._compare_here(20, 20)
+    assert first.tally.first is not None and len(first.tally.first[0]) == 20
+    assert later.tally.first is None and later.tally.reachable_poses > 0
