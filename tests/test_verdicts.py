@@ -641,3 +641,23 @@ def test_a_library_built_from_another_definition_is_named_with_both_digests(tmp_
     assert check.detail == (f"the library says it was built by kingen {kingen.__version__} from another definition of "
                             f"'one_rail' (sha256 {old[:16]}), one_rail.yaml has {robot.sha256[:16]}: rebuild it from "
                             "the reviewed file")
+
+
+def test_boundary_poses_of_a_tiny_region_lie_just_outside_the_band(tmp_path):
+    """The plumb leg's lower travel limit (z = 100 mm) 5e-5 mm below a verification home whose
+    region is 2.5e-5 mm tall: the rays (at most 1e-4 mm, REACH times the half-width) that
+    cross the limit are so short that only the fourth offset, 1e-4 of a ray (at most 1e-8
+    mm), clears the 1e-9 mm band; each pose then lies between 1e-9 and about 1.1e-8 mm from
+    the limit (kingen.verify.boundaries: offsets tried in order, bisected to a tenth of the
+    smallest), on either side."""
+    from kingen.verify.boundaries import boundary_poses
+
+    path = tmp_path / "plumb_leg.yaml"
+    path.write_text(PLUMB_LEG.replace("home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]",
+                                      "home: [0, 0, 100.00005, 0, 0, 0], range: [0, 0, 0.000025, 0, 0, 0]"))
+    robot = load_robot(path)
+    poses, found = boundary_poses(robot, 0)
+    assert found == {"WARN_JOINT_LIMITS_EXCEEDED": 16}
+    distance = np.abs(poses[:, 2] - 100.0)
+    assert np.all(distance > WARNING_BAND) and np.all(distance < 1.2e-8)
+    assert np.any(poses[:, 2] < 100.0) and np.any(poses[:, 2] > 100.0)
