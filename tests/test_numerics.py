@@ -369,3 +369,14 @@ def test_the_seeded_starts_spread_over_the_whole_search_region():
     drawn = begin[2:]
     assert np.all(np.abs(drawn - home) <= half)
     assert np.all(drawn.min(axis=0) < home) and np.all(drawn.max(axis=0) > home)
+
+
+def test_a_repeated_largest_eigenvalue_rounding_past_minus_one_still_gives_the_smallest():
+    """Q diag(7, 7, 2) Q^T for seeded rotations Q: det(B) / 2 is -1 exactly (two equal largest
+    eigenvalues), and rounds below -1 for about half of them; clamped to -1, the closed form
+    still gives 2 (to the sqrt(eps) x 7 it keeps at +/-1), never NaN."""
+    rng = np.random.default_rng(0)
+    rotations = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(40)]
+    matrices = np.array([q @ np.diag([7.0, 7.0, 2.0]) @ q.T for q in rotations])
+    matrices = (matrices + np.swapaxes(matrices, 1, 2)) / 2
+    assert _smallest_eigenvalue(as_entries(matrices)) == pytest.approx(np.full(40, 2.0), rel=1e-6)
