@@ -193,3 +193,50 @@ def test_a_crank_whose_knees_are_equally_far_names_its_branches_by_turn():
     point = pivot + 650.0 * np.array([math.cos(beta), math.sin(beta), 0.0])
     assert limb.branch_labels(point, pivot) == ("crank turned further in the joint's positive sense",
                                                 "crank turned less far")
+
+
+def test_a_direct_index_exactly_at_its_threshold_is_singular():
+    """A posture whose direct index is at most direct_index_min is singular, inclusive: the
+    hexapod at a regular pose, its threshold set to that pose's own index (the same double:
+    near the threshold the reference computes the index exactly), warns
+    WARN_SINGULAR_SOLUTION; with the next float below it as the threshold, good."""
+    from dataclasses import replace
+
+    robot = load_robot("hexapod")
+    t6 = t6_from_pose([[10.0, -5.0, 470.0, 2.0, -1.0, 3.0]])
+    index = float(solve(replace(robot, direct_index_min=None), t6, indices=True).direct_index[0, 0])
+    at = solve(replace(robot, direct_index_min=index), t6)
+    assert at.direct_index[0, 0] == index and at.warnings[0, 0] == SINGULAR
+    assert solve(replace(robot, direct_index_min=float(np.nextafter(index, 0.0))), t6).warnings[0, 0] == GOOD
+
+
+def test_a_direct_index_not_asked_for_is_none():
+    """Solution.direct_index is None unless computed: a robot without a threshold, no indices asked."""
+    robot = load_robot("tau")
+    t6 = t6_from_pose([robot.verification.home])
+    assert robot.direct_index_min is None and solve(robot, t6).direct_index is None
+
+
+def test_a_joint_exactly_at_a_travel_limit_is_within_it(tmp_path):
+    """A leg from the base origin to the platform origin (reference length 0: its joint is
+    |z| exactly, sqrt(z^2) = z) with travel [100, 200]: at z = 100 and 200 exactly it is
+    within its travel (good); a float beyond either, outside."""
+    path = tmp_path / "plumb_leg.yaml"
+    path.write_text("name: plumb_leg\ndescription: one leg\nlimbs:\n  - {model: leg, base_point: [0, 0, 0], "
+                    "platform_point: [0, 0, 0], reference_length: 0, travel: [100, 200]}\n"
+                    "verification: {home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    robot = load_robot(path)
+    heights = [100.0, 200.0, float(np.nextafter(100.0, 0.0)), float(np.nextafter(200.0, 300.0))]
+    solution = solve(robot, t6_from_pose([[0.0, 0.0, z, 0.0, 0.0, 0.0] for z in heights]))
+    assert solution.joints[:, 0, 0].tolist() == heights
+    assert solution.warnings[:, 0].tolist() == [GOOD, GOOD, LIMITS, LIMITS]
+
+
+def test_the_smallest_inverse_index_is_the_least_radicand_over_the_limbs():
+    """Solution.min_inverse_index (solve's JSON): per pose, the smallest normalised radicand
+    over the limbs; inf for a robot of legs (no limb has one)."""
+    _, t6 = random_t6(load_robot("tau"), 20, 3)
+    solution = solve(load_robot("tau"), t6)
+    assert np.array_equal(solution.min_inverse_index, [min(row) for row in solution.radicands.tolist()])
+    hexapod = load_robot("hexapod")
+    assert np.all(solve(hexapod, t6_from_pose([hexapod.verification.home])).min_inverse_index == np.inf)
