@@ -3,6 +3,7 @@
 import os
 import shutil
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -91,6 +92,15 @@ def require_tool(tool, package):
     KINGEN_REQUIRE_TOOLCHAINS=1 (set by .ci/run) fail instead: a skipped matrix is not green."""
     if shutil.which(tool) is None:
         message = f"{tool} is not installed (Debian package {package}; .ci/run installs it)"
+        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
+            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
+        pytest.skip(message)
+
+
+def require_file(path, package):
+    """As require_tool, for a file a package installs (LinuxCNC's headers and modules)."""
+    if not Path(path).is_file():
+        message = f"{path} is not installed (Debian package {package}; .ci/run installs it)"
         if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
             pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
         pytest.skip(message)

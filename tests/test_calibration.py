@@ -8,6 +8,7 @@ from kingen.conventions import joint_errors, t6_from_pose
 from kingen.errors import KingenError
 from kingen.model import load_robot
 from kingen.reference import solve
+from kingen.routine import WARNINGS
 
 
 def test_a_calibrated_reference_length_shifts_the_joint_exactly(plugin):
@@ -101,3 +102,34 @@ def test_verify_passes_with_calibration_on_the_command_line(capsys, tmp_path):
     capsys.readouterr()
     assert code == 0
     assert json.loads(report.read_text())["link_lengths"] == [1501, 1499, 0, 0, 0, 0]
+
+
+def test_a_calibrated_crank_length_is_the_dialogs_value_in_mm(tmp_path):
+    """CEART with its crank lengths also on the dialog's length fields (a copy of its file): given
+    lengths 2 % or less off its own, the plugin and the reference agree on every posture the
+    reference reaches (the fields in mm, as given: scale 1), and the fields do move the joints."""
+    from kingen.hosts.delmia.build import build_plugin
+    from kingen.hosts.delmia.loader import Plugin
+    from kingen.resources import robots_dir
+
+    text = (robots_dir() / "ceart.yaml").read_text()
+    old = "    zero_offset: [offset1, offset2, offset3, offset4, offset5, offset6]\n"
+    assert old in text
+    path = tmp_path / "ceart_lengths.yaml"
+    path.write_text(text.replace(old, old + "    crank_length: [length1, length2, length3, length4, length5, length6]\n")
+                    .replace("name: ceart", "name: ceart_lengths"))
+    robot = load_robot(path)
+    built = build_plugin(robot, tmp_path / "build")
+    loaded = Plugin(built.library, built.routine)
+    _, t6 = random_t6(robot, 200, seed=8)
+    crank = robot.limbs[0].crank_length
+    lengths = crank * np.array([1.01, 0.99, 1.02, 0.98, 1.0, 1.015])
+    loaded.reset_host()
+    calls = loaded.call(t6, lengths, np.zeros(6))
+    expected = solve(robot, t6, lengths, np.zeros(6))
+    assert not np.allclose(expected.joints, solve(robot, t6).joints, equal_nan=True)
+    reachable = expected.warnings != WARNINGS["WARN_UNREACHABLE"]
+    assert reachable.sum() > 1000
+    errors = joint_errors(calls.solutions, expected.joints, robot.revolute)
+    assert errors[np.broadcast_to(reachable[:, None, :], errors.shape)].max() <= 1e-9
+    np.testing.assert_array_equal(calls.warnings, expected.warnings)

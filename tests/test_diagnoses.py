@@ -283,3 +283,66 @@ def test_a_scale_is_named_within_1e_6_relative(error, label):
     theirs = np.linspace(50.0, 80.0, 10)
     text = given_reference(theirs, theirs / 25.4 * (1.0 + error))
     assert text[0].endswith(f"({label})")
+
+
+def exactly_match(count):
+    """``count`` values of exactly MATCH and their doubles: 2 x 1e-6 is 1e-6 doubled in binary,
+    so 2e-6 - 1e-6 == 1e-6 == MATCH holds exactly (no rounding)."""
+    assert 2 * MATCH - MATCH == MATCH
+    return np.full(count, MATCH)
+
+
+def test_a_joint_off_by_exactly_match_agrees():
+    """'Largest residual at which a hypothesis counts' (MATCH) is inclusive: a joint off by
+    exactly 1e-6 mm on every pose needs no diagnosis."""
+    assert given_reference(np.zeros(10), exactly_match(10)) == []
+
+
+def test_an_offset_with_a_residual_of_exactly_match_explains_the_data():
+    """Six values of 1e-6 and five of 2e-6 (11 poses): the median is 1e-6, the largest residual
+    about it 2e-6 - 1e-6 = MATCH exactly, the largest difference 2e-6 (above MATCH)."""
+    mine = np.concatenate([exactly_match(6), 2 * exactly_match(5)])
+    assert given_reference(np.zeros(11), mine, count=11)[0].startswith(
+        "joint 0 (leg1) is off by a constant +1e-06 mm on every pose and posture: ")
+
+
+def test_a_joint_within_exactly_match_of_another_joint_is_named_swapped():
+    """The reference's joint 0 at 5 mm and joint 1 at 0; the routine's joint 0 at exactly
+    MATCH (joint 1 right): it holds joint 1's values within MATCH, inclusive."""
+    robot, t6, expected = case("hexapod", count=10)
+    reference = expected.joints.copy()
+    reference[:, 0, 0], reference[:, 1, 0] = 5.0, 0.0
+    mine = reference.copy()
+    mine[:, 0, 0] = MATCH
+    assert diagnose(robot, t6, mine, reference, expected.warnings) == [
+        "joint 0 (leg1) holds the values of reference joint 1 (leg2): joints swapped in the solutions array"]
+
+
+def test_a_sign_flip_within_exactly_match_is_named():
+    """The reference's joint 0 at 2e-6, 4e-6, ... (exact doublings of MATCH), the routine's
+    their negatives but on pose 0, where it answers -1e-6: mine + theirs = MATCH exactly there."""
+    theirs = 2.0 ** np.arange(1, 11) * MATCH
+    mine = -theirs
+    mine[0] = -MATCH
+    assert mine[0] + theirs[0] == MATCH
+    assert given_reference(theirs, mine) == [
+        "joint 0 (leg1) has its sign flipped: the routine returns minus the reference value"]
+
+
+def test_postures_within_exactly_match_of_each_other_are_matched(tmp_path):
+    """A one-rail robot's reference at 0 (posture 0) and 5 mm (posture 1) on every pose; the
+    routine answers 5 mm in posture 0 and exactly MATCH in posture 1: each matches the other
+    posture (the second within MATCH, inclusive) and no other, so the order is named."""
+    path = tmp_path / "one_rail.yaml"
+    path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
+                    "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
+                    "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    robot = load_robot(path)
+    _, t6 = random_t6(robot, 10, 1)
+    expected = solve(robot, t6)
+    reference = np.zeros((10, 1, 2))
+    reference[:, :, 1] = 5.0
+    mine = np.full((10, 1, 2), 5.0)
+    mine[:, :, 1] = MATCH
+    assert diagnose(robot, t6, mine, reference, expected.warnings)[0].startswith(
+        "postures are in another order: plugin posture -> reference posture 0->1, 1->0 (permutation [1, 0]; ")

@@ -306,3 +306,26 @@ def test_golden_values_of_other_postures_are_said_to_be_unchecked(modules):
     report = verify_library(seen, built.library, built.routine, VerifyOptions(samples=500), host=get_host("linuxcnc"))
     assert [check.name for check in report.checks if check.name.startswith("golden")] == ["golden[0]"]
     assert "golden [1] not checked: at other postures than 0, the one the routine answers" in report.notices
+
+
+@pytest.mark.parametrize("posture", [0, 7])
+def test_leaning_rails_pass_forward_in_either_working_posture(tmp_path, posture):
+    """The Gantry-Tau's rails leaned from -z to (0.28, 0, -0.96) (a unit vector), built in
+    posture 0 (every carriage on branch 0) or 7 (branch 1), its published golden values left
+    out (they are the vertical rails'): the module's forward kinematics, whose Newton steps use
+    each rail's transmission f . u of the working branch, returns every pose."""
+    text = (robots_dir() / "tau.yaml").read_text()
+    text = text[:text.index("golden:")].replace("direction: [0, 0, -1]", "direction: [0.28, 0, -0.96]")
+    path = tmp_path / "leaning_tau.yaml"
+    path.write_text(text.replace("name: tau", "name: leaning_tau").replace("working_posture: 0",
+                                                                          f"working_posture: {posture}"))
+    robot = load_robot(path)
+    host = get_host("linuxcnc")
+    built = host.build(robot, tmp_path / "build")
+    report = verify_library(host.as_seen(robot), built.library, built.routine, VerifyOptions(samples=2000), host=host)
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+    forward = next(check.detail for check in report.checks if check.name == "forward")
+    servo = re.search(r"a servo cycle away: (\d+) of (\d+) returned the pose, 0 failed", forward)
+    assert servo and servo.group(1) == servo.group(2) and int(servo.group(2)) > 100
+    far = re.search(r"far away: (\d+) of (\d+) returned", forward)
+    assert far and far.group(1) == far.group(2), forward

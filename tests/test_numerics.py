@@ -189,11 +189,16 @@ def test_positive_definiteness_after_a_shift_agrees_with_lapack(scale):
         assert decided.any() and not decided.all() or shift == 0.0
 
 
-@pytest.mark.parametrize("smallest_pivot, singular", [(1e-13, True), (1e-11, False)])
+BLOCK_LIMIT = 1e-12 * (2.0 / 3.0) ** 3
+"""diag(1, 1, p)'s limit: 1e-12 x (trace / 3)^3, the trace 2 + p within 1e-12 of 2."""
+
+
+@pytest.mark.parametrize("smallest_pivot, singular", [(1e-13, True), (1e-11, False), (0.9 * BLOCK_LIMIT, True),
+                                                      (1.1 * BLOCK_LIMIT, False)])
 def test_a_force_block_is_translation_singular_below_1e_12_of_its_trace_cubed(smallest_pivot, singular):
     """M_vv = diag(1, 1, p) (trace about 2, (trace / 3)^3 = 0.296): singular, index 0, when the
-    product of its pivots p is below 1e-12 x 0.296; else the Schur complement's index, here
-    M_ww = 4 I with no coupling: sqrt(4) = 2 mm."""
+    product of its pivots p is below 1e-12 x 0.296 (BLOCK_LIMIT; 10 % either side of it too);
+    else the Schur complement's index, here M_ww = 4 I with no coupling: sqrt(4) = 2 mm."""
     gram = np.zeros((6, 6))
     gram[:3, :3] = np.diag([1.0, 1.0, smallest_pivot])
     gram[3:, 3:] = 4.0 * np.eye(3)
@@ -217,3 +222,161 @@ def test_a_crank_whose_platform_point_lies_on_its_axis_is_unreachable_with_finit
     solution = limb.solve(np.array([[200.0, 50.0, 0.0]]))
     assert solution.radicand.tolist() == [-1.0]
     assert np.all(np.isfinite(solution.values))
+
+
+def test_newton_steps_are_at_most_a_fifth_of_the_size_and_of_a_turn():
+    """forward._limited: a step of the robot's whole size shrinks to a fifth of it, one of a
+    whole turn to a fifth of a turn (0.4 pi), every coordinate by the same factor (the
+    direction kept); a step within both limits is kept as it is."""
+    from kingen.forward import _limited
+
+    size = 500.0
+    steps = np.array([[size, 0.0, 50.0, 0.0, 0.0, 0.0],
+                      [0.0, 0.0, 0.0, 0.0, 2 * math.pi, 0.1],
+                      [10.0, -20.0, 30.0, 0.1, -0.2, 0.3]])
+    limited = _limited(steps, size, np.ones(6, dtype=bool))
+    assert np.allclose(limited[0], [size / 5, 0.0, 10.0, 0.0, 0.0, 0.0], rtol=1e-15, atol=0)
+    assert np.allclose(limited[1], [0.0, 0.0, 0.0, 0.0, 0.4 * math.pi, 0.02], rtol=1e-15, atol=0)
+    assert np.array_equal(limited[2], steps[2])
+
+
+def test_forward_results_are_values_that_cannot_change():
+    """AssemblyModes and Assembly are frozen: a result handed out cannot be altered afterwards."""
+    import dataclasses
+
+    modes = forward.AssemblyModes(found=[], exhaustive=True, method="closed form")
+    assembly = forward.Assembly(pose=np.zeros(6), residual_mm=0.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        modes.exhaustive = False
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        assembly.residual_mm = 1.0
+
+
+def test_a_singular_leading_minor_is_not_positive_definite_whatever_the_last_rounds_to():
+    """A = [[1, 1, 1], [1, 1, 2], [1, 2, 1e17]]: its leading 2 x 2 minor is 1 - 1 = 0 exactly, so
+    A is not positive definite (LAPACK: a negative eigenvalue), although the expanded 3 x 3
+    determinant rounds to +1 (1e17 - 4 and 1e17 - 2 both round to 1e17; exactly it is -1)."""
+    from kingen.singularity import _positive_definite, _shifted
+
+    matrix = np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 2.0], [1.0, 2.0, 1e17]])
+    assert np.linalg.eigvalsh(matrix)[0] < 0
+    entries = as_entries(matrix[None])
+    assert _shifted(entries, 0.0)[1] > 0  # the rounded determinant alone would say positive
+    assert not _positive_definite(entries, 0.0)[0]
+
+
+@pytest.mark.parametrize("index, name", list(enumerate(["x", "y", "z", "roll", "pitch", "yaw"])))
+def test_each_named_coordinate_frees_its_own_pose_coordinate(index, name):
+    """README, robot file: forward: {free: [...]} names pose coordinates x, y, z, roll, pitch,
+    yaw (the pose's order): freeing one name frees that coordinate alone; naming none frees all."""
+    from dataclasses import replace
+
+    robot = load_robot("exechon")
+    assert forward.free_mask(replace(robot, forward_free=(name,))).tolist() == [k == index for k in range(6)]
+    assert forward.free_mask(replace(robot, forward_free=None)).tolist() == [True] * 6
+
+
+def test_three_spheres_missing_by_exactly_the_allowance_still_meet():
+    """Trilateration accepts a negative z^2 down to -1e-9 r0^2 inclusive (rounding of spheres
+    that touch). Centres 0, (2^17, 0, 0), (0, 4, 0) and radii 1e5, r1, 1e5: y = 16 / 8 = 2
+    exactly, and r1 (found by a search over consecutive floats) makes x = 100000.00003 with
+    r0^2 - x^2 - y^2 = -10 = -1e-9 r0^2 exactly in floating point: one point, at z = 0."""
+    centres = np.array([[0.0, 0.0, 0.0], [2.0 ** 17, 0.0, 0.0], [0.0, 4.0, 0.0]])
+    radii = np.array([1e5, 31071.999873450026, 1e5])
+    x = (radii[0] ** 2 - radii[1] ** 2 + centres[1, 0] ** 2) / (2 * centres[1, 0])
+    assert (x, radii[0] ** 2 - x ** 2 - 2.0 ** 2) == (100000.00003, -1e-9 * radii[0] ** 2)
+    found = _three_spheres(centres, radii)
+    assert len(found) == 1 and np.array_equal(found[0], [100000.00003, 2.0, 0.0])
+
+
+def test_the_multi_start_search_spans_search_times_the_region_and_at_most_half_a_turn():
+    """forward.search_region: centred on the verification home (mm, radians), half widths
+    ``search`` times the region's (angles in radians), angles capped at pi (a half turn)."""
+    robot = load_robot("exechon")
+    region = robot.verification
+    home, half = forward.search_region(robot, 2.0)
+    assert np.array_equal(home, np.concatenate([region.home[:3], np.radians(region.home[3:])]))
+    assert np.array_equal(half[:3], 2.0 * np.asarray(region.range[:3], dtype=float))
+    assert np.array_equal(half[3:], np.minimum(2.0 * np.radians(region.range[3:]), np.pi))
+    _, wide = forward.search_region(robot, 1e6)
+    assert wide[3:].tolist() == [np.pi] * 3 and np.all(wide[:3] == 1e6 * np.asarray(region.range[:3], dtype=float))
+
+
+def test_newton_stops_at_its_first_step_within_1e_13_of_the_size(monkeypatch):
+    """forward.CONVERGED: Newton stops when no step exceeds 1e-13 of the robot's size (mm) or of a
+    radian, and not before. Newton's steps from starts near the Stewart-Gough example's home
+    are recorded (|step| / scale, translations then rotations); among seeded starts one takes a
+    step whose rotations reach between 1e-13 and 2e-13 rad, its translations within 1e-13 of the
+    size: Newton goes on after it and stops at the next, the first wholly within 1e-13, which is
+    not 0 (so a stricter stop would go on)."""
+    from kingen.conventions import t6_from_pose
+    from kingen.reference import solve
+
+    robot = load_robot("stewart_gough_example")
+    home = np.asarray(robot.verification.home, dtype=float)
+    target = np.concatenate([home[:3], np.radians(home[3:])])
+    joints = solve(robot, t6_from_pose([home])).joints[0, :, 0]
+    free = forward.free_mask(robot)
+    scale = np.array([robot.size_mm] * 3 + [1.0] * 3)
+    limited, steps = forward._limited, []
+
+    def recorded(step, size_mm, free):
+        step = limited(step, size_mm, free)
+        steps.append(np.abs(step[0]) / scale[free])
+        return step
+
+    monkeypatch.setattr(forward, "_limited", recorded)
+    rng = np.random.default_rng(1)
+    for _ in range(100):
+        steps.clear()
+        start = target + rng.normal(size=6) * np.where(scale > 1, 1e-3 * robot.size_mm, 1e-3) * rng.uniform(0.1, 10)
+        forward.newton(robot, start[None], joints[None], free)
+        if any(1e-13 < size[3:].max() <= 2e-13 and size[:3].max() <= 1e-13 for size in steps):
+            break
+    else:
+        pytest.fail("no start took a step of 1e-13 to 2e-13 rad with translations within 1e-13")
+    largest = [size.max() for size in steps]
+    assert 0.0 < largest[-1] <= 1e-13 and all(size > 1e-13 for size in largest[:-1]), largest
+
+
+def test_a_multi_start_search_is_never_called_exhaustive_and_says_where_it_looked():
+    """The Exechon (free: z, roll, pitch; fewer than six limbs, no closed form) at its home:
+    Newton from the pose itself, the home and STARTS seeded starts over SEARCH = 2 times its
+    verification region (home (0, 50, -1250) mm, 0 deg; range 200 mm in z, 10 deg): not
+    exhaustive, and the region it searched is named coordinate by coordinate."""
+    from kingen.conventions import t6_from_pose
+    from kingen.reference import solve
+
+    robot = load_robot("exechon")
+    home = np.asarray(robot.verification.home, dtype=float)
+    joints = solve(robot, t6_from_pose([home])).joints[0, :, 0]
+    modes = forward.assemblies(robot, joints, np.concatenate([home[:3], np.radians(home[3:])]))
+    assert not modes.exhaustive and len(modes.found) >= 1
+    assert modes.method == (f"not exhaustive: Newton from {forward.STARTS + 2} starts over 2 x the verification region "
+                            "(z -1250 +- 400, roll 0 +- 20, pitch 0 +- 20; mm, deg); --search widens it")
+
+
+def test_the_seeded_starts_spread_over_the_whole_search_region():
+    """forward.starts: ``near`` first, then the home, then STARTS seeded poses drawn uniformly
+    over home +/- the search region's half widths: inside it, and on both sides of home in
+    every coordinate (256 uniform draws all on one side would have odds of 2^-256)."""
+    robot = load_robot("exechon")
+    home, half = forward.search_region(robot)
+    near = home + 0.1 * half
+    begin = forward.starts(robot, near)
+    assert len(begin) == forward.STARTS + 2
+    assert np.array_equal(begin[0], near) and np.array_equal(begin[1], home)
+    drawn = begin[2:]
+    assert np.all(np.abs(drawn - home) <= half)
+    assert np.all(drawn.min(axis=0) < home) and np.all(drawn.max(axis=0) > home)
+
+
+def test_a_repeated_largest_eigenvalue_rounding_past_minus_one_still_gives_the_smallest():
+    """Q diag(7, 7, 2) Q^T for seeded rotations Q: det(B) / 2 is -1 exactly (two equal largest
+    eigenvalues), and rounds below -1 for about half of them; clamped to -1, the closed form
+    still gives 2 (to the sqrt(eps) x 7 it keeps at +/-1), never NaN."""
+    rng = np.random.default_rng(0)
+    rotations = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(40)]
+    matrices = np.array([q @ np.diag([7.0, 7.0, 2.0]) @ q.T for q in rotations])
+    matrices = (matrices + np.swapaxes(matrices, 1, 2)) / 2
+    assert _smallest_eigenvalue(as_entries(matrices)) == pytest.approx(np.full(40, 2.0), rel=1e-6)

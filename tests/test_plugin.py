@@ -140,12 +140,18 @@ def test_debug_build_prints_pdata_t6_and_joints(built, tmp_path, capfd):
     loaded = Plugin(result.library, result.routine)
     assert loaded.config.data_hint == 1
     loaded.reset_host()
-    loaded.call(t6_from_pose([[100, 50, -1250, 0, 0, 0]]), kinstat=KinStat(robot, joint_values=[1.5, 2.5, 3.5]))
+    t6 = t6_from_pose([[100, 50, -1250, 0, 0, 0]])
+    loaded.call(t6, kinstat=KinStat(robot, joint_values=[1.5, 2.5, 3.5]))
     printed = capfd.readouterr().out
     assert "kin_exechon: dof_count 3, kin_mode 0" in printed
     assert "dof 2: type 1, value 3.5, travel [-225, 520]" in printed
     assert "kin_exechon: T6[3] = 100 50 -1250 1" in printed
     assert "kin_exechon: posture 0 warning 0: -24.891493 36.1332379 5.62579106" in printed
+    # T6's four rows n, o, a, p as passed (%.9g, as C prints them), no more; exechon has one posture
+    assert [line for line in printed.splitlines() if line.startswith("kin_exechon: T6[")] == [
+        f"kin_exechon: T6[{row}] = " + " ".join(f"{value:.9g}" for value in t6[0, row]) for row in range(4)]
+    assert [line for line in printed.splitlines() if line.startswith("kin_exechon: posture")] == [
+        "kin_exechon: posture 0 warning 0: -24.891493 36.1332379 5.62579106"]
 
 
 def test_release_build_prints_nothing(plugin, capfd):

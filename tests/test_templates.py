@@ -21,11 +21,11 @@ from kingen.routine import SINGULAR_TOLERANCE, WARNINGS
 SINGULAR = WARNINGS["WARN_SINGULAR_SOLUTION"]
 
 
-def hexaglide(direct_index_min):
+def hexaglide(direct_index_min, rail_z=0, offset=(0, 0, 0)):
     """Six rails at radius 300 mm, every 60 degrees, each leaning 10 degrees outwards and 5
     degrees sideways from vertical (so that every component of each direction counts);
     platform points at radius 100, 12 degrees to alternate sides of each rail; links of
-    250 mm; 64 postures."""
+    250 mm; 64 postures. ``rail_z`` raises every rail point, ``offset`` is every carriage's offset."""
     rows = []
     for i in range(6):
         rail, point = math.radians(60 * i), math.radians(60 * i + (12 if i % 2 else -12))
@@ -34,7 +34,8 @@ def hexaglide(direct_index_min):
                               math.sin(lean) * math.sin(rail) + math.sin(side) * math.cos(rail), 1.0])
         direction = ", ".join(f"{value:.12f}" for value in direction / np.linalg.norm(direction))
         rows.append(f"  - {{name: rail{i + 1}, model: rail, rail_point: [{300 * math.cos(rail):.3f}, "
-                    f"{300 * math.sin(rail):.3f}, 0], direction: [{direction}], carriage_offset: [0, 0, 0], "
+                    f"{300 * math.sin(rail):.3f}, {rail_z}], direction: [{direction}], "
+                    f"carriage_offset: [{offset[0]}, {offset[1]}, {offset[2]}], "
                     f"platform_point: [{100 * math.cos(point):.3f}, {100 * math.sin(point):.3f}, 0], link_length: 250}}")
     return ("name: hexaglide\ndescription: six vertical rails, a Hexaglide-like example\nlimbs:\n" + "\n".join(rows)
             + f"\nsingularity: {{direct_index_min: {direct_index_min}}}\n"
@@ -116,3 +117,15 @@ def test_a_non_finite_t6_entry_no_limb_reads_still_makes_every_posture_unreachab
     calls = plugin.call(t6[None])
     assert calls.returned.tolist() == [1] and calls.warnings.tolist() == [[WARNINGS["WARN_UNREACHABLE"]]]
     assert calls.solutions.tolist() == [[[0.0]]]
+
+
+def test_raised_rail_points_and_carriage_offsets_count_in_every_component(tmp_path):
+    """The Hexaglide-like rails with their rail points 40 mm up and every carriage offset by
+    (5, -3, 7) mm (each component of both in use): the C's joints and warnings are the
+    reference's."""
+    robot, plugin = loaded(tmp_path, hexaglide(15, rail_z=40, offset=(5, -3, 7)), "hexaglide")
+    _, t6 = random_t6(robot, 2000, seed=4)
+    calls, expected = plugin.call(t6), solve(robot, t6)
+    assert np.sum(expected.warnings != WARNINGS["WARN_UNREACHABLE"]) > 10000
+    assert joint_errors(calls.solutions, expected.joints, robot.revolute).max() <= 1e-9
+    np.testing.assert_array_equal(calls.warnings, expected.warnings)

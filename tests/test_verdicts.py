@@ -22,7 +22,7 @@ from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.report import Report
-from kingen.routine import WARNING_BAND, WARNINGS, Calls
+from kingen.routine import INPUTS_MODIFIED, WARNING_BAND, WARNINGS, Calls
 from kingen.verify.checks.jacobian import jacobian_check
 from kingen.verify.options import VerifyOptions
 from kingen.verify.tally import Tally, accumulate, posture_statistics, warnings_in_band
@@ -342,3 +342,322 @@ def test_a_threshold_no_pose_reaches_is_said_not_exercised(plugin):
     assert warnings.detail.endswith("the direct-index threshold (direct_index_min 29.3 mm) not exercised: no "
                                     "compared posture's index is at or below it and no ray from the verification "
                                     "home met it")
+
+
+def test_a_snapshot_of_angles_compares_them_a_turn_apart_as_equal(tmp_path):
+    """CEART's cranks (rad): a recorded snapshot of the reference, edited so that pose 0's
+    crank1 in posture 0 reads a full turn (2 pi) more, the same angle, and pose 1's crank2 in
+    posture 3 reads 1e-3 rad more, beyond the 1e-8 rad tolerance; the definition's digest
+    edited too. The reference itself, checked against it, differs in that one joint only, named
+    with its unit, and the digest is named by its first 16 hex digits."""
+    import json
+
+    from kingen.cli import main
+    from kingen.snapshot import load
+    from kingen.verify.checks.snapshot import check
+
+    robot = load_robot("ceart")
+    path = tmp_path / "ceart.golden.json"
+    assert main(["golden", "record", "ceart", "-o", str(path), "--samples", "3"]) == 0
+    data = json.loads(path.read_text())
+    assert data["joint_units"] == ["rad"] * 6 and data["tolerance"] == {"mm": 1e-6, "rad": 1e-8}
+    assert data["entries"][0]["warnings"][0] != UNREACHABLE and data["entries"][1]["warnings"][3] != UNREACHABLE
+    data["entries"][0]["joints"][0][0] += 2 * math.pi
+    moved = data["entries"][1]["joints"][1][3]
+    data["entries"][1]["joints"][1][3] = moved + 1e-3
+    data["definition_sha256"] = "0123456789abcdef" + "0" * 48
+    path.write_text(json.dumps(data))
+    snapshot = load(path, robot)
+
+    def call(t6):
+        reference = solve(robot, t6)
+        return reference.joints, reference.warnings
+
+    result = check(robot, snapshot, call)
+    assert not result.passed
+    assert result.detail == ("3 recorded poses x 64 postures (the reference, kingen 0.1.0): 1 joints beyond 1e-06 mm / "
+                             "1e-08 rad, 0 warnings differ")
+    assert result.diagnoses == [
+        f"pose 1 posture 3 crank2: recorded {moved + 1e-3:.9g}, now {moved:.9g} rad",
+        f"recorded from another definition (sha256 0123456789abcdef; the robot file has {robot.sha256[:16]}): "
+        "record it again if the change was meant"]
+
+
+def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
+    """accumulate keeps running totals over the chunks of a verification: the one rail's chunk
+    of the per-posture case (4 warnings differ, 2 joints wrong, 7 reachable poses) plus a pose
+    in its singular band (D = 1e-12, one joint 1e-8 mm off, within the band's bound, the other
+    1e-5 mm, beyond it), given twice to the same report and tally, counts everything twice and
+    keeps the same worst."""
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    poses = ([[50, 0, -50, 0, 0, 0]] * 4 + [[60, 0, -40, 0, 0, 0]] * 3 + [[150, 0, -50, 0, 0, 0]] * 2
+             + [[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0]])
+    t6 = t6_from_pose(poses)
+    expected = solve(robot, t6)
+    joints, warnings = expected.joints.copy(), expected.warnings.copy()
+    joints[0, 0, 1] += 2e-6
+    joints[1, 0, 0] -= 5e-7
+    joints[9, 0, 0] += 1e-8  # within the singular pose's bound, 16 eps x 100 / sqrt(1e-12) = 3.6e-6 mm
+    joints[9, 0, 1] += 1e-5  # beyond it
+    warnings[3, 0] = UNREACHABLE
+    warnings[4] = UNREACHABLE
+    warnings[7, 1] = GOOD
+    calls = calls_of(expected, warnings, joints)
+    calls.faults[5] = INPUTS_MODIFIED  # a faulty call whose outputs are still compared
+    calls.faults[8] = 1  # a call stopped at a faulting write (pose 8, unreachable): left out
+    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    tally = Tally.start(robot)
+    counts = []
+    for _ in range(2):
+        accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+        counts.append((report.warning_mismatches, report.warnings_in_band, report.singular_entries,
+                       report.singular_out_of_bound, tally.returns_wrong, tally.reachable_poses, tally.faulty_calls,
+                       tally.aborted, tally.closure_checked, tally.fault_bits, tally.posture_counts.tolist(),
+                       tally.warning_counts.tolist()))
+    # 4 warnings differ (poses 3, 4 twice, 7), none in a band; the singular pose's 2 entries in its
+    # band, one beyond its bound; 8 reachable poses (0-6, 9); 2 faulty calls, 1 aborted; closure
+    # judges both branches of poses 0-6 (the singular pose's limb is in its band): 14
+    assert counts[0][:10] == (4, 0, 2, 1, 0, 8, 2, 1, 14, INPUTS_MODIFIED | 1)
+    assert counts[1][:9] == tuple(2 * value for value in counts[0][:9]) and counts[1][9] == counts[0][9]
+    assert counts[1][10] == (2 * np.array(counts[0][10])).tolist()
+    assert counts[1][11] == (2 * np.array(counts[0][11])).tolist()
+    assert report.max_abs_error_mm == pytest.approx(2e-6, rel=1e-6)
+    # the poses kept for diagnoses are the compared ones, the aborted pose 8 left out
+    kept = np.arange(len(t6)) != 8
+    assert np.array_equal(tally.first[0], t6[kept]) and np.array_equal(tally.first[1], joints[kept])
+    assert np.array_equal(tally.first[3], expected.joints[kept])
+
+
+def test_a_chunk_whose_every_call_was_stopped_counts_only_its_faults(tmp_path):
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[50, 0, -50, 0, 0, 0], [60, 0, -40, 0, 0, 0]])
+    expected = solve(robot, t6)
+    calls = calls_of(expected)
+    calls.faults[:] = 1
+    report, tally = compared(robot, t6, calls, expected)
+    assert (tally.faulty_calls, tally.aborted, tally.fault_bits, tally.reachable_poses, tally.first) == (2, 2, 1, 0, None)
+    assert tally.warning_counts.sum() == 0 and tally.posture_counts.sum() == 0 and report.warning_mismatches == 0
+
+
+def test_each_pytest_item_reports_its_checks():
+    """README, 'Robot definitions in your own pytest': the items build, interface, values,
+    warnings, closure, jacobian (golden[i] and snapshot report their own). values, warnings,
+    closure and jacobian report their namesake check; build the library's definition;
+    interface the loaded routine's contract (loading, the interface checks, return values,
+    buffers, determinism, a crash or a timeout). The round trip is in verify's report only."""
+    from kingen.hosts import get_host
+    from kingen.pytest_plugin import item_checks
+
+    assert item_checks(get_host("delmia")) == {
+        "build": ("definition",),
+        "interface": ("load", "get_kin_config", "kin_check_definition", "refusal", "non-finite T6", "return value",
+                      "buffers", "determinism", "crash", "timeout"),
+        "values": ("values",), "warnings": ("warnings",), "closure": ("closure",), "jacobian": ("jacobian",)}
+
+
+def values_context(tmp_path):
+    """The Values check's context after the plumb leg's twelve reachable poses (z 110 to 165 mm,
+    inside its travel) compared with the reference's own joints: every error 0."""
+    from kingen.verify.checks.base import Context
+
+    path = tmp_path / "plumb_leg.yaml"
+    path.write_text(PLUMB_LEG)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[0.0, 0.0, 110.0 + 5 * k, 0.0, 0.0, 0.0] for k in range(12)])
+    expected = solve(robot, t6)
+    report, tally = compared(robot, t6, calls_of(expected), expected)
+    return Context(robot=robot, options=VerifyOptions(), report=report, tally=tally)
+
+
+@pytest.mark.parametrize("field", ["max_abs_error_mm", "max_abs_error_rad"])
+def test_the_value_bounds_are_inclusive(tmp_path, field):
+    """'within 1e-9 mm and rad' (README): an error of exactly the bound passes, the next float
+    above it fails; so does one entry beyond its singular band's bound."""
+    from kingen.verify.checks.values import Values
+
+    context = values_context(tmp_path)
+    bound = context.report.tolerance_mm if field.endswith("mm") else context.report.tolerance_rad
+    setattr(context.report, field, bound)
+    assert Values().run(context)[0].passed
+    setattr(context.report, field, np.nextafter(bound, np.inf))
+    assert not Values().run(context)[0].passed
+    setattr(context.report, field, 0.0)
+    context.report.singular_out_of_bound = 1
+    assert not Values().run(context)[0].passed
+
+
+class Recorder(float):
+    """A bound that records the value compared with it (``value <= bound`` asks the bound first)."""
+
+    seen = []
+
+    def __ge__(self, other):
+        Recorder.seen.append(other)
+        return float(self) >= other
+
+
+def test_the_jacobian_tolerance_is_inclusive(monkeypatch):
+    """The reference's worst relative difference on the Stewart-Gough example, recorded, then
+    made the tolerance: the check passes at it and fails at the next float below."""
+    from kingen.verify.checks import jacobian as module
+
+    robot = load_robot("stewart_gough_example")
+    Recorder.seen.clear()
+    monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", Recorder(1e-6))
+    assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    worst = Recorder.seen[-1]
+    assert 0.0 < worst < 1e-6
+    monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", worst)
+    assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", np.nextafter(worst, 0.0))
+    assert not jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+
+
+def test_closure_leaves_out_a_link_of_at_most_zero_length_inclusive(leg):
+    """The plumb leg (reference length 0: its passive link is the joint itself) at z = 150 mm,
+    answered with a joint of exactly ZERO_LENGTH x the robot's size: a link that short has no
+    direction and is not judged; the next float above it is, and misses closing by about 150 mm."""
+    from kingen.verify.tally import ZERO_LENGTH, closure_error
+
+    expected = solve(leg, t6_from_pose([[0.0, 0.0, 150.0, 0.0, 0.0, 0.0]]))
+    shortest = ZERO_LENGTH * leg.size_mm
+    assert closure_error(leg, expected, np.full_like(expected.joints, shortest)) == (0.0, 0)
+    worst, judged = closure_error(leg, expected, np.full_like(expected.joints, np.nextafter(shortest, np.inf)))
+    assert judged == 1 and worst == pytest.approx(150.0 / shortest, rel=1e-6)
+
+
+def test_a_singular_entry_exactly_at_its_bound_is_right(tmp_path):
+    """The one rail at D = 1e-12 (x = 100 sqrt(1 - 1e-12)), its reference joints replaced by 0
+    (a constructed reference: the comparison, not the solver, is under test), so a routine
+    answering exactly the band's bound b errs by exactly b: within it, right; the next float
+    above b is beyond it, wrong, and counted out of bound."""
+    from kingen.verify.tally import singular_bounds
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    robot = load_robot(path)
+    t6 = t6_from_pose([[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0]])
+    solved = solve(robot, t6)
+    expected = replace(solved, branch_joints=np.zeros_like(solved.branch_joints))  # every posture's joint 0
+    bound = singular_bounds(robot, expected, np.array([1e-9]))[0, 0]
+    assert bound > 1e-9
+    for answer, wrong in ((bound, 0), (np.nextafter(bound, np.inf), 1)):
+        report, tally = compared(robot, t6, calls_of(expected, None, np.full_like(expected.joints, answer)), expected)
+        statistics = posture_statistics(robot, tally)
+        assert [(row["right"], row["wrong"]) for row in statistics] == [(1 - wrong, wrong)] * 2
+        assert (report.singular_entries, report.singular_out_of_bound) == (2, 2 * wrong)
+
+
+class GoodOrUnreachable:
+    """``plugin`` as a routine that tells only good from unreachable (a LinuxCNC module without
+    a status pin): its other warnings read as WARN_GOOD_SOLUTION."""
+
+    warning_vocabulary = ("WARN_GOOD_SOLUTION", "WARN_UNREACHABLE")
+
+    def __init__(self, plugin):
+        self._plugin = plugin
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        calls.warnings[calls.warnings != UNREACHABLE] = GOOD
+        return calls
+
+
+def test_a_routine_of_fewer_warnings_is_judged_on_those_and_the_detail_says_so(plugin):
+    """The hexapod's reference gives WARN_JOINT_LIMITS_EXCEEDED and WARN_SINGULAR_SOLUTION
+    besides good and unreachable; a routine that tells only good from unreachable is judged
+    by the reference read the same way: no mismatch, and the detail, after its counts, says
+    which warnings the routine tells."""
+    from kingen.verify import verify
+
+    robot, routine = plugin("hexapod")
+    report = verify(robot, GoodOrUnreachable(routine), VerifyOptions(samples=200))
+    warnings = next(check for check in report.checks if check.name == "warnings")
+    assert warnings.passed and report.warning_mismatches == 0
+    assert warnings.detail.startswith("0 mismatches, 0 inside the tolerance band, over ")
+    assert ("; the routine tells only WARN_GOOD_SOLUTION, WARN_UNREACHABLE (the reference's others read as good)"
+            in warnings.detail)
+
+
+def test_every_check_needs_one_of_the_stages_verify_has():
+    """checks.base.NEEDS lists what a check can need, in the order verify has it; every check a
+    host composes needs one of them, and the library checks come first (before anything loads)."""
+    from kingen.hosts import get_host
+    from kingen.verify.checks.base import NEEDS
+
+    assert NEEDS == ("library", "routine", "sampled calls", "compared poses", "golden values", "snapshot")
+    for name in ("delmia", "linuxcnc"):
+        needs = [check.needs for check in get_host(name).checks]
+        assert set(needs) <= set(NEEDS), name
+        assert needs[0] == "library"
+
+
+def test_a_warning_the_robot_can_give_but_no_pose_gave_fails_and_says_what_to_do(tmp_path):
+    """The plumb leg's twelve poses inside its travel (values_context: all WARN_GOOD_SOLUTION),
+    no boundary poses: the travel limits' warning, which the leg can give, was never
+    exercised, so warnings fails and says how to exercise it."""
+    from kingen.verify.checks.warnings import Warnings
+
+    context = values_context(tmp_path)
+    [check] = Warnings().run(context)
+    assert not check.passed and check.judged == 12
+    assert check.detail == (
+        "0 mismatches, 0 inside the tolerance band, over 12 postures of 12 sampled poses and 0 poses beside warnings' "
+        "boundaries (boundaries found along 64 rays: none sought); the reference's warnings: 12 WARN_GOOD_SOLUTION; "
+        "not exercised: WARN_JOINT_LIMITS_EXCEEDED (the robot can give it, no compared pose did): widen the "
+        "verification region or check the robot's limits")
+
+
+@pytest.mark.parametrize("tolerance, places", [(0.0003, 4), (0.02, 2), (5.0, 0), (0.0, 6)])
+def test_a_golden_tolerance_is_shown_to_its_leading_digit(tolerance, places):
+    """golden.decimals (its docstring): 0.0003 -> 4, 0.02 -> 2, 5 -> 0; no tolerance (exact) -> 6."""
+    from kingen.verify.checks.golden import decimals
+
+    assert decimals(tolerance) == places
+
+
+def test_a_library_built_from_another_definition_is_named_with_both_digests(tmp_path):
+    """The one rail built, then its file changed by one comment line: definition fails, naming
+    the library's digest, the file's, and what to do, word for word."""
+    import kingen
+    from kingen.hosts.delmia.build import build_plugin
+    from kingen.verify.checks.definition import definition_check
+
+    path = tmp_path / "one_rail.yaml"
+    path.write_text(RAIL)
+    built = build_plugin(load_robot(path), tmp_path / "build")
+    old = load_robot(path).sha256
+    path.write_text(RAIL + "# reviewed again\n")
+    robot = load_robot(path)
+    check = definition_check(robot, built.library)
+    assert not check.passed and old != robot.sha256
+    assert check.detail == (f"the library says it was built by kingen {kingen.__version__} from another definition of "
+                            f"'one_rail' (sha256 {old[:16]}), one_rail.yaml has {robot.sha256[:16]}: rebuild it from "
+                            "the reviewed file")
+
+
+def test_boundary_poses_of_a_tiny_region_lie_just_outside_the_band(tmp_path):
+    """The plumb leg's lower travel limit (z = 100 mm) 5e-5 mm below a verification home whose
+    region is 2.5e-5 mm tall: the rays (at most 1e-4 mm, REACH times the half-width) that
+    cross the limit are so short that only the fourth offset, 1e-4 of a ray (at most 1e-8
+    mm), clears the 1e-9 mm band; each pose then lies between 1e-9 and about 1.1e-8 mm from
+    the limit (kingen.verify.boundaries: offsets tried in order, bisected to a tenth of the
+    smallest), on either side."""
+    from kingen.verify.boundaries import boundary_poses
+
+    path = tmp_path / "plumb_leg.yaml"
+    path.write_text(PLUMB_LEG.replace("home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]",
+                                      "home: [0, 0, 100.00005, 0, 0, 0], range: [0, 0, 0.000025, 0, 0, 0]"))
+    robot = load_robot(path)
+    poses, found = boundary_poses(robot, 0)
+    assert found == {"WARN_JOINT_LIMITS_EXCEEDED": 16}
+    distance = np.abs(poses[:, 2] - 100.0)
+    assert np.all(distance > WARNING_BAND) and np.all(distance < 1.2e-8)
+    assert np.any(poses[:, 2] < 100.0) and np.any(poses[:, 2] > 100.0)

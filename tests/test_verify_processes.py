@@ -96,3 +96,111 @@ def test_merged_counts_add_up_whatever_the_processes(plugin):
         assert 0.35 < wrong / (right + wrong) < 0.65
     assert counts[0] == counts[1] and counts[0]["warning_mismatches"] > 1000
     assert all(value >= 0 for value in counts[0].values())
+
+
+class PrintsOnce:
+    """``plugin`` writing ``text`` on file descriptor 1 at its first call only (a routine's
+    debug print): verify captures it in the interface checks, then in every later block,
+    which print nothing."""
+
+    def __init__(self, plugin, text):
+        self._plugin, self._text, self._printed = plugin, text, False
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        if not self._printed:
+            import os
+
+            os.write(1, self._text)
+            self._printed = True
+        return self._plugin.call(t6, *arguments, **keywords)
+
+
+@pytest.mark.parametrize("text, first_line", [(b"hello\n", "hello"), (b" \n\n", "")])
+def test_what_a_routine_prints_once_is_counted_over_every_block(plugin, text, first_line):
+    robot, routine = plugin("hexapod")
+    report = verify(robot, PrintsOnce(routine, text), VerifyOptions(samples=50, processes=1))
+    assert report.notices[0] == (f"the routine printed {len(text)} bytes on stdout/stderr (first line: "
+                                 f"{first_line!r}); debug printing slows the host by orders of magnitude")
+
+
+class Stopped:
+    """``plugin`` whose every call reports a fault bit other than INPUTS_MODIFIED: stopped at
+    a faulting write, so none of its outputs may be compared."""
+
+    def __init__(self, plugin):
+        self._plugin = plugin
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+    def call(self, t6, *arguments, **keywords):
+        calls = self._plugin.call(t6, *arguments, **keywords)
+        calls.faults[:] = 1
+        return calls
+
+
+def test_when_every_call_is_stopped_the_output_checks_fail_as_uncompared(plugin):
+    from kingen.verify.checks.base import STOPPED_CALLS
+
+    robot, routine = plugin("hexapod")
+    report = verify(robot, Stopped(routine), VerifyOptions(samples=50, processes=1))
+    checks = {check.name: check for check in report.checks}
+    for name in ("values", "warnings"):
+        assert (checks[name].passed, checks[name].detail) == (False, STOPPED_CALLS)
+    assert "jacobian" not in checks  # it judges compared poses and has no uncompared failure: left out
+
+
+class OtherPostures:
+    """``plugin`` claiming one posture more than it has."""
+
+    def __init__(self, plugin):
+        self._plugin = plugin
+        self.postures = plugin.postures + 1
+
+    def __getattr__(self, name):
+        return getattr(self._plugin, name)
+
+
+def test_a_routine_of_another_posture_count_is_not_compared(plugin):
+    robot, routine = plugin("hexapod")
+    report = verify(robot, OtherPostures(routine), VerifyOptions(samples=50, processes=1))
+    assert [(check.name, check.passed, check.detail) for check in report.checks if check.name == "values"] == [
+        ("values", False, "not compared: the routine's joint or posture count differs")]
+    assert report.checks[-1].name == "values"  # nothing judged after it: no golden values, no snapshot
+
+
+def test_a_library_verified_in_a_child_reports_its_progress_chunk_by_chunk(built):
+    """Progress travels from the child as each chunk is merged: the poses done so far, the
+    last chunk the 5 poses past three whole chunks."""
+    from kingen.hosts import get_host
+    from kingen.verify import verify_library
+
+    robot, result = built("hexapod")
+    size = chunk_size(robot)
+    done = []
+    report = verify_library(robot, result.library, result.routine, VerifyOptions(samples=3 * size + 5, processes=2),
+                            progress=done.append, host=get_host("delmia"))
+    assert report.passed
+    assert done == [size, 2 * size, 3 * size, 3 * size + 5]
+
+
+def test_a_chunk_a_cluster_lost_is_compared_here_keeping_the_first_chunks_poses(plugin):
+    """kingen.verify.cluster: a chunk whose job failed on the cluster is drawn and compared in
+    this process, the same poses as there; the first chunk (poses from 0) keeps its poses for
+    the diagnoses as it would have on the worker, a later one does not."""
+    from types import SimpleNamespace
+
+    from kingen.verify.cluster import ClusterChunks
+    from kingen.verify.processes import set_chunk_job
+
+    robot, routine = plugin("tau")
+    options = VerifyOptions(samples=40, processes=1)
+    set_chunk_job(robot, robot, routine, options)
+    chunks = ClusterChunks.__new__(ClusterChunks)
+    chunks._local, chunks._job = (robot, robot, routine, options), SimpleNamespace(options=options)
+    first, later = chunks._compare_here(0, 20), chunks._compare_here(20, 20)
+    assert first.tally.first is not None and len(first.tally.first[0]) == 20
+    assert later.tally.first is None and later.tally.reachable_poses > 0

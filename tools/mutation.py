@@ -39,29 +39,37 @@ OUT = ROOT / "build" / "mutation"
 EQUIVALENT = Path(__file__).resolve().parent / "mutation_equivalent.txt"
 
 _VERIFY = ["tests/test_verdicts.py", "tests/test_verify_bands.py", "tests/test_verify_columns.py"]
+_REPORTS = ["tests/test_verify_reports.py::test_reports_are_those_recorded"]
+"""verify's recorded reports: every check's detail, count and statistic word for word (a few seconds)."""
+_CHILD = ["tests/test_verify_reports.py::test_a_dask_cluster_gives_the_report_local_processes_give",
+          "tests/test_hostile.py::test_what_a_constructor_prints_is_a_notice_and_stays_out_of_the_output"]
+"""A cluster's report against a local one, what a library prints as it loads (about 15 s)."""
 _C = ["tests/test_templates.py", "tests/test_golden_values.py", "tests/test_calibration.py", "tests/test_plugin.py"]
 TESTS = {
     # target (a glob of repository paths) -> the test files that cover it, fastest first
-    "kingen/verify/tally.py": _VERIFY + ["tests/test_exercised.py"],
-    "kingen/verify/boundaries.py": ["tests/test_exercised.py", "tests/test_verdicts.py"],
+    "kingen/verify/tally.py": _VERIFY + ["tests/test_exercised.py"] + _REPORTS,
+    "kingen/verify/boundaries.py": ["tests/test_exercised.py", "tests/test_verdicts.py"] + _REPORTS,
     "kingen/verify/checks/*.py": _VERIFY + ["tests/test_golden_lines.py", "tests/test_exercised.py",
-                                            "tests/test_templates.py", "tests/test_forward.py", "tests/test_legacy.py"],
+                                            "tests/test_templates.py", "tests/test_forward.py", "tests/test_legacy.py"]
+                                 + _REPORTS,
     "kingen/verify/[!t]*.py": _VERIFY + ["tests/test_verify_processes.py", "tests/test_exercised.py",
-                                         "tests/test_legacy.py"],
+                                         "tests/test_legacy.py"] + _REPORTS + _CHILD,
     "kingen/reference.py": ["tests/test_reference.py", "tests/test_verdicts.py", "tests/test_golden_values.py",
-                            "tests/test_golden_lines.py", "tests/test_calibration.py", "tests/test_verify_bands.py"],
+                            "tests/test_golden_lines.py", "tests/test_calibration.py", "tests/test_verify_bands.py"]
+                           + _REPORTS,
     "kingen/singularity.py": ["tests/test_numerics.py", "tests/test_singularity.py", "tests/test_verdicts.py",
-                              "tests/test_reference.py", "tests/test_verify_columns.py", "tests/test_golden_values.py"],
-    "kingen/forward.py": ["tests/test_numerics.py", "tests/test_forward.py", "tests/test_assembly_modes.py"],
+                              "tests/test_reference.py", "tests/test_verify_columns.py", "tests/test_golden_values.py"]
+                             + _REPORTS,
+    "kingen/forward.py": ["tests/test_numerics.py", "tests/test_forward.py", "tests/test_assembly_modes.py"] + _REPORTS,
     "kingen/diagnose.py": ["tests/test_diagnoses.py", "tests/test_legacy.py"],
     "kingen/limbs/*.py": ["tests/test_reference.py", "tests/test_diagnoses.py", "tests/test_golden_values.py",
                           "tests/test_singularity.py", "tests/test_calibration.py", "tests/test_limb_registry.py",
-                          "tests/test_setup_sheet.py"],
+                          "tests/test_setup_sheet.py"] + _REPORTS,
     "kingen/robot_file.py": ["tests/test_numerics.py", "tests/test_model.py", "tests/test_limits.py"],
     "kingen/text.py": ["tests/test_model.py", "tests/test_hostile_outputs.py", "tests/test_limits.py"],
     "kingen/isolation.py": ["tests/test_hostile.py"],
-    "templates/limbs/*.c.j2": _C,
-    "kingen/hosts/delmia/templates/kin_robot.c.j2": _C + ["tests/test_exercised.py"],
+    "templates/limbs/*.c.j2": _C + _REPORTS + ["tests/test_linuxcnc.py"],
+    "kingen/hosts/delmia/templates/kin_robot.c.j2": _C + ["tests/test_exercised.py"] + _REPORTS,
 }
 C_ROBOTS = {"templates/limbs/leg.c.j2": "hexapod", "templates/limbs/rail.c.j2": "tau",
             "templates/limbs/crank.c.j2": "ceart", "kingen/hosts/delmia/templates/kin_robot.c.j2": "ceart"}
@@ -76,7 +84,7 @@ def targets(patterns=None):
             if name.endswith("__init__.py") and name != "kingen/verify/__init__.py" or name in found:
                 continue
             if not patterns or any(fnmatch.fnmatch(name, pattern) for pattern in patterns):
-                found[name] = [test for test in tests if (ROOT / test).exists()]
+                found[name] = [test for test in tests if (ROOT / test.partition("::")[0]).exists()]
     return found
 
 
