@@ -63,9 +63,9 @@ def plugin(built):
     return get
 
 
-class ChangedJoints:
-    """A loaded plugin whose joints ``change(t6 (n, 4, 4), solutions (n, dof, postures))``
-    alters in place after each call: a routine that rounds differently, or is wrong."""
+class ChangedCalls:
+    """A loaded plugin whose outputs ``change(t6 (n, 4, 4), calls)`` alters in place after
+    each call (its solutions, warnings, faults): a routine that is wrong in a chosen way."""
 
     def __init__(self, plugin, change):
         self._plugin, self._change = plugin, change
@@ -75,8 +75,16 @@ class ChangedJoints:
 
     def call(self, t6, *arguments, **keywords):
         calls = self._plugin.call(t6, *arguments, **keywords)
-        self._change(np.asarray(t6).reshape(-1, 4, 4), calls.solutions)
+        self._change(np.asarray(t6).reshape(-1, 4, 4), calls)
         return calls
+
+
+class ChangedJoints(ChangedCalls):
+    """A loaded plugin whose joints ``change(t6 (n, 4, 4), solutions (n, dof, postures))``
+    alters in place after each call: a routine that rounds differently, or is wrong."""
+
+    def __init__(self, plugin, change):
+        super().__init__(plugin, lambda t6, calls: change(t6, calls.solutions))
 
 
 def random_t6(robot, count, seed):

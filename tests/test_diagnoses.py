@@ -235,12 +235,18 @@ def test_a_crank_offset_is_measured_across_the_half_turn():
         "joint 1 (crank2) is off by a constant +2.96706 rad on every pose and posture: a wrong crank zero (+170 deg)"]
 
 
-def test_two_postures_in_the_other_order_are_named(tmp_path):
+def one_rail_robot(tmp_path):
+    """One vertical rail through the base origin, its 100 mm link to the platform origin: two
+    postures, the two carriage positions 100 mm from the platform point."""
     path = tmp_path / "one_rail.yaml"
     path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
                     "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
                     "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
-    robot = load_robot(path)
+    return load_robot(path)
+
+
+def test_two_postures_in_the_other_order_are_named(tmp_path):
+    robot = one_rail_robot(tmp_path)
     _, t6 = random_t6(robot, 10, 1)
     expected = solve(robot, t6)
     assert findings(robot, t6, expected.joints[:, :, ::-1].copy(), expected) == [
@@ -333,11 +339,7 @@ def test_postures_within_exactly_match_of_each_other_are_matched(tmp_path):
     """A one-rail robot's reference at 0 (posture 0) and 5 mm (posture 1) on every pose; the
     routine answers 5 mm in posture 0 and exactly MATCH in posture 1: each matches the other
     posture (the second within MATCH, inclusive) and no other, so the order is named."""
-    path = tmp_path / "one_rail.yaml"
-    path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
-                    "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
-                    "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
-    robot = load_robot(path)
+    robot = one_rail_robot(tmp_path)
     _, t6 = random_t6(robot, 10, 1)
     expected = solve(robot, t6)
     reference = np.zeros((10, 1, 2))

@@ -17,6 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from conftest import ChangedCalls
 
 from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
@@ -552,22 +553,18 @@ def test_a_singular_entry_exactly_at_its_bound_is_right(tmp_path):
         assert (report.singular_entries, report.singular_out_of_bound) == (2, 2 * wrong)
 
 
-class GoodOrUnreachable:
+def _good_unless_unreachable(t6, calls):
+    calls.warnings[calls.warnings != UNREACHABLE] = GOOD
+
+
+class GoodOrUnreachable(ChangedCalls):
     """``plugin`` as a routine that tells only good from unreachable (a LinuxCNC module without
     a status pin): its other warnings read as WARN_GOOD_SOLUTION."""
 
     warning_vocabulary = ("WARN_GOOD_SOLUTION", "WARN_UNREACHABLE")
 
     def __init__(self, plugin):
-        self._plugin = plugin
-
-    def __getattr__(self, name):
-        return getattr(self._plugin, name)
-
-    def call(self, t6, *arguments, **keywords):
-        calls = self._plugin.call(t6, *arguments, **keywords)
-        calls.warnings[calls.warnings != UNREACHABLE] = GOOD
-        return calls
+        super().__init__(plugin, _good_unless_unreachable)
 
 
 def test_a_routine_of_fewer_warnings_is_judged_on_those_and_the_detail_says_so(plugin):

@@ -5,7 +5,7 @@ import dataclasses
 
 import pytest
 
-from conftest import ChangedJoints
+from conftest import ChangedCalls, ChangedJoints
 from kingen.verify import processes as verify_module
 from kingen.verify import VerifyOptions, chunk_size, verify
 
@@ -126,27 +126,17 @@ def test_what_a_routine_prints_once_is_counted_over_every_block(plugin, text, fi
                                  f"{first_line!r}); debug printing slows the host by orders of magnitude")
 
 
-class Stopped:
+def stopped(plugin):
     """``plugin`` whose every call reports a fault bit other than INPUTS_MODIFIED: stopped at
     a faulting write, so none of its outputs may be compared."""
-
-    def __init__(self, plugin):
-        self._plugin = plugin
-
-    def __getattr__(self, name):
-        return getattr(self._plugin, name)
-
-    def call(self, t6, *arguments, **keywords):
-        calls = self._plugin.call(t6, *arguments, **keywords)
-        calls.faults[:] = 1
-        return calls
+    return ChangedCalls(plugin, lambda t6, calls: calls.faults.fill(1))
 
 
 def test_when_every_call_is_stopped_the_output_checks_fail_as_uncompared(plugin):
     from kingen.verify.checks.base import STOPPED_CALLS
 
     robot, routine = plugin("hexapod")
-    report = verify(robot, Stopped(routine), VerifyOptions(samples=50, processes=1))
+    report = verify(robot, stopped(routine), VerifyOptions(samples=50, processes=1))
     checks = {check.name: check for check in report.checks}
     for name in ("values", "warnings"):
         assert (checks[name].passed, checks[name].detail) == (False, STOPPED_CALLS)
