@@ -95,20 +95,34 @@ def random_t6(robot, count, seed):
     return poses, t6_from_pose(poses)
 
 
+def skip_or_fail(message):
+    """Skip a test whose requirement (a tool, a package's files, root) is missing, saying
+    ``message``; under KINGEN_REQUIRE_TOOLCHAINS=1 (set by .ci/run) fail instead: a skipped
+    matrix is not green."""
+    if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
+        pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing requirement a failure")
+    pytest.skip(message)
+
+
 def require_tool(tool, package):
-    """Skip when ``tool`` is missing, saying what installs it; under
-    KINGEN_REQUIRE_TOOLCHAINS=1 (set by .ci/run) fail instead: a skipped matrix is not green."""
+    """skip_or_fail when ``tool`` is missing, saying what installs it."""
     if shutil.which(tool) is None:
-        message = f"{tool} is not installed (Debian package {package}; .ci/run installs it)"
-        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
-        pytest.skip(message)
+        skip_or_fail(f"{tool} is not installed (Debian package {package}; .ci/run installs it)")
 
 
 def require_file(path, package):
-    """As require_tool, for a file a package installs (LinuxCNC's headers and modules)."""
+    """As require_tool, for a file a package installs (LinuxCNC's stock modules)."""
     if not Path(path).is_file():
-        message = f"{path} is not installed (Debian package {package}; .ci/run installs it)"
-        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
-        pytest.skip(message)
+        skip_or_fail(f"{path} is not installed (Debian package {package}; .ci/run installs it)")
+
+
+def require_linuxcnc_headers():
+    """skip_or_fail unless kingen finds LinuxCNC's headers where it builds modules from
+    (kingen.hosts.linuxcnc.build.linuxcnc_headers: $KINGEN_LINUXCNC_INCLUDE or Debian's folder)."""
+    from kingen.errors import KingenError
+    from kingen.hosts.linuxcnc.build import linuxcnc_headers
+
+    try:
+        linuxcnc_headers()
+    except KingenError as error:
+        skip_or_fail(f"{error} (.ci/run installs it)")

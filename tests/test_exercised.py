@@ -4,7 +4,6 @@ fails naming the cause; every check states how much it judged."""
 
 import json
 import xml.etree.ElementTree as ElementTree
-from pathlib import Path
 
 import pytest
 
@@ -119,12 +118,9 @@ def test_one_posture_is_one_posture(tmp_path, capsys):
 
 
 def test_bad_host_settings_are_one_line_errors(tmp_path, capsys):
-    import os
+    from conftest import require_linuxcnc_headers
 
-    from conftest import require_file
-
-    require_file(Path(os.environ.get("KINGEN_LINUXCNC_INCLUDE", "/usr/include/linuxcnc"), "kinematics.h"),
-                 "linuxcnc-uspace-dev")  # the last setting is refused only once the module is built
+    require_linuxcnc_headers()  # the last setting is refused only once the module is built
     for argv, words in ((["--setp", "x"], "'x': give NAME=VALUE with a number"),
                         (["--setp", "a=nan"], "'a=nan': give NAME=VALUE with a finite number"),
                         (["--units", "furlong"], "Invalid value for '--units'"),

@@ -13,10 +13,10 @@ import shutil
 import stat
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
+from conftest import skip_or_fail
 from kingen.cli import main
 from kingen.errors import KingenError
 from kingen.files import write_atomic
@@ -25,10 +25,7 @@ from kingen.hosts.delmia.build import host_support
 
 def require_root():
     if os.geteuid() != 0 or shutil.which("unshare") is None:
-        message = "needs root and unshare (CI runs as root)"
-        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes it a failure")
-        pytest.skip(message)
+        skip_or_fail("needs root and unshare (CI runs as root)")
 
 
 def in_private_mounts(script, tmp_path):

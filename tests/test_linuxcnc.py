@@ -5,14 +5,13 @@ posture; its forward Newton from seeds a servo cycle and 10 mm / 5 degrees away)
 cannot drive are refused with a located error; its package's snippets hold the robot file's
 numbers. LinuxCNC's headers come from Debian's linuxcnc-uspace-dev (.ci/run installs it)."""
 
-import os
 import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from conftest import require_tool
+from conftest import require_linuxcnc_headers, require_tool
 from kingen.cli import main
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
@@ -45,11 +44,7 @@ def stock_report(robot_name, module, *arguments):
 
 @pytest.fixture(autouse=True)
 def linuxcnc_headers():
-    if not Path(os.environ.get("KINGEN_LINUXCNC_INCLUDE", "/usr/include/linuxcnc"), "kinematics.h").is_file():
-        message = "LinuxCNC's headers are not installed (Debian package linuxcnc-uspace-dev; .ci/run installs it)"
-        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(message + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
-        pytest.skip(message)
+    require_linuxcnc_headers()
 
 
 @pytest.fixture(scope="module")

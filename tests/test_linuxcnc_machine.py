@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import skip_or_fail
 from kingen.conventions import t6_from_pose
 from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.package import render_package
@@ -80,9 +81,7 @@ def missing():
 def linuxcnc_machine():
     reason = missing()
     if reason is not None:
-        if os.environ.get("KINGEN_REQUIRE_TOOLCHAINS") == "1":
-            pytest.fail(reason + "; KINGEN_REQUIRE_TOOLCHAINS=1 makes a missing tool a failure")
-        pytest.skip(reason)
+        skip_or_fail(reason)
 
 
 def machine_ini(robot, folder, kins_ini, units):
