@@ -63,6 +63,28 @@ def plugin(built):
     return get
 
 
+PLUMB_LEG = """\
+name: plumb_leg
+description: One leg from the base origin to the platform origin, its joint the absolute length.
+limbs:
+  - {model: leg, base_point: [0, 0, 0], platform_point: [0, 0, 0], reference_length: 0, travel: [100, 200]}
+verification: {home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
+"""
+"""Its joint at pose (0, 0, z) is z: the travel limits 100 and 200 mm are met at z = 100, 200."""
+
+
+ONE_RAIL = """\
+name: one_rail
+description: One rail along -z through the origin, link 100 mm to the platform origin.
+limbs:
+  - {model: rail, rail_point: [0, 0, 0], direction: [0, 0, -1], carriage_offset: [0, 0, 0],
+     platform_point: [0, 0, 0], link_length: 100}
+verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
+"""
+"""At (x, 0, z), |x| < 100, its two carriage positions are -z -/+ sqrt(100^2 - x^2) (u = -z):
+two postures, both reachable; beyond x = 100 neither is."""
+
+
 class ChangedCalls:
     """A loaded plugin whose outputs ``change(t6 (n, 4, 4), calls)`` alters in place after
     each call (its solutions, warnings, faults): a routine that is wrong in a chosen way."""

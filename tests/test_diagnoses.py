@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from conftest import random_t6
+from conftest import ONE_RAIL, random_t6
 from kingen.diagnose import MATCH, NAMED_SCALES, _ranges, diagnose, diagnose_warnings
 from kingen.model import load_robot
 from kingen.reference import solve
@@ -236,12 +236,8 @@ def test_a_crank_offset_is_measured_across_the_half_turn():
 
 
 def one_rail_robot(tmp_path):
-    """One vertical rail through the base origin, its 100 mm link to the platform origin: two
-    postures, the two carriage positions 100 mm from the platform point."""
     path = tmp_path / "one_rail.yaml"
-    path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
-                    "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
-                    "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    path.write_text(ONE_RAIL)
     return load_robot(path)
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from conftest import SHIPPED, random_t6
+from conftest import ONE_RAIL, PLUMB_LEG, SHIPPED, random_t6
 from kingen.routine import SINGULAR_TOLERANCE, WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
@@ -113,9 +113,7 @@ def test_a_rail_near_its_singular_band_keeps_its_small_root(tmp_path):
     import math
 
     path = tmp_path / "one_rail.yaml"
-    path.write_text("name: one_rail\ndescription: one rail\nlimbs:\n  - {model: rail, rail_point: [0, 0, 0], "
-                    "direction: [0, 0, -1], carriage_offset: [0, 0, 0], platform_point: [0, 0, 0], link_length: 100}\n"
-                    "verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     x = 100 * math.sqrt(1 - 1e-5)
     root = math.sqrt(100 ** 2 - x ** 2)
@@ -222,9 +220,7 @@ def test_a_joint_exactly_at_a_travel_limit_is_within_it(tmp_path):
     |z| exactly, sqrt(z^2) = z) with travel [100, 200]: at z = 100 and 200 exactly it is
     within its travel (good); a float beyond either, outside."""
     path = tmp_path / "plumb_leg.yaml"
-    path.write_text("name: plumb_leg\ndescription: one leg\nlimbs:\n  - {model: leg, base_point: [0, 0, 0], "
-                    "platform_point: [0, 0, 0], reference_length: 0, travel: [100, 200]}\n"
-                    "verification: {home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    path.write_text(PLUMB_LEG)
     robot = load_robot(path)
     heights = [100.0, 200.0, float(np.nextafter(100.0, 0.0)), float(np.nextafter(200.0, 300.0))]
     solution = solve(robot, t6_from_pose([[0.0, 0.0, z, 0.0, 0.0, 0.0] for z in heights]))

@@ -17,7 +17,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from conftest import ChangedCalls
+from conftest import ONE_RAIL, PLUMB_LEG, ChangedCalls
 
 from kingen.conventions import t6_from_pose
 from kingen.model import load_robot
@@ -30,15 +30,6 @@ from kingen.verify.tally import Tally, accumulate, posture_statistics, warnings_
 
 GOOD, LIMITS = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]
 SINGULAR, UNREACHABLE = WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]
-
-PLUMB_LEG = """\
-name: plumb_leg
-description: One leg from the base origin to the platform origin, its joint the absolute length.
-limbs:
-  - {model: leg, base_point: [0, 0, 0], platform_point: [0, 0, 0], reference_length: 0, travel: [100, 200]}
-verification: {home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
-"""
-"""Its joint at pose (0, 0, z) is z: the travel limits 100 and 200 mm are met at z = 100, 200."""
 
 
 def calls_of(expected, warnings=None, solutions=None):
@@ -171,21 +162,9 @@ def test_the_jacobian_check_passes_a_constant_offset():
     assert check.passed and check.judged == 30
 
 
-RAIL = """\
-name: one_rail
-description: One rail along -z through the origin, link 100 mm to the platform origin.
-limbs:
-  - {model: rail, rail_point: [0, 0, 0], direction: [0, 0, -1], carriage_offset: [0, 0, 0],
-     platform_point: [0, 0, 0], link_length: 100}
-verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
-"""
-"""At (x, 0, z), |x| < 100, its two carriage positions are -z -/+ sqrt(100^2 - x^2) (u = -z):
-two postures, both reachable; beyond x = 100 neither is."""
-
-
 def test_per_posture_statistics_count_each_outcome_exactly(tmp_path):
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     poses = [[50, 0, -50, 0, 0, 0]] * 4 + [[60, 0, -40, 0, 0, 0]] * 3 + [[150, 0, -50, 0, 0, 0]] * 2
     t6 = t6_from_pose(poses)
@@ -219,7 +198,7 @@ def test_per_posture_statistics_count_each_outcome_exactly(tmp_path):
 def test_a_rail_at_its_singular_radicand_is_counted_by_its_own_bound(tmp_path):
     """At x = 100 sqrt(1 - D) the normalised radicand is D (the rail's construction)."""
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     t6 = t6_from_pose([[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0], [50, 0, -50, 0, 0, 0]])
     expected = solve(robot, t6)
@@ -238,7 +217,7 @@ def test_closure_judges_every_reachable_branch_outside_the_singular_band_and_fai
     from kingen.verify.tally import closure_error
 
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     poses = ([[x, 0, -50, 0, 0, 0] for x in (0, 20, 40, 60, 80, 95)] + [[100 * math.sqrt(1 - 1e-7), 0, -50, 0, 0, 0]]
              + [[150, 0, -50, 0, 0, 0], [0, 150, -50, 0, 0, 0]])
@@ -295,7 +274,7 @@ def test_just_outside_the_band_a_long_link_is_held_to_its_conditioning_bound(tmp
     from kingen.verify.tally import singular_bounds
 
     path = tmp_path / "long_rail.yaml"
-    path.write_text(RAIL.replace("link_length: 100", "link_length: 20000").replace("one_rail", "long_rail")
+    path.write_text(ONE_RAIL.replace("link_length: 100", "link_length: 20000").replace("one_rail", "long_rail")
                     .replace("home: [50, 0, -50, 0, 0, 0]", "home: [5000, 0, -50, 0, 0, 0]"))
     robot = load_robot(path)
     t6 = t6_from_pose([[20000 * math.sqrt(1 - 1e-3), 0, -50, 0, 0, 0]])
@@ -391,7 +370,7 @@ def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
     1e-5 mm, beyond it), given twice to the same report and tally, counts everything twice and
     keeps the same worst."""
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     poses = ([[50, 0, -50, 0, 0, 0]] * 4 + [[60, 0, -40, 0, 0, 0]] * 3 + [[150, 0, -50, 0, 0, 0]] * 2
              + [[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0]])
@@ -433,7 +412,7 @@ def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
 
 def test_a_chunk_whose_every_call_was_stopped_counts_only_its_faults(tmp_path):
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     t6 = t6_from_pose([[50, 0, -50, 0, 0, 0], [60, 0, -40, 0, 0, 0]])
     expected = solve(robot, t6)
@@ -539,7 +518,7 @@ def test_a_singular_entry_exactly_at_its_bound_is_right(tmp_path):
     from kingen.verify.tally import singular_bounds
 
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     robot = load_robot(path)
     t6 = t6_from_pose([[100 * math.sqrt(1 - 1e-12), 0, -50, 0, 0, 0]])
     solved = solve(robot, t6)
@@ -628,10 +607,10 @@ def test_a_library_built_from_another_definition_is_named_with_both_digests(tmp_
     from kingen.verify.checks.definition import definition_check
 
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     built = build_plugin(load_robot(path), tmp_path / "build")
     old = load_robot(path).sha256
-    path.write_text(RAIL + "# reviewed again\n")
+    path.write_text(ONE_RAIL + "# reviewed again\n")
     robot = load_robot(path)
     check = definition_check(robot, built.library)
     assert not check.passed and old != robot.sha256

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from conftest import ONE_RAIL
 from kingen.routine import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.routine import Calls
@@ -18,20 +19,11 @@ from kingen.verify.tally import Tally as _Tally
 from kingen.verify.tally import accumulate as _accumulate
 from kingen.verify.tally import singular_bounds, warnings_in_band
 
-RAIL = """\
-name: one_rail
-description: One rail along -z through the origin, link 100 mm to the platform origin.
-limbs:
-  - {model: rail, rail_point: [0, 0, 0], direction: [0, 0, -1], carriage_offset: [0, 0, 0],
-     platform_point: [0, 0, 0], link_length: 100}
-verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
-"""
-
 
 @pytest.fixture
 def rail(tmp_path):
     path = tmp_path / "one_rail.yaml"
-    path.write_text(RAIL)
+    path.write_text(ONE_RAIL)
     return load_robot(path)
 
 
