@@ -21,9 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .certificate import certified_above
 from .routine import SINGULAR_TOLERANCE, WARNINGS
-from .singularity import (branch_table, direct_index_of_entries, direct_index_side, gram_entries_of, gram_partial_sums,
-                          limb_wrenches, posture_values)
+from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
+                          gram_partial_sums, limb_wrenches, posture_values)
 
 
 @dataclass(frozen=True)
@@ -49,7 +50,8 @@ class Solution:
     """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
     (robots without six force lines, or not asked for). Computed for the warnings only (not
     ``indices``), it is exact within EXACT_WINDOW of direct_index_min and elsewhere only says
-    its side, +inf or -inf (kingen.singularity.direct_index_side)."""
+    its side, +inf or -inf (kingen.singularity.direct_index_side; +inf also where
+    kingen.certificate proves it above the window)."""
 
     @functools.cached_property
     def joints(self):
@@ -108,6 +110,40 @@ def _blocks(count, postures):
     return [slice(begin, begin + step) for begin in range(0, count, step)]
 
 
+CERTIFY_PROBE_POSES = 32
+"""The certificate (kingen.certificate) is tried on this many poses first, per call of solve..."""
+CERTIFY_SETTLED = 0.5
+"""...and used for all of them only where it settled at least this fraction of the probe's
+postures: it settles every CEART posture and (being loose by 20 to 300 times there) none of
+IWF's or the hexapod's, where it would only cost time."""
+
+
+def _direct_index(robot, points, branch_joints, indices):
+    """(n, postures) the direct index (mm): exact (``indices``), or as direct_index_side gives
+    it for robot.direct_index_min, +inf where kingen.certificate proves it above the window,
+    the rest from each posture's M (built only where some posture of a block needs it)."""
+    count = points.shape[0]
+    wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
+    lines = np.moveaxis(wrenches, 0, -1)  # (dof, 2, 6, n): the memory's own layout
+    index = np.empty((count, robot.postures))
+    threshold = robot.direct_index_min
+    certify = not indices and threshold is not None and count > 0 and np.mean(
+        certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], threshold * (1.0 + EXACT_WINDOW))) >= CERTIFY_SETTLED
+    partial_sums = None
+    for block in _blocks(count, robot.postures):
+        settled = certified_above(robot, lines[..., block], threshold * (1.0 + EXACT_WINDOW)) if certify else None
+        if settled is not None and np.all(settled):
+            index[block] = np.inf
+            continue
+        if partial_sums is None:
+            partial_sums = gram_partial_sums(robot, wrenches)
+        entries = gram_entries_of(partial_sums, block)
+        index[block] = (direct_index_of_entries(entries) if indices else direct_index_side(entries, threshold))
+        if settled is not None:
+            np.copyto(index[block], np.inf, where=settled)
+    return index
+
+
 def _solve(robot, t6, indices):
     count = t6.shape[0]
     rows = _t6_rows(t6)
@@ -140,13 +176,7 @@ def _solve(robot, t6, indices):
     singular = np.broadcast_to(singular[:, None], outside.shape)
     index = None
     if robot.has_direct_index and (indices or robot.direct_index_min is not None):
-        wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
-        index = np.empty((count, robot.postures))
-        partial_sums = gram_partial_sums(robot, wrenches)
-        for block in _blocks(count, robot.postures):
-            entries = gram_entries_of(partial_sums, block)
-            index[block] = (direct_index_of_entries(entries) if indices
-                            else direct_index_side(entries, robot.direct_index_min))
+        index = _direct_index(robot, points, branch_joints, indices)
         np.copyto(index, np.nan, where=unreachable)
         if robot.direct_index_min is not None:
             singular = singular | (index <= robot.direct_index_min)

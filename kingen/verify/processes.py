@@ -129,11 +129,9 @@ def compare_poses(poses, first=False):
     with printed.capture():
         calls = plugin.call(t6, options.link_lengths, options.link_offsets)
     expected = in_vocabulary(solve(robot, t6, options.link_lengths, options.link_offsets), plugin)
-    accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
+    accumulate(robot, report, tally, robot.revolute, t6, calls, expected, keep_first=first)
     counts = {name: getattr(report, name) for name in REPORT_COUNTS + REPORT_WORST}
     tally.calibrated = None
-    if not first:
-        tally.first = None
     return _Part(counts, tally, printed.bytes, printed.first_line)
 
 

@@ -119,7 +119,10 @@ class Tally:
             self.first = other.first
 
 
-def accumulate(robot, report, tally, revolute, t6, calls, expected):
+def accumulate(robot, report, tally, revolute, t6, calls, expected, keep_first=True):
+    """Add one chunk's comparison to ``report``'s counters and ``tally``'s totals: the routine's
+    ``calls`` on the poses ``t6`` against the reference's ``expected``. Its first
+    DIAGNOSIS_POSES poses become ``tally.first`` when ``keep_first`` and none are kept yet."""
     tally.faulty_calls += int(np.count_nonzero(calls.faults))
     tally.fault_bits |= int(np.bitwise_or.reduce(calls.faults)) if len(calls.faults) else 0
     aborted = (calls.faults & ~INPUTS_MODIFIED) != 0
@@ -155,7 +158,7 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected):
     closure_worst, closure_checked = closure_error(tally.calibrated, expected, calls.solutions)
     tally.closure_worst = max(tally.closure_worst, closure_worst)
     tally.closure_checked += closure_checked
-    if tally.first is None:
+    if keep_first and tally.first is None:
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
                        expected.warnings[keep])
