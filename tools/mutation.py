@@ -60,6 +60,8 @@ TESTS = {
     "kingen/singularity.py": ["tests/test_numerics.py", "tests/test_singularity.py", "tests/test_verdicts.py",
                               "tests/test_reference.py", "tests/test_verify_columns.py", "tests/test_golden_values.py"]
                              + _REPORTS,
+    "kingen/certificate.py": ["tests/test_certificate.py", "tests/test_singularity.py", "tests/test_reference.py",
+                              "tests/test_verdicts.py"],
     "kingen/forward.py": ["tests/test_numerics.py", "tests/test_forward.py", "tests/test_assembly_modes.py"] + _REPORTS,
     "kingen/diagnose.py": ["tests/test_diagnoses.py", "tests/test_legacy.py"],
     "kingen/limbs/*.py": ["tests/test_reference.py", "tests/test_diagnoses.py", "tests/test_golden_values.py",
