@@ -127,12 +127,15 @@ def _direct_index(robot, points, branch_joints, indices):
     lines = np.moveaxis(wrenches, 0, -1)  # (dof, 2, 6, n): the memory's own layout
     index = np.empty((count, robot.postures))
     threshold = robot.direct_index_min
-    certify = not indices and threshold is not None and count > 0 and np.mean(
-        certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], threshold * (1.0 + EXACT_WINDOW))) >= CERTIFY_SETTLED
+    settled = None
+    if not indices and threshold is not None and count > 0:
+        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], threshold * (1.0 + EXACT_WINDOW))
+        if np.mean(probe) >= CERTIFY_SETTLED:
+            rest = certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], threshold * (1.0 + EXACT_WINDOW))
+            settled = np.concatenate([probe, rest])
     partial_sums = None
     for block in _blocks(count, robot.postures):
-        settled = certified_above(robot, lines[..., block], threshold * (1.0 + EXACT_WINDOW)) if certify else None
-        if settled is not None and np.all(settled):
+        if settled is not None and np.all(settled[block]):
             index[block] = np.inf
             continue
         if partial_sums is None:
@@ -140,7 +143,7 @@ def _direct_index(robot, points, branch_joints, indices):
         entries = gram_entries_of(partial_sums, block)
         index[block] = (direct_index_of_entries(entries) if indices else direct_index_side(entries, threshold))
         if settled is not None:
-            np.copyto(index[block], np.inf, where=settled)
+            np.copyto(index[block], np.inf, where=settled[block])
     return index
 
 
