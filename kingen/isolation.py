@@ -65,6 +65,7 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     child.start()
     sender.close()
     stage = first_stage
+    finished = False
     try:
         while True:
             if not receiver.poll(timeout):
@@ -73,7 +74,9 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
             try:
                 kind, value = receiver.recv()
             except EOFError:
+                finished = True
                 break
+            finished = kind in LAST_MESSAGES
             if kind == "stage":
                 stage = value
             elif kind == "result":
@@ -88,7 +91,7 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
                 on_message(kind, value)
     finally:
         receiver.close()
-        _end(child)
+        _end(child, finished)
     if killed_from_outside(child.exitcode):
         return None, ChildFailure("crash", stage, f"the host process was {killer(child.exitcode)} during {stage}, "
                                                  "not ended by the routine: run it again")
@@ -123,12 +126,21 @@ def killer(exit_code):
     return f"killed by {ending(exit_code)} ({-exit_code}) from outside{hint}"
 
 
-def _end(child):
-    """Stop the child if it still runs (after a result it exits by itself) and reap it."""
-    child.join(timeout=5.0)
+LAST_MESSAGES = ("result", "defect", "error", "internal")
+"""What a child sends last, just before it exits by itself."""
+EXIT_GRACE = 5.0
+"""Seconds a child that sent its last message (or closed its end) gets to exit by itself."""
+
+
+def _end(child, finished):
+    """Reap the child: one that ``finished`` its job gets EXIT_GRACE seconds to exit by itself;
+    any other (stopped for a timeout, or left on an exception here, SIGTERM included) is killed
+    at once, since a routine that spins in native code never gets to run a signal handler."""
+    if finished:
+        child.join(timeout=EXIT_GRACE)
     if child.is_alive():
         child.kill()
-        child.join()
+    child.join()
 
 
 def _child_main(connection, job, arguments):

@@ -236,3 +236,30 @@ def test_a_reused_yaml_anchor_is_one_error_line_without_ruamels_warning(tmp_path
                                    "base_point: &p [0, 0, 0], platform_point: *p"))
     result = run_kingen(tmp_path, "render", str(robot), "-o", str(tmp_path / "out"))
     assert result.returncode == 0 and result.stderr == ""
+
+
+def _spin(channel):
+    channel.stage("spinning")
+    while True:
+        pass
+
+
+def _answer(channel):
+    return 42
+
+
+def test_a_child_stopped_for_a_timeout_is_killed_at_once_and_a_finished_one_exits_by_itself(monkeypatch):
+    """kingen.isolation: a child that makes no progress is killed as soon as its timeout ends,
+    not given EXIT_GRACE to exit first (a routine spinning in native code never would); one that
+    sent its result ends by itself (exit status 0)."""
+    from kingen import isolation
+
+    monkeypatch.setattr(isolation, "EXIT_GRACE", 120.0)
+    start = time.monotonic()
+    result, failure = isolation.run_in_child(_spin, (), timeout=0.5)
+    assert result is None and failure.kind == "timeout" and failure.stage == "spinning"
+    assert time.monotonic() - start < 60
+    ended = []
+    monkeypatch.setattr(isolation, "_end", lambda child, finished: ended.append((finished, child.join() or child.exitcode)))
+    assert isolation.run_in_child(_answer, (), timeout=30) == (42, None)
+    assert ended == [(True, 0)]
