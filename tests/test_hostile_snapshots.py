@@ -129,7 +129,7 @@ def _peak_memory_mb(tmp_path, samples):
 
 def test_record_memory_does_not_grow_with_the_samples(tmp_path):
     # Before issue 23 the whole snapshot was built in memory: about 75 MB more per 1000 ceart poses.
-    assert _peak_memory_mb(tmp_path, 6000) < _peak_memory_mb(tmp_path, 1000) + 60
+    assert _peak_memory_mb(tmp_path, 3000) < _peak_memory_mb(tmp_path, 1000) + 60
 
 
 def test_a_plugin_recording_streams_from_its_child_and_verifies(tmp_path, capsys, monkeypatch):
