@@ -5,6 +5,7 @@ the rounding and translation conditions each shown to be what refuses a posture,
 reference giving the same warnings with it as without it."""
 
 from dataclasses import replace
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -15,9 +16,13 @@ from kingen.certificate import ROUNDING, certified_above, posture_determinants
 from kingen.model import load_robot
 from kingen.reference import solve
 from kingen.routine import WARNINGS
-from kingen.singularity import PACKED, direct_index, direct_index_side, limb_wrenches, posture_values
+from kingen.singularity import (PACKED, TRANSLATION_SINGULAR, direct_index, direct_index_side, limb_wrenches,
+                                posture_values)
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
+UNIT_ROUNDOFF = Fraction(1, 2 ** 53)
+G30 = 30 * UNIT_ROUNDOFF / (1 - 30 * UNIT_ROUNDOFF)
+"""docs/conventions.md's rounding constant g30 = 30u / (1 - 30u), exactly."""
 
 
 def lines_of(robot, count, seed):
@@ -138,6 +143,58 @@ def test_it_never_certifies_what_the_reference_calls_translation_singular(monkey
     assert not np.any(certified_above(robot, lines, 1e-12))
     monkeypatch.setattr(certificate, "TRANSLATION_MARGIN", 0.0)
     assert np.all(certified_above(robot, lines, 1e-12))
+
+
+def triangular_lines(x, d):
+    """Lines (6, 2, 6, 1) of W = [[I, X], [0, d I]], X all 0 but x in row 0, column 3: unit forces along
+    the axes through the origin (the first with moment x) and three pure moments d. det W = d^3,
+    P = (1 + x) d^3, F = 3, T = x^2 + 3 d^2, and every product and sum in the certificate's det W is exact."""
+    wrenches = np.zeros((1, 6, 6))
+    wrenches[0, :3, :3] = np.eye(3)
+    wrenches[0, 0, 3] = x
+    wrenches[0, 3:, 3:] = d * np.eye(3)
+    return as_lines(wrenches)
+
+
+def documented_test(x, d, bound):
+    """docs/conventions.md's test for triangular_lines(x, d) in exact rational arithmetic (F / 3 = 1):
+    |det| > 2 g30 P + t (F / 3)^(3/2) T / 2 (1 + 1e-12) and det^2 > 1e3 TRANSLATION_SINGULAR (F / 3)^3 (T / 3)^3."""
+    x, d, bound = Fraction(x), Fraction(d), Fraction(bound)
+    det, terms, moment_trace = d ** 3, (1 + x) * d ** 3, x * x + 3 * d * d
+    return bool(det > 2 * G30 * terms + bound * moment_trace / 2 * (1 + Fraction(1, 10 ** 12))
+                and det * det > 1000 * Fraction(TRANSLATION_SINGULAR) * (moment_trace / 3) ** 3)
+
+
+SOLVED = (1 - 2 * G30) / (Fraction(3, 2) * (1 + Fraction(1, 10 ** 12)))
+"""The bound at which W = I (det 1, P 1, F 3, T 3) meets the documented test's first inequality."""
+
+
+@pytest.mark.parametrize("x, d, bound, certified", [
+    (float((1 + 30 * UNIT_ROUNDOFF) / (2 * G30) - 1), 2.0 ** 47, 0.0, False),  # |det W| 30u below 2 g30 P
+    (float(Fraction(99, 100) / (2 * G30) - 1), 2.0 ** 47, 0.0, True),  # 1 % above it
+    (0.0, 1.0, float(SOLVED * (1 - Fraction(1, 10 ** 13))), True),  # W = I, 1e-13 below the solved bound
+    (0.0, 1.0, float(SOLVED * (1 + Fraction(1, 10 ** 13))), False),  # 1e-13 above it
+])
+def test_it_certifies_exactly_where_the_documented_test_passes_in_exact_arithmetic(x, d, bound, certified):
+    """Where det W and P are exact, the certificate is the documented test with g30 = 30u / (1 - 30u) and
+    1 + 1e-12 themselves, not with a rounding allowance or a margin a few units of roundoff or 1e-12 off."""
+    assert documented_test(x, d, bound) is certified
+    assert certified_above(load_robot("hexapod"), triangular_lines(x, d), bound)[0, 0] == certified
+
+
+@pytest.mark.parametrize("ratio", [1 - 1e-4, 1 + 5e-4])
+def test_its_translation_condition_is_the_documented_one(ratio):
+    """det W^2 > 1e3 TRANSLATION_SINGULAR (F / 3)^3 (T / 3)^3 decides, on six unit force lines (x, y, z
+    through the origin; x, y, z with moments (0, 1, 0), (0, 0, 1), (1, q, 0)): det W = 1, F = 6, T = 3 + q^2,
+    q set so that the left side is ``ratio`` times the right, measured with LAPACK's det."""
+    q = np.sqrt(3 * ((TRANSLATION_SINGULAR * 8 * 1e3 * ratio) ** (-1 / 3) - 1))
+    wrenches = np.zeros((1, 6, 6))
+    wrenches[0, :3, :3] = wrenches[0, 3:, :3] = np.eye(3)
+    wrenches[0, 3:, 3:] = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, q, 0.0]]
+    force_third, moment_third = (wrenches[0, :, :3] ** 2).sum() / 3, (wrenches[0, :, 3:] ** 2).sum() / 3
+    measured = np.linalg.det(wrenches[0]) ** 2 / (TRANSLATION_SINGULAR * force_third ** 3 * moment_third ** 3)
+    assert measured / 1e3 == pytest.approx(ratio, rel=1e-6)
+    assert certified_above(load_robot("hexapod"), as_lines(wrenches), 1e-12)[0, 0] == (measured > 1e3)
 
 
 @pytest.mark.parametrize("threshold", [None, 450.0, 600.0])
