@@ -28,6 +28,8 @@ def singular_bounds(robot, reference_solution, fixed=None):
     larger of the robot's size_mm and the joint's own magnitude): the radicand's rounding
     grows with the coordinates it is computed from."""
     radicands = reference_solution.radicands
+    if not np.any(np.isfinite(radicands)):  # legs only (D = +inf): no joint is ill-conditioned
+        return np.zeros(radicands.shape)
     scale = np.array([limb.singular_scale() for limb in robot.limbs])
     # A length's radicand is computed from coordinates as large as the robot or the joint
     # (a carriage far along its rail): its rounding grows with (that / link)^2.
