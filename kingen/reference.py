@@ -114,8 +114,8 @@ CERTIFY_PROBE_POSES = 32
 """The certificate (kingen.certificate) is tried on this many poses first, per call of solve..."""
 CERTIFY_SETTLED = 0.5
 """...and used for all of them only where it settled at least this fraction of the probe's
-postures: it settles every CEART posture and (being loose by 19 to 350 times there) none of
-IWF's or the hexapod's, where it would only cost time."""
+postures: it settles every CEART posture in the verification region and (being loose by 19
+to 350 times there) none of IWF's or the hexapod's, where it would only cost time."""
 
 
 def _direct_index(robot, points, branch_joints, indices):
