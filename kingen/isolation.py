@@ -65,7 +65,7 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     child.start()
     sender.close()
     stage = first_stage
-    finished = False
+    finished = stopped = False
     try:
         while True:
             if not receiver.poll(timeout):
@@ -91,7 +91,11 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
                 on_message(kind, value)
     finally:
         receiver.close()
-        _end(child, finished)
+        stopped = _end(child, finished)
+    if stopped:
+        return None, ChildFailure("crash", stage, f"the plugin closed kingen's channel to the host process during "
+                                                 f"{stage}, which then did not end within {EXIT_GRACE:g} s: it "
+                                                 "was stopped")
     if killed_from_outside(child.exitcode):
         return None, ChildFailure("crash", stage, f"the host process was {killer(child.exitcode)} during {stage}, "
                                                  "not ended by the routine: run it again")
@@ -135,12 +139,16 @@ EXIT_GRACE = 5.0
 def _end(child, finished):
     """Reap the child: one that ``finished`` its job gets EXIT_GRACE seconds to exit by itself;
     any other (stopped for a timeout, or left on an exception here, SIGTERM included) is killed
-    at once, since a routine that spins in native code never gets to run a signal handler."""
+    at once, since a routine that spins in native code never gets to run a signal handler.
+    Returns whether a finished child had to be killed (its last message sent, or its end of
+    the pipe closed, it went on running)."""
     if finished:
         child.join(timeout=EXIT_GRACE)
-    if child.is_alive():
+    stopped = child.is_alive()
+    if stopped:
         child.kill()
     child.join()
+    return finished and stopped
 
 
 def _child_main(connection, job, arguments):

@@ -260,6 +260,26 @@ def test_a_child_stopped_for_a_timeout_is_killed_at_once_and_a_finished_one_exit
     assert result is None and failure.kind == "timeout" and failure.stage == "spinning"
     assert time.monotonic() - start < 60
     ended = []
-    monkeypatch.setattr(isolation, "_end", lambda child, finished: ended.append((finished, child.join() or child.exitcode)))
+    monkeypatch.setattr(isolation, "_end",
+                        lambda child, finished: ended.append((finished, child.join() or child.exitcode)) or False)
     assert isolation.run_in_child(_answer, (), timeout=30) == (42, None)
     assert ended == [(True, 0)]
+
+
+def _close_and_spin(channel):
+    channel.stage("closing the pipe")
+    channel._connection.close()
+    while True:
+        pass
+
+
+def test_a_child_that_closes_its_pipe_and_runs_on_is_stopped_and_named(monkeypatch):
+    """A plugin that closes kingen's channel (its file descriptor) and goes on running is
+    stopped after EXIT_GRACE and named for what it did, not reported as killed from outside."""
+    from kingen import isolation
+
+    monkeypatch.setattr(isolation, "EXIT_GRACE", 0.5)
+    result, failure = isolation.run_in_child(_close_and_spin, (), timeout=60)
+    assert result is None and failure.kind == "crash" and failure.stage == "closing the pipe"
+    assert failure.detail == ("the plugin closed kingen's channel to the host process during closing the pipe, "
+                              "which then did not end within 0.5 s: it was stopped")
