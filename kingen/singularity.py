@@ -139,38 +139,11 @@ def posture_gram_entries(robot, wrenches):
     return gram_entries_of(gram_partial_sums(robot, wrenches))
 
 
-GRAM_BLOCK_POSES = 1024
-"""Poses whose lines' w w^T are formed at once: 21 entries per line stay in the cache (the
-hexapod's 7,168-pose chunks took 11 times as long in one piece)."""
-
-
 def gram_partial_sums(robot, wrenches):
     """(high, low): the two partial sums of partial_sum_split as packed entries with the poses
     last, high (21, postures >> low_bits, n) and low (21, 2^low_bits, n) (None when no limb
     is split off), from the limbs' line wrenches (n, dof, 2, 6): each line's w w^T once.
     Per pose, not per posture: gram_entries_of adds them up for the postures."""
-    count = wrenches.shape[0]
-    table = branch_table(robot)
-    low_bits, low_limbs, high_limbs = partial_sum_split(robot)
-    groups = [(high_limbs, range(0, robot.postures, 1 << low_bits))]
-    if low_limbs:
-        groups.append((low_limbs, range(1 << low_bits)))
-    sums = [np.empty((len(PACKED), len(postures), count)) for _, postures in groups]
-    for begin in range(0, count, GRAM_BLOCK_POSES):
-        block = slice(begin, begin + GRAM_BLOCK_POSES)
-        lines = _line_products(robot, wrenches[block])
-        for (limbs, postures), total in zip(groups, sums):
-            for column, posture in enumerate(postures):  # the posture's sum over ``limbs`` of their branch's w w^T
-                first, *others = limbs
-                target = total[:, column, block]
-                np.copyto(target, lines[first, table[posture, first]])
-                for limb in others:
-                    target += lines[limb, table[posture, limb]]
-    return sums[0], sums[1] if low_limbs else None
-
-
-def _line_products(robot, wrenches):
-    """{(limb, branch): w w^T as packed entries (21, n)} of every line, from wrenches (n, dof, 2, 6)."""
     count = wrenches.shape[0]
     lines = {}
     for index, limb in enumerate(robot.limbs):
@@ -181,7 +154,22 @@ def _line_products(robot, wrenches):
                 start = row * (row + 1) // 2
                 np.multiply(rates[row], rates[:row + 1], out=product[start:start + row + 1])
             lines[index, branch] = product
-    return lines
+    table = branch_table(robot)
+    low_bits, low_limbs, high_limbs = partial_sum_split(robot)
+
+    def partial_sums(limbs, postures):
+        """(21, len(postures), n): per posture, the sum over ``limbs`` of their branch's w w^T."""
+        sums = np.empty((len(PACKED), len(postures), count))
+        for column, posture in enumerate(postures):
+            first, *others = limbs
+            total = sums[:, column]
+            np.copyto(total, lines[first, table[posture, first]])
+            for limb in others:
+                total += lines[limb, table[posture, limb]]
+        return sums
+
+    high = partial_sums(high_limbs, range(0, robot.postures, 1 << low_bits))
+    return high, partial_sums(low_limbs, range(1 << low_bits)) if low_limbs else None
 
 
 def gram_entries_of(partial_sums, poses=slice(None)):
