@@ -111,7 +111,9 @@ def _blocks(count, postures):
 
 
 CERTIFY_PROBE_POSES = 32
-"""The certificate (kingen.certificate) is tried on this many poses first, per call of solve..."""
+"""The certificate (kingen.certificate) is tried on this many poses first, per call of solve
+for robots with more than one posture (it forms all 64 branch combinations' determinants,
+of which a one-posture robot uses one)..."""
 CERTIFY_SETTLED = 0.5
 """...and used for all of them only where it settled at least this fraction of the probe's
 postures: it settles every CEART posture in the verification region and (being loose by 19
@@ -128,7 +130,7 @@ def _direct_index(robot, points, branch_joints, indices):
     index = np.empty((count, robot.postures))
     threshold = robot.direct_index_min
     settled = None
-    if not indices and threshold is not None and count > 0:
+    if not indices and threshold is not None and count > 0 and robot.postures > 1:
         probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], threshold * (1.0 + EXACT_WINDOW))
         if np.mean(probe) >= CERTIFY_SETTLED:
             rest = certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], threshold * (1.0 + EXACT_WINDOW))
