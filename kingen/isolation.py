@@ -65,7 +65,7 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     child.start()
     sender.close()
     stage = first_stage
-    finished = stopped = False
+    finished = False
     try:
         while True:
             if not receiver.poll(timeout):

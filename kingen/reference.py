@@ -131,10 +131,10 @@ def _direct_index(robot, points, branch_joints, indices):
     threshold = robot.direct_index_min
     settled = None
     if not indices and threshold is not None and count > 0 and robot.postures > 1:
-        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], threshold * (1.0 + EXACT_WINDOW))
+        window_top = threshold * (1.0 + EXACT_WINDOW)  # above it, direct_index_side says only "above"
+        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], window_top)
         if np.mean(probe) >= CERTIFY_SETTLED:
-            rest = certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], threshold * (1.0 + EXACT_WINDOW))
-            settled = np.concatenate([probe, rest])
+            settled = np.concatenate([probe, certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], window_top)])
     partial_sums = None
     for block in _blocks(count, robot.postures):
         if settled is not None and np.all(settled[block]):

@@ -55,9 +55,8 @@ TESTS = {
     "kingen/verify/[!t]*.py": _VERIFY + ["tests/test_verify_processes.py", "tests/test_exercised.py",
                                          "tests/test_legacy.py"] + _REPORTS + _CHILD,
     "kingen/reference.py": ["tests/test_reference.py", "tests/test_certificate.py", "tests/test_verdicts.py",
-                            "tests/test_golden_values.py",
-                            "tests/test_golden_lines.py", "tests/test_calibration.py", "tests/test_verify_bands.py"]
-                           + _REPORTS,
+                            "tests/test_golden_values.py", "tests/test_golden_lines.py", "tests/test_calibration.py",
+                            "tests/test_verify_bands.py"] + _REPORTS,
     "kingen/singularity.py": ["tests/test_numerics.py", "tests/test_singularity.py", "tests/test_verdicts.py",
                               "tests/test_reference.py", "tests/test_verify_columns.py", "tests/test_golden_values.py"]
                              + _REPORTS,
