@@ -14,6 +14,7 @@ import stat
 import subprocess
 import sys
 
+import jinja2
 import pytest
 
 from conftest import skip_or_fail
@@ -117,6 +118,66 @@ def test_a_cache_folder_another_user_owns_is_refused(tmp_path, monkeypatch, caps
     with pytest.raises(KingenError, match="is owned by another user"):
         host_support()
 
+
+def plant_compiled_template(name, planted_text):
+    """Compile DELMIA's template ``name`` with ``planted_text`` appended, and store that
+    code in kingen's template cache under the real source's key and checksum (as another
+    user could, into a cache they may write): the file a render would load."""
+    from kingen.hosts.delmia.render import TEMPLATES
+    from kingen.render import _environment
+
+    environment = _environment("c", TEMPLATES)
+    source, filename, _ = environment.loader.get_source(environment, name)
+    cache = environment.bytecode_cache
+    bucket = jinja2.bccache.Bucket(environment, cache.get_cache_key(name, filename), cache.get_source_checksum(source))
+    bucket.code = environment.compile(source + planted_text, name, filename)
+    path = cache._path(bucket)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "wb") as stream:
+        bucket.write_bytecode(stream)
+    return path
+
+
+@pytest.mark.parametrize("mode, loaded", [(0o600, True), (0o620, False), (0o602, False)])
+def test_compiled_templates_are_loaded_only_from_a_private_file(tmp_path, monkeypatch, mode, loaded):
+    """A planted compiled template is rendered from a private file (so that the test can
+    tell) and never from one its group or others may write."""
+    from kingen.hosts.delmia.render import render
+    from kingen.model import load_robot
+    from kingen.render import _environment
+
+    monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
+    _environment.cache_clear()  # a new environment: nothing compiled in this process yet
+    path = plant_compiled_template("kin_robot.c.j2", "/* planted */\n")
+    path.chmod(mode)
+    _environment.cache_clear()
+    try:
+        source = render(load_robot("tau"))["kin_tau.c"]
+    finally:
+        _environment.cache_clear()
+    assert source.endswith("/* planted */\n") == loaded
+
+
+def test_an_unwritable_or_junk_template_cache_still_renders(tmp_path, monkeypatch):
+    from kingen.hosts.delmia.render import render
+    from kingen.model import load_robot
+    from kingen.render import _environment
+
+    monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
+    _environment.cache_clear()
+    expected = render(load_robot("tau"))["kin_tau.c"]
+    compiled = list((tmp_path / "cache").glob("templates-*/*.jinja"))
+    assert compiled and all(stat.S_IMODE(path.stat().st_mode) == 0o600 for path in compiled)
+    for path in compiled:
+        path.write_bytes(path.read_bytes()[:40])  # cut short
+    _environment.cache_clear()
+    assert render(load_robot("tau"))["kin_tau.c"] == expected
+    monkeypatch.setenv("KINGEN_CACHE", "/proc/kingen-cache")  # cannot be made
+    _environment.cache_clear()
+    try:
+        assert render(load_robot("tau"))["kin_tau.c"] == expected
+    finally:
+        _environment.cache_clear()
 
 # --- 5. a leg of no length
 

@@ -86,15 +86,19 @@ def linuxcnc_machine():
 
 def machine_ini(robot, folder, kins_ini, units):
     """A simulated machine's .ini: kingen's [TRAJ] HOME, [KINS] and [JOINT_n] entries, with
-    homing at the HOME kingen wrote (home to the current position) and velocities added."""
+    homing at the HOME kingen wrote (home to the current position, which reads as HOME) and
+    velocities added."""
     joints, home = [], None
     for section in kins_ini.split("\n[")[1:]:
         header, _, body = section.partition("]\n")
         if header == "TRAJ":
             home = body.split("HOME = ")[1].splitlines()[0]
             continue
+        # HOME_OFFSET = HOME: the joint homes where it stands and reads HOME there, with no
+        # move after homing (from 0 to a delta's 250 mm HOME that took 5 s).
         extra = ("MAX_VELOCITY = 50\nMAX_ACCELERATION = 500\nHOME_SEQUENCE = 0\nHOME_SEARCH_VEL = 0\n"
-                 "HOME_LATCH_VEL = 0\n" if header.startswith("JOINT") else "")
+                 f"HOME_LATCH_VEL = 0\nHOME_OFFSET = {body.split('HOME = ')[1].splitlines()[0]}\n"
+                 if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")
     coordinates = "X Y Z A B C" if robot.dof == 6 else "X Y Z"
     axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -1000\nMAX_LIMIT = 1000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
@@ -147,6 +151,9 @@ def pose_in_mm(robot, world):
     return pose
 
 
+# One LinuxCNC runs at a time on a machine (run_machine's lock): under pytest-xdist's
+# --dist loadgroup (pyproject.toml) both run on one worker, so that no other waits for the lock.
+@pytest.mark.xdist_group("linuxcnc")
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_linuxcnc_runs_kingens_module_to_the_reference(name, tmp_path):
     robot, outcome = run_machine(name, tmp_path)

@@ -55,7 +55,7 @@ try:
     command.traj_mode(linuxcnc.TRAJ_MODE_FREE)
     time.sleep(0.2)
     before = settled()
-    command.jog(linuxcnc.JOG_INCREMENT, True, 0, 1.0, float(os.environ["KINGEN_JOG"]))
+    command.jog(linuxcnc.JOG_INCREMENT, True, 0, 10.0, float(os.environ["KINGEN_JOG"]))  # units/s
     time.sleep(0.2)
     result["jog"] = {"before": before, "after": settled()}
     pins = subprocess.run(["halcmd", "-s", "show", "pin", os.environ["KINGEN_MODULE"]], capture_output=True, text=True)
