@@ -130,11 +130,11 @@ def _direct_index(robot, points, branch_joints, indices):
     index = np.empty((count, robot.postures))
     threshold = robot.direct_index_min
     settled = None
-    if not indices and threshold is not None and count > 0 and robot.postures > 1:
-        window_top = threshold * (1.0 + EXACT_WINDOW)  # above it, direct_index_side says only "above"
-        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], window_top)
+    if not indices and _certificate_tried(robot) and count > 0:
+        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], _window_top(robot))
         if np.mean(probe) >= CERTIFY_SETTLED:
-            settled = np.concatenate([probe, certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], window_top)])
+            settled = np.concatenate([probe, certified_above(robot, lines[..., CERTIFY_PROBE_POSES:],
+                                                             _window_top(robot))])
     partial_sums = None
     for block in _blocks(count, robot.postures):
         if settled is not None and np.all(settled[block]):
@@ -149,7 +149,32 @@ def _direct_index(robot, points, branch_joints, indices):
     return index
 
 
-def _solve(robot, t6, indices):
+def _certificate_tried(robot):
+    """Whether solve tries kingen.certificate for ``robot``'s warnings: a threshold, six force
+    lines and more than one posture."""
+    return robot.has_direct_index and robot.direct_index_min is not None and robot.postures > 1
+
+
+def _window_top(robot):
+    """Above this (mm) direct_index_side says only "above": what the certificate must prove."""
+    return robot.direct_index_min * (1.0 + EXACT_WINDOW)
+
+
+def certificate_settles(robot, t6):
+    """Whether solve, called on the poses ``t6`` (n, 4, 4; mm), settles their direct index by
+    kingen.certificate, as it decides on its first CERTIFY_PROBE_POSES poses (and then builds
+    no posture's M). False for robots it does not try it for."""
+    if not _certificate_tried(robot):
+        return False
+    t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
+    with np.errstate(all="ignore"):
+        solution = _solve(robot.calibrated(), t6, indices=False, direct_index=False)
+        wrenches, _ = limb_wrenches(robot, solution.points, solution.branch_joints, with_transmissions=False)
+        probe = certified_above(robot, np.moveaxis(wrenches, 0, -1), _window_top(robot))
+    return bool(len(t6)) and bool(np.mean(probe) >= CERTIFY_SETTLED)
+
+
+def _solve(robot, t6, indices, direct_index=True):
     count = t6.shape[0]
     rows = _t6_rows(t6)
     finite = np.all(np.isfinite(rows.reshape(12, count)), axis=0)
@@ -180,7 +205,7 @@ def _solve(robot, t6, indices):
     unreachable = unreachable[:, None] | ~finite[:, None]
     singular = np.broadcast_to(singular[:, None], outside.shape)
     index = None
-    if robot.has_direct_index and (indices or robot.direct_index_min is not None):
+    if direct_index and robot.has_direct_index and (indices or robot.direct_index_min is not None):
         index = _direct_index(robot, points, branch_joints, indices)
         np.copyto(index, np.nan, where=unreachable)
         if robot.direct_index_min is not None:

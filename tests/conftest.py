@@ -18,7 +18,7 @@ if os.environ.get("CI"):
 os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache-"))
 
 # Tests start kingen in new Python processes (`python -m kingen.cli` 49 times in one run, pytest
-# sessions, forked helpers). Where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE,
+# sessions). Where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE,
 # as in CI containers) and kingen is installed editable, each compiled every kingen module
 # afresh (0.13 s of a 0.9 s `kingen verify`, by farm-bench's median); byte-compiled once here,
 # they load it. Up-to-date files are skipped; a read-only tree is left as it is.

@@ -231,3 +231,28 @@ def test_it_is_kept_only_where_its_probe_settles_most_postures(monkeypatch, name
                         lambda robot, lines, bound: poses.append(lines.shape[-1]) or certified_above(robot, lines, bound))
     solve(robot, t6)
     assert poses == ([32, 968] if kept else [32] if probed else [])
+
+
+@pytest.mark.parametrize("name, settles", [("ceart", True), ("iwf", False), ("rus_optimized", False),
+                                           ("hexapod", False)])
+def test_certificate_settles_says_what_solve_decides(monkeypatch, name, settles):
+    """reference.certificate_settles answers as solve decides on the same poses: where it says
+    True, solve builds no posture's M (what verify's chunks are sized by)."""
+    robot = load_robot(name)
+    _, t6 = random_t6(robot, 500, seed=28)
+    assert reference.certificate_settles(robot, t6) == settles
+    built = []
+    original = reference.gram_partial_sums
+    monkeypatch.setattr(reference, "gram_partial_sums", lambda *args: built.append(1) or original(*args))
+    solve(robot, t6)
+    assert bool(built) == (not settles and robot.direct_index_min is not None)
+
+
+def test_verify_chunks_leave_out_the_matrices_the_certificate_spares():
+    """CEART's chunks count joint entries only (the certificate settles it); IWF's also the
+    packed matrices its direct index builds."""
+    from kingen.verify.processes import CHUNK_ENTRIES, MAX_CHUNK_POSES, chunk_size
+
+    ceart, iwf = load_robot("ceart"), load_robot("iwf")
+    assert chunk_size(ceart) == min(MAX_CHUNK_POSES, CHUNK_ENTRIES // (ceart.dof * ceart.postures))
+    assert chunk_size(iwf) < CHUNK_ENTRIES // (iwf.dof * iwf.postures)
