@@ -16,6 +16,7 @@ items go to one worker, so each robot is verified once) and ``--junitxml``.
 """
 
 import argparse
+import gc
 import os
 from pathlib import Path
 
@@ -75,6 +76,15 @@ def pytest_configure(config):
             raise pytest.UsageError(f"--kingen / kingen_robots: {folder} is not a folder")
         if str(folder) not in config.args and not any(_within(folder, Path(arg)) for arg in config.args):
             config.args.append(str(folder))
+
+
+def pytest_collection_finish(session):
+    """With robot folders collected: gc.freeze() what the session holds by now (the modules
+    it imported, its collected items; kept to its end anyway), so that the garbage collector
+    no longer scans it. pytest's five collections at the session's end (its unraisable-
+    exception check) took 0.2 s of a warm run of the shipped robots before."""
+    if _folders(session.config):
+        gc.freeze()
 
 
 def _within(path, folder):

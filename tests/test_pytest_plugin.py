@@ -168,6 +168,18 @@ def test_a_second_session_builds_nothing(folder, tmp_path, monkeypatch):
 
 
 
+def test_what_a_session_holds_after_collection_is_frozen_out_of_the_garbage_collector(folder):
+    """gc.freeze() once robot folders are collected (pytest's end-of-session collections then
+    skip the imported modules and items); a session without them is left alone."""
+    folder.makeconftest("import gc\n\n\ndef pytest_unconfigure(config):\n"
+                        "    open('frozen.txt', 'w').write(str(gc.get_freeze_count()))\n")
+    run(folder).assert_outcomes(passed=8)
+    assert int((folder.path / "frozen.txt").read_text()) > 10000
+    folder.makepyfile(test_plain="def test_nothing():\n    pass\n")
+    folder.runpytest_subprocess("-p", "no:cacheprovider", "test_plain.py").assert_outcomes(passed=1)
+    assert int((folder.path / "frozen.txt").read_text()) == 0
+
+
 def test_under_xdist_each_robot_files_items_run_on_one_worker(folder):
     """``-n 2`` alone: the plugin's scheduler keeps a robot file's items together, so each
     robot is verified once, on one worker (pytest-xdist's own would spread them)."""
