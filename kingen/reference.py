@@ -131,10 +131,10 @@ def _direct_index(robot, points, branch_joints, indices):
     threshold = robot.direct_index_min
     settled = None
     if not indices and _certificate_tried(robot) and count > 0:
-        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], _window_top(robot))
+        window_top = _window_top(robot)
+        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], window_top)
         if np.mean(probe) >= CERTIFY_SETTLED:
-            settled = np.concatenate([probe, certified_above(robot, lines[..., CERTIFY_PROBE_POSES:],
-                                                             _window_top(robot))])
+            settled = np.concatenate([probe, certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], window_top)])
     partial_sums = None
     for block in _blocks(count, robot.postures):
         if settled is not None and np.all(settled[block]):
@@ -164,14 +164,14 @@ def certificate_settles(robot, t6):
     """Whether solve, called on the poses ``t6`` (n, 4, 4; mm), settles their direct index by
     kingen.certificate, as it decides on its first CERTIFY_PROBE_POSES poses (and then builds
     no posture's M). False for robots it does not try it for."""
-    if not _certificate_tried(robot):
-        return False
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
+    if not _certificate_tried(robot) or not len(t6):
+        return False
     with np.errstate(all="ignore"):
         solution = _solve(robot.calibrated(), t6, indices=False, direct_index=False)
         wrenches, _ = limb_wrenches(robot, solution.points, solution.branch_joints, with_transmissions=False)
         probe = certified_above(robot, np.moveaxis(wrenches, 0, -1), _window_top(robot))
-    return bool(len(t6)) and bool(np.mean(probe) >= CERTIFY_SETTLED)
+    return bool(np.mean(probe) >= CERTIFY_SETTLED)
 
 
 def _solve(robot, t6, indices, direct_index=True):

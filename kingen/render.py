@@ -18,10 +18,10 @@ import textwrap
 import jinja2
 
 from . import __version__
-from .library_info import BUILD_INFO_MARKER
-from .limbs import MODELS, c_double, partial_path
 from .errors import KingenError
 from .files import atomic_file, cache_dir, private_file, private_folder
+from .library_info import BUILD_INFO_MARKER
+from .limbs import MODELS, c_double, partial_path
 from .resources import templates_dir
 from .schema import dialog_label, field_index
 from .singularity import PACKED, partial_sum_split
@@ -81,6 +81,7 @@ class PrivateBytecodeCache(jinja2.BytecodeCache):
             pass
         finally:
             os.umask(mask)
+
 
 @functools.lru_cache(maxsize=None)
 def _environment(kind, folder):
