@@ -152,13 +152,15 @@ def _boundaries(robot, home, directions, kinds):
 
 def _both_sides(robot, warnings_at, rays, low, high):
     """For each offset of OFFSETS and side (before, after) of each bracketed boundary: the
-    poses there and which of them lie outside the tolerance band."""
-    sides = []
-    for offset in OFFSETS:
-        for side, fractions in (("before", np.clip(low - offset, 0.0, None)), ("after", high + offset)):
-            solution, poses = warnings_at(fractions, rays)
-            sides.append((side, poses, ~np.any(warnings_in_band(robot, solution), axis=1)))
-    return sides
+    poses there and which of them lie outside the tolerance band. All in one reference solve
+    (each pose is solved on its own, so batching changes no pose)."""
+    cases = [(side, fractions) for offset in OFFSETS
+             for side, fractions in (("before", np.clip(low - offset, 0.0, None)), ("after", high + offset))]
+    solution, poses = warnings_at(np.concatenate([fractions for _, fractions in cases]), np.tile(rays, len(cases)))
+    clear = ~np.any(warnings_in_band(robot, solution), axis=1)
+    count = len(rays)
+    return [(side, poses[k * count:(k + 1) * count], clear[k * count:(k + 1) * count])
+            for k, (side, _) in enumerate(cases)]
 
 
 def _chosen(sides, brackets):
