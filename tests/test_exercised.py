@@ -5,6 +5,7 @@ fails naming the cause; every check states how much it judged."""
 import json
 import xml.etree.ElementTree as ElementTree
 
+import numpy as np
 import pytest
 
 from kingen.cli import main
@@ -148,3 +149,35 @@ def test_a_library_kingen_did_not_build_has_its_definition_not_exercised(tmp_pat
                             VerifyOptions(samples=200), host=host)
     definition = report.checks[0]
     assert definition.name == "definition" and definition.status == "not exercised" and definition.passed
+
+
+@pytest.mark.parametrize("levels", [1, 2, 3, 5])
+def test_halvings_decided_together_give_the_brackets_of_one_at_a_time(levels):
+    """boundaries._bisected against plain bisection (one midpoint per step) on brackets with
+    several crossings (a predicate that is not monotone), so that a 'first crossing' search
+    would differ: the same brackets, bit for bit."""
+    from kingen.verify.boundaries import _bisected
+
+    rng = np.random.default_rng(levels)
+    low = rng.uniform(0.0, 0.9, size=40)
+    high = low + rng.uniform(1e-9, 0.1, size=40)
+    frequency = rng.uniform(50.0, 5000.0, size=40)
+
+    def beyond(fractions, rays):
+        return np.sin(frequency[rays] * fractions) > 0.0
+
+    calls = []
+
+    def inside(fractions):
+        calls.append(len(fractions))
+        return beyond(fractions, np.tile(np.arange(40), len(fractions) // 40)).reshape(-1, 40)
+
+    one_low, one_high = low, high
+    for _ in range(levels):
+        middle = 0.5 * (one_low + one_high)
+        past = beyond(middle, np.arange(40))
+        one_high, one_low = np.where(past, middle, one_high), np.where(past, one_low, middle)
+    together_low, together_high = _bisected(low, high, levels, inside)
+    assert calls == [40 * ((1 << levels) - 1)]
+    np.testing.assert_array_equal(together_low, one_low)
+    np.testing.assert_array_equal(together_high, one_high)
