@@ -130,11 +130,10 @@ def _direct_index(robot, points, branch_joints, indices):
     index = np.empty((count, robot.postures))
     threshold = robot.direct_index_min
     settled = None
-    if not indices and _certificate_tried(robot) and count > 0:
-        window_top = _window_top(robot)
-        probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], window_top)
-        if np.mean(probe) >= CERTIFY_SETTLED:
-            settled = np.concatenate([probe, certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], window_top)])
+    probe = _settling_probe(robot, lines) if not indices else None
+    if probe is not None:
+        rest = certified_above(robot, lines[..., CERTIFY_PROBE_POSES:], _window_top(robot))
+        settled = np.concatenate([probe, rest])
     partial_sums = None
     for block in _blocks(count, robot.postures):
         if settled is not None and np.all(settled[block]):
@@ -149,10 +148,14 @@ def _direct_index(robot, points, branch_joints, indices):
     return index
 
 
-def _certificate_tried(robot):
-    """Whether solve tries kingen.certificate for ``robot``'s warnings: a threshold, six force
-    lines and more than one posture."""
-    return robot.has_direct_index and robot.direct_index_min is not None and robot.postures > 1
+def _settling_probe(robot, lines):
+    """kingen.certificate on the first CERTIFY_PROBE_POSES poses of the limbs' ``lines``
+    (dof, 2, 6, n): (m, postures) where it settles at least CERTIFY_SETTLED of their postures,
+    else None (and always for robots it is not tried for: no threshold, or one posture)."""
+    if robot.direct_index_min is None or robot.postures <= 1 or lines.shape[-1] == 0:
+        return None
+    probe = certified_above(robot, lines[..., :CERTIFY_PROBE_POSES], _window_top(robot))
+    return probe if np.mean(probe) >= CERTIFY_SETTLED else None
 
 
 def _window_top(robot):
@@ -164,17 +167,19 @@ def certificate_settles(robot, t6):
     """Whether solve, called on the poses ``t6`` (n, 4, 4; mm), settles their direct index by
     kingen.certificate, as it decides on its first CERTIFY_PROBE_POSES poses (and then builds
     no posture's M). False for robots it does not try it for."""
-    t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
-    if not _certificate_tried(robot) or not len(t6):
+    if not robot.has_direct_index:
         return False
+    t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
     with np.errstate(all="ignore"):
-        solution = _solve(robot.calibrated(), t6, indices=False, direct_index=False)
-        wrenches, _ = limb_wrenches(robot, solution.points, solution.branch_joints, with_transmissions=False)
-        probe = certified_above(robot, np.moveaxis(wrenches, 0, -1), _window_top(robot))
-    return bool(np.mean(probe) >= CERTIFY_SETTLED)
+        points, branch_joints, _, _, _ = _limb_solutions(robot.calibrated(), t6)
+        wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
+        return _settling_probe(robot, np.moveaxis(wrenches, 0, -1)) is not None
 
 
-def _solve(robot, t6, indices, direct_index=True):
+def _limb_solutions(robot, t6):
+    """(points (n, dof, 3), branch_joints (n, dof, 2), radicands (n, dof), finite (n,),
+    overflow (n, dof)) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
+    finite or the limb's value overflows (see the module docstring)."""
     count = t6.shape[0]
     rows = _t6_rows(t6)
     finite = np.all(np.isfinite(rows.reshape(12, count)), axis=0)
@@ -191,6 +196,12 @@ def _solve(robot, t6, indices, direct_index=True):
             radicands[:, index] = limb_solution.radicand
     overflow = ~np.all(np.isfinite(branch_joints), axis=2)  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
+    return points, branch_joints, radicands, finite, overflow
+
+
+def _solve(robot, t6, indices):
+    count = t6.shape[0]
+    points, branch_joints, radicands, finite, overflow = _limb_solutions(robot, t6)
 
     lower, upper = robot.travel_limits()
     limited = np.isfinite(lower) | np.isfinite(upper)
@@ -205,7 +216,7 @@ def _solve(robot, t6, indices, direct_index=True):
     unreachable = unreachable[:, None] | ~finite[:, None]
     singular = np.broadcast_to(singular[:, None], outside.shape)
     index = None
-    if direct_index and robot.has_direct_index and (indices or robot.direct_index_min is not None):
+    if robot.has_direct_index and (indices or robot.direct_index_min is not None):
         index = _direct_index(robot, points, branch_joints, indices)
         np.copyto(index, np.nan, where=unreachable)
         if robot.direct_index_min is not None:
