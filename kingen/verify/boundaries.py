@@ -140,13 +140,15 @@ def _boundaries(robot, home, directions, kinds):
     low, high = steps[np.array(lows)], steps[np.array(lows) + 1]
 
     def inside(fractions):
-        """(len(fractions) // rays, rays) whether each pose lies beyond its ray's boundary."""
-        solution, _ = warnings_at(fractions, np.tile(rays, len(fractions) // len(rays)))
+        """(k, rays) whether each pose of ``fractions`` (k x rays,) lies beyond its ray's boundary."""
+        repeats = len(fractions) // len(rays)
+        solution, _ = warnings_at(fractions, np.tile(rays, repeats))
+        kinds, columns = np.tile(bracket_kinds, repeats), np.tile(postures, repeats)
         beyond = np.zeros(len(fractions), dtype=bool)
         for kind, _ in met:
-            mine = np.tile(bracket_kinds == kind, len(fractions) // len(rays))
-            beyond[mine] = _beyond(robot, kind, solution)[mine, np.tile(postures, len(fractions) // len(rays))[mine]]
-        return beyond.reshape(-1, len(rays))
+            mine = kinds == kind
+            beyond[mine] = _beyond(robot, kind, solution)[mine, columns[mine]]
+        return beyond.reshape(repeats, len(rays))
 
     for done in range(0, BISECTIONS, LEVELS_PER_SOLVE):
         low, high = _bisected(low, high, min(LEVELS_PER_SOLVE, BISECTIONS - done), inside)
@@ -169,9 +171,8 @@ def _bisected(low, high, levels, inside):
         step = span >> (level + 1)
         for left in range(0, span, 2 * step):
             points[left + step] = 0.5 * (points[left] + points[left + 2 * step])
-    positions = np.arange(1, span)
-    beyond = inside(np.concatenate([points[position] for position in positions]))  # (span - 1, rays)
     table = np.stack([points[position] for position in range(span + 1)])  # (span + 1, rays)
+    beyond = inside(table[1:span].ravel())  # (span - 1, rays)
     rays = np.arange(len(low))
     left, right = np.zeros(len(low), dtype=int), np.full(len(low), span)
     for _ in range(levels):
