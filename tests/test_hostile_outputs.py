@@ -138,46 +138,44 @@ def plant_compiled_template(name, planted_text):
     return path
 
 
+@pytest.fixture
+def render_afresh():
+    """render_afresh(name) -> the shipped robot's DELMIA source, rendered by new template
+    environments (nothing compiled in this process: what a new process loads or compiles);
+    they are dropped again after the test."""
+    from kingen.hosts.delmia.render import render
+    from kingen.model import load_robot
+    from kingen.render import _environment
+
+    def rendered(name):
+        _environment.cache_clear()
+        return render(load_robot(name))[f"kin_{name}.c"]
+
+    yield rendered
+    _environment.cache_clear()
+
+
 @pytest.mark.parametrize("mode, loaded", [(0o600, True), (0o620, False), (0o602, False)])
-def test_compiled_templates_are_loaded_only_from_a_private_file(tmp_path, monkeypatch, mode, loaded):
+def test_compiled_templates_are_loaded_only_from_a_private_file(tmp_path, monkeypatch, render_afresh, mode, loaded):
     """A planted compiled template is rendered from a private file (so that the test can
     tell) and never from one its group or others may write."""
-    from kingen.hosts.delmia.render import render
-    from kingen.model import load_robot
-    from kingen.render import _environment
-
     monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
-    _environment.cache_clear()  # a new environment: nothing compiled in this process yet
-    path = plant_compiled_template("kin_robot.c.j2", "/* planted */\n")
-    path.chmod(mode)
-    _environment.cache_clear()
-    try:
-        source = render(load_robot("tau"))["kin_tau.c"]
-    finally:
-        _environment.cache_clear()
-    assert source.endswith("/* planted */\n") == loaded
+    render_afresh("tau")  # compiles into this cache
+    plant_compiled_template("kin_robot.c.j2", "/* planted */\n").chmod(mode)
+    assert render_afresh("tau").endswith("/* planted */\n") == loaded
 
 
-def test_an_unwritable_or_junk_template_cache_still_renders(tmp_path, monkeypatch):
-    from kingen.hosts.delmia.render import render
-    from kingen.model import load_robot
-    from kingen.render import _environment
-
+def test_an_unwritable_or_junk_template_cache_still_renders(tmp_path, monkeypatch, render_afresh):
     monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
-    _environment.cache_clear()
-    expected = render(load_robot("tau"))["kin_tau.c"]
+    expected = render_afresh("tau")
     compiled = list((tmp_path / "cache").glob("templates-*/*.jinja"))
     assert compiled and all(stat.S_IMODE(path.stat().st_mode) == 0o600 for path in compiled)
     for path in compiled:
         path.write_bytes(path.read_bytes()[:40])  # cut short
-    _environment.cache_clear()
-    assert render(load_robot("tau"))["kin_tau.c"] == expected
+    assert render_afresh("tau") == expected
     monkeypatch.setenv("KINGEN_CACHE", "/proc/kingen-cache")  # cannot be made
-    _environment.cache_clear()
-    try:
-        assert render(load_robot("tau"))["kin_tau.c"] == expected
-    finally:
-        _environment.cache_clear()
+    assert render_afresh("tau") == expected
+
 
 # --- 5. a leg of no length
 
