@@ -73,6 +73,13 @@ class Calls:
     solutions: np.ndarray
     warnings: np.ndarray
     faults: np.ndarray
+    branch_values: np.ndarray = None
+    """(n, dof, 2) each limb's value in its branch 0 and 1 as the routine wrote it (at
+    kingen.singularity.representative_postures), when the host summarised the calls by
+    branch (then ``solutions`` is read-only, so that the summary stays theirs); else None."""
+    repeats: np.ndarray = None
+    """(n,) with ``branch_values``: whether every posture's value of every limb equals (==, so
+    never for NaN) its value in the branch it takes (kingen.singularity.branch_table)."""
 
     @property
     def guard_violations(self):

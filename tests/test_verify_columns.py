@@ -93,3 +93,64 @@ def test_the_branch_repeat_check_finds_every_single_entry_that_breaks_it(name):
                 by_definition = all(np.array_equal(changed[:, limb, k], representative)
                                     for k in range(robot.postures) if table[k, limb] == table[posture, limb])
                 assert verify._repeats_branches(robot, changed) == by_definition, (limb, posture, value)
+
+
+def host_summary(robot, joints):
+    """kingen_host_summarise_branches (the DELMIA host emulator's C) on each pose of ``joints``
+    (n, dof, postures): (repeats (n,), branch values (n, dof, 2))."""
+    from kingen.hosts.delmia.loader import _pointer, host
+    from kingen.singularity import representative_postures
+
+    first_postures = np.array(representative_postures(robot), dtype=np.intc)
+    branch_of = np.array(branch_table(robot), dtype=np.intc)
+    values = np.empty(joints.shape[:2] + (2,))
+    repeats = [host().kingen_host_summarise_branches(
+        _pointer("double *", np.ascontiguousarray(pose)), robot.dof, robot.postures, _pointer("int *", first_postures),
+        _pointer("int *", branch_of), _pointer("double *", values[number])) for number, pose in enumerate(joints)]
+    return np.array(repeats, dtype=bool), values
+
+
+@pytest.mark.parametrize("name", ["ceart", "tau", "iwf"])
+def test_the_hosts_summary_by_branch_is_the_repeat_check_and_the_branch_values(name):
+    """The C summary the DELMIA host makes as it calls (Calls.repeats, Calls.branch_values)
+    against _repeats_branches and kingen.singularity.branch_values, pose by pose: for every
+    (limb, posture) entry changed alone, by a little or to NaN, and unchanged."""
+    from kingen.singularity import branch_values
+
+    robot = load_robot(name)
+    table = branch_table(robot)
+    branch_joints = np.random.default_rng(6).normal(size=(1, robot.dof, 2))
+    joints = np.stack([branch_joints[:, limb, table[:, limb]] for limb in range(robot.dof)], axis=1)
+    changed = []
+    for limb in range(robot.dof):
+        for posture in range(robot.postures):
+            for value in (1e-12, np.nan):
+                pose = joints[0].copy()
+                pose[limb, posture] = value if np.isnan(value) else pose[limb, posture] + value
+                changed.append(pose)
+    poses = np.concatenate([joints, np.array(changed)])
+    repeats, values = host_summary(robot, poses)
+    assert repeats.tolist() == [verify._repeats_branches(robot, pose[None]) for pose in poses]
+    assert repeats[0] and not np.all(repeats)
+    np.testing.assert_array_equal(values, branch_values(robot, poses))
+
+
+@pytest.mark.parametrize("name", ["ceart", "tau"])
+def test_a_call_summarised_by_branch_returns_what_a_plain_call_does(name, plugin):
+    """plugin.call(..., branches_of=robot): the same outputs as without, read-only solutions,
+    and the summary of exactly those (the comparison then takes its columns from it)."""
+    robot, routine = plugin(name)
+    t6 = t6_from_pose(sample_poses(robot, 200, 9))
+    routine.reset_host()  # as verify does before each chunk: another test may have left it refusing
+    plain, summarised = routine.call(t6), routine.call(t6, branches_of=robot)
+    for field in ("returned", "solutions", "warnings", "faults"):
+        np.testing.assert_array_equal(getattr(summarised, field), getattr(plain, field))
+    assert plain.repeats is None and not summarised.solutions.flags.writeable
+    repeats, values = host_summary(robot, plain.solutions)
+    np.testing.assert_array_equal(summarised.repeats, repeats)
+    np.testing.assert_array_equal(summarised.branch_values, values)
+    assert np.all(summarised.repeats)
+    expected = solve(robot, t6)
+    by_summary, by_numpy = (_compared_columns(robot, calls, expected) for calls in (summarised, plain))
+    assert by_summary.weights.max() > 1
+    np.testing.assert_array_equal(by_summary.plugin, by_numpy.plugin)

@@ -135,8 +135,10 @@ def compare_poses(poses, first=False):
     printed = Printed()
     t6 = t6_from_pose(poses)
     plugin.reset_host()
+    # A host that can summarises the solutions by limb branch as it calls (kingen.verify.tally uses it).
+    summary = {"branches_of": robot} if getattr(plugin, "summarises_branches", False) and robot.postures > 2 else {}
     with printed.capture():
-        calls = plugin.call(t6, options.link_lengths, options.link_offsets)
+        calls = plugin.call(t6, options.link_lengths, options.link_offsets, **summary)
     expected = in_vocabulary(solve(robot, t6, options.link_lengths, options.link_offsets), plugin)
     accumulate(robot, report, tally, robot.revolute, t6, calls, expected, keep_first=first)
     counts = {name: getattr(report, name) for name in REPORT_COUNTS + REPORT_WORST}

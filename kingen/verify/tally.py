@@ -200,16 +200,21 @@ class _Columns:
 
 def compared_columns(robot, calls, expected):
     """The _Columns of one chunk: by branch when the routine allows it and the robot has more
-    than two postures, else by posture."""
+    than two postures, else by posture. Whether it allows it, and its values by branch, come
+    from the host's summary of the calls where it made one (Calls.repeats), else from
+    _repeats_branches and kingen.singularity.branch_values: the same test and values."""
     reference_solves = expected.warnings != UNREACHABLE
     same_reach = (np.array_equal(calls.warnings != UNREACHABLE, reference_solves)
                   and np.array_equal(reference_solves, np.broadcast_to(reference_solves[:, :1], reference_solves.shape)))
     table = branch_table(robot)
-    if robot.postures > 2 and same_reach and _repeats_branches(robot, calls.solutions):
+    summarised = calls.repeats is not None
+    if robot.postures > 2 and same_reach and (np.all(calls.repeats) if summarised
+                                               else _repeats_branches(robot, calls.solutions)):
         weights = np.array([[np.count_nonzero(table[:, index] == branch) for branch in range(2)]
                             for index in range(robot.dof)])
         reach = np.repeat(reference_solves[:, :1], 2, axis=1)
-        return _Columns(branch_values(robot, calls.solutions), expected.branch_joints, reach, reach, table, weights)
+        values = calls.branch_values if summarised else branch_values(robot, calls.solutions)
+        return _Columns(values, expected.branch_joints, reach, reach, table, weights)
     postures = np.arange(robot.postures)
     return _Columns(calls.solutions, expected.joints, reference_solves,
                     reference_solves & (calls.warnings != UNREACHABLE),

@@ -60,7 +60,10 @@ EMULATOR_FUNCTIONS = (
     "double *link_offsets, double *solutions, int solution_block, int *warnings, int warning_block, "
     "int *returns, void *pData)",
     "int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_lengths, double *link_offsets, "
-    "int dof, int postures, double *solutions, int *warnings, int *returns, int *faults, void *pData)",
+    "int dof, int postures, double *solutions, int *warnings, int *returns, int *faults, void *pData, "
+    "const int *first_postures, const int *branch_of, double *branch_values, int *repeats)",
+    "int kingen_host_summarise_branches(const double *solution, int dof, int postures, const int *first_postures, "
+    "const int *branch_of, double *branch_values)",
 )
 """Functions only the host emulator offers (state of kin_check_definition, batch drivers)."""
 GUARD_FAULT_BITS = (

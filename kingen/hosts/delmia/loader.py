@@ -22,6 +22,7 @@ import numpy as np
 
 from ...errors import KingenError, PluginDefect, refuse_special_file
 from ...routine import Calls, check_routine_name
+from ...singularity import branch_table, representative_postures
 from . import abi
 from .build import host_support
 from .checks import CHECKS
@@ -141,8 +142,14 @@ class Plugin:
         lib.kingen_host_reset(self.dof, self.postures)
         lib.kingen_host_refuse(int(refuse))
 
-    def call(self, t6, link_lengths=None, link_offsets=None, kinstat=None):
-        """Call the routine for every T6 in ((4, 4) or (n, 4, 4)) from C, with guarded buffers."""
+    summarises_branches = True
+    """call can summarise the solutions by limb branch (its ``branches_of``)."""
+
+    def call(self, t6, link_lengths=None, link_offsets=None, kinstat=None, branches_of=None):
+        """Call the routine for every T6 in ((4, 4) or (n, 4, 4)) from C, with guarded buffers.
+        With ``branches_of`` (a robot of the routine's joint and posture counts), the C driver
+        also summarises each call's solutions by the robot's limb branches while they are in
+        the cache (Calls.branch_values and Calls.repeats)."""
         t6 = np.ascontiguousarray(t6, dtype=float).reshape(-1, 4, 4)
         count = t6.shape[0]
         solutions = np.empty((count, self.dof, self.postures))
@@ -150,15 +157,21 @@ class Plugin:
         returned = np.empty(count, dtype=np.intc)
         faults = np.empty(count, dtype=np.intc)
         lengths, offsets = _dialog(link_lengths), _dialog(link_offsets)
+        summary = _BranchSummary(branches_of, count) if branches_of is not None else None
         status = host().kingen_host_run_guarded(
             ffi.cast("void *", self.function), count, _pointer("double *", t6), _pointer("double *", lengths),
             _pointer("double *", offsets), self.dof, self.postures, _pointer("double *", solutions),
             _pointer("int *", warnings), _pointer("int *", returned), _pointer("int *", faults),
             ffi.NULL if kinstat is None else kinstat.pointer,
+            *(summary.arguments() if summary is not None else (ffi.NULL,) * 4),
         )
         if status < 0:
             raise KingenError("the host emulator could not map guarded buffers (out of memory?)")
-        return Calls(returned=returned, solutions=solutions, warnings=warnings, faults=faults)
+        if summary is None:
+            return Calls(returned=returned, solutions=solutions, warnings=warnings, faults=faults)
+        solutions.flags.writeable = False
+        return Calls(returned=returned, solutions=solutions, warnings=warnings, faults=faults,
+                     branch_values=summary.branch_values, repeats=summary.repeats.astype(bool))
 
     def batch_runner(self, t6):
         """A function that runs the unguarded C batch driver over ``t6`` (n, 4, 4) into buffers
@@ -209,6 +222,21 @@ def _dialog(values):
     """The six Length or Offset fields as a contiguous array (zeros: all empty)."""
     array = np.zeros(6) if values is None else np.array(values, dtype=float).reshape(6)
     return np.ascontiguousarray(array)
+
+
+class _BranchSummary:
+    """The tables and outputs of kingen_host_run_guarded's summary by limb branch of ``robot``
+    over ``count`` calls."""
+
+    def __init__(self, robot, count):
+        self._first_postures = np.array(representative_postures(robot), dtype=np.intc)
+        self._branch_of = np.array(branch_table(robot), dtype=np.intc)
+        self.branch_values = np.empty((count, robot.dof, 2))
+        self.repeats = np.empty(count, dtype=np.intc)
+
+    def arguments(self):
+        return (_pointer("int *", self._first_postures), _pointer("int *", self._branch_of),
+                _pointer("double *", self.branch_values), _pointer("int *", self.repeats))
 
 
 def _pointer(ctype, array):

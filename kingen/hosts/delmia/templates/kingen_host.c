@@ -94,6 +94,24 @@ int kingen_host_run_batch(void *routine, int count, double *t6, double *link_len
     return count;
 }
 
+/* Each limb's value in its two branches, read at the postures first_postures (dof x 2) names,
+ * into branch_values (dof x 2); returns 1 when every posture's value of every limb equals (==:
+ * NaN never does) the value of the branch it takes, branch_of (postures x dof), else 0. */
+int kingen_host_summarise_branches(const double *solution, int dof, int postures, const int *first_postures,
+                                   const int *branch_of, double *branch_values)
+{
+    int limb, posture, repeats = 1;
+    for (limb = 0; limb < dof; limb++) {
+        const double *values = solution + (size_t)limb * postures;
+        double *branches = branch_values + 2 * limb;
+        branches[0] = values[first_postures[2 * limb]];
+        branches[1] = values[first_postures[2 * limb + 1]];
+        for (posture = 0; posture < postures; posture++)
+            repeats &= values[posture] == branches[branch_of[posture * dof + limb]];
+    }
+    return repeats;
+}
+
 #ifndef _WIN32
 /* KINGEN_WROTE_* (fault bits per pose) and KINGEN_UNWRITTEN_WARNING come from kingen/abi.py
  * through the stand-in header. */
@@ -208,11 +226,14 @@ static int pad_intact(kingen_guarded *region, int doubles)
 /* Call the routine once per T6 with guarded buffers; outputs are copied to the caller's
  * contiguous arrays (solutions: count x dof x postures, warnings: count x postures).
  * Unwritten outputs keep the sentinels NaN and -1. faults[i] gets the KINGEN_WROTE_* bits
- * of pose i; after a fault the pose's outputs are what was written before it. Returns the
- * number of poses with a fault, or -1 when the guarded buffers cannot be set up. */
+ * of pose i; after a fault the pose's outputs are what was written before it. With
+ * first_postures and branch_of (else NULL), kingen_host_summarise_branches of each pose's solutions goes
+ * to branch_values (count x dof x 2) and repeats[i]. Returns the number of poses with a
+ * fault, or -1 when the guarded buffers cannot be set up. */
 int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_lengths, double *link_offsets,
                             int dof, int postures, double *solutions, int *warnings, int *returns,
-                            int *faults, void *pData)
+                            int *faults, void *pData, const int *first_postures, const int *branch_of,
+                            double *branch_values, int *repeats)
 {
     kingen_routine call;
     kingen_guarded solution_region, warning_region;
@@ -269,6 +290,9 @@ int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_l
             faults[i] |= KINGEN_WROTE_INPUTS;
         memcpy(solutions + (size_t)i * dof * postures, solution_data, solution_bytes);
         memcpy(warnings + (size_t)i * postures, warning_data, warning_bytes);
+        if (first_postures != NULL)
+            repeats[i] = kingen_host_summarise_branches(solution_data, dof, postures, first_postures, branch_of,
+                                                        branch_values + (size_t)i * dof * 2);
         if (faults[i])
             faulty++;
     }
@@ -281,8 +305,10 @@ int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_l
 #else
 int kingen_host_run_guarded(void *routine, int count, double *t6, double *link_lengths, double *link_offsets,
                             int dof, int postures, double *solutions, int *warnings, int *returns,
-                            int *faults, void *pData)
+                            int *faults, void *pData, const int *first_postures, const int *branch_of,
+                            double *branch_values, int *repeats)
 {
+    (void)first_postures; (void)branch_of; (void)branch_values; (void)repeats;
     (void)routine; (void)count; (void)t6; (void)link_lengths; (void)link_offsets; (void)dof; (void)postures;
     (void)solutions; (void)warnings; (void)returns; (void)faults; (void)pData;
     return -1;
