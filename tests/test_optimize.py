@@ -16,6 +16,8 @@ from kingen.design import Problem
 from kingen.model import resolve_robot_path
 from kingen.robot_file import read_robot_file
 
+# One worker under -n N: the module's optimisation runs are then made once.
+pytestmark = pytest.mark.xdist_group("optimize")
 SMALL = {"search": {"swarm": 6, "iterations": 4, "c1": 2.8, "c2": 1.3},
          "refine": {"iterations": 2}, "objective": {"posture": 21, "tilt_convention": "euler", "tilt_step": 1,
                                                       "azimuth_step": 8, "tilt_max": 120, "collision": "thesis"}}
