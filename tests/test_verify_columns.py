@@ -154,3 +154,11 @@ def test_a_call_summarised_by_branch_returns_what_a_plain_call_does(name, plugin
     by_summary, by_numpy = (_compared_columns(robot, calls, expected) for calls in (summarised, plain))
     assert by_summary.weights.max() > 1
     np.testing.assert_array_equal(by_summary.plugin, by_numpy.plugin)
+
+
+def test_a_summary_by_another_robots_branches_is_refused(plugin):
+    """The C summary indexes the routine's buffers by the robot's tables: a robot of other
+    counts is a programming error, refused before any call."""
+    _, routine = plugin("ceart")
+    with pytest.raises(ValueError, match="branches_of: tau has 3 joints and 8 postures, the routine 6 and 64"):
+        routine.call(t6_from_pose(sample_poses(load_robot("ceart"), 2, 1)), branches_of=load_robot("tau"))

@@ -135,7 +135,7 @@ def compare_poses(poses, first=False):
     printed = Printed()
     t6 = t6_from_pose(poses)
     plugin.reset_host()
-    # A host that can summarises the solutions by limb branch as it calls (kingen.verify.tally uses it).
+    # A host that can summarise the solutions by limb branch as it calls (kingen.verify.tally uses it).
     summary = {"branches_of": robot} if getattr(plugin, "summarises_branches", False) and robot.postures > 2 else {}
     with printed.capture():
         calls = plugin.call(t6, options.link_lengths, options.link_offsets, **summary)

@@ -157,7 +157,12 @@ class Plugin:
         returned = np.empty(count, dtype=np.intc)
         faults = np.empty(count, dtype=np.intc)
         lengths, offsets = _dialog(link_lengths), _dialog(link_offsets)
-        summary = _BranchSummary(branches_of, count) if branches_of is not None else None
+        summary = None
+        if branches_of is not None:
+            if (branches_of.dof, branches_of.postures) != (self.dof, self.postures):
+                raise ValueError(f"branches_of: {branches_of.name} has {branches_of.dof} joints and "
+                                 f"{branches_of.postures} postures, the routine {self.dof} and {self.postures}")
+            summary = _BranchSummary(branches_of, count)
         status = host().kingen_host_run_guarded(
             ffi.cast("void *", self.function), count, _pointer("double *", t6), _pointer("double *", lengths),
             _pointer("double *", offsets), self.dof, self.postures, _pointer("double *", solutions),
