@@ -95,7 +95,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     """
     from ..files import write_atomic
     from ..snapshot import load as load_snapshot
-    from ..verify import VerifyOptions, chunk_size, verify_library
+    from ..verify import VerifyOptions, verify_library
 
     if processes is not None and scheduler is not None:
         raise click.UsageError("give at most one of --processes and --scheduler")
@@ -105,7 +105,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     model = host.as_seen(model)
     options = VerifyOptions(samples=samples, seed=seed, link_lengths=link_lengths, link_offsets=link_offsets,
                             timeout=timeout, snapshot=snapshot, processes=processes, scheduler=scheduler)
-    with _progress(samples, chunk_size(model)) as progress:
+    with _progress(samples, model) as progress:
         report = verify_library(model, library, routine, options, progress, host=host)
     print_report(report, library)
     if json_path is not None:
@@ -271,9 +271,13 @@ def _bench_job(channel, model, host, library, routine, calls, floor):
     return figures
 
 
-def _progress(total, chunk):
-    """A progress bar on stderr for runs of several chunks at a terminal; otherwise nothing."""
-    if total <= chunk or sys.stderr is None or not sys.stderr.isatty():
+def _progress(total, robot):
+    """A progress bar on stderr for runs of several of verify's chunks of ``robot`` at a
+    terminal; otherwise nothing (and the chunk size, which probes the reference, is left to
+    verify's child)."""
+    from ..verify import chunk_size
+
+    if sys.stderr is None or not sys.stderr.isatty() or total <= chunk_size(robot):
         return contextlib.nullcontext(None)
     bar = click.progressbar(length=total, label="verifying", file=sys.stderr)
 
