@@ -204,14 +204,24 @@ def cached(folder, library, make, sources=()):
         private_file(path)
     if intact and read_stamp(stamp, "library_sha256") == file_digest(library) is not None:
         return
-    mask = os.umask(0o077)  # what kingen caches is this user's alone, whatever the umask
     try:
-        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-        make()
-        write_atomic(stamp, json.dumps({"library_sha256": file_digest(library)}) + "\n")
+        with private_writes(folder):
+            make()
+            write_atomic(stamp, json.dumps({"library_sha256": file_digest(library)}) + "\n")
     except PermissionError as error:
         raise KingenError(f"kingen's cache folder {folder} is not writable ({error.strerror}): "
                           "set KINGEN_CACHE to a folder of your own") from None
+
+
+@contextlib.contextmanager
+def private_writes(folder):
+    """Create ``folder`` (and its parents) if missing, mode 0700, and within the block create
+    files and folders with umask 077: what kingen caches is this user's alone, whatever the
+    umask. The umask is restored on leaving, also on an error (OSError from the mkdir included)."""
+    mask = os.umask(0o077)
+    try:
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        yield
     finally:
         os.umask(mask)
 

@@ -11,7 +11,6 @@ own folder first, then in the shared ``templates/`` (limb model partials from th
 
 import functools
 import math
-import os
 import pickle
 import textwrap
 
@@ -19,7 +18,7 @@ import jinja2
 
 from . import __version__
 from .errors import KingenError
-from .files import atomic_file, cache_dir, private_file, private_folder
+from .files import atomic_file, cache_dir, private_file, private_folder, private_writes
 from .library_info import BUILD_INFO_MARKER
 from .limbs import MODELS, c_double, partial_path
 from .resources import templates_dir
@@ -70,17 +69,14 @@ class PrivateBytecodeCache(jinja2.BytecodeCache):
 
     def dump_bytecode(self, bucket):
         path = self._path(bucket)
-        mask = os.umask(0o077)
         try:
             private_folder(path.parent.parent)
-            path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-            private_folder(path.parent)
-            with atomic_file(path) as stream:
-                bucket.write_bytecode(stream)
+            with private_writes(path.parent):
+                private_folder(path.parent)
+                with atomic_file(path) as stream:
+                    bucket.write_bytecode(stream)
         except (KingenError, OSError):  # not ours, or not writable: the next process compiles again
             pass
-        finally:
-            os.umask(mask)
 
 
 @functools.lru_cache(maxsize=None)
