@@ -20,7 +20,7 @@ from ..report import Report
 from ..routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ..singularity import PACKED, partial_sum_split
 from .options import value_tolerance_mm
-from .tally import Tally, accumulate
+from .tally import Tally, accumulate, compares_by_branch
 
 CHUNK_ENTRIES = 2000000
 """Joint entries (poses x dof x postures) per batch, within 1000 and MAX_CHUNK_POSES poses:
@@ -136,7 +136,8 @@ def compare_poses(poses, first=False):
     t6 = t6_from_pose(poses)
     plugin.reset_host()
     # A host that can summarise the solutions by limb branch as it calls (kingen.verify.tally uses it).
-    summary = {"branches_of": robot} if getattr(plugin, "summarises_branches", False) and robot.postures > 2 else {}
+    summarises = getattr(plugin, "summarises_branches", False) and compares_by_branch(robot)
+    summary = {"branches_of": robot} if summarises else {}
     with printed.capture():
         calls = plugin.call(t6, options.link_lengths, options.link_offsets, **summary)
     expected = in_vocabulary(solve(robot, t6, options.link_lengths, options.link_offsets), plugin)

@@ -198,6 +198,12 @@ class _Columns:
         return np.any(flags[:, np.arange(self.column_of.shape[1]), self.column_of], axis=2)
 
 
+def compares_by_branch(robot):
+    """Whether compared_columns may compare ``robot``'s joints by limb branch: robots with more
+    than two postures (see _repeats_branches); the host's summary is asked for those only."""
+    return robot.postures > 2
+
+
 def compared_columns(robot, calls, expected):
     """The _Columns of one chunk: by branch when the routine allows it and the robot has more
     than two postures, else by posture. Whether it allows it, and its values by branch, come
@@ -208,7 +214,7 @@ def compared_columns(robot, calls, expected):
                   and np.array_equal(reference_solves, np.broadcast_to(reference_solves[:, :1], reference_solves.shape)))
     table = branch_table(robot)
     summarised = calls.repeats is not None
-    if robot.postures > 2 and same_reach and (np.all(calls.repeats) if summarised
+    if compares_by_branch(robot) and same_reach and (np.all(calls.repeats) if summarised
                                                else _repeats_branches(robot, calls.solutions)):
         weights = np.array([[np.count_nonzero(table[:, index] == branch) for branch in range(2)]
                             for index in range(robot.dof)])
