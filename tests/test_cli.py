@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from kingen.cli import main
+from kingen.cli import GC_FIRST_THRESHOLD, main
 
 JSON_KEYS = {"robot", "samples", "postures", "max_abs_error_mm", "max_abs_error_rad", "warning_mismatches",
              "golden_checked", "golden_failed", "passed"}
@@ -33,6 +33,18 @@ def test_help_and_version_load_no_heavy_module(argv):
              "print(sorted(m for m in ('numpy', 'pydantic', 'jinja2', 'cffi', 'ruamel.yaml') if m in sys.modules))")
     done = subprocess.run([sys.executable, "-c", probe, *argv], capture_output=True, text=True, check=True)
     assert done.stdout.splitlines()[-1] == "[]"
+
+
+def test_the_executable_collects_garbage_rarely_and_freezes_it_before_exiting():
+    """kingen.cli.run, the executable's entry point: the youngest generation collected every
+    GC_FIRST_THRESHOLD allocations during the command, everything left frozen at its end,
+    the command's exit code kept; main() (in-process callers) changes neither."""
+    probe = ("import atexit, gc, sys; from kingen import cli; "
+             "atexit.register(lambda: print(gc.get_threshold()[0], gc.get_freeze_count() > 0)); "
+             "cli.main(['list']); print(gc.get_threshold()[0], gc.get_freeze_count()); cli.run()")
+    done = subprocess.run([sys.executable, "-c", probe, "nosuchcommand"], capture_output=True, text=True)
+    assert done.returncode == 2 and "nosuchcommand" in done.stderr
+    assert done.stdout.splitlines()[-2:] == ["700 0", f"{GC_FIRST_THRESHOLD} True"]
 
 
 def test_render_writes_only_the_source(capsys, tmp_path):
