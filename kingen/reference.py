@@ -194,7 +194,7 @@ def _limb_solutions(robot, t6):
         branch_joints[:, index, :] = limb_solution.values
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
-    overflow = ~np.all(np.isfinite(branch_joints), axis=2)  # (n, dof)
+    overflow = ~(np.isfinite(branch_joints[..., 0]) & np.isfinite(branch_joints[..., 1]))  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
     return points, branch_joints, radicands, finite, overflow
 

@@ -33,8 +33,9 @@ def singular_bounds(robot, reference_solution, fixed=None):
     scale = np.array([limb.singular_scale() for limb in robot.limbs])
     # A length's radicand is computed from coordinates as large as the robot or the joint
     # (a carriage far along its rail): its rounding grows with (that / link)^2.
-    with np.errstate(invalid="ignore"):
-        reach = np.fmax(robot.size_mm, np.nanmax(np.abs(reference_solution.branch_joints), axis=2))
+    # np.fmax ignores a NaN as np.nanmax would; over the axis of two branches, several times faster.
+    magnitude = np.abs(reference_solution.branch_joints)
+    reach = np.fmax(robot.size_mm, np.fmax(magnitude[..., 0], magnitude[..., 1]))
     scale = np.where(robot.revolute, scale, np.maximum(scale, reach ** 2 / scale))
     in_band = np.abs(radicands) <= SINGULAR_TOLERANCE + WARNING_BAND
     eps = np.finfo(float).eps
