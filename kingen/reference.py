@@ -125,8 +125,7 @@ def _direct_index(robot, points, branch_joints, indices):
     it for robot.direct_index_min, +inf where kingen.certificate proves it above the window,
     the rest from each posture's M (built only where some posture of a block needs it)."""
     count = points.shape[0]
-    wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
-    lines = np.moveaxis(wrenches, 0, -1)  # (dof, 2, 6, n): the memory's own layout
+    wrenches, lines = _force_lines(robot, points, branch_joints)
     index = np.empty((count, robot.postures))
     threshold = robot.direct_index_min
     settled = None
@@ -146,6 +145,14 @@ def _direct_index(robot, points, branch_joints, indices):
         if settled is not None:
             np.copyto(index[block], np.inf, where=settled[block])
     return index
+
+
+def _force_lines(robot, points, branch_joints):
+    """(wrenches (n, dof, 2, 6), lines (dof, 2, 6, n)): the limbs' unit line wrenches
+    (kingen.singularity.limb_wrenches) for platform points (n, dof, 3) and joints per branch
+    (n, dof, 2), and the same memory in its own layout, poses last, as the certificate reads it."""
+    wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
+    return wrenches, np.moveaxis(wrenches, 0, -1)
 
 
 def _settling_probe(robot, lines):
@@ -172,8 +179,7 @@ def certificate_settles(robot, t6):
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
     with np.errstate(all="ignore"):
         points, branch_joints, _, _, _ = _limb_solutions(robot.calibrated(), t6)
-        wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)
-        return _settling_probe(robot, np.moveaxis(wrenches, 0, -1)) is not None
+        return _settling_probe(robot, _force_lines(robot, points, branch_joints)[1]) is not None
 
 
 def _limb_solutions(robot, t6):
