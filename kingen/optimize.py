@@ -6,23 +6,23 @@ Particles are evaluated through :func:`kingen.executors.executor` (a process poo
 distributed executor for a cluster); the swarm's random numbers come only from the seed, so
 a search gives the same result for any number of workers. After every iteration the whole
 state is written to a checkpoint, from which ``resume`` continues to the same result as an
-uninterrupted run.
+uninterrupted run. The checkpoint is plain data (:mod:`kingen.checkpoint`), from which the
+swarm is rebuilt: no code is ever loaded from it.
 """
 
 import copy
 import json
-import pickle
 import time
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import checkpoint
+from .checkpoint import CHECKPOINT  # noqa: F401  (where optimize's output folder keeps it)
 from .design import evaluate, settings_of
-from .errors import KingenError, refuse_special_file
-from .files import digest, write_atomic
-
-CHECKPOINT = "checkpoint.pkl"
+from .errors import KingenError
+from .files import digest
 
 
 @dataclass
@@ -68,25 +68,66 @@ def new_state(problem, seed, fingerprint):
 
 
 def save(state, folder):
-    """Checkpoint ``state`` into ``folder`` (atomically)."""
-    write_atomic(folder / CHECKPOINT, pickle.dumps(state))
+    """Checkpoint ``state`` into ``folder`` (atomically, as plain data: kingen.checkpoint)."""
+    algorithm = state.algorithm
+    particles, bests = algorithm.particles, algorithm.pop
+    generator = algorithm.random_state.bit_generator.state["state"]
+    swarm = checkpoint.Swarm(
+        iteration=algorithm.n_iter, x=particles.get("X").tolist(), v=particles.get("V").tolist(),
+        f=particles.get("F")[:, 0].tolist(), best_x=bests.get("X").tolist(), best_f=bests.get("F")[:, 0].tolist(),
+        random_state=generator["state"], random_increment=generator["inc"],
+        random_has_uint32=algorithm.random_state.bit_generator.state["has_uint32"],
+        random_uinteger=algorithm.random_state.bit_generator.state["uinteger"])
+    checkpoint.write(folder, checkpoint.Checkpoint(
+        format=checkpoint.FORMAT, version=checkpoint.VERSION, fingerprint=state.fingerprint, seed=state.seed,
+        iteration=state.iteration, evaluations=state.evaluations, poses=state.poses,
+        best_x=None if state.best_x is None else [float(value) for value in state.best_x],
+        best_objective=state.best_objective, best_table=state.best_table, history=state.history,
+        since_improvement=state.since_improvement, seconds=state.seconds, swarm=swarm))
 
 
-def load(folder, expected):
-    """The SearchState checkpointed in ``folder``; KingenError when there is none or it was
-    made for another problem."""
+def load(folder, problem, expected):
+    """The SearchState checkpointed in ``folder`` for ``problem``: its swarm rebuilt from the
+    checkpoint's data, so that the search continues as if never stopped. KingenError when there
+    is none, it is not a checkpoint kingen accepts (kingen.checkpoint.read), or it was made for
+    another problem (fingerprint ``expected``) or does not fit this one's swarm and variables."""
+    data = checkpoint.read(folder)
     path = folder / CHECKPOINT
-    refuse_special_file(path)
-    try:
-        state = pickle.loads(path.read_bytes())
-    except FileNotFoundError:
-        raise KingenError(f"{path}: no checkpoint to resume from (run without --resume first)") from None
-    except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, TypeError, ValueError) as error:
-        raise KingenError(f"{path}: not a kingen checkpoint ({type(error).__name__})") from None
-    if not isinstance(state, SearchState) or state.fingerprint != expected:
+    if data.fingerprint != expected:
         raise KingenError(f"{path}: the checkpoint is of another design problem (the robot file or its "
                           "optimize: section changed)")
-    return state
+    swarm, size = data.swarm, (problem.section.search.swarm, len(problem.names))
+    for name in ("x", "v", "best_x"):
+        if np.shape(getattr(swarm, name)) != size:
+            raise KingenError(f"{path}: swarm.{name}: not {size[0]} particles of {size[1]} variables")
+    for name in ("f", "best_f"):
+        if len(getattr(swarm, name)) != size[0]:
+            raise KingenError(f"{path}: swarm.{name}: not {size[0]} particles")
+    if data.best_x is not None and len(data.best_x) != size[1]:
+        raise KingenError(f"{path}: best_x: not {size[1]} variables")
+    state = new_state(problem, data.seed, expected)
+    _restore_swarm(state.algorithm, swarm)
+    best_x = None if data.best_x is None else np.array(data.best_x)
+    best_table = None if data.best_table is None else [tuple(row) for row in data.best_table]
+    return SearchState(algorithm=state.algorithm, seed=data.seed, fingerprint=expected, iteration=data.iteration,
+                       evaluations=data.evaluations, poses=data.poses, best_x=best_x,
+                       best_objective=data.best_objective, best_table=best_table, history=list(data.history),
+                       since_improvement=data.since_improvement, seconds=data.seconds)
+
+
+def _restore_swarm(algorithm, swarm):
+    """Put a checkpoint's Swarm into a freshly set-up pymoo PSO: what its ask and tell read."""
+    from pymoo.core.population import Population
+
+    algorithm.particles = Population.new(X=np.array(swarm.x), V=np.array(swarm.v), F=np.array(swarm.f)[:, None])
+    algorithm.pop = Population.new(X=np.array(swarm.best_x), F=np.array(swarm.best_f)[:, None])
+    algorithm.n_iter = swarm.iteration
+    algorithm.is_initialized = True
+    algorithm._set_optimum()
+    generator = algorithm.random_state.bit_generator.state
+    generator.update(state={"state": swarm.random_state, "inc": swarm.random_increment},
+                     has_uint32=swarm.random_has_uint32, uinteger=swarm.random_uinteger)
+    algorithm.random_state.bit_generator.state = generator
 
 
 def run_swarm(problem, state, executor, folder=None, progress=None, stop=None):

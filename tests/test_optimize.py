@@ -2,8 +2,11 @@
 resumable to the same result, its outputs complete (a robot file that builds and verifies,
 the JSON contract, a report a browser shows), bad input refused in one line."""
 
+import copy
 import io
 import json
+import os
+import pickle
 import subprocess
 
 import pytest
@@ -126,3 +129,102 @@ def test_the_report_in_a_real_browser(two_workers):
                     f"--screenshot={shot}", (folder / "report.html").as_uri()], check=True, capture_output=True,
                    timeout=120)
     assert shot.stat().st_size > 20000
+
+
+@pytest.fixture(scope="module")
+def checkpointed(small_file, tmp_path_factory):
+    """The checkpoint of a one-iteration search of small_file (as data), to be tampered with."""
+    folder = tmp_path_factory.mktemp("checkpointed")
+    _run(small_file, folder, "--workers", "1", "--iterations", "1")
+    return json.loads((folder / search.CHECKPOINT).read_text())
+
+
+def _resume(small_file, folder, capsys):
+    """optimize --resume from ``folder``: (exit code, stderr)."""
+    code = main(["optimize", str(small_file), "-o", str(folder), "--workers", "1", "--iterations", "2", "--resume"])
+    return code, capsys.readouterr().err.strip()
+
+
+def test_a_checkpoint_is_plain_private_data_and_resumes(checkpointed, small_file, tmp_path, capsys):
+    (tmp_path / search.CHECKPOINT).write_text(json.dumps(checkpointed))
+    os.chmod(tmp_path / search.CHECKPOINT, 0o600)
+    assert _resume(small_file, tmp_path, capsys) == (0, "")
+    assert os.stat(tmp_path / search.CHECKPOINT).st_mode & 0o777 == 0o600
+    data = json.loads((tmp_path / search.CHECKPOINT).read_text())
+    assert (data["format"], data["version"], data["iteration"]) == ("kingen optimize checkpoint", 1, 2)
+    assert len(data["swarm"]["x"]) == SMALL["search"]["swarm"]
+
+
+class _Payload:
+    """Unpickling this runs code: it touches the file ``marker``."""
+
+    def __init__(self, marker):
+        self.marker = marker
+
+    def __reduce__(self):
+        return (open, (str(self.marker), "w"))
+
+
+@pytest.mark.parametrize("name", ["checkpoint.pkl", "checkpoint.json"])
+def test_a_pickled_checkpoint_runs_nothing(small_file, tmp_path, capsys, name):
+    marker = tmp_path / "payload-ran"
+    (tmp_path / name).write_bytes(pickle.dumps(_Payload(marker)))
+    os.chmod(tmp_path / name, 0o600)
+    code, error = _resume(small_file, tmp_path, capsys)
+    assert code == 2 and not marker.exists() and len(error.splitlines()) == 1
+    assert (f"{tmp_path / 'checkpoint.json'}: " + ("no checkpoint to resume from (kingen does not read the old "
+            "pickled checkpoint.pkl)" if name == "checkpoint.pkl" else "not a kingen checkpoint (")) in error
+
+
+def _tampered(checkpointed, change):
+    data = copy.deepcopy(checkpointed)
+    change(data)
+    return json.dumps(data)
+
+
+TAMPERED = {
+    "an old version": (lambda data: data.update(version=0), "version: Input should be 1"),
+    "a NaN": (lambda data: data["swarm"]["v"][0].__setitem__(0, float("nan")), "swarm.v.0.0: Input should be a finite"),
+    "code as text": (lambda data: data.update(seed="__import__('os')"), "seed: Input should be a valid integer"),
+    "a field more": (lambda data: data.update(extra=1), "extra: Extra inputs are not permitted"),
+    "a particle less": (lambda data: data["swarm"]["x"].pop(), "swarm.x: not 6 particles of "),
+    "another problem": (lambda data: data.update(fingerprint="0" * 64), "the checkpoint is of another design problem"),
+}
+
+
+@pytest.mark.parametrize("case", TAMPERED)
+def test_a_tampered_checkpoint_is_refused_in_one_line(checkpointed, small_file, tmp_path, capsys, case):
+    change, expected = TAMPERED[case]
+    (tmp_path / search.CHECKPOINT).write_text(_tampered(checkpointed, change))
+    os.chmod(tmp_path / search.CHECKPOINT, 0o600)
+    code, error = _resume(small_file, tmp_path, capsys)
+    assert code == 2 and len(error.splitlines()) == 1 and f"{tmp_path / search.CHECKPOINT}: " in error
+    assert expected in error
+
+
+def _other_users(path):
+    os.chown(path, 12345, 12345)
+
+
+PLACED = {
+    "owned by another user": (_other_users, "is owned by another user (uid 12345)"),
+    "writable by its group": (lambda path: os.chmod(path, 0o620), "is writable by its group"),
+    "a symbolic link": (lambda path: (path.rename(path.with_suffix(".real")),
+                                      path.symlink_to(path.with_suffix(".real"))), "is a symbolic link"),
+    "a FIFO": (lambda path: (path.unlink(), os.mkfifo(path, 0o600)), "is not a regular file"),
+    "8 GB": (lambda path: os.truncate(path, 8 << 30), "larger than 16 MB, which no checkpoint is"),
+}
+
+
+@pytest.mark.parametrize("case", PLACED)
+def test_a_checkpoint_another_user_could_have_written_is_refused(checkpointed, small_file, tmp_path, capsys, case):
+    place, expected = PLACED[case]
+    path = tmp_path / search.CHECKPOINT
+    path.write_text(json.dumps(checkpointed))
+    os.chmod(path, 0o600)
+    if case == "owned by another user" and os.getuid() != 0:
+        pytest.skip("only root can give a file to another user")
+    place(path)
+    code, error = _resume(small_file, tmp_path, capsys)
+    assert code == 2 and len(error.splitlines()) == 1
+    assert f"{path}: {expected}" in error

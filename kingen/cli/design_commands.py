@@ -55,7 +55,7 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     out_dir = out_dir or default_out_dir(model) / "optimize"
     fingerprint = search.fingerprint(problem)
     if resume:
-        state = search.load(out_dir, fingerprint)
+        state = search.load(out_dir, problem, fingerprint)
         say(f"resuming at iteration {state.iteration} (best {state.best_objective:g} deg) from {out_dir}")
     else:
         state = search.new_state(problem, seed, fingerprint)
