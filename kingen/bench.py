@@ -11,6 +11,8 @@ Memory is bounded whatever the call count: the routine is timed over a pool of a
 import statistics
 import time
 
+from typing_extensions import NotRequired, TypedDict
+
 from .conventions import t6_from_pose
 from .errors import PluginDefect
 from .isolation import captured_output
@@ -28,6 +30,40 @@ VERIFY_LIMIT = 200000
 """verify's poses per second are measured on at most this many poses."""
 FLOOR_SAMPLES = 2000
 """Poses a floor is verified on before it is timed."""
+
+
+class Timings(TypedDict):
+    """A routine's ns per call over the rounds of compare."""
+
+    min: float
+    median: float
+
+
+class AgainstFloor(TypedDict):
+    """The routine against a hand-written floor: each one's Timings and their ratios."""
+
+    floor: Timings
+    routine: Timings
+    rounds: int
+    ratio_min: float
+    ratio_median: float
+
+
+class Figures(TypedDict):
+    """What ``kingen bench`` prints and writes as JSON (benchmark's figures, against_floor
+    with --floor)."""
+
+    robot: str
+    routine: str
+    postures: int
+    calls: int
+    batch_ns_per_call: float
+    cffi_ns_per_call: float
+    reference_poses_per_second: float
+    verify_poses_per_second: float
+    verify_processes: int
+    verify_passed: bool
+    against_floor: NotRequired[AgainstFloor]
 
 
 def _best_seconds(function, repeats, passes=1, tick=None):

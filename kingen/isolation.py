@@ -3,7 +3,8 @@ asking it about its routine and every routine call; and capturing what it prints
 
 The command line never executes plugin code in its own process. A job runs in a
 forked child and talks to the parent through a pipe: stage names, progress, finished
-checks and at last its result. The parent waits at most ``timeout`` seconds for each
+checks and at last its result, each as plain data in an authenticated frame
+(:mod:`kingen.wire`) that the parent checks field by field before it uses any of it. The parent waits at most ``timeout`` seconds for each
 message, so a routine that stops making progress (an endless loop, a sleep per call)
 is killed and named with the stage it was in; a child that dies (a segfault, a call to
 ``exit()``) becomes a :class:`ChildFailure` naming the signal or exit status and the
@@ -24,6 +25,7 @@ import traceback
 from contextlib import contextmanager
 from dataclasses import dataclass
 
+from . import wire
 from .errors import InternalError, KingenError, PluginDefect
 
 FIRST_STAGE = "loading the routine"
@@ -40,40 +42,59 @@ class ChildFailure:
 
 
 class Channel:
-    """The child's end: ``stage(text)`` before each step, ``send(kind, value)`` for the rest."""
+    """The child's end: ``stage(text)`` before each step, ``send(kind, value)`` for the rest
+    (plain data: kingen.wire)."""
 
-    def __init__(self, connection):
-        self._connection = connection
+    def __init__(self, sender):
+        self._sender = sender
 
     def stage(self, text):
-        self._connection.send(("stage", text))
+        self._sender.send("stage", text)
 
     def send(self, kind, value):
-        self._connection.send((kind, value))
+        self._sender.send(kind, value)
 
 
-def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE):
+def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE, decoders=None):
     """Run ``job(channel, *arguments)`` in a forked child; return (result, None) or
     (None, ChildFailure). ``on_message(kind, value)`` gets every message other than
     stages. A KingenError raised in the child is raised here (bad input found while
-    loading); any other exception there is a kingen defect, raised as InternalError."""
+    loading); any other exception there is a kingen defect, raised as InternalError.
+
+    Everything the child sends arrives as plain data through an authenticated channel
+    (kingen.wire); ``decoders`` maps a message kind ('result' included) to a function that
+    turns its plain value into the object the caller expects, checked field by field
+    (raising WireError). A message that fails its check or cannot be read or decoded is a
+    ``crash`` failure naming the stage: the child is
+    stopped, and nothing it sent is used."""
+    decoders = {**CONTROL_DECODERS, **(decoders or {})}
     context = multiprocessing.get_context("fork")
-    receiver, sender = context.Pipe(duplex=False)
+    key = wire.new_key()
+    reading, writing = os.pipe()
     # Not a daemon, so that the job may fork helpers (verify's reference process); it is
     # always stopped and reaped below, and it dies with this process (PR_SET_PDEATHSIG).
-    child = context.Process(target=_child_main, args=(sender, job, arguments), daemon=False)
-    child.start()
-    sender.close()
+    child = context.Process(target=_child_main, args=(reading, writing, key, job, arguments), daemon=False)
+    try:
+        child.start()
+    finally:
+        os.close(writing)
+    receiver = wire.Receiver(reading, key)
     stage = first_stage
     finished = False
     try:
         while True:
-            if not receiver.poll(timeout):
+            try:
+                message = receiver.receive(timeout)
+                if message is not None:
+                    kind, value = message[0], _decoded(decoders, *message)
+            except TimeoutError:
                 return None, ChildFailure("timeout", stage, f"no progress for {timeout:g} s during {stage}; "
                                                             "the routine was stopped (--timeout)")
-            try:
-                kind, value = receiver.recv()
-            except EOFError:
+            except wire.WireError as error:
+                return None, ChildFailure("crash", stage, f"kingen's channel to the host process carried {error} "
+                                                         f"during {stage}: the host process was stopped and "
+                                                         "nothing it sent was used")
+            if message is None:
                 finished = True
                 break
             finished = kind in LAST_MESSAGES
@@ -101,6 +122,29 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
                                                  "not ended by the routine: run it again")
     return None, ChildFailure("crash", stage, f"the plugin ended the host process ({ending(child.exitcode)}) "
                                              f"during {stage}")
+
+
+def _text(value):
+    if not isinstance(value, str):
+        raise wire.WireError("a message whose text is not text")
+    return value
+
+
+def _defect(value):
+    if not (isinstance(value, list) and len(value) == 2 and all(isinstance(part, str) for part in value)):
+        raise wire.WireError("a defect message kingen cannot read")
+    return value
+
+
+CONTROL_DECODERS = {"stage": _text, "defect": _defect, "error": _text, "internal": _text}
+"""The messages every job's child sends besides its own: stages, and how it ended if not
+with a result."""
+
+
+def _decoded(decoders, kind, value):
+    """A received message's value as its kind's decoder makes it (plain data where the caller
+    gave none)."""
+    return decoders[kind](value) if kind in decoders else value
 
 
 def ending(exit_code):
@@ -151,13 +195,15 @@ def _end(child, finished):
     return finished and stopped
 
 
-def _child_main(connection, job, arguments):
+def _child_main(reading, writing, key, job, arguments):
+    os.close(reading)
     die_with_parent()
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     faulthandler.disable()
     _silence_standard_streams()
-    channel = Channel(connection)
+    sender = wire.Sender(writing, key)
+    channel = Channel(sender)
     try:
         channel.send("result", job(channel, *arguments))
     except PluginDefect as error:
@@ -167,7 +213,7 @@ def _child_main(connection, job, arguments):
     except BaseException as error:  # a kingen defect: reported by the parent as an internal error
         channel.send("internal", f"{type(error).__name__}: {error} ({_origin(error)})")
     finally:
-        connection.close()
+        sender.close()
 
 
 def _origin(error):

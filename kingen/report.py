@@ -6,7 +6,7 @@ import json
 import math
 import xml.etree.ElementTree as ElementTree
 from dataclasses import asdict, dataclass, field
-from typing import Optional
+from typing import Dict, List, Optional, Tuple, Union
 
 from .text import xml_text
 
@@ -23,7 +23,7 @@ class Check:
     name: str
     passed: bool
     detail: str = ""
-    diagnoses: list = field(default_factory=list)
+    diagnoses: List[str] = field(default_factory=list)
     exercised: bool = True
     judged: Optional[int] = None
 
@@ -45,11 +45,11 @@ class GoldenResult:
     """One golden value: published joints against the plugin's and the reference's (YAML units)."""
 
     source: str
-    pose: list
+    pose: List[float]
     posture: int
-    expected: list
-    plugin: list
-    reference: list
+    expected: List[float]
+    plugin: List[float]
+    reference: List[float]
     tolerance: float
     passed: bool
 
@@ -69,22 +69,22 @@ class Report:
     singular_out_of_bound: int = 0
     warning_mismatches: int = 0
     warnings_in_band: int = 0
-    golden: list = field(default_factory=list)
-    checks: list = field(default_factory=list)
-    notices: list = field(default_factory=list)
+    golden: List[GoldenResult] = field(default_factory=list)
+    checks: List[Check] = field(default_factory=list)
+    notices: List[str] = field(default_factory=list)
     seconds: float = 0.0
     processes: int = 1
     """How many processes compared the sampled poses (``seconds`` is their wall time)."""
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
-    boundary_poses: dict = field(default_factory=dict)
+    boundary_poses: Dict[str, Union[int, Dict[str, int]]] = field(default_factory=dict)
     """{poses: how many poses on warnings' boundaries joined the sample, boundaries_found:
     {warning, or direct_index_min for the direct index's threshold: boundaries found}}
     (kingen.verify.boundaries)."""
-    interface_checks: tuple = ()
+    interface_checks: Tuple[str, ...] = ()
     """Names of the host's interface checks (their failures are listed as ``interface_failures``)."""
-    posture_statistics: list = field(default_factory=list)
+    posture_statistics: List[Dict[str, Union[int, float, None]]] = field(default_factory=list)
     """Per posture: {posture, right, wrong, unreachable_wrongly, missed, worst_error_mm,
     worst_error_rad}: poses solved right, solved wrong (joints beyond their bound), reported
     unreachable where the reference solves them, and solved where the reference finds none."""

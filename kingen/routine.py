@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import KingenError
+from .wire import WireError
 
 WARNINGS = {
     "WARN_GOOD_SOLUTION": 0,
@@ -88,6 +89,33 @@ class Calls:
     @property
     def inputs_modified(self):
         return bool(np.any(self.faults & INPUTS_MODIFIED))
+
+
+CALLS_ARRAYS = {"returned": ("iu", 1), "solutions": ("f", 3), "warnings": ("iu", 2), "faults": ("iu", 1),
+                "branch_values": ("f", 3), "repeats": ("iub", 1)}
+"""Calls' arrays as they travel from a child: numpy dtype kinds and dimensions."""
+
+
+def calls_decoder(poses):
+    """A kingen.isolation decoder of the Calls a child sends for ``poses`` poses: each array of
+    its numeric kind, ``poses`` long and consistent with the others in joints and postures,
+    the branch summary (n, dof, 2) and (n,) both or neither; WireError naming what is not."""
+    def decode(value):
+        if not isinstance(value, dict) or set(value) != set(CALLS_ARRAYS):
+            raise WireError("Calls that kingen cannot read (their fields)")
+        summary = value["branch_values"] is not None
+        for name, (kinds, dimensions) in CALLS_ARRAYS.items():
+            array = value[name]
+            if array is None and name in ("branch_values", "repeats") and not summary:
+                continue
+            if not (isinstance(array, np.ndarray) and array.dtype.kind in kinds and array.ndim == dimensions
+                    and len(array) == poses):
+                raise WireError(f"Calls that kingen cannot read ({name}: not {poses} poses' numbers)")
+        _, dof, postures = value["solutions"].shape
+        if value["warnings"].shape[1] != postures or summary and value["branch_values"].shape[1:] != (dof, 2):
+            raise WireError("Calls that kingen cannot read (their joint or posture counts disagree)")
+        return Calls(**value)
+    return decode
 
 
 def check_routine_name(routine):

@@ -136,6 +136,55 @@ def test_hostile_plugins_end_in_a_named_verdict(tmp_path, defect, code, words):
     assert time.monotonic() - start < 30
 
 
+class _ExitZero:
+    """Unpickling this ends the unpickling process with exit status 0."""
+
+    def __reduce__(self):
+        return (os._exit, (0,))
+
+
+def forging_constructor(frame):
+    """C: a library constructor that writes ``frame`` (bytes) into every file descriptor from
+    3 up, as a plugin that looks for kingen's channel to its parent would."""
+    data = ", ".join(str(byte) for byte in frame)
+    return ("#include <unistd.h>\n"
+            f"static const unsigned char forged[] = {{{data}}};\n"
+            "__attribute__((constructor)) static void forge(void) {\n"
+            "    for (int fd = 3; fd < 1024; fd++) (void)!write(fd, forged, sizeof forged);\n"
+            "}\n")
+
+
+def forged_frames():
+    """What a plugin may write into kingen's channel, by name: a pickle frame as
+    multiprocessing's pipes carry (unpickling it exits 0: a forged PASS), and a frame of
+    kingen's own format with a passing report but a tag made without the channel's key."""
+    import pickle
+    import struct
+
+    from kingen import wire
+
+    data = pickle.dumps(("result", _ExitZero()))
+    report = {"robot": "probe", "routine": "kin_probe", "samples": 200, "seed": 0, "postures": 1,
+              "checks": [{"name": "values", "passed": True}]}
+    return {"pickle": struct.pack("!i", len(data)) + data, "unkeyed": wire.encode(bytes(32), "result", report)}
+
+
+FORGED = forged_frames()
+
+
+@pytest.mark.parametrize("name", FORGED)
+def test_a_plugin_writing_into_kingens_channel_can_only_fail_its_own_run(tmp_path, name):
+    """No frame a plugin writes reaches kingen as its message: kingen does not unpickle (the
+    pickle frame would exit 0) and judges nothing the child sends unchecked."""
+    result = verify_source(tmp_path, plugin_source(CONSTRUCTOR=forging_constructor(FORGED[name])))
+    assert result.returncode == 1, result.stdout + result.stderr
+    carried = "bytes that are not kingen's message" if name == "pickle" else \
+        "a message that is not kingen's (its check failed)"
+    assert (f"FAILED crash: kingen's channel to the host process carried {carried} during loading the plugin "
+            "(its constructors and get_kin_config): the host process was stopped and nothing it sent was used") \
+        in result.stdout, result.stdout
+
+
 def test_a_library_without_get_kin_config_fails_the_check(tmp_path):
     result = verify_source(tmp_path, plugin_source().replace("get_kin_config", "get_kin_konfig"))
     assert result.returncode == 1
@@ -268,7 +317,7 @@ def test_a_child_stopped_for_a_timeout_is_killed_at_once_and_a_finished_one_exit
 
 def _close_and_spin(channel):
     channel.stage("closing the pipe")
-    channel._connection.close()
+    channel._sender.close()
     while True:
         pass
 

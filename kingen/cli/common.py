@@ -193,12 +193,15 @@ def host_target(host, target, command):
     return target
 
 
-def in_child(job, arguments, timeout, host, on_message=None):
-    """A job's result from a child process; a crash or a hang there is a failed run (exit 1).
-    ``on_message(kind, value)`` gets what the job sends besides stages, as it comes."""
+def in_child(job, arguments, timeout, host, decoders, on_message=None):
+    """A job's result from a child process; a crash or a hang there, or a message that is not
+    what ``decoders`` (kind -> decoder, 'result' included: kingen.isolation.run_in_child) accept,
+    is a failed run (exit 1). ``on_message(kind, value)`` gets what the job sends besides
+    stages, decoded, as it comes."""
     from ..isolation import run_in_child
 
-    result, failure = run_in_child(job, arguments, timeout, on_message, first_stage=host.loading_stage)
+    result, failure = run_in_child(job, arguments, timeout, on_message, first_stage=host.loading_stage,
+                                   decoders=decoders)
     if failure is not None:
         raise PluginDefect(failure.detail)
     return result

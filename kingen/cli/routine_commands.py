@@ -2,6 +2,7 @@
 bench, golden record, info."""
 
 import contextlib
+import functools
 import json
 import sys
 from pathlib import Path
@@ -137,8 +138,9 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
 
     A --floor is verified first (on a few thousand poses, as verify --source would) and refused
     when it fails a check: only a correct floor gives a meaningful ratio."""
-    from ..bench import verify_floor
+    from ..bench import Figures, verify_floor
     from ..files import write_atomic
+    from ..wire import typed
 
     model = load_model(robot)
     seen = host.as_seen(model)
@@ -148,7 +150,8 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
         verify_floor(seen, host, floor, floor_source, timeout)
     library, routine = routine_to_check(model, host, out_dir, library, source, routine, timeout)
     model = seen
-    figures = in_child(_bench_job, (model, host, library, routine, calls, floor), timeout, host)
+    figures = in_child(_bench_job, (model, host, library, routine, calls, floor), timeout, host,
+                       {"result": functools.partial(typed, Figures)})
     say(f"bench {model.name} ({routine}, {model.postures} postures, {figures['calls']} calls)")
     say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
     say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
@@ -206,10 +209,10 @@ def golden_record(robot, library, source, routine, samples, seed, output, host, 
         library, routine = routine_to_check(model, host, None, library, source, routine, timeout)
         recorded_from = f"plugin {Path(library).name} ({routine})"
         check_fits(model, samples, recorded_from, seed)
-        poses = t6_chunks(model, samples, seed, chunk)  # the child's poses, drawn here again
         with recording(output, model, recorded_from, samples, seed) as snapshot:
             in_child(_record_job, (host, model, library, routine, samples, seed, chunk), timeout, host,
-                     lambda kind, calls: snapshot.add(next(poses), *calls))
+                     {"chunk": _chunk_decoder(t6_chunks(model, samples, seed, chunk))},
+                     lambda kind, chunk: snapshot.add(chunk[0], chunk[1].solutions, chunk[1].warnings))
     say(f"{output}: {samples} poses x {model.postures} postures recorded from {recorded_from}")
 
 
@@ -247,8 +250,22 @@ def _record_job(channel, host, model, library, routine, samples, seed, chunk):
     plugin = host.load(library, routine, model)
     channel.stage("the routine's calls")
     for t6 in t6_chunks(model, samples, seed, chunk):
-        calls = plugin.call(t6, None, None)
-        channel.send("chunk", (calls.solutions, calls.warnings))
+        channel.send("chunk", plugin.call(t6, None, None))
+
+
+def _chunk_decoder(poses):
+    """Decodes each chunk _record_job sends into (its poses, their Calls), the poses drawn
+    here again from the iterator ``poses``; WireError for a chunk of another length or one
+    more than was drawn."""
+    from ..routine import calls_decoder
+    from ..wire import WireError
+
+    def decode(value):
+        t6 = next(poses, None)
+        if t6 is None:
+            raise WireError("more chunks than the snapshot has poses")
+        return t6, calls_decoder(len(t6))(value)
+    return decode
 
 
 def _bench_job(channel, model, host, library, routine, calls, floor):

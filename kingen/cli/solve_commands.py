@@ -51,6 +51,7 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     from ..files import write_atomic
     from ..conventions import branch_of_posture, t6_from_pose
     from ..reference import solve as reference_solve
+    from ..routine import calls_decoder
 
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
@@ -58,7 +59,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     matrix = t6_from_pose(np.asarray([pose])) if pose is not None else np.asarray(t6, dtype=float).reshape(1, 4, 4)
     library, routine = routine_to_check(model, host, out_dir, timeout=timeout)
     model = host.as_seen(model)
-    calls = in_child(solve_job, (host, model, library, routine, matrix, link_lengths, link_offsets), timeout, host)
+    calls = in_child(solve_job, (host, model, library, routine, matrix, link_lengths, link_offsets), timeout, host,
+                     {"result": calls_decoder(len(matrix))})
     expected = reference_solve(model, matrix, link_lengths, link_offsets, indices=True)
     direct = expected.direct_index[0] if expected.direct_index is not None else [None] * model.postures
     inverse = float(expected.min_inverse_index[0])

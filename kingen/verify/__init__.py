@@ -21,11 +21,14 @@ which checks it gets (its ``checks`` tuple), verify runs them in that order.
 becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
+import functools
 import time
 
 from ..errors import KingenError, PluginDefect
 from ..isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
 from ..poses import chunk_bounds
+from ..report import Report
+from ..wire import typed
 from .checks import PHASES, Check, Context, by_need
 from .options import VerifyOptions, report_tolerance_mm, value_tolerance_mm
 from .boundaries import boundary_poses
@@ -100,7 +103,7 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
 
     try:
         report, failure = run_in_child(_verify_job, (robot, library, routine, host, options), options.timeout,
-                                       on_message, first_stage=host.loading_stage)
+                                       on_message, first_stage=host.loading_stage, decoders=REPORT_DECODERS)
     except PluginDefect as defect:
         report, failure = None, None
         checks = [Check(defect.check, False, str(defect))]
@@ -113,6 +116,12 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
     if failure is not None:
         report.checks.append(Check(failure.kind, False, failure.detail))
     return report
+
+
+REPORT_DECODERS = {"result": functools.partial(typed, Report), "check": functools.partial(typed, Check),
+                   "progress": functools.partial(typed, int)}
+"""What verify's child sends, checked field by field before use (kingen.wire): the report is
+only data here, and its verdict (Report.passed) is computed from its checks in this process."""
 
 
 def _interface_names(checks):
