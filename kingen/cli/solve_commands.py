@@ -283,6 +283,10 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
 def _tilt_summary(analysis, settings):
     """One line: the least tilt over the azimuths and what stops it, with the settings behind it."""
     limits = analysis["tilt_limits"]
+    if analysis["singular_at_home"]:
+        tilts = ("every azimuth's tilt limit is 0 deg" if limits
+                 else f"tilt limits {analysis['available']['tilt_limits']}")
+        return f"{analysis['singular_at_home']}; {tilts}"
     if not limits:
         return f"tilt limits {analysis['available']['tilt_limits']}"
     least = min(limits, key=lambda row: row["max_tilt_deg"])
