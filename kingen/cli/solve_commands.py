@@ -176,8 +176,8 @@ def _indices_note(model):
 def fk(robot, joints, more_joints, near, json_path, search):
     """Forward kinematics: every platform pose (assembly mode) the joints admit, and how kingen
     knows they are all: exhaustively for six limbs (homotopy from a generic Stewart-Gough
-    platform) and for three translating limbs (closed form); otherwise a multi-start search
-    over a stated region.
+    platform) and for three translating limbs (closed form), "not exhaustive" where the
+    geometry has a continuum of solutions; otherwise a multi-start search over a stated region.
 
     Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
     import numpy as np
