@@ -5,8 +5,10 @@ Only the coordinates the robot can move are analysed (``forward.free``; all six 
 limbs): a delta is swept in x, y, z and never tilted. Causes, in this order:
 ``unreachable`` (a limb has no solution, or is at its own singularity), ``joint_limits``,
 ``direct_singularity`` (the direct index at most the robot's ``direct_index_min``; or, with
-or without one, a crossing: the index below ``CROSSING`` of its value at home, or the sign
-of the closure Jacobian's determinant over the free coordinates differing from home's),
+or without one, a singular pose (see SINGULAR) or a crossing: the index below ``CROSSING``
+of its value at home, or the sign of the closure Jacobian's determinant over the free
+coordinates differing from home's; a home that is itself singular stops every pose judged
+from it at home, and the crossing rules then do not apply),
 ``collision`` (:mod:`kingen.collision`, with the robot file's ``collision:`` radii), else
 ``none``. Poses are mm and degrees. Everything is the numpy reference's: no plugin runs here.
 """
@@ -38,6 +40,12 @@ doubling from the verification range up to 2**SLICE_DOUBLINGS times it, then bis
 CROSSING = 0.05
 """A direct index below this fraction of its value at home stops a pose as a direct
 singularity even where the robot file sets no ``direct_index_min``."""
+SINGULAR = 1e-6
+"""A reachable pose is singular, whatever home's values, where its direct index is at most
+this fraction of the robot's size (robots with a direct index), or, for the others, where
+the closure Jacobian over the free coordinates, its columns and then its rows scaled to unit
+length, has a determinant of at most SINGULAR ** 2 in magnitude. At an exact singularity
+rounding leaves about 1e-8 and 1e-15 of them; the thresholds lie far above."""
 
 
 @dataclass(frozen=True)
@@ -63,11 +71,18 @@ class Settings:
 
 @dataclass(frozen=True)
 class Home:
-    """A posture's values at the verification home: direct index (mm, NaN: not available)
-    and the sign of the closure Jacobian's determinant (0: singular or unreachable)."""
+    """A posture's values at the verification home: direct index (mm, NaN: not available),
+    the sign of the closure Jacobian's determinant (0: singular or unreachable) and whether
+    home itself is a singular pose (SINGULAR)."""
 
     index_mm: float
     det_sign: float
+    singular: bool = False
+
+
+def singular_index_mm(robot):
+    """The direct index (mm) at or below which a pose of ``robot`` is singular (SINGULAR)."""
+    return SINGULAR * robot.size_mm
 
 
 def free_coordinates(robot):
@@ -76,10 +91,12 @@ def free_coordinates(robot):
 
 
 def home_values(robot, posture, settings=Settings()):
-    """The posture's Home at the verification home."""
+    """The posture's Home at the verification home (det_sign 0 where home is singular)."""
     evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(np.array([robot.verification.home]))), posture,
                          settings, Home(np.nan, 0.0))
-    return Home(float(evaluated["direct_index_mm"][0]), float(evaluated["det_sign"][0]))
+    singular = bool(evaluated["singular"][0])
+    return Home(float(evaluated["direct_index_mm"][0]), 0.0 if singular else float(evaluated["det_sign"][0]),
+                singular)
 
 
 def evaluate(robot, t6, posture, settings=Settings(), home=None):
@@ -87,8 +104,8 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
     CAUSES, warning, direct_index_mm (NaN: not available or unreachable), det_sign (sign of
     the closure Jacobian's determinant over the free coordinates; 0 where unreachable),
     min_inverse_index, min_rod_distance_mm and min_crank_distance_mm (clearances; NaN when
-    not configured or not applicable), joints (n, dof). ``home``: the posture's Home
-    (computed when not given) for the crossing rules."""
+    not configured or not applicable), joints (n, dof), singular (n,) bool (SINGULAR).
+    ``home``: the posture's Home (computed when not given) for the crossing rules."""
     home = home_values(robot, posture, settings) if home is None else home
     plain = replace(robot, direct_index_min=None)
     expected = solve(plain, t6)
@@ -102,13 +119,14 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
         index[reachable] = direct_index_of_entries(posture_gram_entries(plain, wrenches)[:, :, posture],
                                                    robot.direct_index_min)
     sign = np.where(reachable, _det_sign(robot, t6, expected.points, joints), 0.0)
+    singular = reachable & ((index <= singular_index_mm(robot)) if robot.has_direct_index else (sign == 0.0))
     rods, cranks = clearances(robot, expected.points, joints, settings.collision)
     threshold = robot.direct_index_min if robot.direct_index_min is not None else -1.0
     crossed = (index < CROSSING * home.index_mm) | ((home.det_sign != 0) & (sign != home.det_sign) & reachable)
     cause = np.full(len(t6), CAUSES.index("none"))
     candidates = [
         ("collision", (rods < 0.0) | (cranks < 0.0)),
-        ("direct_singularity", (index <= threshold) | crossed),
+        ("direct_singularity", (index <= threshold) | crossed | singular),
         ("joint_limits", warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]),
         ("unreachable", ~reachable | (np.min(np.abs(expected.radicands), axis=1) <= 1e-5)),
     ]
@@ -116,12 +134,13 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
         cause = np.where(mask, CAUSES.index(name), cause)
     return {"cause": cause, "warning": warning, "direct_index_mm": index, "det_sign": sign,
             "min_inverse_index": np.where(np.isfinite(expected.min_inverse_index), expected.min_inverse_index, np.nan),
-            "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints}
+            "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints, "singular": singular}
 
 
 def _det_sign(robot, t6, points, joints):
     """Sign of det d(closure residuals)/d(free coordinates) (n,): over the platform twist
-    for six limbs (free of any angle convention), over the free pose coordinates otherwise."""
+    for six limbs (free of any angle convention), over the free pose coordinates otherwise;
+    for robots without a direct index, 0 where that matrix is singular (SINGULAR)."""
     wrenches = unit_wrenches(robot, points, joints)
     free = free_coordinates(robot)
     if len(free) == 6:
@@ -130,7 +149,20 @@ def _det_sign(robot, t6, points, joints):
         poses = np.concatenate([t6[:, 3, :3], rpy_from_rotation(np.swapaxes(t6[:, :3, :3], 1, 2))], axis=1)
         square = closure_derivative(wrenches, poses, free)
     with np.errstate(invalid="ignore"):
-        return np.nan_to_num(np.sign(np.linalg.det(square)))
+        sign = np.nan_to_num(np.sign(np.linalg.det(square)))
+        if not robot.has_direct_index:
+            sign = np.where(np.abs(_equilibrated_det(square)) <= SINGULAR ** 2, 0.0, sign)
+    return sign
+
+
+def _equilibrated_det(square):
+    """det of square matrices (n, k, k) with their columns and then their rows scaled to unit
+    length (at most 1 in magnitude, Hadamard; free of the coordinates' units); 0 for a zero
+    column or row."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scaled = square / np.linalg.norm(square, axis=1, keepdims=True)
+        scaled = scaled / np.linalg.norm(scaled, axis=2, keepdims=True)
+        return np.nan_to_num(np.linalg.det(np.nan_to_num(scaled)))
 
 
 def tilted_t6(robot, azimuths, tilts, convention="axis"):
@@ -279,7 +311,9 @@ def slices(robot, posture, settings=Settings(), home=None):
 
 def analyze(robot, posture=None, settings=Settings(), progress=None):
     """The analysis of ``posture`` (default: the robot's working posture) as JSON-ready data:
-    {robot, posture, available, settings, tilt_limits, sweeps, slices, direct_index_min_mm}."""
+    {robot, posture, available, settings, tilt_limits, sweeps, slices, direct_index_min_mm,
+    singular_at_home} (singular_at_home: null, or what makes home a singular pose; every tilt
+    then stops at 0 degrees)."""
     posture = robot.working_posture if posture is None else posture
     step = progress or (lambda text: None)
     home = home_values(robot, posture, settings)
@@ -307,9 +341,22 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
                  "sweep_angle_step_deg": SWEEP_STEP_DEG, "sweep_position_steps": SWEEP_STEPS,
                  "slice_cells": SLICE_CELLS, "slice_rays": SLICE_RAYS,
                  "crossing_fraction": CROSSING, "crossing_sign_of_det_j": True,
-                 "direct_index_at_home_mm": _finite_or_none(home.index_mm), "det_j_sign_at_home": home.det_sign}
+                 "direct_index_at_home_mm": _finite_or_none(home.index_mm), "det_j_sign_at_home": home.det_sign,
+                 "singular_fraction": SINGULAR}
     return {"robot": robot.name, "posture": posture, "available": available, "settings": described,
-            "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min}
+            "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min,
+            "singular_at_home": singular_at_home(robot, home)}
+
+
+def singular_at_home(robot, home):
+    """None, or one sentence saying why ``home`` (the posture's Home) is a singular pose."""
+    if not home.singular:
+        return None
+    if robot.has_direct_index:
+        return (f"home is a direct singularity: its direct index is {home.index_mm:.3g} mm, at most "
+                f"{singular_index_mm(robot):.3g} mm ({SINGULAR:g} of the robot's size)")
+    return (f"home is a direct singularity: the closure Jacobian over the free coordinates is singular there "
+            f"(scaled determinant at most {SINGULAR ** 2:g})")
 
 
 def _finite_or_none(value):

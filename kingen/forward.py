@@ -13,6 +13,12 @@ finite differences. How every assembly mode is found, and said:
 - otherwise not exhaustively: Newton from seeded starts over a stated region (``search``
   times the verification region around home), which the output names.
 
+An exhaustive method counts isolated solutions only: on a geometry with a continuum of them
+(coincident joints, congruent planar platforms) its paths end elsewhere or nowhere. So its
+answer is checked (check_exhaustive): Newton from ``near`` and home must find nothing it
+missed, and the closure Jacobian must be regular at every pose found; else the answer says
+"not exhaustive" and why, with every pose found.
+
 Poses are (x, y, z) in mm and (roll, pitch, yaw) in radians here; the command line shows
 degrees.
 """
@@ -33,6 +39,9 @@ CONVERGED = 1e-13
 """Newton stops when no step exceeds this fraction of the robot's size (mm) or of a radian."""
 SAME_POSE_MM = 1e-6
 SAME_POSE_RAD = 1e-8
+SINGULAR_RCOND = 1e-6
+"""A pose's closure Jacobian (angle columns per robot size) is singular where its smallest
+singular value is at most this fraction of its largest (rounding leaves about 1e-16)."""
 
 
 @dataclass(frozen=True)
@@ -183,8 +192,44 @@ def assemblies(robot, joints, near, search=SEARCH):
         exhaustive, candidates, method = _multi_start(robot, joints, near, free, search)
     found = _polished(robot, candidates, joints, near, free)
     if exhaustive:
+        exhaustive, found, method = check_exhaustive(robot, joints, near, free, found, method)
+    if exhaustive:
         method = f"{method}: {len(found)} real"
     return AssemblyModes(found=found, exhaustive=exhaustive, method=method)
+
+
+def check_exhaustive(robot, joints, near, free, found, method):
+    """(exhaustive, found, method) for an exhaustive method's ``found`` poses and ``method``
+    line: unchanged where Newton from ``near`` and the verification home reaches no pose
+    missing from ``found`` and the closure Jacobian is regular at every pose; otherwise not
+    exhaustive, the poses Newton reached added (nearest ``near`` first) and the line naming
+    the continuum of solutions the method cannot see."""
+    home, _ = search_region(robot)
+    local = _polished(robot, np.vstack([near, np.where(free, home, near)]), joints, near, free)
+    missed = [assembly for assembly in local if not any(_same(assembly.pose, other.pose) for other in found)]
+    everything = sorted(found + missed, key=lambda assembly: np.linalg.norm(assembly.pose[:3] - near[:3]))
+    singular = int(np.count_nonzero(_singular(robot, [assembly.pose for assembly in everything], joints, free)))
+    if not missed and not singular:
+        return True, found, method
+    evidence = [f"Newton from --near and home reaches {len(missed)} pose(s) the method did not find"] if missed else []
+    if singular:
+        evidence.append(f"the closure Jacobian is singular at {singular} of the {len(everything)} pose(s)")
+    kind = "the geometry has a continuum of solutions" if singular else "the method missed poses"
+    return False, everything, (f"not exhaustive: {kind} ({'; '.join(evidence)}); "
+                               f"{method.removeprefix('exhaustive: ')}: {len(found)} real isolated")
+
+
+def _singular(robot, poses, joints, free):
+    """(n,) bool: whether the closure Jacobian over the free coordinates is singular at each
+    of the poses (n, 6) for ``joints`` (dof,) (SINGULAR_RCOND; angle columns in mm per robot
+    size, so that the test is free of units)."""
+    poses = np.asarray(poses, dtype=float).reshape(-1, 6)
+    if not len(poses):
+        return np.zeros(0, dtype=bool)
+    _, wrenches = closure(robot, poses, np.tile(joints, (len(poses), 1)))
+    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
+    values = np.linalg.svd(closure_derivative(wrenches, poses, free) * scale, compute_uv=False)
+    return values[:, -1] <= SINGULAR_RCOND * values[:, 0]
 
 
 def _multi_start(robot, joints, near, free, search):

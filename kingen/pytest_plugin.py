@@ -9,10 +9,12 @@ process (in a child process, as ``kingen verify`` does); a failing item shows it
 details and diagnoses, and points at the robot file's line. ``--kingen-samples N`` sets the
 poses (default 2000; below 1 is a usage error), ``--kingen-host NAME`` the host (default
 delmia). A robot file reached twice (through a symlink, a symlink loop) is collected once,
-under the first path found; a robot file that cannot be read (a dangling symlink) is a
-failing ``build`` item. A snapshot verify refuses fails the ``snapshot`` item alone: the
-other items are verified without it. Works with pytest-xdist (under ``-n N`` a robot file's
-items go to one worker, so each robot is verified once) and ``--junitxml``.
+under the first path found; a robot file that cannot be read (a dangling symlink) or is not
+a regular file (a FIFO, a symlink to a device) is a failing ``build`` item. A snapshot
+verify refuses (one it cannot read included: a FIFO, a device, a dangling symlink) fails
+the ``snapshot`` item alone: the other items are verified without it. Works with
+pytest-xdist (under ``-n N`` a robot file's items go to one worker, so each robot is
+verified once) and ``--junitxml``.
 """
 
 import argparse
@@ -126,16 +128,26 @@ def pytest_collect_file(file_path, parent):
 @pytest.hookimpl(wrapper=True)
 def pytest_make_collect_report(collector):
     """A folder's collection also gives its robot files that pytest passes over because they
-    cannot be opened (dangling symlinks): each is a RobotFile whose ``build`` item fails."""
+    are neither a regular file nor a folder (dangling symlinks, FIFOs, sockets, devices and
+    symlinks to them): each is a RobotFile whose ``build`` item fails, never a silent skip."""
     report = yield
     if (isinstance(collector, pytest.Directory) and report.passed
             and any(_within(collector.path, folder) for folder in _folders(collector.config))):
         for entry in sorted(os.scandir(collector.path), key=lambda entry: entry.name):
             path = Path(entry.path)
-            if (entry.is_symlink() and not path.exists() and _is_robot_file(path, collector.config)
+            if (_passed_over(entry) and _is_robot_file(path, collector.config)
                     and _first_time(collector.config, path)):
                 report.result.append(RobotFile.from_parent(collector, path=path))
     return report
+
+
+def _passed_over(entry):
+    """Whether pytest's folder collection passes over the folder entry ``entry``: it collects
+    only what is (through symlinks) a folder or a regular file."""
+    try:
+        return not entry.is_dir() and not entry.is_file()
+    except OSError:
+        return True
 
 
 def robot_scope(nodeid):
@@ -184,7 +196,7 @@ class RobotFile(pytest.File):
             yield KingenItem.from_parent(self, name=name, line=robot.line_of("name"))
         for index in range(len(robot.golden)):
             yield KingenItem.from_parent(self, name=f"golden[{index}]", line=robot.line_of("golden", index))
-        if snapshot_path(self.path).is_file():
+        if os.path.lexists(snapshot_path(self.path)):
             yield KingenItem.from_parent(self, name="snapshot", line=1)
 
     def outcome(self):
@@ -207,7 +219,7 @@ class RobotFile(pytest.File):
         samples = self.config.getoption("kingen_samples")
         samples = DEFAULT_SAMPLES if samples is None else samples
         snapshot, snapshot_problem = None, None
-        if snapshot_path(self.path).is_file():
+        if os.path.lexists(snapshot_path(self.path)):
             try:
                 snapshot = load(snapshot_path(self.path), self.robot)
             except KingenError as error:

@@ -14,7 +14,7 @@ import cffi
 import numpy as np
 
 from . import __version__
-from .analysis import CAUSES, CROSSING, Settings
+from .analysis import CAUSES, CROSSING, Settings, singular_index_mm
 from .compiler import compile_c, compiler_command
 from .files import cache_dir, cached, digest, write_atomic
 from .limbs.crank import Crank
@@ -57,8 +57,9 @@ def _library():
 
 
 def home(robot, posture, settings=Settings()):
-    """(direct index mm, sign of det W, whether the thesis's cranks at angle 0 collide) at
-    the verification home, as the judge computes them (analysis.home_values in numpy)."""
+    """(direct index mm, sign of det W (0: unreachable or singular), whether the thesis's
+    cranks at angle 0 collide) at the verification home, as the judge computes them
+    (analysis.home_values in numpy)."""
     _, values = _design(robot, posture, settings)
     return values
 
@@ -84,11 +85,13 @@ def _design(robot, posture, settings):
         design.crank_radius = robot.collision.get("crank_radius", 0.0)
     index, sign, cranks_collide = ffi.new("double *"), ffi.new("double *"), ffi.new("int *")
     library.kingen_home(design, index, sign, cranks_collide)
-    thresholds = [value for value in (robot.direct_index_min, CROSSING * index[0]) if np.isfinite(value or np.nan)]
-    design.index_threshold = max(thresholds) if thresholds else 0.0
-    design.home_det_sign = sign[0]
+    floor = singular_index_mm(robot)
+    thresholds = [value for value in (robot.direct_index_min, CROSSING * index[0], floor)
+                  if np.isfinite(value or np.nan)]
+    design.index_threshold = max(thresholds)
+    design.home_det_sign = 0.0 if index[0] <= floor else sign[0]
     design.cranks_collide_at_zero = int(cranks_collide[0]) if design.collision == COLLISION_MODELS["thesis"] else 0
-    return design, (float(index[0]), float(sign[0]), bool(cranks_collide[0]))
+    return design, (float(index[0]), float(design.home_det_sign), bool(cranks_collide[0]))
 
 
 def tilt_table(robot, posture, settings=Settings()):

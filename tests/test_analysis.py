@@ -10,12 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from markupsafe import escape
 
 from conftest import require_tool
 from kingen.analysis import CAUSES
 from kingen.collision import segment_distance
 from kingen.cli import main
 from kingen.cli.common import load_model
+from kingen.model import robots_dir
 from kingen.figures import LABELS, OUTSIDE_LABEL, QUANTITIES, figure_objects, figures, report_html
 
 SWEEP_KEYS = {"value", "warning", "direct_index_mm", "min_inverse_index", "min_rod_distance_mm",
@@ -133,6 +135,40 @@ def test_a_crossing_of_a_direct_singularity_stops_a_tilt_without_a_threshold(tmp
     assert all(row["min_direct_index_mm"] is not None for row in data["tilt_limits"])
     rolled = {entry["value"]: entry for entry in data["sweeps"]["roll"]}
     assert rolled[-57.0]["cause"] == "direct_singularity" and rolled[0.0]["cause"] == "none"
+
+
+def congruent_hexapod(folder):
+    """The example Stewart-Gough layout with the platform's joints congruent to the base's and
+    no travel limits: at home (straight above the base) every leg is vertical, so the six
+    force lines cannot resist a horizontal force: a direct singularity (index 0)."""
+    text = (robots_dir() / "stewart_gough_example.yaml").read_text()
+    for old, new in (("platform_radius: 100", "platform_radius: 150"), ("platform_pair_angle: 100",
+                                                                        "platform_pair_angle: 20"),
+                     ("  travel: [10, 140]\n", ""), ("name: stewart_gough_example", "name: congruent")):
+        assert old in text
+        text = text.replace(old, new)
+    path = folder / "congruent.yaml"
+    path.write_text(text[:text.index("golden:")])
+    return path
+
+
+def test_a_robot_singular_at_home_is_stopped_at_home(tmp_path, capsys):
+    """Crossing rules relative to a singular home see nothing: home itself is judged singular,
+    every azimuth's tilt limit is 0, and the text, JSON and report say why."""
+    assert main(["analyze", str(congruent_hexapod(tmp_path)), "-o", str(tmp_path / "out"),
+                 "--tilt-step", "1", "--azimuth-step", "45"]) == 0
+    reason = "home is a direct singularity: its direct index is 0 mm, at most 0.00027 mm (1e-06 of the robot's size)"
+    assert capsys.readouterr().out.splitlines()[0] == (
+        f"analyze congruent, posture 0: {reason}; every azimuth's tilt limit is 0 deg")
+    data = json.loads((tmp_path / "out" / "analysis.json").read_text())
+    assert data["singular_at_home"] == reason and data["settings"]["det_j_sign_at_home"] == 0.0
+    assert [(row["max_tilt_deg"], row["cause"]) for row in data["tilt_limits"]] == [(0.0, "direct_singularity")] * 8
+    assert {entry["value"]: entry["cause"] for entry in data["sweeps"]["roll"]}[0.0] == "direct_singularity"
+    assert f"<th>singular at home</th><td>{escape(reason)}" in (tmp_path / "out" / "report.html").read_text()
+
+
+def test_a_robot_regular_at_home_says_so(ceart_analysis):
+    assert json.loads((ceart_analysis / "analysis.json").read_text())["singular_at_home"] is None
 
 
 def delta_like(data):

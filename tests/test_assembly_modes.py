@@ -118,3 +118,32 @@ def test_where_no_method_is_exhaustive_the_search_region_is_stated(capsys):
         capsys.readouterr().out
     assert main(["fk", "exechon", "--joints", text, "--search", "5"]) == 0
     assert "over 5 x the verification region (z -1250 +- 1000" in capsys.readouterr().out
+
+
+def _hexagon(radius, z):
+    """Six joints in pairs 20 degrees apart around a circle of ``radius`` (mm) at height z."""
+    angles = np.radians([angle + offset for angle in (0, 120, 240) for offset in (-10, 10)])
+    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles), np.full(6, z)])
+
+
+@pytest.mark.parametrize("coincident", [False, True], ids=["congruent-planar", "coincident-joints"])
+def test_on_a_continuum_of_solutions_fk_says_not_exhaustive_and_gives_the_pose(tmp_path, capsys, coincident):
+    """Congruent planar base and platform (an architecture singularity: the platform can move
+    with every leg held), or two legs on the same joints: the 40 paths end on no real pose,
+    yet the home pose solves the joints exactly. fk gives it and does not claim to be
+    exhaustive."""
+    base = _hexagon(150.0, 0.0)
+    platform = _hexagon(150.0 if not coincident else 90.0, 0.0)
+    if coincident:
+        base[5], platform[5] = base[4], platform[4]
+    robot_file = _legs_file(tmp_path / "continuum.yaml", base, platform, [0, 0, 300, 0, 0, 0])
+    joints = np.linalg.norm(platform + [0, 0, 300] - base, axis=1)
+    out = tmp_path / "modes.json"
+    assert main(["fk", str(robot_file), "--joints", " ".join(f"{value:.12f}" for value in joints),
+                 "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["exhaustive"] is False
+    assert data["method"].startswith("not exhaustive: the geometry has a continuum of solutions (")
+    assert "the closure Jacobian is singular at" in data["method"]
+    assert any(np.allclose(solution["pose"], [0, 0, 300, 0, 0, 0], atol=1e-6) for solution in data["solutions"])
+    assert capsys.readouterr().out.splitlines()[0] == data["method"]

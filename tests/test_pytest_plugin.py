@@ -2,6 +2,7 @@
 snapshots as items, stale libraries caught by their build information."""
 
 import json
+import os
 import shutil
 
 import pytest
@@ -200,3 +201,29 @@ def test_under_xdist_each_robot_files_items_run_on_one_worker(folder):
                                            ("tests/a.yaml.py::test_x[b.yaml]", "tests/a.yaml.py::test_x[b.yaml]")])
 def test_robot_scope_groups_a_robot_files_items_only(nodeid, scope):
     assert robot_scope(nodeid) == scope
+
+
+def test_a_robot_file_that_is_not_a_regular_file_is_a_failing_item(folder):
+    """pytest passes over FIFOs and devices; the plugin fails them (never hangs on them,
+    never skips them in silence)."""
+    os.mkfifo(folder.path / "pipe.yaml")
+    (folder.path / "null.yml").symlink_to("/dev/null")
+    result = run(folder, "-k", "pipe or null")
+    result.assert_outcomes(failed=2)
+    text = result.stdout.str()
+    assert f"{folder.path / 'pipe.yaml'}: not a regular file (a FIFO); give the file itself" in text
+    assert f"{folder.path / 'null.yml'}: not a regular file (a character device); give the file itself" in text
+    assert "FAILED pipe.yaml::build" in text and "FAILED null.yml::build" in text
+
+
+@pytest.mark.parametrize("make, problem", [
+    (os.mkfifo, "not a regular file (a FIFO); give the file itself"),
+    (lambda path: path.symlink_to("/dev/zero"), "not a regular file (a character device); give the file itself"),
+    (lambda path: path.symlink_to("gone.golden.json"), "cannot be read: No such file or directory")],
+    ids=["fifo", "link-to-dev-zero", "dangling-link"])
+def test_a_snapshot_that_cannot_be_read_fails_the_snapshot_item(folder, make, problem):
+    make(folder.path / "tau.golden.json")
+    result = run(folder)
+    result.assert_outcomes(passed=8, failed=1)
+    assert f"{folder.path / 'tau.golden.json'}: {problem}" in result.stdout.str()
+    assert "FAILED tau.yaml::snapshot" in result.stdout.str()

@@ -66,3 +66,31 @@ def test_ceart_and_the_crossing_rule_agree_too():
     fast, _ = tilt_table(robot, 63, settings)
     assert fast == [(row["max_tilt_deg"], row["cause"]) for row in tilt_limits(robot, 63, settings)]
     assert not judges(load_robot("hexapod"))  # legs: the reference judges them
+
+
+def test_a_design_singular_at_home_scores_0(tmp_path):
+    """The thesis's design with every crank pointing inwards from its pivot and the platform's
+    joints straight below the crank tips at angle 0 (posture 63), no direct_index_min: at home
+    the six rods hang vertical, a direct singularity. It scores 0 (judge and reference
+    alike), not the tilts the crossing rules, relative to that singular home, would allow."""
+    text = resolve_robot_path("rus_optimized").read_text()
+    for old, new in (("platform_radius: 197.2", "platform_radius: 442.885"),
+                     ("platform_half_distance: 50.1", "platform_half_distance: 76.6"),
+                     ("crank_directions: [60, 159, 181, 285, 302, 44]",
+                      "crank_directions: [180, 300, 300, 60, 60, 180]"),
+                     ("home: [0, 0, -404.2, 0, 0, 0]", "home: [0, 0, -650, 0, 0, 0]"),
+                     ("singularity: {direct_index_min: 29.3}\n", ""), ("working_posture: 21", "working_posture: 63"),
+                     ("objective: {posture: 21, tilt_convention: euler, tilt_step: 1, azimuth_step: 1",
+                      "objective: {posture: 63, tilt_convention: euler, tilt_step: 1, azimuth_step: 15"),
+                     ("collision: thesis}", "collision: segments}")):
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "singular.yaml"
+    path.write_text(text[:text.index("golden:")])
+    singular = Problem(read_robot_file(path)[0], path)
+    robot = singular.robot(singular.start())
+    objective, table, _ = evaluate(singular, singular.start())
+    assert objective == 0.0 and table == [(0.0, "direct_singularity")] * 24
+    assert judges(robot) and home(robot, 63)[:2] == (0.0, 0.0)
+    reference = tilt_limits(robot, 63, Settings("euler", 1.0, 15.0, 120.0))
+    assert [(row["max_tilt_deg"], row["cause"]) for row in reference] == table

@@ -178,8 +178,8 @@ def _indices_note(model):
 def fk(robot, joints, more_joints, near, json_path, search):
     """Forward kinematics: every platform pose (assembly mode) the joints admit, and how kingen
     knows they are all: exhaustively for six limbs (homotopy from a generic Stewart-Gough
-    platform) and for three translating limbs (closed form); otherwise a multi-start search
-    over a stated region.
+    platform) and for three translating limbs (closed form), "not exhaustive" where the
+    geometry has a continuum of solutions; otherwise a multi-start search over a stated region.
 
     Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
     import numpy as np
@@ -285,6 +285,10 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
 def _tilt_summary(analysis, settings):
     """One line: the least tilt over the azimuths and what stops it, with the settings behind it."""
     limits = analysis["tilt_limits"]
+    if analysis["singular_at_home"]:
+        tilts = ("every azimuth's tilt limit is 0 deg" if limits
+                 else f"tilt limits {analysis['available']['tilt_limits']}")
+        return f"{analysis['singular_at_home']}; {tilts}"
     if not limits:
         return f"tilt limits {analysis['available']['tilt_limits']}"
     least = min(limits, key=lambda row: row["max_tilt_deg"])

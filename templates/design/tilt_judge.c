@@ -2,8 +2,9 @@
  * for a design given at run time. It decides each pose as kingen/analysis.py's evaluate()
  * does (the numpy reference), for six cranks without travel limits:
  *   unreachable          a limb's normalised radicand D <= 1e-5 (no solution, or its own singularity)
- *   direct_singularity   the direct index at most the threshold (the robot's direct_index_min, or
- *                        5 % of its value at home, whichever is larger), or det W's sign not home's
+ *   direct_singularity   the direct index at most the threshold (the largest of the robot's
+ *                        direct_index_min, 5 % of its value at home and analysis.SINGULAR of the
+ *                        robot's size), or det W's sign not home's
  *   collision            rods (and cranks) closer than their radii, in the chosen model
  * (the first that holds, in this order). Lengths mm, angles radians, base frame. */
 #include <math.h>
