@@ -238,6 +238,14 @@ def test_an_optimize_section_has_the_command_lines_bounds(capsys, tmp_path, obje
     assert not (tmp_path / "o").exists()
 
 
+def test_optimize_refuses_an_output_folder_that_is_a_dangling_link_before_the_search(capsys, tmp_path):
+    (tmp_path / "o").symlink_to(tmp_path / "nowhere" / "o")
+    code, out, err = run(capsys, "optimize", optimize_file(tmp_path), "-o", tmp_path / "o")
+    assert code == 2 and one_error_line(err) and out == ""
+    assert f"{tmp_path / 'o'} is a symbolic link to {tmp_path / 'nowhere' / 'o'}, which does not exist" in err
+    assert not (tmp_path / "nowhere").exists() and not list(tmp_path.glob(".o*"))
+
+
 @pytest.mark.parametrize("value, words", [(" ", "$CC holds no command"), ('"x', "$CC: cannot be split")])
 def test_unusable_compiler_variables_are_bad_input(capsys, tmp_path, monkeypatch, value, words):
     monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
