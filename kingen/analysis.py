@@ -37,6 +37,8 @@ SLICE_RAYS = 32
 SLICE_DOUBLINGS = 12
 """A slice's window is the workspace's extent in its plane: along SLICE_RAYS rays from home,
 doubling from the verification range up to 2**SLICE_DOUBLINGS times it, then bisected."""
+TILT_CHUNK_POSES = 4096
+"""Poses tilt_limits judges at once (about 10 MB of the reference's arrays)."""
 CROSSING = 0.05
 """A direct index below this fraction of its value at home stops a pose as a direct
 singularity even where the robot file sets no ``direct_index_min``."""
@@ -203,20 +205,39 @@ def tilt_limits(robot, posture, settings=Settings(), home=None):
     Empty when the platform cannot tilt."""
     if not can_tilt(robot):
         return []
+    home = home_values(robot, posture, settings) if home is None else home
+    tilts = settings.tilts
+    first, causes, least = _first_stops(robot, posture, settings, home)
+    return [{"azimuth_deg": round(float(azimuth), 6), "max_tilt_deg": round(float(tilts[max(stop - 1, 0)]), 6),
+             "cause": CAUSES[cause], "min_direct_index_mm": float(index) if np.isfinite(index) else None}
+            for azimuth, stop, cause, index in zip(settings.azimuths, first, causes, least)]
+
+
+def _first_stops(robot, posture, settings, home):
+    """(first stopping step (len(tilts): none), its cause, least direct index mm before it
+    (NaN: none available)) per azimuth of ``settings``. The poses are judged in chunks of at
+    most max(TILT_CHUNK_POSES, azimuths) along the tilts, each azimuth until its first stop:
+    memory is independent of the step counts."""
     azimuths, tilts = settings.azimuths, settings.tilts
-    evaluated = evaluate(robot, tilted_t6(robot, azimuths, tilts, settings.tilt_convention), posture, settings, home)
-    causes = evaluated["cause"].reshape(len(azimuths), len(tilts))
-    indices = evaluated["direct_index_mm"].reshape(len(azimuths), len(tilts))
-    limits = []
-    for azimuth, row, index in zip(azimuths, causes, indices):
-        stops = np.nonzero(row != CAUSES.index("none"))[0]
-        first = int(stops[0]) if len(stops) else len(row)
-        reached = index[:first]
-        limits.append({"azimuth_deg": round(float(azimuth), 6),
-                       "max_tilt_deg": round(float(tilts[max(first - 1, 0)]), 6),
-                       "cause": CAUSES[row[first]] if len(stops) else "none",
-                       "min_direct_index_mm": float(np.nanmin(reached)) if np.any(np.isfinite(reached)) else None})
-    return limits
+    first = np.full(len(azimuths), len(tilts))
+    causes = np.full(len(azimuths), CAUSES.index("none"))
+    least = np.full(len(azimuths), np.nan)
+    going, start = np.arange(len(azimuths)), 0
+    while len(going) and start < len(tilts):
+        chunk = tilts[start:start + max(1, TILT_CHUNK_POSES // len(going))]
+        evaluated = evaluate(robot, tilted_t6(robot, azimuths[going], chunk, settings.tilt_convention), posture,
+                             settings, home)
+        cause = evaluated["cause"].reshape(len(going), len(chunk))
+        stopped = cause != CAUSES.index("none")
+        stops = np.where(stopped.any(axis=1), stopped.argmax(axis=1), len(chunk))
+        reached = np.arange(len(chunk)) < stops[:, None]
+        index = np.where(reached, evaluated["direct_index_mm"].reshape(len(going), len(chunk)), np.nan)
+        least[going] = np.fmin(least[going], np.fmin.reduce(index, axis=1))
+        ended = stops < len(chunk)
+        first[going[ended]] = start + stops[ended]
+        causes[going[ended]] = cause[ended, stops[ended]]
+        going, start = going[~ended], start + len(chunk)
+    return first, causes, least
 
 
 def sweeps(robot, posture, settings=Settings(), home=None):

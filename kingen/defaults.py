@@ -14,3 +14,10 @@ TARGETS = ("linux", "windows")
 MAX_PROCESSES = 16
 """verify's comparing processes at most (``--processes``; by default one per core up to this):
 each holds about 100 MB of chunk arrays."""
+TILT_STEP_DEG = (0.001, 90.0)
+"""(least, most) tilt step in degrees: analyze's ``--tilt-step`` and an ``optimize:``
+section's ``objective.tilt_step``."""
+AZIMUTH_STEP_DEG = (0.5, 180.0)
+"""(least, most) step between tilt azimuths in degrees: ``--azimuth-step`` and ``objective.azimuth_step``."""
+TILT_MAX_DEG = (0.1, 180.0)
+"""(least, most) largest tilt tried in degrees: ``--tilt-max`` and ``objective.tilt_max``."""

@@ -19,35 +19,44 @@ import numpy as np
 from .analysis import Settings, tilt_limits
 from .design_schema import Optimize
 from .errors import KingenError
+from .located import Locator
+from .schema import MAX_DEGREES, MAX_NAME
 from .tilt_judge import judges, tilt_table
 
 POSITION_FIELDS = {"depth": -1.0, "height": 1.0}
 """Variables that set the verification home's z: depth below the base (z = -depth), height above."""
+OPTIMIZED = "_optimized"
+"""What an optimised design's name ends in."""
 
 
 class Problem:
     """The design problem of a robot file's data: its variables (names, bounds, whether each
-    is an angle), the data each design makes, and the objective."""
+    is an angle), the data each design makes, and the objective. ``lines`` (the file's
+    {field path: line}) put the line into the errors, which name file, field and problem."""
 
-    def __init__(self, data, path):
+    def __init__(self, data, path, lines=None):
         self.data, self.path = data, path
         self.section = Optimize.model_validate(data["optimize"])
+        locate = Locator(str(path), lines or {})
         layout = data.get("layout") or {}
         self.names, self.lower, self.upper, self.angles, self._targets = [], [], [], [], []
         for number, variable in enumerate(self.section.variables):
-            where = f"optimize.variables[{number}].field"
+            where = ["optimize", "variables", number, "field"]
             if variable.field in POSITION_FIELDS:
                 targets, angle = [(variable.field, None)], False
             elif variable.field.startswith("layout.") and variable.field[7:] in layout:
                 name = variable.field[7:]
                 value = layout[name]
                 if isinstance(value, bool) or not isinstance(value, (int, float, list)):
-                    raise KingenError(f"{path}: {where}: layout.{name} is not a number or a list of numbers")
+                    raise locate.error(where, f"layout.{name} is not a number or a list of numbers")
                 targets = [(name, index) for index in range(len(value))] if isinstance(value, list) else [(name, None)]
                 angle = "direction" in name or "angle" in name
             else:
-                raise KingenError(f"{path}: {where}: '{variable.field}' is neither a field of the layout "
-                                  f"(layout.<field>) nor one of {', '.join(POSITION_FIELDS)}")
+                raise locate.error(where, f"'{variable.field}' is neither a field of the layout "
+                                          f"(layout.<field>) nor one of {', '.join(POSITION_FIELDS)}")
+            if angle and max(map(abs, variable.bounds)) > MAX_DEGREES:
+                raise locate.error(["optimize", "variables", number, "bounds"],
+                                   f"an angle's bounds must be within +/-{MAX_DEGREES:g} degrees")
             for target in targets:
                 self.names.append(variable.field if target[1] is None else f"{variable.field}[{target[1]}]")
                 self.lower.append(variable.bounds[0])
@@ -112,13 +121,19 @@ def evaluate(problem, x):
     return min((tilt for tilt, _ in table), default=0.0), table, judged
 
 
+def optimized_name(name):
+    """``<name>_optimized``, the name cut short where it must be for the whole to stay within
+    MAX_NAME characters: a name kingen accepts."""
+    return f"{name[:MAX_NAME - len(OPTIMIZED)]}{OPTIMIZED}"
+
+
 def design_yaml(problem, x, objective, header):
     """The robot file of design ``x``: the file's data with the design in it, renamed
-    ``<name>_optimized``, ``header`` (lines) as comments on top."""
+    optimized_name(name), ``header`` (lines) as comments on top."""
     from ruamel.yaml import YAML
 
     data = problem.design_data(x)
-    data["name"] = f"{data['name']}_optimized"
+    data["name"] = optimized_name(data["name"])
     data["description"] = f"{' '.join(str(data.get('description', '')).split())} Optimised by kingen: " \
                           f"least tilt {objective:g} degrees."
     data["source"] = " ".join(header)

@@ -7,7 +7,8 @@ from typing import Annotated, Literal, Optional
 import numpy as np
 from pydantic import Field, model_validator
 
-from .schema import Strict
+from .defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
+from .schema import Coordinate, Strict
 
 
 class Variable(Strict):
@@ -15,7 +16,8 @@ class Variable(Strict):
 
     field: Annotated[str, Field(min_length=1)]
     """``layout.<field>``, ``depth`` or ``height``."""
-    bounds: Annotated[list[float], Field(min_length=2, max_length=2)]
+    bounds: Annotated[list[Coordinate], Field(min_length=2, max_length=2)]
+    """mm or degrees, within the geometry range (kingen.design.Problem holds an angle's to +/-MAX_DEGREES)."""
 
     @model_validator(mode="after")
     def _ordered(self):
@@ -24,14 +26,21 @@ class Variable(Strict):
         return self
 
 
+def _within(bounds):
+    """A float field within (least, most), both included: the bounds analyze's options have too."""
+    return Annotated[float, Field(ge=bounds[0], le=bounds[1])]
+
+
 class Objective(Strict):
-    """What a design is judged by (analyze's settings, the thesis's by default)."""
+    """What a design is judged by (analyze's settings and their bounds, the thesis's by
+    default). ``posture`` is checked against the robot's postures when the file is read
+    (kingen.model)."""
 
     posture: Optional[Annotated[int, Field(ge=0)]] = None
     tilt_convention: Literal["axis", "euler"] = "euler"
-    tilt_step: Annotated[float, Field(gt=0, le=90)] = 1.0
-    azimuth_step: Annotated[float, Field(ge=0.5, le=180)] = 1.0
-    tilt_max: Annotated[float, Field(gt=0, le=180)] = 120.0
+    tilt_step: _within(TILT_STEP_DEG) = 1.0
+    azimuth_step: _within(AZIMUTH_STEP_DEG) = 1.0
+    tilt_max: _within(TILT_MAX_DEG) = 120.0
     collision: Literal["segments", "thesis"] = "thesis"
 
 

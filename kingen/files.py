@@ -95,9 +95,12 @@ def _missing_folders(folder):
 def writable_folder(folder):
     """Refuse (KingenError) an output folder kingen could not write, before any work: the
     folder, or its nearest existing ancestor that kingen would create it in, must be a
-    writable folder."""
+    writable folder; a symbolic link to nothing is refused (kingen cannot make a folder there)."""
     folder = Path(folder)
     missing = _missing_folders(folder)
+    if missing and missing[0].is_symlink():
+        raise KingenError(f"{folder}: {missing[0]} is a symbolic link to {os.readlink(missing[0])}, "
+                          "which does not exist")
     existing = missing[0].parent if missing else folder
     if not existing.is_dir():
         raise KingenError(f"{folder}: {existing} is not a folder")

@@ -325,9 +325,7 @@ def robot_from_data(data, path, lines=None, raw=None):
         raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "
                                       "computes in")
     _check_golden(robot, locate)
-    if robot.working_posture >= robot.postures:
-        raise locate.error(["working_posture"], f"posture {robot.working_posture} does not exist "
-                                                f"(the robot has {robot.postures})")
+    _check_postures(robot, document, locate)
     free = robot.forward_free
     if free and (len(set(free)) != len(free) or len(free) != robot.dof):
         raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb")
@@ -358,6 +356,16 @@ def _expand_limbs(document, locate):
             ["limbs"], f"{two_branch} two-branch limbs; at most {MAX_TWO_BRANCH_LIMBS} (256 postures)"
         )
     return limbs
+
+
+def _check_postures(robot, document, locate):
+    """The working posture and an ``optimize:`` section's objective posture exist."""
+    named = [(["working_posture"], robot.working_posture)]
+    if document.optimize is not None and document.optimize.objective.posture is not None:
+        named.append((["optimize", "objective", "posture"], document.optimize.objective.posture))
+    for path, posture in named:
+        if posture >= robot.postures:
+            raise locate.error(path, f"posture {posture} does not exist (the robot has {robot.postures})")
 
 
 def _check_golden(robot, locate):

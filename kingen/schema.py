@@ -39,7 +39,9 @@ def _check_unit(vector):
     return [component / norm for component in vector]
 
 
-Identifier = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,62}$")]
+MAX_NAME = 63
+"""Characters in a robot's or joint's name at most."""
+Identifier = Annotated[str, Field(pattern=rf"^[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}$")]
 Coordinate = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
 """mm, or for travel limits of revolute joints degrees."""
 Angle = Annotated[float, Field(ge=-MAX_DEGREES, le=MAX_DEGREES)]

@@ -75,6 +75,29 @@ def test_a_tilt_nothing_stops_reports_the_cap():
     assert [(row["max_tilt_deg"], row["cause"]) for row in limits] == [(2.0, "none")] * 4
 
 
+def test_tilt_limits_hold_a_bounded_number_of_poses_and_give_what_the_whole_grid_gives(monkeypatch):
+    """12,004 poses (4 azimuths x 3,001 tilts; towards azimuth 0 a direct singularity stops the
+    tilt at 58.8 degrees, the others reach the cap): judged at most TILT_CHUNK_POSES at a time,
+    the limits are those of the whole grid judged at once, and of chunks of 50 poses."""
+    robot = load_robot("hexapod")
+    settings = Settings(tilt_step_deg=0.02, azimuth_step_deg=90.0, tilt_max_deg=60.0)
+    judged = []
+    evaluate = analysis.evaluate
+
+    def counted(robot, t6, *args):
+        judged.append(len(t6))
+        return evaluate(robot, t6, *args)
+
+    monkeypatch.setattr(analysis, "evaluate", counted)
+    chunked = tilt_limits(robot, 0, settings)
+    assert max(judged) <= analysis.TILT_CHUNK_POSES < 4 * len(settings.tilts)
+    assert [row["cause"] for row in chunked] == ["direct_singularity", "none", "none", "none"]
+    assert chunked[0]["max_tilt_deg"] == pytest.approx(58.76, abs=0.02)
+    for size in (10 ** 9, 50):
+        monkeypatch.setattr(analysis, "TILT_CHUNK_POSES", size)
+        assert tilt_limits(robot, 0, settings) == chunked
+
+
 def test_only_free_coordinates_are_analysed():
     delta = load_robot("linear_delta")
     assert tilt_limits(delta, 7) == []

@@ -175,6 +175,77 @@ def test_bad_options_are_usage_errors(capsys, tmp_path, monkeypatch, argv, words
     assert code == 2 and one_error_line(err) and words in err, err
 
 
+@pytest.mark.parametrize("argv, option", [
+    (["analyze", "tau", "--tilt-step", "nan"], "--tilt-step"),
+    (["analyze", "tau", "--azimuth-step", "nan"], "--azimuth-step"),
+    (["analyze", "tau", "--tilt-max", "nan"], "--tilt-max"),
+    (["analyze", "tau", "--tilt-max", "-nan"], "--tilt-max"),
+    (["verify", "tau", "--timeout", "nan"], "--timeout"),
+    (["build", "tau", "--timeout", "NaN"], "--timeout"),
+])
+def test_nan_is_refused_by_every_number_option(capsys, tmp_path, monkeypatch, argv, option):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and one_error_line(err) and out == "", err
+    assert f"Invalid value for '{option}'" in err and "is not a finite number" in err
+    assert not (tmp_path / "build").exists()
+
+
+def test_nan_from_the_environment_is_refused_naming_the_variable(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("KINGEN_TIMEOUT", "nan")
+    code, _, err = run(capsys, "build", "tau", "-o", tmp_path / "b")
+    assert code == 2 and one_error_line(err)
+    assert "'--timeout' (env var: 'KINGEN_TIMEOUT'): 'nan' is not a finite number" in err
+    assert not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("width", ["nan", "-nan"])
+def test_fk_refuses_a_search_width_that_is_not_a_finite_number(capsys, width):
+    # A NaN width made a NaN region: exit 0 with one assembly mode where the search finds six.
+    code, out, err = run(capsys, "fk", "exechon", "--joints", "400 400 400", "--search", width)
+    assert code == 2 and one_error_line(err) and out == ""
+    assert "Invalid value for '--search'" in err
+
+
+def optimize_file(tmp_path, objective="{}", bounds="[100, 200]"):
+    """A leg robot (one posture) with an optimize: section; optimize: is line 6, its variable line 8,
+    its objective line 9."""
+    path = tmp_path / "probe.yaml"
+    path.write_text(LEG.replace("NAME", "probe").replace("DESCRIPTION", "A probe.")
+                    + f"optimize:\n  variables:\n    - {{field: height, bounds: {bounds}}}\n"
+                      f"  objective: {objective}\n")
+    return path
+
+
+@pytest.mark.parametrize("objective, bounds, words", [
+    ("{tilt_step: 1e-9}", "[100, 200]",
+     ":9: optimize.objective.tilt_step: Input should be greater than or equal to 0.001 (got 1e-09)"),
+    ("{tilt_max: 0.05}", "[100, 200]",
+     ":9: optimize.objective.tilt_max: Input should be greater than or equal to 0.1 (got 0.05)"),
+    ("{posture: 1000000}", "[100, 200]",
+     ":9: optimize.objective.posture: posture 1000000 does not exist (the robot has 1)"),
+    ("{posture: 1}", "[100, 200]", ":9: optimize.objective.posture: posture 1 does not exist (the robot has 1)"),
+    ("{}", "[100, 1e308]", ":8: optimize.variables[0].bounds[1]: Input should be less than or equal to 1000000"),
+    ("{}", "[-1e7, 200]", ":8: optimize.variables[0].bounds[0]: Input should be greater than or equal to -1000000"),
+])
+def test_an_optimize_section_has_the_command_lines_bounds(capsys, tmp_path, objective, bounds, words):
+    path = optimize_file(tmp_path, objective, bounds)
+    with pytest.raises(KingenError) as raised:
+        load_robot(path)  # every command refuses it, not only optimize
+    assert str(raised.value).startswith(f"{path}{words}")
+    code, _, err = run(capsys, "optimize", path, "-o", tmp_path / "o")
+    assert code == 2 and one_error_line(err) and f"{path}{words}" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_optimize_refuses_an_output_folder_that_is_a_dangling_link_before_the_search(capsys, tmp_path):
+    (tmp_path / "o").symlink_to(tmp_path / "nowhere" / "o")
+    code, out, err = run(capsys, "optimize", optimize_file(tmp_path), "-o", tmp_path / "o")
+    assert code == 2 and one_error_line(err) and out == ""
+    assert f"{tmp_path / 'o'} is a symbolic link to {tmp_path / 'nowhere' / 'o'}, which does not exist" in err
+    assert not (tmp_path / "nowhere").exists() and not list(tmp_path.glob(".o*"))
+
+
 @pytest.mark.parametrize("value, words", [(" ", "$CC holds no command"), ('"x', "$CC: cannot be split")])
 def test_unusable_compiler_variables_are_bad_input(capsys, tmp_path, monkeypatch, value, words):
     monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))

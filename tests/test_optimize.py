@@ -7,6 +7,7 @@ import io
 import json
 import os
 import pickle
+import re
 import subprocess
 
 import pytest
@@ -16,7 +17,7 @@ from conftest import require_tool
 from kingen import optimize as search
 from kingen.cli import main
 from kingen.design import Problem
-from kingen.model import resolve_robot_path
+from kingen.model import load_robot, resolve_robot_path
 from kingen.robot_file import read_robot_file
 
 # One worker under -n N: the module's optimisation runs are then made once.
@@ -109,14 +110,41 @@ def test_bad_input_is_one_line(small_file, tmp_path, capsys):
     assert "no checkpoint to resume from" in capsys.readouterr().err
     data = read_robot_file(small_file)[0]
     data["optimize"]["variables"][0]["field"] = "layout.crank_directoins"
-    bad = tmp_path / "bad.yaml"
-    buffer = io.StringIO()
-    YAML().dump(data, buffer)
-    bad.write_text(buffer.getvalue())
+    bad = _dump(data, tmp_path / "bad.yaml")
     assert main(["optimize", str(bad), "-o", str(tmp_path / "c")]) == 2
     error = capsys.readouterr().err.strip()
     assert len(error.splitlines()) == 1 and "optimize.variables[0].field" in error
     assert not (tmp_path / "c").exists()
+
+
+def test_an_angles_bounds_are_refused_beyond_two_turns_before_the_search(small_file, tmp_path, capsys):
+    data = read_robot_file(small_file)[0]
+    data["optimize"]["variables"][0]["bounds"] = [0, 1000]  # layout.crank_directions, degrees
+    bad = _dump(data, tmp_path / "bad.yaml")
+    assert main(["optimize", str(bad), "-o", str(tmp_path / "c")]) == 2
+    error = capsys.readouterr().err.strip()
+    found = re.fullmatch(rf"kingen: error: {re.escape(str(bad))}:(\d+): optimize\.variables\[0\]\.bounds: "
+                         r"an angle's bounds must be within \+/-720 degrees", error)
+    assert found and bad.read_text().splitlines()[int(found[1]) - 1].strip() == "bounds:"
+    assert not (tmp_path / "c").exists()
+
+
+def test_a_long_robot_name_gives_a_design_kingen_reads(small_file, tmp_path):
+    data = read_robot_file(small_file)[0]
+    path = _dump({**data, "name": "r" * 60, "optimize": {**data["optimize"], "refine": {"method": "none"}}},
+                 tmp_path / "long.yaml")
+    assert main(["optimize", str(path), "-o", str(tmp_path / "o"), "--swarm", "2", "--iterations", "1",
+                 "--workers", "1"]) == 0
+    design = load_robot(tmp_path / "o" / f"{'r' * 53}_optimized.yaml")
+    assert design.name == f"{'r' * 53}_optimized" and len(design.name) == 63
+
+
+def _dump(data, path):
+    """Write ``data`` as YAML to ``path``; returns the path."""
+    buffer = io.StringIO()
+    YAML().dump(data, buffer)
+    path.write_text(buffer.getvalue())
+    return path
 
 
 def test_the_report_in_a_real_browser(two_workers):

@@ -22,6 +22,19 @@ DEFAULT_HOST = "delmia"
 ROBOT = click.argument("robot", metavar="ROBOT")
 
 
+class FiniteRange(click.FloatRange):
+    """A float option within [min, max] that is a finite number: click.FloatRange lets NaN
+    through (it compares false with every bound). Every ranged float option of kingen uses it."""
+
+    name = "finite float range"
+
+    def convert(self, value, param, ctx):
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
+
+
 def _out_folder(context, parameter, path):
     """An output folder is checked before the work, not after it: it, or the existing folder
     it would be made in, must be a writable folder."""
@@ -115,10 +128,10 @@ def _output_file(context, parameter, path):
     return path
 
 
-TIMEOUT = click.option("--timeout", type=click.FloatRange(min=0.1, max=7 * 86400), default=DEFAULT_TIMEOUT,
-                       envvar="KINGEN_TIMEOUT", show_default=True, metavar="SECONDS",
+TIMEOUT = click.option("--timeout", type=FiniteRange(min=0.1, max=7 * 86400), default=DEFAULT_TIMEOUT,
+                       envvar="KINGEN_TIMEOUT", show_envvar=True, show_default=True, metavar="SECONDS",
                        help="Longest a compiler run may take, and a plugin may go without progress, "
-                            "before it is killed ($KINGEN_TIMEOUT).")
+                            "before it is killed.")
 def HOST(function):
     """--host NAME with the host settings --units and --setp: the command gets ``host``, the
     registered host so configured (kingen.hosts; an unknown one is bad input, exit 2)."""

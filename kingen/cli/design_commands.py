@@ -34,24 +34,25 @@ from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model, s
 def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume, json_path):
     """Search the robot file's design space (its optimize: section) for the largest tilt
     reached in every direction: a particle swarm, then scipy's trust-constr. Writes
-    <name>_optimized.yaml, optimization.json and report.html; checkpoints every iteration.
+    <name>_optimized.yaml (the name cut to fit 63 characters), optimization.json and
+    report.html; checkpoints every iteration.
 
     Exit 0 with a design, 2 bad input, 130 when stopped (the checkpoint continues it: --resume)."""
     from .. import optimize as search
     from ..executors import executor
-    from ..design import Problem, design_yaml
+    from ..design import Problem, design_yaml, optimized_name
     from ..design_report import convergence, polar_comparison, report_html
     from ..files import default_out_dir, write_atomic
     from ..robot_file import read_robot_file
 
     model = load_model(robot)
-    data, _, _ = read_robot_file(model.path)
+    data, lines, _ = read_robot_file(model.path)
     if not data.get("optimize"):
         raise KingenError(f"{model.path}: optimize: no design problem in this robot file (see README, "
                           "'Design optimisation')")
     overrides = {key: value for key, value in (("iterations", iterations), ("swarm", swarm)) if value is not None}
     data["optimize"] = {**data["optimize"], "search": {**data["optimize"].get("search", {}), **overrides}}
-    problem = Problem(data, model.path)
+    problem = Problem(data, model.path, lines)
     out_dir = out_dir or default_out_dir(model) / "optimize"
     fingerprint = search.fingerprint(problem)
     if resume:
@@ -73,11 +74,11 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     seconds = state.seconds + time.perf_counter() - started
     outcome = search.result(problem, state, best[:3], best[3], described, seconds)
     text = json.dumps(finite(outcome), indent=1, allow_nan=False) + "\n"
-    name = outcome["robot"]
+    name = optimized_name(outcome["robot"])
     header = [f"kingen optimize {model.name} --seed {state.seed}: least tilt {outcome['objective_deg']:g} degrees "
               f"(the file's design: {outcome['start_objective_deg']:g}), {outcome['evaluations']} designs evaluated."]
     pngs = {"polar.png": polar_comparison(outcome), "convergence.png": convergence(outcome)}
-    outputs = {f"{name}_optimized.yaml": design_yaml(problem, best[0], outcome["objective_deg"], header),
+    outputs = {f"{name}.yaml": design_yaml(problem, best[0], outcome["objective_deg"], header),
                "optimization.json": text, **pngs, "report.html": report_html(outcome, pngs)}
     for file_name, content in outputs.items():
         write_atomic(out_dir / file_name, content)

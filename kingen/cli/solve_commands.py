@@ -9,11 +9,12 @@ from pathlib import Path
 
 import click
 
+from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
 from ..errors import KingenError
 from ..text import shorten
-from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _out_folder, _output_file, _pose, _t6,
-                     calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check, say,
-                     solve_job)
+from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
+                     _t6, calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check,
+                     say, solve_job)
 
 
 @cli.command("list")
@@ -172,7 +173,7 @@ def _indices_note(model):
                    "[default: the verification home].")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write the assembly modes as JSON.")
-@click.option("--search", type=click.FloatRange(min=0.1, max=1000.0), default=2.0, show_default=True,
+@click.option("--search", type=FiniteRange(min=0.1, max=1000.0), default=2.0, show_default=True,
               help="Where no exhaustive method applies: the multi-start search covers this many times the "
                    "verification region around home.")
 def fk(robot, joints, more_joints, near, json_path, search):
@@ -235,11 +236,11 @@ def fk(robot, joints, more_joints, near, json_path, search):
 @click.option("--tilt-convention", type=click.Choice(["axis", "euler"]), default="axis", show_default=True,
               help="axis: turn about the horizontal axis (cos a, sin a, 0); euler: roll = tilt cos a, "
                    "pitch = tilt sin a (the 6-RUS thesis's polar graph).")
-@click.option("--tilt-step", type=click.FloatRange(min=0.001, max=90.0), default=0.1, show_default=True,
+@click.option("--tilt-step", type=FiniteRange(*TILT_STEP_DEG), default=0.1, show_default=True,
               help="Tilt step (deg): a limit is the largest multiple of it up to which every step passes.")
-@click.option("--azimuth-step", type=click.FloatRange(min=0.5, max=180.0), default=15.0, show_default=True,
+@click.option("--azimuth-step", type=FiniteRange(*AZIMUTH_STEP_DEG), default=15.0, show_default=True,
               help="Step (deg) between the azimuths of the tilt directions.")
-@click.option("--tilt-max", type=click.FloatRange(min=0.1, max=180.0), default=90.0, show_default=True,
+@click.option("--tilt-max", type=FiniteRange(*TILT_MAX_DEG), default=90.0, show_default=True,
               help="Largest tilt (deg) tried, and the range (+-) of the angle sweeps.")
 @click.option("--collision", "collision_model", type=click.Choice(["segments", "thesis"]), default="segments",
               show_default=True, help="segments: every pair of links and cranks, cranks at their angle; thesis: "
