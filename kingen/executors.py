@@ -5,6 +5,7 @@ either gives the same results wherever its jobs run, since every job is a pure f
 its arguments."""
 
 import contextlib
+import os
 import re
 import signal
 import threading
@@ -36,8 +37,16 @@ class Workers:
     count: int
 
 
-def _ignore_interrupts():
-    """In a worker: Ctrl-C is the parent's to handle (it checkpoints and stops the pool)."""
+def _start_worker(parent):
+    """In a pool worker, forked or spawned by kingen's process ``parent`` (its pid): it dies
+    with kingen, however kingen ends (SIGKILL included: ``PR_SET_PDEATHSIG``; at once if kingen
+    ended before that was asked), and Ctrl-C is the parent's to handle (it checkpoints and
+    stops the pool)."""
+    from .isolation import die_with_parent
+
+    die_with_parent()
+    if os.getppid() != parent:
+        os.kill(os.getpid(), signal.SIGKILL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -135,5 +144,5 @@ def executor(workers=None, scheduler=None):
     from .verify.processes import comparing_processes
 
     count = workers or comparing_processes()
-    with ProcessPoolExecutor(count, initializer=_ignore_interrupts) as pool:
+    with ProcessPoolExecutor(count, initializer=_start_worker, initargs=(os.getpid(),)) as pool:
         yield Workers(pool, f"{count} worker process{'es' if count != 1 else ''}", count)
