@@ -2,11 +2,15 @@
 ended in a traceback, ran code, hung or wrote the wrong thing. Each now ends in exit 0,
 1 or 2 with one located line, within its limits, leaving no partial output."""
 
+import contextlib
 import json
 import os
+import socket
 import stat
 import subprocess
 import sys
+import threading
+import time
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
@@ -460,3 +464,74 @@ def test_plugins_built_by_kingen_verify_at_the_edge_of_the_range(tmp_path):
     result = build_plugin(robot, tmp_path / "b")
     report = verify(robot, Plugin(result.library, result.routine), VerifyOptions(samples=5000))
     assert report.passed, [c.detail for c in report.failures]
+
+
+# --- schedulers: addresses that are not addresses, servers that are not Dask schedulers
+
+@contextlib.contextmanager
+def fake_scheduler(answer):
+    """The address of a server on 127.0.0.1 that accepts every connection and sends ``answer``
+    (b"": says nothing, ever); it stops with the block."""
+    server = socket.create_server(("127.0.0.1", 0))
+    accepted = []
+
+    def serve():
+        with contextlib.suppress(OSError):
+            while True:
+                connection, _ = server.accept()
+                accepted.append(connection)
+                connection.sendall(answer)
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    finally:
+        server.shutdown(socket.SHUT_RDWR)
+        server.close()
+        for connection in accepted:
+            connection.close()
+
+
+SCHEDULER_COMMANDS = {"optimize": ["optimize", "rus_optimized", "--iterations", "1", "--swarm", "2"],
+                      "verify": ["verify", "hexapod", "--samples", "10"]}
+
+
+@pytest.mark.parametrize("command", sorted(SCHEDULER_COMMANDS))
+@pytest.mark.parametrize("answer, words", [(b"", "(no answer within 1 s)"),
+                                           (b"\xff" * 64 + b"HTTP/1.1 200 OK\r\n\r\n", "(not a Dask scheduler: ")],
+                         ids=["silent", "junk"])
+def test_a_server_that_is_no_scheduler_is_named_within_the_deadline(command, answer, words, tmp_path, capsys,
+                                                                     monkeypatch):
+    """Connecting and the first answers share one deadline (SCHEDULER_TIMEOUT, 20 s; 1 s here):
+    a server that accepts and says nothing, or says something else, is exit 2 naming it."""
+    pytest.importorskip("distributed")
+    monkeypatch.setattr("kingen.executors.SCHEDULER_TIMEOUT", 1.0)
+    with fake_scheduler(answer) as address:
+        start = time.monotonic()
+        code, _, err = run(capsys, *SCHEDULER_COMMANDS[command], "-o", tmp_path / "out", "--scheduler", address)
+        elapsed = time.monotonic() - start
+    assert code == 2 and one_error_line(err), err
+    assert err.startswith(f"kingen: error: --scheduler: no Dask scheduler at {address} ") and words in err, err
+    assert elapsed < 30
+
+
+@pytest.mark.parametrize("command", sorted(SCHEDULER_COMMANDS))
+@pytest.mark.parametrize("address, problem", [
+    ("notanaddress", "not of the form tcp://HOST:PORT, tls://HOST:PORT or HOST:PORT"),
+    ("", "not of the form tcp://HOST:PORT, tls://HOST:PORT or HOST:PORT"),
+    ("tcp://[::1", "not of the form tcp://HOST:PORT, tls://HOST:PORT or HOST:PORT"),
+    ("http://127.0.0.1:8786", "unknown protocol 'http' (Dask knows tcp, tls, ws, wss, ucx)"),
+    ("127.0.0.1:70000", "port 70000 is not within 1 to 65535")])
+def test_a_scheduler_address_that_is_not_one_is_refused_before_any_work(command, address, problem, tmp_path, capsys):
+    code, _, err = run(capsys, *SCHEDULER_COMMANDS[command], "-o", tmp_path / "out", "--scheduler", address)
+    assert code == 2
+    assert err == f"kingen: error: --scheduler: {address!r} is not a Dask scheduler address: {problem}\n"
+    assert not (tmp_path / "out").exists()
+
+
+def test_dask_address_forms_are_accepted():
+    from kingen.executors import scheduler_address
+
+    for address in ("tcp://127.0.0.1:8786", "127.0.0.1:8786", "tls://scheduler.example.org:8786",
+                    "tcp://[::1]:8786", "ws://localhost:8786", "localhost:8786"):
+        assert scheduler_address(address) == address

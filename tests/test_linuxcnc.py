@@ -5,7 +5,10 @@ posture; its forward Newton from seeds a servo cycle and 10 mm / 5 degrees away)
 cannot drive are refused with a located error; its package's snippets hold the robot file's
 numbers. LinuxCNC's headers come from Debian's linuxcnc-uspace-dev (.ci/run installs it)."""
 
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -132,6 +135,28 @@ def test_a_wrong_inverse_fails_values_and_a_wrong_forward_fails_forward(modules,
     assert "ok     forward" in outputs["inverse"]  # its forward is right: it is fed the reference's joints
     assert "ok     values" in outputs["forward"] and "FAILED forward" in outputs["forward"]
     assert re.search(r"a servo cycle away: 0 of \d+ returned the pose", outputs["forward"])
+
+
+@pytest.mark.parametrize("body, words", [
+    ("for (;;) ;", "FAILED timeout: no progress for 2 s during loading the module"),
+    ("exit(0);", "FAILED crash: the plugin ended the host process (exit status 0) during loading the module"),
+    ("raise(SIGSEGV);", "FAILED crash: the plugin ended the host process (signal SIGSEGV) during loading the module"),
+], ids=["spins", "exits", "signals"])
+def test_a_module_whose_constructor_breaks_leaves_nothing_in_tmpdir(body, words, modules, tmp_path):
+    """The module's copy is made in the child's temporary folder, which kingen's own process
+    makes and removes, whatever the constructor does to the child."""
+    _, _, built = modules("hexapod")
+    source = tmp_path / "hexapodkins.c"
+    source.write_text(built.source.read_text() + "#include <signal.h>\n#include <stdlib.h>\n"
+                      f"__attribute__((constructor)) static void hostile(void) {{ {body} }}\n")
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", "hexapod", "--host", "linuxcnc", "--source",
+                             str(source), "--routine", "hexapodkins", "-o", str(tmp_path / "out"), "--samples", "200",
+                             "--timeout", "2"], capture_output=True, text=True, timeout=120,
+                            env={**os.environ, "TMPDIR": str(temporary)})
+    assert result.returncode == 1 and words in result.stdout, result.stdout + result.stderr
+    assert list(temporary.iterdir()) == []
 
 
 @pytest.mark.parametrize("change, words", [

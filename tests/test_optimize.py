@@ -8,7 +8,10 @@ import json
 import os
 import pickle
 import re
+import signal
 import subprocess
+import sys
+import time
 
 import pytest
 from ruamel.yaml import YAML
@@ -81,6 +84,31 @@ def test_a_dask_cluster_gives_the_same_result(two_workers, small_file, tmp_path)
     assert other["workers"].startswith("a Dask cluster")
     for key in ("objective_deg", "history", "variables"):
         assert other[key] == result[key]
+
+
+def test_pool_workers_die_with_kingen_killed_by_sigkill(small_file, tmp_path):
+    """SIGKILL gives kingen no chance to stop its pool: its workers die with it all the same
+    (PR_SET_PDEATHSIG), within a few seconds."""
+    from test_hostile import _children, _state
+
+    process = subprocess.Popen([sys.executable, "-m", "kingen.cli", "optimize", str(small_file), "-o", str(tmp_path),
+                                "--workers", "2", "--iterations", "100000"],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    workers = []
+    while len(workers) < 2 and time.monotonic() < deadline and process.poll() is None:
+        time.sleep(0.2)
+        workers = _children(process.pid)
+    assert len(workers) >= 2, "the pool never started"
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait(timeout=10)
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline and [pid for pid in workers if _state(pid) not in ("gone", "Z")]:
+        time.sleep(0.1)
+    survivors = [pid for pid in workers if _state(pid) not in ("gone", "Z")]
+    for pid in survivors:  # a failing run leaves nothing spinning either
+        os.kill(pid, signal.SIGKILL)
+    assert survivors == []
 
 
 def test_a_stopped_run_resumes_to_the_same_result(two_workers, small_file, tmp_path, monkeypatch):

@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
+from ..executors import checked_scheduler
 from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model, say
 
 
@@ -25,7 +26,7 @@ from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model, s
               help="Particles [default: the robot file's optimize.search.swarm].")
 @click.option("--workers", type=click.IntRange(min=1, max=256), default=None,
               help="Processes evaluating particles [default: the usable cores].")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
+@click.option("--scheduler", default=None, metavar="ADDRESS", callback=checked_scheduler,
               help="Evaluate on a Dask cluster (its scheduler's address, e.g. tcp://host:8786) instead of "
                    "local processes; needs the 'distributed' package.")
 @click.option("--resume", is_flag=True, help="Continue the search from the checkpoint in the output folder.")

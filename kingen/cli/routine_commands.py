@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 
 from ..defaults import MAX_PROCESSES, TARGETS
+from ..executors import checked_scheduler
 from ..text import counted
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, cli, host_target, in_child,
                      load_model, plugin_options, processes_text, routine_to_check, say, calibration_options)
@@ -80,7 +81,7 @@ def package(robot, out_dir, target, host, timeout):
 @click.option("--processes", type=click.IntRange(min=1, max=MAX_PROCESSES), default=None,
               help="Processes comparing the poses (the same report whatever the number)  "
                    "[default: one per core].")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
+@click.option("--scheduler", default=None, metavar="ADDRESS", callback=checked_scheduler,
               help="Compare the poses on a Dask cluster (its scheduler's address, e.g. tcp://host:8786) instead of "
                    "local processes (the same report); needs the 'distributed' package.")
 @calibration_options

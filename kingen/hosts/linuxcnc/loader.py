@@ -72,6 +72,8 @@ class Module:
         refuse_special_file(path)
         if not path.is_file():
             raise KingenError(f"{path}: no such module")
+        # in a child (kingen.isolation.run_in_child) the temporary folder is the parent's to remove,
+        # so the copy goes even when the module's constructor never lets the child get to rmtree below
         folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))
         copy = folder / path.name  # a fresh copy: each load gets the module's own static state
         shutil.copy2(path, copy)
