@@ -42,7 +42,7 @@ def _start_worker(parent):
     with kingen, however kingen ends (SIGKILL included: ``PR_SET_PDEATHSIG``; at once if kingen
     ended before that was asked), and Ctrl-C is the parent's to handle (it checkpoints and
     stops the pool)."""
-    from .isolation import die_with_parent
+    from .household import die_with_parent
 
     die_with_parent()
     if os.getppid() != parent:

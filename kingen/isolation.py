@@ -4,32 +4,31 @@ asking it about its routine and every routine call; and capturing what it prints
 The command line never executes plugin code in its own process. A job runs in a
 forked child and talks to the parent through a pipe: stage names, progress, finished
 checks and at last its result, each as plain data in an authenticated frame
-(:mod:`kingen.wire`) that the parent checks field by field before it uses any of it. The parent waits at most ``timeout`` seconds for each
-message, so a routine that stops making progress (an endless loop, a sleep per call)
+(:mod:`kingen.wire`) that the parent checks field by field before it uses any of it. The
+parent waits at most ``timeout`` seconds for each message, so a routine that stops making progress (an endless loop, a sleep per call)
 is killed and named with the stage it was in; a child that dies (a segfault, a call to
 ``exit()``) becomes a :class:`ChildFailure` naming the signal or exit status and the
 stage, and one killed from outside (SIGKILL from the out-of-memory killer, say) says so
-rather than blaming the routine. The child dies with the parent (``PR_SET_PDEATHSIG`` on Linux), and the parent
-kills it on the way out of any exception, SIGTERM included (the CLI turns SIGTERM into
-``SystemExit``).
+rather than blaming the routine. The child dies with the parent (``PR_SET_PDEATHSIG`` on
+Linux), and the parent kills it on the way out of any exception, SIGTERM included (the CLI
+turns SIGTERM into ``SystemExit``); whatever the child started, and its temporary folder, go
+with it (:class:`kingen.household.Household`).
 """
 
 import ctypes
 import faulthandler
-import functools
 import multiprocessing
 import os
-import shutil
 import signal
 import sys
 import tempfile
-import time
 import traceback
-from contextlib import contextmanager, suppress
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from . import wire
 from .errors import InternalError, KingenError, PluginDefect
+from .household import Household, die_with_parent
 
 FIRST_STAGE = "loading the routine"
 """The stage a job starts in, unless its caller names it (a host's ``loading_stage``)."""
@@ -117,7 +116,7 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     finally:
         receiver.close()
         stopped = _end(child, finished)
-        household.clear(child)
+        household.clear(child, EXIT_GRACE)
     if stopped:
         return None, ChildFailure("crash", stage, f"the plugin closed kingen's channel to the host process during "
                                                  f"{stage}, which then did not end within {EXIT_GRACE:g} s: it "
@@ -226,124 +225,6 @@ def _origin(error):
     return f"{os.path.basename(frames[-1].filename)}:{frames[-1].lineno}" if frames else "unknown place"
 
 
-class Household:
-    """Everything a job's child starts, ended and removed by the parent when the child ends.
-
-    A plugin's constructor may fork, ``setsid`` and spin, or leave files in its temporary
-    folder; the child itself may be killed before it cleans up. None of that may outlive the
-    run, and the cleanup must not depend on the child, which runs foreign code:
-
-    - the child runs in a process group of its own (set by the parent and by the child, so
-      neither order of the two races): nothing it signals through its group (``kill(0,
-      SIGSTOP)``) reaches kingen, and a terminal's Ctrl-C reaches kingen alone, which stops it;
-    - this process is a child subreaper (``PR_SET_CHILD_SUBREAPER``) while the child lives, so
-      a process the plugin started and detached (``setsid``, a double fork) becomes this
-      process's child when its parent dies, rather than init's;
-    - when the child has ended, its group is killed, and then every child of this process
-      that was not one before the child started (orphans handed to the subreaper) is killed
-      and reaped, round after round, since each kill hands that orphan's own children over,
-      for at most EXIT_GRACE seconds;
-    - the child's temporary folder (``TMPDIR`` and Python's ``tempfile`` there: module copies,
-      reload copies, captured output) is made here and removed here, after all that.
-
-    Linux only, each part a no-op where the kernel lacks it. What it cannot do: a plugin
-    that stops or kills kingen itself (``kill(getppid(), SIGSTOP)``), or processes a plugin
-    detached when kingen is killed with SIGKILL (nothing then runs to end them); see README,
-    'Exit codes and limits'. A process another thread of kingen forks while the child lives
-    would be taken for an orphan: kingen forks none."""
-
-    def __init__(self):
-        self.folder = tempfile.mkdtemp(prefix="kingen-child-")
-        self._known = set(children(os.getpid()))
-        self._was_subreaper = _subreaper(True)
-
-    def hosted(self, job):
-        """``job`` as the child runs it: in its own process group, with the temporary folder."""
-        return functools.partial(_hosted, self.folder, job)
-
-    def start(self, child):
-        """Start ``child`` (a multiprocessing Process running a hosted job) in its own group;
-        on failure (no fork), nothing is left behind."""
-        try:
-            child.start()
-        except BaseException:
-            self.clear(child)
-            raise
-        with suppress(OSError):  # it may have exited already
-            os.setpgid(child.pid, child.pid)
-
-    def clear(self, child):
-        """After ``child`` ended and was reaped: kill its group and every orphan it left, reap
-        them, remove the temporary folder, and stop being a subreaper unless this process was
-        one before."""
-        if child.pid is not None:
-            with suppress(OSError):
-                os.killpg(child.pid, signal.SIGKILL)
-        _kill_orphans(self._known, time.monotonic() + EXIT_GRACE)
-        if not self._was_subreaper:
-            _subreaper(False)
-        shutil.rmtree(self.folder, ignore_errors=True)
-
-
-def _hosted(folder, job, channel, *arguments):
-    """In the child: join its own process group, make ``folder`` its temporary folder, run the job."""
-    os.setpgid(0, 0)
-    os.environ["TMPDIR"] = tempfile.tempdir = folder
-    return job(channel, *arguments)
-
-
-def _subreaper(on):
-    """Make this process a child subreaper or not (``PR_SET_CHILD_SUBREAPER``); return whether
-    it was one before (False where Linux cannot say)."""
-    try:
-        prctl = ctypes.CDLL(None, use_errno=True).prctl
-    except (OSError, AttributeError):
-        return False
-    was = ctypes.c_int(0)
-    prctl(37, ctypes.byref(was))  # PR_GET_CHILD_SUBREAPER
-    prctl(36, int(on))  # PR_SET_CHILD_SUBREAPER
-    return bool(was.value)
-
-
-def children(pid):
-    """The pids of the processes whose parent is ``pid``, from /proc (empty without it)."""
-    found = []
-    with suppress(OSError):
-        for entry in os.listdir("/proc"):
-            if entry.isdigit():
-                try:
-                    with open(f"/proc/{entry}/stat", "rb") as stream:
-                        fields = stream.read().rsplit(b")", 1)[1].split()
-                except OSError:  # it ended meanwhile
-                    continue
-                if int(fields[1]) == pid:
-                    found.append(int(entry))
-    return found
-
-
-def _kill_orphans(known, deadline):
-    """SIGKILL and reap every child of this process not in ``known``, again for the children
-    each kill hands over, until none is left or ``deadline`` (time.monotonic()) has passed."""
-    while time.monotonic() < deadline:
-        orphans = [pid for pid in children(os.getpid()) if pid not in known]
-        if not orphans:
-            return
-        for pid in orphans:
-            with suppress(OSError):
-                os.kill(pid, signal.SIGKILL)
-        for pid in orphans:
-            with suppress(OSError):
-                os.waitpid(pid, 0)
-
-
-def die_with_parent():
-    """Ask Linux to SIGKILL this process when its parent dies, however the parent dies."""
-    try:
-        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
-
-
 HEAP_KEEP_BYTES = 32 << 20
 """Blocks up to this size come from the heap, and this much freed heap stays mapped."""
 
@@ -368,7 +249,8 @@ def _silence_standard_streams():
     null = os.open(os.devnull, os.O_WRONLY)
     os.dup2(null, 1)
     os.dup2(null, 2)
-    os.close(null)
+    if null > 2:  # it is itself descriptor 1 or 2 when that one was closed
+        os.close(null)
 
 
 @contextmanager

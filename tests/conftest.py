@@ -162,3 +162,39 @@ def require_linuxcnc_headers():
         linuxcnc_headers()
     except KingenError as error:
         skip_or_fail(f"{error} (.ci/run installs it)")
+
+
+class _ExitZero:
+    """Unpickling this ends the unpickling process with exit status 0."""
+
+    def __reduce__(self):
+        return (os._exit, (0,))
+
+
+def forging_constructor(frame):
+    """C: a library constructor that writes ``frame`` (bytes) into every file descriptor from
+    3 up, as a plugin that looks for kingen's channel to its parent would."""
+    data = ", ".join(str(byte) for byte in frame)
+    return ("#include <unistd.h>\n"
+            f"static const unsigned char forged[] = {{{data}}};\n"
+            "__attribute__((constructor)) static void forge(void) {\n"
+            "    for (int fd = 3; fd < 1024; fd++) (void)!write(fd, forged, sizeof forged);\n"
+            "}\n")
+
+
+def forged_frames():
+    """What a plugin may write into kingen's channel, by name: a pickle frame as
+    multiprocessing's pipes carry (unpickling it exits 0: a forged PASS), and a frame of
+    kingen's own format with a passing report but a tag made without the channel's key."""
+    import pickle
+    import struct
+
+    from kingen import wire
+
+    data = pickle.dumps(("result", _ExitZero()))
+    report = {"robot": "probe", "routine": "kin_probe", "samples": 200, "seed": 0, "postures": 1,
+              "checks": [{"name": "values", "passed": True}]}
+    return {"pickle": struct.pack("!i", len(data)) + data, "unkeyed": wire.encode(bytes(32), "result", report)}
+
+
+FORGED = forged_frames()

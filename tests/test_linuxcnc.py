@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import require_linuxcnc_headers, require_tool
+from conftest import FORGED, forging_constructor, require_linuxcnc_headers, require_tool
 from kingen.cli import main
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
@@ -157,6 +157,21 @@ def test_a_module_whose_constructor_breaks_leaves_nothing_in_tmpdir(body, words,
                             env={**os.environ, "TMPDIR": str(temporary)})
     assert result.returncode == 1 and words in result.stdout, result.stdout + result.stderr
     assert list(temporary.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", FORGED)
+def test_a_module_writing_into_kingens_channel_can_only_fail_its_own_run(name, modules, tmp_path):
+    """As for a DELMIA plugin (tests/test_hostile.py): a module constructor that writes a pickle
+    frame or a forged report into every descriptor fails its own run, and runs nothing in kingen."""
+    _, _, built = modules("hexapod")
+    source = tmp_path / "hexapodkins.c"
+    source.write_text(built.source.read_text() + forging_constructor(FORGED[name]))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", "hexapod", "--host", "linuxcnc", "--source",
+                             str(source), "--routine", "hexapodkins", "-o", str(tmp_path / "out"), "--samples", "200"],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED crash: kingen's channel to the host process carried " in result.stdout, result.stdout
+    assert "during loading the module" in result.stdout
 
 
 @pytest.mark.parametrize("change, words", [

@@ -98,16 +98,26 @@ def test_a_robot_file_reached_twice_is_collected_once(folder):
                                                        "jacobian", "golden[0]", "golden[1]")]
 
 
-def test_a_dangling_robot_symlink_is_a_failing_item(folder):
-    (folder.path / "gone.yaml").symlink_to("nowhere.yaml")
-    (folder.path / "sub").mkdir()
-    (folder.path / "sub" / "lost.yml").symlink_to("/no/such/robot.yml")
-    result = run(folder, "-k", "gone or lost")
-    result.assert_outcomes(failed=2)
+UNREADABLE = {
+    "gone.yaml": (lambda path: path.symlink_to("nowhere.yaml"), "the symlink's target nowhere.yaml does not exist"),
+    "sub/lost.yml": (lambda path: path.symlink_to("/no/such/robot.yml"),
+                     "the symlink's target /no/such/robot.yml does not exist"),
+    "pipe.yaml": (os.mkfifo, "not a regular file (a FIFO); give the file itself"),
+    "null.yml": (lambda path: path.symlink_to("/dev/null"), "not a regular file (a character device); give the file itself"),
+}
+
+
+def test_a_robot_file_that_cannot_be_read_is_a_failing_item(folder):
+    """A dangling symlink, a FIFO or a device (which pytest passes over) is a failing build
+    item naming the file: never a hang, never skipped in silence."""
+    for name, (make, _) in UNREADABLE.items():
+        (folder.path / name).parent.mkdir(exist_ok=True)
+        make(folder.path / name)
+    result = run(folder, "-k", "gone or lost or pipe or null")
+    result.assert_outcomes(failed=len(UNREADABLE))
     text = result.stdout.str()
-    assert f"{folder.path / 'gone.yaml'}: the symlink's target nowhere.yaml does not exist" in text
-    assert f"{folder.path / 'sub' / 'lost.yml'}: the symlink's target /no/such/robot.yml does not exist" in text
-    assert "FAILED gone.yaml::build" in text and "FAILED sub/lost.yml::build" in text
+    for name, (_, words) in UNREADABLE.items():
+        assert f"{folder.path / name}: {words}" in text and f"FAILED {name}::build" in text
 
 
 COUNTING = """
@@ -202,18 +212,6 @@ def test_under_xdist_each_robot_files_items_run_on_one_worker(folder):
 def test_robot_scope_groups_a_robot_files_items_only(nodeid, scope):
     assert robot_scope(nodeid) == scope
 
-
-def test_a_robot_file_that_is_not_a_regular_file_is_a_failing_item(folder):
-    """pytest passes over FIFOs and devices; the plugin fails them (never hangs on them,
-    never skips them in silence)."""
-    os.mkfifo(folder.path / "pipe.yaml")
-    (folder.path / "null.yml").symlink_to("/dev/null")
-    result = run(folder, "-k", "pipe or null")
-    result.assert_outcomes(failed=2)
-    text = result.stdout.str()
-    assert f"{folder.path / 'pipe.yaml'}: not a regular file (a FIFO); give the file itself" in text
-    assert f"{folder.path / 'null.yml'}: not a regular file (a character device); give the file itself" in text
-    assert "FAILED pipe.yaml::build" in text and "FAILED null.yml::build" in text
 
 
 @pytest.mark.parametrize("make, problem", [

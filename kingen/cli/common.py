@@ -297,7 +297,8 @@ def detach(err):
     """Point a broken standard stream at /dev/null, so later writes and the final flush succeed."""
     null = os.open(os.devnull, os.O_WRONLY)
     os.dup2(null, 2 if err else 1)
-    os.close(null)
+    if null > 2:  # it is itself descriptor 1 or 2 when that one was closed
+        os.close(null)
     if err:
         sys.stderr = open(os.devnull, "w")
     else:

@@ -13,7 +13,8 @@ import numpy as np
 
 from ..conventions import t6_from_pose
 from ..defaults import MAX_PROCESSES
-from ..isolation import captured_output, die_with_parent
+from ..household import die_with_parent
+from ..isolation import captured_output
 from ..poses import PoseStream
 from ..reference import CERTIFY_PROBE_POSES, certificate_settles, solve
 from ..report import Report
