@@ -21,8 +21,8 @@ import numpy as np
 from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.checks.forward import SEEDS, regular_poses
 from kingen.hosts.linuxcnc.loader import Module
-from kingen.model import load_robot
-from kingen.poses import sample_poses
+from kingen.robot.model import load_robot
+from kingen.kinematics.poses import sample_poses
 from kingen.verify import VerifyOptions, verify_library
 
 STOCK = Path("/usr/lib/linuxcnc/modules")

@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 from ruamel.yaml import YAML
 
-from kingen.design import Problem, evaluate
-from kingen.model import resolve_robot_path
-from kingen.robot_file import read_robot_file
+from kingen.design.problem import Problem, evaluate
+from kingen.robot.model import resolve_robot_path
+from kingen.robot.reading import read_robot_file
 
 PATH = resolve_robot_path("rus_optimized")
 
@@ -69,7 +69,7 @@ def _optimize(path, folder, *options):
 def speedup():
     """Designs a second through the executor on 1 and 2 workers: 120 designs near the thesis's
     optimum (what a converging swarm evaluates), and a short search from random starts."""
-    from kingen.optimize import executor
+    from kingen.design.search import executor
 
     problem = Problem(read_robot_file(PATH)[0], PATH)
     rng = np.random.default_rng(0)

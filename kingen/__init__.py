@@ -1,8 +1,209 @@
-"""kingen: robot YAML to verified DELMIA V5 / IGRIP user-inverse-kinematics plugins.
+"""kingen: a robot's YAML definition to verified inverse-kinematics C routines for DELMIA V5 /
+IGRIP and LinuxCNC, with forward kinematics, workspace analysis and design optimisation.
 
-Phases, one module each: ``model`` (load and validate YAML) -> ``render``
-(C source text) -> ``build`` (compile) -> ``host`` (load as DELMIA does) ->
-``verify`` (compare with ``reference``). Conventions live in ``conventions``.
+This is the public face, for a notebook or a script::
+
+    import kingen
+    robot = kingen.load_robot("hexapod")
+    solution = kingen.solve(robot, [[0, 0, 800, 0, 0, 0]])
+    report = kingen.verify(robot)
+
+Every function here imports what it needs when it is called, so ``import kingen`` is
+cheap. The packages below are kingen's own (docs/architecture.md): ``kingen.robot``
+(reading a robot file, the ``Robot``, limb models), ``kingen.kinematics`` (the reference,
+singularities, forward kinematics), ``kingen.verify``, ``kingen.hosts`` (DELMIA, LinuxCNC
+and the host interface), ``kingen.design`` (analysis and optimisation), ``kingen.runtime``
+(compiler, child processes, files) and ``kingen.cli``. Units: mm for lengths, degrees for
+the angles of a pose (x y z roll pitch yaw, R = Rz(yaw) Ry(pitch) Rx(roll)), radians for
+revolute joints.
 """
 
-__version__ = "0.1.0"
+from .defaults import VERSION
+
+__version__ = VERSION
+__all__ = ["analyze", "assembly_modes", "build", "load_robot", "shipped_robots", "solve", "verify"]
+
+
+def shipped_robots():
+    """The names of the robots kingen ships (``robots/*.yaml``).
+
+    Returns
+    -------
+    list of str
+        Sorted names, each accepted by :func:`load_robot`.
+    """
+    from .robot.model import shipped_robots as names
+
+    return names()
+
+
+def load_robot(robot):
+    """Read and validate a robot definition.
+
+    Parameters
+    ----------
+    robot : str or os.PathLike
+        A YAML file's path, or the name of a shipped robot (:func:`shipped_robots`).
+
+    Returns
+    -------
+    kingen.robot.model.Robot
+        The validated robot, in mm and radians whatever units its file uses: ``dof``
+        joints (one per limb), ``postures`` solutions per pose, ``joint_names``, ``limbs``.
+
+    Raises
+    ------
+    kingen.errors.KingenError
+        The file cannot be read or breaks the schema: one line, ``file:line: field: problem``.
+    """
+    from . import hosts  # noqa: F401  (every host's check of the names it makes from the robot's)
+    from .robot.model import load_robot as load
+
+    return load(robot)
+
+
+def solve(robot, poses, link_lengths=None, link_offsets=None):
+    """Every posture's joints for each pose, from kingen's numpy reference.
+
+    Parameters
+    ----------
+    robot : kingen.robot.model.Robot
+        From :func:`load_robot`.
+    poses : array_like, shape (n, 6)
+        Platform poses in the base frame: x, y, z in mm, roll, pitch, yaw in degrees,
+        R = Rz(yaw) Ry(pitch) Rx(roll).
+    link_lengths, link_offsets : array_like, shape (6,), optional
+        DELMIA's dialog fields Length 1..6 and Offset 1..6, applied to the parameters the
+        robot file marks as calibrated (zero leaves a parameter as built).
+
+    Returns
+    -------
+    kingen.kinematics.reference.Solution
+        ``joints`` (n, dof, postures): mm for prismatic, radians for revolute joints;
+        ``warnings`` (n, postures): status codes (``kingen.kinematics.routine.WARNINGS``:
+        0 good, 2 unreachable, ...); ``radicands`` (n, dof).
+    """
+    import numpy as np
+
+    from .conventions import t6_from_pose
+    from .kinematics.reference import solve as reference
+
+    return reference(robot, t6_from_pose(np.asarray(poses, dtype=float).reshape(-1, 6)), link_lengths, link_offsets)
+
+
+def assembly_modes(robot, joints, near=None, search=2.0):
+    """Forward kinematics: every platform pose the joints admit.
+
+    Parameters
+    ----------
+    robot : kingen.robot.model.Robot
+    joints : array_like, shape (dof,)
+        Joint values: mm for prismatic, radians for revolute joints.
+    near : array_like, shape (6,), optional
+        A pose (mm and radians) that orders the answers and gives the coordinates the
+        robot does not move; the robot's home pose by default.
+    search : float, optional
+        How far a multi-start search reaches around ``near``, in multiples of the robot's
+        verification range (where no exhaustive method applies).
+
+    Returns
+    -------
+    kingen.kinematics.forward.AssemblyModes
+        ``found``: Assembly poses (6,) in mm and radians, nearest ``near`` first, each with
+        its ``residual_mm``; ``exhaustive``: whether they are all of them; ``method``: how
+        that is known, in one line.
+    """
+    import numpy as np
+
+    from .kinematics.forward import assemblies
+
+    if near is None:
+        home = np.asarray(robot.verification.home, dtype=float)
+        near = np.concatenate([home[:3], np.radians(home[3:])])
+    return assemblies(robot, joints, near, search)
+
+
+def build(robot, host="delmia", out_dir=None):
+    """Render and compile the robot's routine for a host (skipped when up to date).
+
+    Parameters
+    ----------
+    robot : kingen.robot.model.Robot
+    host : str, optional
+        ``"delmia"`` (a DELMIA V5 / IGRIP plugin) or ``"linuxcnc"`` (a kinematics module),
+        or any host registered in ``kingen.hosts``.
+    out_dir : str or os.PathLike, optional
+        The output folder; ``build/<name>`` (DELMIA) or the host's default.
+
+    Returns
+    -------
+    kingen.hosts.base.BuildResult
+        ``library`` (the compiled file's path), ``routine`` (its entry point's name) and
+        ``source``.
+    """
+    from pathlib import Path
+
+    from .hosts import get_host
+
+    return get_host(host).build(robot, None if out_dir is None else Path(out_dir))
+
+
+def verify(robot, library=None, routine=None, host="delmia", samples=10000, seed=0):
+    """Check a compiled routine against the reference, its golden values and its host's
+    contract; the routine runs in a child process, never in this one.
+
+    Parameters
+    ----------
+    robot : kingen.robot.model.Robot
+    library : str or os.PathLike, optional
+        A compiled library; kingen's own build for ``host`` by default.
+    routine : str, optional
+        The routine's name in ``library``; the host's name for the robot by default.
+    host : str, optional
+        ``"delmia"`` or ``"linuxcnc"``.
+    samples, seed : int, optional
+        How many seeded poses of the robot's verification region are compared.
+
+    Returns
+    -------
+    kingen.verify.report.Report
+        ``passed``, ``checks`` (each with ``name``, ``passed``, ``detail``), the largest
+        errors (``max_abs_error_mm``, ``max_abs_error_rad``) and ``as_json()``, the
+        contract of ``kingen verify --json``.
+    """
+    from pathlib import Path
+
+    from .hosts import get_host
+    from .verify import VerifyOptions, verify_library
+
+    chosen = get_host(host)
+    if library is None:
+        built = chosen.build(robot)
+        library, routine = built.library, built.routine
+    return verify_library(chosen.as_seen(robot), Path(library), routine or chosen.routine_name(robot),
+                          VerifyOptions(samples=samples, seed=seed), host=chosen)
+
+
+def analyze(robot, posture=None, tilt_step=0.1, azimuth_step=15.0, tilt_max=90.0):
+    """How far the platform tilts in every direction from home before something stops it.
+
+    Parameters
+    ----------
+    robot : kingen.robot.model.Robot
+    posture : int, optional
+        The posture judged; the robot's working posture by default.
+    tilt_step, azimuth_step, tilt_max : float, optional
+        The grid, in degrees (the bounds of ``kingen analyze``'s options).
+
+    Returns
+    -------
+    list of dict
+        One per azimuth: ``azimuth_deg``, ``max_tilt_deg`` (degrees), ``cause`` (what stops
+        it: a singularity, a joint's travel, unreachability, or ``none``) and
+        ``min_direct_index_mm``; empty when the platform cannot tilt.
+    """
+    from .design.analysis import Settings, tilt_limits
+
+    chosen = robot.working_posture if posture is None else posture
+    return tilt_limits(robot, chosen, Settings(tilt_step_deg=tilt_step, azimuth_step_deg=azimuth_step,
+                                               tilt_max_deg=tilt_max))

@@ -18,6 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+SIX = 6
+"""A platform's degrees of freedom: the force lines a robot needs for the direct index, one each."""
+
 
 @dataclass(frozen=True)
 class JointType:

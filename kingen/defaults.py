@@ -21,3 +21,5 @@ AZIMUTH_STEP_DEG = (0.5, 180.0)
 """(least, most) step between tilt azimuths in degrees: ``--azimuth-step`` and ``objective.azimuth_step``."""
 TILT_MAX_DEG = (0.1, 180.0)
 """(least, most) largest tilt tried in degrees: ``--tilt-max`` and ``objective.tilt_max``."""
+VERSION = "0.1.0"
+"""kingen's version (``kingen.__version__``), written into generated files and snapshots."""

@@ -178,8 +178,8 @@ class RobotFile(pytest.File):
 
     def collect(self):
         from .errors import KingenError, located
-        from .model import load_robot
-        from .snapshot import snapshot_path
+        from .robot.model import load_robot
+        from .verify.snapshot import snapshot_path
 
         if not self.path.exists():
             problem = located(self.path, None, None, f"the symlink's target {os.readlink(self.path)} does not exist"
@@ -213,7 +213,7 @@ class RobotFile(pytest.File):
 
     def _verify(self):
         from .errors import KingenError
-        from .snapshot import load, snapshot_path
+        from .verify.snapshot import load, snapshot_path
         from .verify import VerifyOptions, verify_library
 
         samples = self.config.getoption("kingen_samples")
@@ -259,7 +259,7 @@ class KingenItem(pytest.Item):
             raise KingenFailure(f"no check {self.name} in the report")
         failed = [check for check in checks if not check.passed]
         if failed:
-            from .report import statistics_lines
+            from .verify.report import statistics_lines
 
             lines = []
             for check in failed:
@@ -295,11 +295,11 @@ def _build_folder(host, robot):
     and the robot file's content, so that a later session (or another xdist worker) finds the
     build done; the build inside it is content-addressed too (a stamp of the source, compiler
     and flags), so nothing stale is ever used."""
-    from . import __version__
-    from .files import cache_dir, digest, private_folder
+    from .defaults import VERSION
+    from .runtime.files import cache_dir, digest, private_folder
 
     root = cache_dir() / "pytest-builds"
     for folder in (cache_dir(), root):
         private_folder(folder)
         folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-    return root / f"{robot.name}-{digest(__version__, host.name, robot.sha256)[:16]}"
+    return root / f"{robot.name}-{digest(VERSION, host.name, robot.sha256)[:16]}"

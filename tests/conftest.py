@@ -29,7 +29,7 @@ if not os.environ.get("PYTEST_XDIST_WORKER"):
 from kingen.hosts.delmia.build import build_plugin  # noqa: E402
 from kingen.conventions import t6_from_pose  # noqa: E402
 from kingen.hosts.delmia.loader import Plugin  # noqa: E402
-from kingen.model import load_robot, shipped_robots  # noqa: E402
+from kingen.robot.model import load_robot, shipped_robots  # noqa: E402
 
 SHIPPED = shipped_robots()
 
@@ -189,7 +189,7 @@ def forged_frames():
     import pickle
     import struct
 
-    from kingen import wire
+    from kingen.runtime import wire
 
     data = pickle.dumps(("result", _ExitZero()))
     report = {"robot": "probe", "routine": "kin_probe", "samples": 200, "seed": 0, "postures": 1,

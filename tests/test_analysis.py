@@ -13,12 +13,12 @@ import pytest
 from markupsafe import escape
 
 from conftest import require_tool
-from kingen.analysis import CAUSES
-from kingen.collision import segment_distance
+from kingen.design.analysis import CAUSES
+from kingen.kinematics.collision import segment_distance
 from kingen.cli import main
 from kingen.cli.common import load_model
-from kingen.model import robots_dir
-from kingen.figures import LABELS, OUTSIDE_LABEL, QUANTITIES, figure_objects, figures, report_html
+from kingen.robot.model import robots_dir
+from kingen.design.figures import LABELS, OUTSIDE_LABEL, QUANTITIES, figure_objects, figures, report_html
 
 SWEEP_KEYS = {"value", "warning", "direct_index_mm", "min_inverse_index", "min_rod_distance_mm",
               "min_crank_distance_mm", "joints"}

@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from kingen import analysis
-from kingen.analysis import CAUSES, Settings, home_values, slices, sweeps, tilt_limits
+from kingen.design import analysis
+from kingen.design.analysis import CAUSES, Settings, home_values, slices, sweeps, tilt_limits
 from kingen.cli import main
-from kingen.collision import line_distance
-from kingen.model import load_robot
+from kingen.kinematics.collision import line_distance
+from kingen.robot.model import load_robot
 
 THESIS = Settings(tilt_convention="euler", tilt_step_deg=1.0, azimuth_step_deg=1.0, tilt_max_deg=120.0,
                   collision="thesis")

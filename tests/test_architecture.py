@@ -1,6 +1,7 @@
-"""The layout docs/architecture.md describes, pinned: imports run one way (no circle, counting
-imports inside functions too), DELMIA's names live only in its host package, and no module
-grows past a few hundred lines."""
+"""The layout docs/architecture.md describes, pinned: imports run one way, down the layers
+(no circle, no import of a higher layer, counting imports inside functions too), DELMIA's
+names live only in its host package, the package's top holds a handful of modules, and no
+module grows past a few hundred lines."""
 
 import ast
 from pathlib import Path
@@ -64,6 +65,85 @@ def test_no_import_circle():
     for node in sorted(graph):
         if node not in state:
             visit(node)
+
+
+LAYERS = (
+    ("foundation", ("kingen.errors", "kingen.conventions", "kingen.units", "kingen.defaults", "kingen.vendor")),
+    ("runtime", ("kingen.runtime",)),
+    ("robot", ("kingen.robot", "kingen.limbs")),
+    ("kinematics", ("kingen.kinematics",)),
+    ("verify", ("kingen.verify",)),
+    ("hosts", ("kingen.hosts",)),
+    ("design", ("kingen.design",)),
+    ("interface", ("kingen.cli", "kingen.pytest_plugin", "kingen")),
+)
+"""kingen's layers, lowest first (docs/architecture.md): a module may import its own layer's
+and lower ones' modules, never a higher one's. ``kingen`` itself is the public face, on top."""
+
+
+def layer(name):
+    """The index in LAYERS of module ``name``'s layer (its longest matching prefix)."""
+    matches = [(len(prefix), index) for index, (_, prefixes) in enumerate(LAYERS) for prefix in prefixes
+               if name == prefix or name.startswith(prefix + ".")]
+    assert matches, f"{name} is in no layer: add it to LAYERS and docs/architecture.md"
+    return max(matches)[1]
+
+
+def upward_imports(graph):
+    """'a (layer) -> b (layer)' for every import in ``graph`` (module -> modules it imports)
+    of a module in a higher layer. Importing a module runs its packages' __init__ first, but
+    the root package's is the lazy public face, which imports nothing when it runs: it counts
+    only where a module names it."""
+    found = []
+    for name, targets in sorted(graph.items()):
+        for target in sorted(targets):
+            if layer(target) > layer(name):
+                found.append(f"{name} ({LAYERS[layer(name)][0]}) -> {target} ({LAYERS[layer(target)][0]})")
+    return found
+
+
+def import_graph():
+    """Module -> the kingen modules it imports anywhere in its body (imports inside functions
+    counted), the root package only where it is named."""
+    known = modules()
+    graph = {}
+    for name, path in known.items():
+        named = _names_root(path)
+        graph[name] = {target for target in imported(name, path, known)
+                       if target != "kingen" or named}
+    return graph
+
+
+def _names_root(path):
+    """Whether the module at ``path`` imports the root package by name (``import kingen``,
+    ``from kingen import x``, or a relative import that climbs to it)."""
+    depth = len(path.relative_to(PACKAGE).parts)  # the level of a relative import that climbs to it
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import) and any(alias.name == "kingen" for alias in node.names):
+            return True
+        if isinstance(node, ast.ImportFrom):
+            if node.level == 0 and node.module == "kingen":
+                return True
+            if node.level and not node.module and node.level == depth:
+                return True
+    return False
+
+
+def test_imports_run_down_the_layers():
+    assert upward_imports(import_graph()) == []
+
+
+def test_a_planted_upward_import_fails_the_layer_test():
+    graph = import_graph()
+    graph["kingen.robot.model"] = graph["kingen.robot.model"] | {"kingen.hosts"}
+    graph["kingen.errors"] = graph["kingen.errors"] | {"kingen"}
+    assert upward_imports(graph) == ["kingen.errors (foundation) -> kingen (interface)",
+                                     "kingen.robot.model (robot) -> kingen.hosts (hosts)"]
+
+
+def test_the_top_of_the_package_holds_a_handful_of_modules():
+    top = sorted(path.name for path in PACKAGE.glob("*.py"))
+    assert len(top) <= 6, top
 
 
 def test_delmia_names_live_only_in_its_host_package():

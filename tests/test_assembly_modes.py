@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from kingen import sgp
+from kingen.kinematics import sgp
 from kingen.cli import main
 from kingen.conventions import matrix_from_pose, rpy_from_rotation, t6_from_pose
-from kingen.forward import _polished, assemblies, free_mask, newton, starts
-from kingen.model import load_robot
-from kingen.reference import solve
+from kingen.kinematics.forward import _polished, assemblies, free_mask, newton, starts
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
 
 # Dietmaier (1998), "The Stewart-Gough platform of general geometry can have 40 real
 # postures", as Martyushev's fkSGP restates it (genSGP.m, sgpType 100): base, platform, lengths.

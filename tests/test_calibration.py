@@ -6,9 +6,9 @@ import pytest
 from conftest import random_t6
 from kingen.conventions import joint_errors, t6_from_pose
 from kingen.errors import KingenError
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.routine import WARNINGS
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import WARNINGS
 
 
 def test_a_calibrated_reference_length_shifts_the_joint_exactly(plugin):
@@ -82,7 +82,7 @@ CASES = [
 
 @pytest.mark.parametrize("old, new, fragment", CASES, ids=[c[2][:40] for c in CASES])
 def test_bad_calibration_is_located(tmp_path, old, new, fragment):
-    from kingen.resources import robots_dir
+    from kingen.runtime.resources import robots_dir
     text = (robots_dir() / "exechon.yaml").read_text()
     assert old in text
     path = tmp_path / "exechon.yaml"
@@ -110,7 +110,7 @@ def test_a_calibrated_crank_length_is_the_dialogs_value_in_mm(tmp_path):
     reference reaches (the fields in mm, as given: scale 1), and the fields do move the joints."""
     from kingen.hosts.delmia.build import build_plugin
     from kingen.hosts.delmia.loader import Plugin
-    from kingen.resources import robots_dir
+    from kingen.runtime.resources import robots_dir
 
     text = (robots_dir() / "ceart.yaml").read_text()
     old = "    zero_offset: [offset1, offset2, offset3, offset4, offset5, offset6]\n"

@@ -1,4 +1,4 @@
-"""The direct index's certificate (kingen.certificate; docs/conventions.md, 'A certificate for
+"""The direct index's certificate (kingen.kinematics.certificate; docs/conventions.md, 'A certificate for
 the direct index'): its det W against LAPACK's within the proven rounding allowance, its
 bound never above the index, certification just below the bound and never just above it,
 the rounding and translation conditions each shown to be what refuses a posture, and the
@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 from conftest import random_t6
-from kingen import certificate, reference
-from kingen.certificate import ROUNDING, certified_above, posture_determinants
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.routine import WARNINGS
-from kingen.singularity import (PACKED, TRANSLATION_SINGULAR, direct_index, direct_index_side, limb_wrenches,
+from kingen.kinematics import certificate, reference
+from kingen.kinematics.certificate import ROUNDING, certified_above, posture_determinants
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import WARNINGS
+from kingen.kinematics.singularity import (PACKED, TRANSLATION_SINGULAR, direct_index, direct_index_side, limb_wrenches,
                                 posture_values)
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]

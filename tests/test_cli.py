@@ -108,7 +108,7 @@ def test_verify_gives_the_same_report_whatever_its_processes(capsys, tmp_path):
 
 
 def test_verify_fails_with_exit_1_on_a_wrong_golden_value(capsys, tmp_path):
-    from kingen.model import robots_dir
+    from kingen.robot.model import robots_dir
     text = (robots_dir() / "exechon.yaml").read_text().replace("-24.8915", "-24.9915")
     path = tmp_path / "exechon.yaml"
     path.write_text(text)

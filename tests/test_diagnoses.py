@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from conftest import ONE_RAIL, random_t6
-from kingen.diagnose import MATCH, NAMED_SCALES, _ranges, diagnose, diagnose_warnings
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.routine import WARNINGS
+from kingen.verify.diagnose import MATCH, NAMED_SCALES, _ranges, diagnose, diagnose_warnings
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import WARNINGS
 
 NAMES = {code: name for name, code in WARNINGS.items()}
 GOOD, LIMITS = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]

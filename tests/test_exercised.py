@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from kingen.cli import main
-from kingen.resources import robots_dir
+from kingen.runtime.resources import robots_dir
 
 
 def run(capsys, *argv):
@@ -68,7 +68,7 @@ class WithoutWarning:
 
 def cases():
     from conftest import SHIPPED
-    from kingen.model import load_robot
+    from kingen.robot.model import load_robot
     from kingen.verify.boundaries import warnings_to_exercise
 
     return [(name, kind) for name in SHIPPED for kind in warnings_to_exercise(load_robot(name))]
@@ -78,7 +78,7 @@ def cases():
 def test_a_routine_that_never_gives_a_warning_fails_warnings(name, kind, plugin):
     """Every shipped robot, every warning it can give: the boundary poses make a routine that
     never gives it fail, even where the uniform sample holds no such pose."""
-    from kingen.routine import WARNINGS
+    from kingen.kinematics.routine import WARNINGS
     from kingen.verify import VerifyOptions, verify
 
     robot, routine = plugin(name)
@@ -136,7 +136,7 @@ def test_bad_host_settings_are_one_line_errors(tmp_path, capsys):
 
 
 def test_a_library_kingen_did_not_build_has_its_definition_not_exercised(tmp_path, capsys):
-    from kingen.model import load_robot
+    from kingen.robot.model import load_robot
     from kingen.hosts import get_host
     from kingen.verify import VerifyOptions, verify_library
 

@@ -9,9 +9,9 @@ import pytest
 from conftest import SHIPPED, ChangedJoints, random_t6
 from kingen.cli import main
 from kingen.conventions import pose_from_t6, t6_from_pose
-from kingen.forward import assemblies, closure, free_mask, newton
-from kingen.model import load_robot
-from kingen.reference import solve
+from kingen.kinematics.forward import assemblies, closure, free_mask, newton
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
 
 THESIS_POSE = [-1200.0, -750.0, -1900.0, 0.0, 0.0, 0.0]
 

@@ -20,11 +20,11 @@ from kingen.hosts.delmia.build import build_plugin
 from kingen.cli import main
 from kingen.errors import KingenError
 from kingen.hosts.delmia.loader import Plugin
-from kingen.model import load_robot, robots_dir, shipped_robots
+from kingen.robot.model import load_robot, robots_dir, shipped_robots
 from kingen.pytest_plugin import sample_count
-from kingen.reference import solve as reference_solve
-from kingen.robot_file import read_robot_file
-from kingen.snapshot import load as load_snapshot
+from kingen.kinematics.reference import solve as reference_solve
+from kingen.robot.reading import read_robot_file
+from kingen.verify.snapshot import load as load_snapshot
 from kingen.verify.checks.snapshot import check as check_snapshot
 from kingen.verify import VerifyOptions, verify
 

@@ -7,8 +7,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from kingen.model import load_robot, shipped_robots
-from kingen.reference import solve
+from kingen.robot.model import load_robot, shipped_robots
+from kingen.kinematics.reference import solve
 from kingen.verify.checks.golden import check_golden, decimals, golden_detail
 
 WITH_GOLDEN = [name for name in shipped_robots() if load_robot(name).golden]

@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from kingen.conventions import t6_from_pose
-from kingen.model import load_robot, shipped_robots
-from kingen.reference import solve
+from kingen.robot.model import load_robot, shipped_robots
+from kingen.kinematics.reference import solve
 from kingen.verify.checks.golden import check_golden
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))

@@ -72,7 +72,7 @@ def test_a_registered_host_builds_verifies_and_packages_through_the_commands(toy
 def test_a_wrong_toy_routine_fails_the_shared_checks(toy, tmp_path, capsys):
     host, robot = toy
     source = tmp_path / "wrong.c"
-    text = host.render(__import__("kingen.model", fromlist=["load_robot"]).load_robot(robot))["toy_octo.c"]
+    text = host.render(__import__("kingen.robot.model", fromlist=["load_robot"]).load_robot(robot))["toy_octo.c"]
     source.write_text(text.replace("- row[6]", "- row[6] + 1e-6"))
     code, out, _ = run(capsys, "verify", robot, "--host", "toy", "--source", source, "-o", tmp_path / "b",
                        "--samples", "2000")

@@ -310,10 +310,10 @@ def _answer(channel):
 
 
 def test_a_child_stopped_for_a_timeout_is_killed_at_once_and_a_finished_one_exits_by_itself(monkeypatch):
-    """kingen.isolation: a child that makes no progress is killed as soon as its timeout ends,
+    """kingen.runtime.isolation: a child that makes no progress is killed as soon as its timeout ends,
     not given EXIT_GRACE to exit first (a routine spinning in native code never would); one that
     sent its result ends by itself (exit status 0)."""
-    from kingen import isolation
+    from kingen.runtime import isolation
 
     monkeypatch.setattr(isolation, "EXIT_GRACE", 120.0)
     start = time.monotonic()
@@ -337,7 +337,7 @@ def _close_and_spin(channel):
 def test_a_child_that_closes_its_pipe_and_runs_on_is_stopped_and_named(monkeypatch):
     """A plugin that closes kingen's channel (its file descriptor) and goes on running is
     stopped after EXIT_GRACE and named for what it did, not reported as killed from outside."""
-    from kingen import isolation
+    from kingen.runtime import isolation
 
     monkeypatch.setattr(isolation, "EXIT_GRACE", 0.5)
     result, failure = isolation.run_in_child(_close_and_spin, (), timeout=60)

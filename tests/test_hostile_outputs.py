@@ -20,7 +20,7 @@ import pytest
 from conftest import skip_or_fail
 from kingen.cli import main
 from kingen.errors import KingenError
-from kingen.files import write_atomic
+from kingen.runtime.files import write_atomic
 from kingen.hosts.delmia.build import host_support
 
 
@@ -124,7 +124,7 @@ def plant_compiled_template(name, planted_text):
     code in kingen's template cache under the real source's key and checksum (as another
     user could, into a cache they may write): the file a render would load."""
     from kingen.hosts.delmia.render import TEMPLATES
-    from kingen.render import _environment
+    from kingen.hosts.render import _environment
 
     environment = _environment("c", TEMPLATES)
     source, filename, _ = environment.loader.get_source(environment, name)
@@ -144,8 +144,8 @@ def render_afresh():
     environments (nothing compiled in this process: what a new process loads or compiles);
     they are dropped again after the test."""
     from kingen.hosts.delmia.render import render
-    from kingen.model import load_robot
-    from kingen.render import _environment
+    from kingen.robot.model import load_robot
+    from kingen.hosts.render import _environment
 
     def rendered(name):
         _environment.cache_clear()

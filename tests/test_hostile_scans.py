@@ -14,7 +14,7 @@ import time
 import pytest
 
 from kingen.errors import KingenError
-from kingen.library_info import BUILD_INFO_MARKER, build_info
+from kingen.runtime.library_info import BUILD_INFO_MARKER, build_info
 from test_hostile import ROBOT, _children, plugin_source, run_kingen
 
 MARKER = BUILD_INFO_MARKER.encode()
@@ -108,7 +108,7 @@ def _fake_compiler(tmp_path, rest):
 def test_the_compiler_gets_a_private_temporary_folder_that_is_removed(tmp_path, monkeypatch):
     import tempfile
 
-    from kingen.compiler import compile_c
+    from kingen.runtime.compiler import compile_c
 
     scratch = tmp_path / "tmp"
     scratch.mkdir()
@@ -214,7 +214,7 @@ def test_bench_refuses_a_floor_that_fails_verification(tmp_path):
 
 
 def test_build_information_is_reported_as_a_label_not_a_proof(tmp_path):
-    from kingen.model import load_robot
+    from kingen.robot.model import load_robot
 
     robot = tmp_path / "probe.yaml"
     robot.write_text(ROBOT)

@@ -8,9 +8,9 @@ import sys
 
 import pytest
 
-import kingen.snapshot
+import kingen.verify.snapshot
 from kingen.cli import main
-from kingen.model import load_robot
+from kingen.robot.model import load_robot
 
 from test_hostile import ROBOT, plugin_source
 
@@ -79,11 +79,11 @@ def test_record_refuses_what_verify_would_refuse_before_computing(tmp_path, caps
     def computing(*arguments, **keywords):
         raise AssertionError("the reference was called")
 
-    monkeypatch.setattr("kingen.reference.solve", computing)
+    monkeypatch.setattr("kingen.kinematics.reference.solve", computing)
     output = tmp_path / "ceart.golden.json"
     code, _, err = run(capsys, "golden", "record", "ceart", "-o", output, "--samples", "10000")
     robot = load_robot("ceart")
-    per_entry = kingen.snapshot.entry_bytes(robot)
+    per_entry = kingen.verify.snapshot.entry_bytes(robot)
     assert code == 2 and err.count("\n") == 1, err
     assert err.startswith(f"kingen: error: --samples 10000: a snapshot of ceart takes up to "
                           f"{per_entry / 1000:.1f} kB a pose and verify reads at most 64 MB: at most ")
@@ -93,7 +93,7 @@ def test_record_refuses_what_verify_would_refuse_before_computing(tmp_path, caps
 
 
 def test_the_largest_count_that_fits_is_recorded_and_read_back(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(kingen.snapshot, "MAX_SNAPSHOT_BYTES", 100_000)
+    monkeypatch.setattr(kingen.verify.snapshot, "MAX_SNAPSHOT_BYTES", 100_000)
     output = tmp_path / "tau.golden.json"
     code, _, err = run(capsys, "golden", "record", "tau", "-o", output, "--samples", "1000")
     assert code == 2 and "and verify reads at most 100 kB: at most " in err, err
@@ -103,7 +103,7 @@ def test_the_largest_count_that_fits_is_recorded_and_read_back(tmp_path, capsys,
     assert not output.exists()
     assert run(capsys, "golden", "record", "tau", "-o", output, "--samples", fitting)[0] == 0
     assert output.stat().st_size <= 100_000
-    assert len(kingen.snapshot.load(output, load_robot("tau")).entries) == fitting
+    assert len(kingen.verify.snapshot.load(output, load_robot("tau")).entries) == fitting
 
 
 def test_record_writes_chunk_by_chunk_the_same_file(tmp_path, capsys, monkeypatch):
@@ -113,7 +113,7 @@ def test_record_writes_chunk_by_chunk_the_same_file(tmp_path, capsys, monkeypatc
     chunked = tmp_path / "chunked.json"
     assert run(capsys, "golden", "record", "tau", "-o", chunked, "--samples", "30")[0] == 0
     assert chunked.read_bytes() == whole.read_bytes()
-    assert len(kingen.snapshot.load(chunked, load_robot("tau")).entries) == 30
+    assert len(kingen.verify.snapshot.load(chunked, load_robot("tau")).entries) == 30
 
 
 def _peak_memory_mb(tmp_path, samples):

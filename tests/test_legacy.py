@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from kingen.cli import main
-from kingen.resources import robots_dir
+from kingen.runtime.resources import robots_dir
 
 _THESIS = {}
 
@@ -226,7 +226,7 @@ DllExport int kin_ceart(double link_lengths[], double link_offsets[], double T6[
 
 
 def crank_source(unit):
-    from kingen.model import load_robot
+    from kingen.robot.model import load_robot
     limbs = load_robot("ceart").limbs
     table = lambda rows: ", ".join("{" + ", ".join(repr(v) for v in row) + "}" for row in rows)  # noqa: E731
     return (CRANK_LEGACY.replace("PIVOTS", table(l.pivot for l in limbs))
@@ -426,8 +426,8 @@ def test_a_crash_in_another_comparing_process_is_named_as_in_the_first(capsys, t
     """verify compares chunks in forked processes too: a routine that crashes there (here on
     one pose of chunk 1, the second process's first) is run again on that chunk in the first
     process, where it crashes on the same pose, so the crash is named with its poses as always."""
-    from kingen.model import load_robot
-    from kingen.poses import sample_poses
+    from kingen.robot.model import load_robot
+    from kingen.kinematics.poses import sample_poses
     from kingen.verify import chunk_size
     robot = load_robot(thesis_hexapod())
     chunk = chunk_size(robot)
@@ -445,7 +445,7 @@ def test_a_crash_only_in_another_comparing_process_still_fails(capsys, tmp_path)
     """A routine that crashes in a forked comparing process but not when its chunk is compared
     again in the first one (here: in any process but the one that called it first) has crashed
     all the same: the verdict says so, naming the poses and the signal."""
-    from kingen.model import load_robot
+    from kingen.robot.model import load_robot
     from kingen.verify import chunk_size
     chunk = chunk_size(load_robot(thesis_hexapod()))
     text = ("#include <unistd.h>\nstatic pid_t first_caller = 0;\n"
@@ -463,7 +463,7 @@ def test_a_routine_that_crashes_is_a_failed_check_not_a_dead_process(capsys, tmp
     code, out, _, data = run_verify(capsys, tmp_path, thesis_hexapod(), hexapod_source(CRASH="1"), "kin_hexapodFullTest")
     assert code == 1
     assert failed_checks(data) == ["crash"]
-    from kingen.model import load_robot
+    from kingen.robot.model import load_robot
     from kingen.verify import chunk_size
     last = min(3000, chunk_size(load_robot(thesis_hexapod()))) - 1
     assert f"the plugin ended the host process (signal SIGSEGV) during poses 0 to {last} of seed 0" in out

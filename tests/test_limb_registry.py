@@ -8,14 +8,14 @@ from typing import Literal
 import numpy as np
 import pytest
 
-from kingen import limbs
+from kingen.robot import limbs
 from kingen.hosts.delmia.build import build_plugin
 from kingen.errors import KingenError
 from kingen.hosts.delmia.loader import Plugin
-from kingen.limbs import LimbModel, LimbSolution, c_double, c_vector
-from kingen.model import load_robot
+from kingen.robot.limbs import LimbModel, LimbSolution, c_double, c_vector
+from kingen.robot.model import load_robot
 from kingen.hosts.delmia.package import render_package
-from kingen.schema import Coordinate, Vec3
+from kingen.robot.schema import Coordinate, Vec3
 from kingen.verify import VerifyOptions, verify
 
 

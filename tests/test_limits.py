@@ -16,15 +16,15 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 import pytest
 
-from kingen.compiler import first_diagnostic
-from kingen.files import cache_dir
+from kingen.runtime.compiler import first_diagnostic
+from kingen.runtime.files import cache_dir
 from kingen.hosts.delmia.build import build_plugin, host_support
 from kingen.cli import main
 from kingen.errors import KingenError
-from kingen.model import load_robot, robots_dir
+from kingen.robot.model import load_robot, robots_dir
 from kingen.hosts.delmia.pe import dll_exports
-from kingen.report import Check, Report, json_text, junit_xml
-from kingen.poses import PoseStream, pose_chunks, sample_poses
+from kingen.verify.report import Check, Report, json_text, junit_xml
+from kingen.kinematics.poses import PoseStream, pose_chunks, sample_poses
 
 LEG = """\
 name: NAME
@@ -272,7 +272,7 @@ def test_a_hanging_compiler_is_killed(capsys, tmp_path, monkeypatch):
 def test_a_source_including_dev_zero_ends_in_a_compiler_error(capsys, tmp_path, monkeypatch):
     # The compiler's address-space limit ends it; at 1 GiB rather than the product's 4 GiB,
     # so that the kernel hands out (and takes back) a quarter of the pages.
-    monkeypatch.setattr("kingen.compiler.COMPILER_MEMORY", 1 << 30)
+    monkeypatch.setattr("kingen.runtime.compiler.COMPILER_MEMORY", 1 << 30)
     source = tmp_path / "kin_zero.c"
     source.write_text('#include "/dev/zero"\n')
     code, _, err = run(capsys, "verify", "hexapod", "--source", source, "-o", tmp_path / "b", "--timeout", "60")
@@ -338,8 +338,8 @@ def test_std_streams_closed_or_cut_short_keep_the_exit_code(tmp_path):
 
 
 def test_internal_errors_exit_3_with_one_line(capsys, monkeypatch):
-    import kingen.model
-    monkeypatch.setattr(kingen.model, "shipped_robots", lambda: 1 / 0)
+    import kingen.robot.model
+    monkeypatch.setattr(kingen.robot.model, "shipped_robots", lambda: 1 / 0)
     monkeypatch.delenv("KINGEN_DEBUG", raising=False)
     code, _, err = run(capsys, "list")
     assert code == 3 and err.count("\n") == 1
@@ -505,7 +505,7 @@ def test_a_server_that_is_no_scheduler_is_named_within_the_deadline(command, ans
     """Connecting and the first answers share one deadline (SCHEDULER_TIMEOUT, 20 s; 1 s here):
     a server that accepts and says nothing, or says something else, is exit 2 naming it."""
     pytest.importorskip("distributed")
-    monkeypatch.setattr("kingen.executors.SCHEDULER_TIMEOUT", 1.0)
+    monkeypatch.setattr("kingen.runtime.executors.SCHEDULER_TIMEOUT", 1.0)
     with fake_scheduler(answer) as address:
         start = time.monotonic()
         code, _, err = run(capsys, *SCHEDULER_COMMANDS[command], "-o", tmp_path / "out", "--scheduler", address)
@@ -530,7 +530,7 @@ def test_a_scheduler_address_that_is_not_one_is_refused_before_any_work(command,
 
 
 def test_dask_address_forms_are_accepted():
-    from kingen.executors import scheduler_address
+    from kingen.runtime.executors import scheduler_address
 
     for address in ("tcp://127.0.0.1:8786", "127.0.0.1:8786", "tls://scheduler.example.org:8786",
                     "tcp://[::1]:8786", "ws://localhost:8786", "localhost:8786"):

@@ -22,9 +22,9 @@ from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.build import build_module
 from kingen.hosts.linuxcnc.loader import Module
 from kingen.hosts.linuxcnc.package import render_package
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.resources import robots_dir
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.runtime.resources import robots_dir
 from kingen.verify import VerifyOptions, verify_library
 
 LINUXCNC_ROBOTS = ["hexapod", "flexapod", "stewart_gough_example", "ceart", "iwf", "rus_optimized", "tau",

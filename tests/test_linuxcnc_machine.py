@@ -21,8 +21,8 @@ from conftest import skip_or_fail
 from kingen.conventions import t6_from_pose
 from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.package import render_package
-from kingen.model import load_robot
-from kingen.reference import solve
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
 
 DRIVER = Path(__file__).parent / "linuxcnc" / "driver.py"
 MODULES = Path("/usr/lib/linuxcnc/modules")

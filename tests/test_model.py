@@ -7,7 +7,7 @@ import pytest
 
 from conftest import SHIPPED
 from kingen.errors import KingenError
-from kingen.model import load_robot
+from kingen.robot.model import load_robot
 
 EXPECTED_SHAPE = {  # (dof, postures, limb model) from docs/conventions.md
     "hexapod": (6, 1, "leg"), "flexapod": (6, 1, "leg"), "exechon": (3, 1, "leg"), "tau": (3, 8, "rail"),

@@ -9,12 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from kingen import forward
+from kingen.kinematics import forward
 from kingen.errors import KingenError
-from kingen.forward import SAME_POSE_MM, SAME_POSE_RAD, _polished, _same, _three_spheres
-from kingen.model import load_robot
-from kingen.robot_file import MAX_DEPTH, MAX_NODES, read_robot_file
-from kingen.singularity import PACKED, _exact_smallest_eigenvalue, _smallest_eigenvalue, direct_index, \
+from kingen.kinematics.forward import SAME_POSE_MM, SAME_POSE_RAD, _polished, _same, _three_spheres
+from kingen.robot.model import load_robot
+from kingen.robot.reading import MAX_DEPTH, MAX_NODES, read_robot_file
+from kingen.kinematics.singularity import PACKED, _exact_smallest_eigenvalue, _smallest_eigenvalue, direct_index, \
     direct_index_of_entries
 
 
@@ -175,7 +175,7 @@ def test_crank_angles_far_from_a_turn_are_not_rounded_by_the_reference():
 def test_positive_definiteness_after_a_shift_agrees_with_lapack(scale):
     """Sylvester's criterion on A - shift I (what the warnings decide the direct index's side
     with) against the sign of LAPACK's smallest eigenvalue, on matrices of every size."""
-    from kingen.singularity import _positive_definite
+    from kingen.kinematics.singularity import _positive_definite
 
     rng = np.random.default_rng(3)
     q, _ = np.linalg.qr(rng.normal(size=(400, 3, 3)))
@@ -228,7 +228,7 @@ def test_newton_steps_are_at_most_a_fifth_of_the_size_and_of_a_turn():
     """forward._limited: a step of the robot's whole size shrinks to a fifth of it, one of a
     whole turn to a fifth of a turn (0.4 pi), every coordinate by the same factor (the
     direction kept); a step within both limits is kept as it is."""
-    from kingen.forward import _limited
+    from kingen.kinematics.forward import _limited
 
     size = 500.0
     steps = np.array([[size, 0.0, 50.0, 0.0, 0.0, 0.0],
@@ -256,7 +256,7 @@ def test_a_singular_leading_minor_is_not_positive_definite_whatever_the_last_rou
     """A = [[1, 1, 1], [1, 1, 2], [1, 2, 1e17]]: its leading 2 x 2 minor is 1 - 1 = 0 exactly, so
     A is not positive definite (LAPACK: a negative eigenvalue), although the expanded 3 x 3
     determinant rounds to +1 (1e17 - 4 and 1e17 - 2 both round to 1e17; exactly it is -1)."""
-    from kingen.singularity import _positive_definite, _shifted
+    from kingen.kinematics.singularity import _positive_definite, _shifted
 
     matrix = np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 2.0], [1.0, 2.0, 1e17]])
     assert np.linalg.eigvalsh(matrix)[0] < 0
@@ -310,7 +310,7 @@ def test_newton_stops_at_its_first_step_within_1e_13_of_the_size(monkeypatch):
     size: Newton goes on after it and stops at the next, the first wholly within 1e-13, which is
     not 0 (so a stricter stop would go on)."""
     from kingen.conventions import t6_from_pose
-    from kingen.reference import solve
+    from kingen.kinematics.reference import solve
 
     robot = load_robot("stewart_gough_example")
     home = np.asarray(robot.verification.home, dtype=float)
@@ -345,7 +345,7 @@ def test_a_multi_start_search_is_never_called_exhaustive_and_says_where_it_looke
     verification region (home (0, 50, -1250) mm, 0 deg; range 200 mm in z, 10 deg): not
     exhaustive, and the region it searched is named coordinate by coordinate."""
     from kingen.conventions import t6_from_pose
-    from kingen.reference import solve
+    from kingen.kinematics.reference import solve
 
     robot = load_robot("exechon")
     home = np.asarray(robot.verification.home, dtype=float)

@@ -17,11 +17,11 @@ import pytest
 from ruamel.yaml import YAML
 
 from conftest import require_tool
-from kingen import optimize as search
+from kingen.design import search
 from kingen.cli import main
-from kingen.design import Problem
-from kingen.model import load_robot, resolve_robot_path
-from kingen.robot_file import read_robot_file
+from kingen.design.problem import Problem
+from kingen.robot.model import load_robot, resolve_robot_path
+from kingen.robot.reading import read_robot_file
 
 # One worker under -n N: the module's optimisation runs are then made once.
 pytestmark = pytest.mark.xdist_group("optimize")

@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6, require_tool
-from kingen.routine import UNWRITTEN_WARNING, WARNINGS
-from kingen.compiler import compiler_command
+from kingen.kinematics.routine import UNWRITTEN_WARNING, WARNINGS
+from kingen.runtime.compiler import compiler_command
 from kingen.hosts.delmia.build import STRICT_C89, host_support
 from kingen.conventions import joint_errors, t6_from_pose
 from kingen.hosts.delmia.loader import KinStat, Plugin, host_state
-from kingen.model import load_robot
+from kingen.robot.model import load_robot
 from kingen.hosts.delmia.render import render
-from kingen.reference import solve
+from kingen.kinematics.reference import solve
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 COMPILERS = ["gcc", "clang", "tcc"]
@@ -55,7 +55,7 @@ def test_generated_source_is_tables_plus_one_helper_per_model(name):
 
 def test_rendering_is_reproducible_across_processes(tmp_path):
     """Byte for byte, in fresh interpreters with different hash seeds (set and dict order)."""
-    script = ("import sys; from kingen.model import load_robot; from kingen.hosts.delmia.render import render; "
+    script = ("import sys; from kingen.robot.model import load_robot; from kingen.hosts.delmia.render import render; "
               "sys.stdout.write(''.join(t for n in sys.argv[1:] for t in render(load_robot(n)).values()))")
     outputs = [subprocess.run([sys.executable, "-c", script, *SHIPPED], capture_output=True, text=True, check=True,
                               env={**os.environ, "PYTHONHASHSEED": seed}).stdout for seed in ("1", "2")]

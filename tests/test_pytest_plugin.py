@@ -8,7 +8,7 @@ import shutil
 import pytest
 
 from kingen.cli import main
-from kingen.model import robots_dir
+from kingen.robot.model import robots_dir
 from kingen.pytest_plugin import robot_scope
 
 pytest_plugins = ["pytester"]

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from conftest import ONE_RAIL, PLUMB_LEG, SHIPPED, random_t6
-from kingen.routine import SINGULAR_TOLERANCE, WARNINGS
+from kingen.kinematics.routine import SINGULAR_TOLERANCE, WARNINGS
 from kingen.conventions import t6_from_pose
-from kingen.model import load_robot
-from kingen.reference import platform_points_in_base, solve
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import platform_points_in_base, solve
 
 GOOD, LIMITS, UNREACHABLE, SINGULAR = (WARNINGS[k] for k in (
     "WARN_GOOD_SOLUTION", "WARN_JOINT_LIMITS_EXCEEDED", "WARN_UNREACHABLE", "WARN_SINGULAR_SOLUTION"))
@@ -126,7 +126,7 @@ def test_a_leg_of_no_reference_length_blames_no_absolute_length():
     """A leg whose reference length is 0 already reports absolute lengths: an offset of any
     size, even within 1e-9 of that 0, is a wrong reference length, never 'absolute strut
     length' (which needs a positive reference length it equals)."""
-    from kingen.limbs.leg import Leg
+    from kingen.robot.limbs.leg import Leg
 
     leg = Leg(model="leg", base_point=[0, 0, 0], platform_point=[0, 0, 0], reference_length=0)
     for offset in (5e-10, 22.913):
@@ -142,10 +142,10 @@ def test_each_model_names_the_collision_radius_of_its_passive_link():
     cranks' 15.5 mm, 31 mm."""
     from dataclasses import replace
 
-    from kingen.collision import clearances
-    from kingen.limbs.crank import Crank
-    from kingen.limbs.leg import Leg
-    from kingen.limbs.rail import Rail
+    from kingen.kinematics.collision import clearances
+    from kingen.robot.limbs.crank import Crank
+    from kingen.robot.limbs.leg import Leg
+    from kingen.robot.limbs.rail import Rail
 
     assert (Leg.passive_radius, Crank.passive_radius, Rail.passive_radius) == ("leg_radius", "rod_radius", "rod_radius")
     robot = load_robot("ceart")
@@ -167,8 +167,8 @@ def test_a_parameter_in_degrees_is_scaled_to_radians_and_lengths_are_not():
     its unit word in ``calibratable`` (README: a crank's zero_offset in degrees, lengths in mm)."""
     import math
 
-    from kingen.limbs.crank import Crank
-    from kingen.limbs.rail import Rail
+    from kingen.robot.limbs.crank import Crank
+    from kingen.robot.limbs.rail import Rail
 
     crank = load_robot("ceart").limbs[0]
     assert isinstance(crank, Crank)

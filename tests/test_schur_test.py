@@ -6,9 +6,9 @@ import cffi
 import numpy as np
 import pytest
 
-from kingen.compiler import compile_c
-from kingen.render import schur_test_lines
-from kingen.singularity import PACKED
+from kingen.runtime.compiler import compile_c
+from kingen.hosts.render import schur_test_lines
+from kingen.kinematics.singularity import PACKED
 
 DECLARATION = "double margin_of(const double m[21], double threshold);"
 

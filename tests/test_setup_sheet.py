@@ -10,11 +10,11 @@ from kingen.conventions import t6_from_pose
 from kingen.hosts.delmia.package import render_package
 from kingen.hosts.linuxcnc.package import render_package as render_linuxcnc
 from kingen.hosts.linuxcnc.render import robot_problem
-from kingen.model import load_robot, robots_dir, shipped_robots
-from kingen.placement import branch_words
-from kingen.reference import solve
-from kingen.routine import WARNINGS, warnings_to_exercise
-from kingen.text import markdown
+from kingen.robot.model import load_robot, robots_dir, shipped_robots
+from kingen.robot.placement import branch_words
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import WARNINGS, warnings_to_exercise
+from kingen.runtime.text import markdown
 
 
 def sheet(name, target="windows"):

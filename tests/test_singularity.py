@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6
-from kingen.routine import WARNINGS
+from kingen.kinematics.routine import WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.singularity import (
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.kinematics.singularity import (
     EXACT_WINDOW, PACKED, direct_index, direct_index_of_entries, direct_index_side, finite_difference_jacobian,
     jacobian, limb_wrenches, posture_gram_entries, posture_wrenches,
 )
@@ -152,7 +152,7 @@ def test_a_6rus_robot_tilted_about_y_turns_singular_where_the_reference_says(plu
 
 def test_a_threshold_needs_six_force_lines(tmp_path):
     text = (tmp_path / "tau.yaml")
-    from kingen.model import robots_dir
+    from kingen.robot.model import robots_dir
     text.write_text((robots_dir() / "tau.yaml").read_text() + "singularity: {direct_index_min: 10}\n")
     with pytest.raises(KingenError, match=r"singularity.direct_index_min: the direct index needs six force lines; "
                                           r"this robot has 3 limbs"):

@@ -14,9 +14,9 @@ from kingen.cli import main
 from kingen.conventions import joint_errors
 from kingen.hosts.delmia.build import build_plugin
 from kingen.hosts.delmia.loader import Plugin
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.routine import SINGULAR_TOLERANCE, WARNINGS
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import SINGULAR_TOLERANCE, WARNINGS
 
 SINGULAR = WARNINGS["WARN_SINGULAR_SOLUTION"]
 

@@ -5,12 +5,12 @@ at random, in both tilt conventions and both collision models."""
 import numpy as np
 import pytest
 
-from kingen.analysis import Settings, home_values, tilt_limits
-from kingen.collision import clearances
-from kingen.design import Problem, evaluate
-from kingen.model import load_robot, resolve_robot_path
-from kingen.robot_file import read_robot_file
-from kingen.tilt_judge import home, judges, tilt_table
+from kingen.design.analysis import Settings, home_values, tilt_limits
+from kingen.kinematics.collision import clearances
+from kingen.design.problem import Problem, evaluate
+from kingen.robot.model import load_robot, resolve_robot_path
+from kingen.robot.reading import read_robot_file
+from kingen.design.tilt_judge import home, judges, tilt_table
 
 
 @pytest.fixture(scope="module")

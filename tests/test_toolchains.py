@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from conftest import SHIPPED, random_t6, require_tool
-from kingen.compiler import compile_c
+from kingen.runtime.compiler import compile_c
 from kingen.hosts.delmia.build import MINGW, STRICT_C89, build_plugin, host_support, windows_host_import_library
 from kingen.conventions import rotation_from_rpy, t6_from_matrix
-from kingen.model import load_robot
+from kingen.robot.model import load_robot
 from kingen.hosts.delmia.package import render_package, write_package
 from kingen.hosts.delmia.pe import dll_exports
-from kingen.reference import solve
+from kingen.kinematics.reference import solve
 
 
 

@@ -7,19 +7,19 @@ import stat
 import numpy as np
 import pytest
 
-from kingen.routine import UNWRITTEN_WARNING, WARNINGS, check_routine_name, warnings_to_exercise
-from kingen.bench import benchmark
-from kingen.compiler import CompileError, compile_c, compiler_command
-from kingen.files import PACKAGE_MARKER as MARKER
-from kingen.files import write_atomic
+from kingen.kinematics.routine import UNWRITTEN_WARNING, WARNINGS, check_routine_name, warnings_to_exercise
+from kingen.verify.bench import benchmark
+from kingen.runtime.compiler import CompileError, compile_c, compiler_command
+from kingen.runtime.files import PACKAGE_MARKER as MARKER
+from kingen.runtime.files import write_atomic
 from kingen.hosts.delmia.build import WINDOWS_DEFINES, legacy_library_name
 from kingen.conventions import t6_from_pose
-from kingen.diagnose import diagnose, diagnose_warnings
+from kingen.verify.diagnose import diagnose, diagnose_warnings
 from kingen.errors import KingenError
 from kingen.hosts.delmia.loader import KinStat
-from kingen.model import load_robot
+from kingen.robot.model import load_robot
 from kingen.hosts.delmia.package import render_package, write_package
-from kingen.reference import solve
+from kingen.kinematics.reference import solve
 
 GOOD, UNREACHABLE = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]
 

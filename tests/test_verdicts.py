@@ -20,10 +20,10 @@ import pytest
 from conftest import ONE_RAIL, PLUMB_LEG, ChangedCalls
 
 from kingen.conventions import t6_from_pose
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.report import Report
-from kingen.routine import INPUTS_MODIFIED, WARNING_BAND, WARNINGS, Calls
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.verify.report import Report
+from kingen.kinematics.routine import INPUTS_MODIFIED, WARNING_BAND, WARNINGS, Calls
 from kingen.verify.checks.jacobian import jacobian_check
 from kingen.verify.options import VerifyOptions
 from kingen.verify.tally import Tally, accumulate, posture_statistics, warnings_in_band
@@ -333,7 +333,7 @@ def test_a_snapshot_of_angles_compares_them_a_turn_apart_as_equal(tmp_path):
     import json
 
     from kingen.cli import main
-    from kingen.snapshot import load
+    from kingen.verify.snapshot import load
     from kingen.verify.checks.snapshot import check
 
     robot = load_robot("ceart")

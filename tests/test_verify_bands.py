@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from conftest import ONE_RAIL
-from kingen.routine import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
+from kingen.kinematics.routine import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
 from kingen.conventions import t6_from_pose
-from kingen.routine import Calls
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.report import Report
+from kingen.kinematics.routine import Calls
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.verify.report import Report
 from kingen.verify.tally import Tally as _Tally
 from kingen.verify.tally import accumulate as _accumulate
 from kingen.verify.tally import singular_bounds, warnings_in_band

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from kingen.verify import tally as verify
-from kingen.routine import WARNINGS
-from kingen.routine import Calls
-from kingen.model import load_robot
-from kingen.reference import solve
-from kingen.report import Report
-from kingen.singularity import branch_table
-from kingen.poses import sample_poses
+from kingen.kinematics.routine import WARNINGS
+from kingen.kinematics.routine import Calls
+from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.verify.report import Report
+from kingen.kinematics.singularity import branch_table
+from kingen.kinematics.poses import sample_poses
 from kingen.verify.tally import Tally as _Tally
 from kingen.verify.tally import accumulate as _accumulate
 from kingen.verify.tally import compared_columns as _compared_columns
@@ -99,7 +99,7 @@ def host_summary(robot, joints):
     """kingen_host_summarise_branches (the DELMIA host emulator's C) on each pose of ``joints``
     (n, dof, postures): (repeats (n,), branch values (n, dof, 2))."""
     from kingen.hosts.delmia.loader import _pointer, host
-    from kingen.singularity import representative_postures
+    from kingen.kinematics.singularity import representative_postures
 
     first_postures = np.array(representative_postures(robot), dtype=np.intc)
     branch_of = np.array(branch_table(robot), dtype=np.intc)
@@ -113,9 +113,9 @@ def host_summary(robot, joints):
 @pytest.mark.parametrize("name", ["ceart", "tau", "iwf"])
 def test_the_hosts_summary_by_branch_is_the_repeat_check_and_the_branch_values(name):
     """The C summary the DELMIA host makes as it calls (Calls.repeats, Calls.branch_values)
-    against _repeats_branches and kingen.singularity.branch_values, pose by pose: for every
+    against _repeats_branches and kingen.kinematics.singularity.branch_values, pose by pose: for every
     (limb, posture) entry changed alone, by a little or to NaN, and unchanged."""
-    from kingen.singularity import branch_values
+    from kingen.kinematics.singularity import branch_values
 
     robot = load_robot(name)
     table = branch_table(robot)

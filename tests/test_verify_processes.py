@@ -6,6 +6,7 @@ import dataclasses
 import pytest
 
 from conftest import ChangedCalls, ChangedJoints
+from kingen.runtime import cores as cores_module
 from kingen.verify import processes as verify_module
 from kingen.verify import VerifyOptions, chunk_size, verify
 
@@ -56,11 +57,11 @@ def test_several_processes_report_what_one_does(name, plugin, monkeypatch):
 def test_a_containers_cpu_quota_bounds_the_processes(tmp_path, monkeypatch, files, cores):
     for name, text in files.items():
         (tmp_path / name).write_text(text)
-    monkeypatch.setattr(verify_module, "CPU_QUOTA_FILES", ((str(tmp_path / "cpu.max"), None),
-                                                           (str(tmp_path / "quota"), str(tmp_path / "period"))))
-    monkeypatch.setattr(verify_module.os, "sched_getaffinity", lambda pid: set(range(64)))
-    assert verify_module.cpu_quota() == cores
-    assert verify_module.comparing_processes() == (cores or verify_module.MAX_PROCESSES)
+    monkeypatch.setattr(cores_module, "CPU_QUOTA_FILES", ((str(tmp_path / "cpu.max"), None),
+                                                          (str(tmp_path / "quota"), str(tmp_path / "period"))))
+    monkeypatch.setattr(cores_module.os, "sched_getaffinity", lambda pid: set(range(64)))
+    assert cores_module.cpu_quota() == cores
+    assert cores_module.usable_cores() == (cores or cores_module.MAX_PROCESSES)
 
 
 class FlippedWarnings:

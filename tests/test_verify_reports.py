@@ -51,7 +51,7 @@ def test_processes_and_scheduler_are_exclusive():
 
 def test_no_scheduler_is_bad_input(tmp_path, monkeypatch, capsys):
     """Nothing listens on port 9: after the scheduler timeout (20 s; 1 s here) a one-line error, exit 2."""
-    monkeypatch.setattr("kingen.executors.SCHEDULER_TIMEOUT", 1.0)
+    monkeypatch.setattr("kingen.runtime.executors.SCHEDULER_TIMEOUT", 1.0)
     assert main(["verify", "hexapod", "--samples", "10", "-o", str(tmp_path), "--scheduler", "tcp://127.0.0.1:9"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("kingen: error: --scheduler: no Dask scheduler at tcp://127.0.0.1:9 (Timed out") and err.count("\n") == 1, err

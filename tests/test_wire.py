@@ -1,4 +1,4 @@
-"""kingen.wire: what a child sends its parent is plain data in frames only kingen's child can
+"""kingen.runtime.wire: what a child sends its parent is plain data in frames only kingen's child can
 make; whatever else arrives is refused in one line, never run, never waited on forever."""
 
 import json
@@ -8,9 +8,9 @@ import struct
 import numpy as np
 import pytest
 
-from kingen import wire
-from kingen.report import Check, GoldenResult, Report
-from kingen.routine import calls_decoder
+from kingen.runtime import wire
+from kingen.verify.report import Check, GoldenResult, Report
+from kingen.kinematics.routine import calls_decoder
 
 KEY = bytes(range(32))
 

@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from kingen.hosts.linuxcnc.loader import Module
-from kingen.model import load_robot
-from kingen.robot_file import read_robot_file
+from kingen.robot.model import load_robot
+from kingen.robot.reading import read_robot_file
 
 MODULES = Path("/usr/lib/linuxcnc/modules")
 GENHEXKINS = MODULES / "genhexkins.so"

@@ -8,7 +8,7 @@ Exit codes: 0 success, 1 verification failed (or the plugin broke, crashed or hu
 error (one line; the traceback only with ``KINGEN_DEBUG=1``), 143 terminated by
 SIGTERM. Library code raises KingenError; only this package prints and chooses exit
 codes. Foreign code (a library's constructors, its entry points, routines) runs only in a
-child process (:mod:`kingen.isolation`), bounded by ``--timeout``.
+child process (:mod:`kingen.runtime.isolation`), bounded by ``--timeout``.
 """
 
 import gc

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import click
 
-from .. import __version__
+from ..defaults import VERSION
 from ..defaults import DEFAULT_TIMEOUT, MAX_MM
 from ..errors import KingenError, PluginDefect, refuse_special_file
-from ..text import printable
+from ..runtime.text import printable
 
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
@@ -38,7 +38,7 @@ class FiniteRange(click.FloatRange):
 def _out_folder(context, parameter, path):
     """An output folder is checked before the work, not after it: it, or the existing folder
     it would be made in, must be a writable folder."""
-    from ..files import writable_folder
+    from ..runtime.files import writable_folder
 
     if path is not None:
         try:
@@ -63,7 +63,7 @@ def _dialog_fields(context, parameter, values):
 def _routine_name(context, parameter, value):
     if value is not None:
         try:
-            from ..routine import check_routine_name
+            from ..kinematics.routine import check_routine_name
 
             check_routine_name(value)
         except KingenError as error:
@@ -73,7 +73,7 @@ def _routine_name(context, parameter, value):
 
 def _pose(context, parameter, values):
     """A pose option: six finite numbers, x y z within +/-MAX_MM mm, angles within +/-720 degrees."""
-    from ..schema import MAX_DEGREES
+    from ..robot.schema import MAX_DEGREES
 
     if values is not None and not (all(math.isfinite(v) for v in values) and all(abs(v) <= MAX_MM for v in values[:3])
                                    and all(abs(v) <= MAX_DEGREES for v in values[3:])):
@@ -186,7 +186,7 @@ def plugin_options(function):
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="kingen")
+@click.version_option(VERSION, prog_name="kingen")
 def cli():
     """Robot YAML -> DELMIA V5 / IGRIP user-inverse-kinematics plugin, verified.
 
@@ -208,10 +208,10 @@ def host_target(host, target, command):
 
 def in_child(job, arguments, timeout, host, decoders, on_message=None):
     """A job's result from a child process; a crash or a hang there, or a message that is not
-    what ``decoders`` (kind -> decoder, 'result' included: kingen.isolation.run_in_child) accept,
+    what ``decoders`` (kind -> decoder, 'result' included: kingen.runtime.isolation.run_in_child) accept,
     is a failed run (exit 1). ``on_message(kind, value)`` gets what the job sends besides
     stages, decoded, as it comes."""
-    from ..isolation import run_in_child
+    from ..runtime.isolation import run_in_child
 
     result, failure = run_in_child(job, arguments, timeout, on_message, first_stage=host.loading_stage,
                                    decoders=decoders)
@@ -248,12 +248,12 @@ def solve_job(channel, host, model, library, routine, matrix, link_lengths, link
 
 
 def load_model(robot):
-    """The validated robot named by a shipped name or a YAML path (see kingen.model). Every
+    """The validated robot named by a shipped name or a YAML path (see kingen.robot.model). Every
     command that computes starts here, so numpy's floating-point warnings are turned off
     here too: kingen judges NaN and inf itself, and the warnings would only be noise."""
     import numpy as np
 
-    from ..model import load_robot
+    from ..robot.model import load_robot
 
     np.seterr(all="ignore")
     return load_robot(robot)

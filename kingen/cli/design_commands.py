@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
-from ..executors import checked_scheduler
+from ..runtime.executors import checked_scheduler
 from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model, say
 
 
@@ -39,12 +39,12 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     report.html; checkpoints every iteration.
 
     Exit 0 with a design, 2 bad input, 130 when stopped (the checkpoint continues it: --resume)."""
-    from .. import optimize as search
-    from ..executors import executor
-    from ..design import Problem, design_yaml, optimized_name
-    from ..design_report import convergence, polar_comparison, report_html
-    from ..files import default_out_dir, write_atomic
-    from ..robot_file import read_robot_file
+    from ..design import search
+    from ..runtime.executors import executor
+    from ..design.problem import Problem, design_yaml, optimized_name
+    from ..design.report import convergence, polar_comparison, report_html
+    from ..runtime.files import default_out_dir, write_atomic
+    from ..robot.reading import read_robot_file
 
     model = load_model(robot)
     data, lines, _ = read_robot_file(model.path)

@@ -10,8 +10,8 @@ from pathlib import Path
 import click
 
 from ..defaults import MAX_PROCESSES, TARGETS
-from ..executors import checked_scheduler
-from ..text import counted
+from ..runtime.executors import checked_scheduler
+from ..runtime.text import counted
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, cli, host_target, in_child,
                      load_model, plugin_options, processes_text, routine_to_check, say, calibration_options)
 
@@ -95,8 +95,8 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
     that follows the DELMIA interface, hand-written ones included. Plugin code runs in a
     child process, so a routine that crashes, exits or hangs becomes a failed check.
     """
-    from ..files import write_atomic
-    from ..snapshot import load as load_snapshot
+    from ..runtime.files import write_atomic
+    from ..verify.snapshot import load as load_snapshot
     from ..verify import VerifyOptions, verify_library
 
     if processes is not None and scheduler is not None:
@@ -111,11 +111,11 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
         report = verify_library(model, library, routine, options, progress, host=host)
     print_report(report, library)
     if json_path is not None:
-        from ..report import json_text
+        from ..verify.report import json_text
 
         write_atomic(json_path, json_text(report, options))
     if junit_path is not None:
-        from ..report import junit_xml
+        from ..verify.report import junit_xml
 
         write_atomic(junit_path, junit_xml(report))
     return 0 if report.passed else EXIT_FAILED
@@ -139,9 +139,9 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
 
     A --floor is verified first (on a few thousand poses, as verify --source would) and refused
     when it fails a check: only a correct floor gives a meaningful ratio."""
-    from ..bench import Figures, verify_floor
-    from ..files import write_atomic
-    from ..wire import typed
+    from ..verify.bench import Figures, verify_floor
+    from ..runtime.files import write_atomic
+    from ..runtime.wire import typed
 
     model = load_model(robot)
     seen = host.as_seen(model)
@@ -190,7 +190,7 @@ def golden_record(robot, library, source, routine, samples, seed, output, host, 
     A count whose file verify --golden would refuse as too large is refused before anything
     is computed. The entries are written as they are computed, a chunk at a time (memory
     does not grow with --samples); OUTPUT is replaced only by the complete file."""
-    from ..snapshot import check_fits, recording, t6_chunks
+    from ..verify.snapshot import check_fits, recording, t6_chunks
     from ..verify import chunk_size
 
     model = load_model(robot)
@@ -198,7 +198,7 @@ def golden_record(robot, library, source, routine, samples, seed, output, host, 
     if library is None and source is None:
         if routine is not None:
             raise click.UsageError("--routine needs --plugin or --source")
-        from ..reference import solve as reference_solve
+        from ..kinematics.reference import solve as reference_solve
 
         recorded_from = "the reference"
         check_fits(model, samples, recorded_from, seed)
@@ -223,7 +223,7 @@ def info(library):
     """What a compiled library says about itself (read from its bytes, never loaded).
 
     Its build information is a label the library carries, not a proof of who built it."""
-    from ..library_info import binary_format, build_info
+    from ..runtime.library_info import binary_format, build_info
 
     details = build_info(library)
     say(f"library: {library}")
@@ -246,7 +246,7 @@ def info(library):
 def _record_job(channel, host, model, library, routine, samples, seed, chunk):
     """In a child process: the routine's (solutions, warnings) for a snapshot's poses, sent
     chunk by chunk as they are computed."""
-    from ..snapshot import t6_chunks
+    from ..verify.snapshot import t6_chunks
 
     plugin = host.load(library, routine, model)
     channel.stage("the routine's calls")
@@ -258,8 +258,8 @@ def _chunk_decoder(poses):
     """Decodes each chunk _record_job sends into (its poses, their Calls), the poses drawn
     here again from the iterator ``poses``; WireError for a chunk of another length or one
     more than was drawn."""
-    from ..routine import calls_decoder
-    from ..wire import WireError
+    from ..kinematics.routine import calls_decoder
+    from ..runtime.wire import WireError
 
     def decode(value):
         t6 = next(poses, None)
@@ -270,8 +270,8 @@ def _chunk_decoder(poses):
 
 
 def _bench_job(channel, model, host, library, routine, calls, floor):
-    from ..bench import ROUNDS, benchmark, compare
-    from ..isolation import keep_freed_memory
+    from ..verify.bench import ROUNDS, benchmark, compare
+    from ..runtime.isolation import keep_freed_memory
 
     keep_freed_memory()  # as verify's child does, so that its poses per second are verify's
     plugin = host.load(library, routine, model)
@@ -315,7 +315,7 @@ def print_report(report, library):
             else f"  {check.name}: not exercised: {check.detail}")
         for diagnosis in check.diagnoses:
             say(f"         diagnosis: {diagnosis}")
-    from ..report import statistics_lines
+    from ..verify.report import statistics_lines
 
     for line in statistics_lines(report):
         say(f"  {line}")

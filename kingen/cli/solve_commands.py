@@ -11,7 +11,7 @@ import click
 
 from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
 from ..errors import KingenError
-from ..text import shorten
+from ..runtime.text import shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
                      _t6, calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check,
                      say, solve_job)
@@ -20,7 +20,7 @@ from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _o
 @cli.command("list")
 def list_robots():
     """The shipped robots with DOF, postures and limb models."""
-    from ..model import shipped_robots
+    from ..robot.model import shipped_robots
 
     rows = [("robot", "dof", "postures", "limbs", "description")]
     for name in shipped_robots():
@@ -49,10 +49,10 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
     import numpy as np
 
-    from ..files import write_atomic
+    from ..runtime.files import write_atomic
     from ..conventions import branch_of_posture, t6_from_pose
-    from ..reference import solve as reference_solve
-    from ..routine import calls_decoder
+    from ..kinematics.reference import solve as reference_solve
+    from ..kinematics.routine import calls_decoder
 
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
@@ -111,8 +111,8 @@ def _predict_switch(model, t6, expected, switch, scale, units):
     import numpy as np
 
     from ..conventions import pose_from_t6, wrap_angle
-    from ..forward import assemblies
-    from ..routine import WARNINGS
+    from ..kinematics.forward import assemblies
+    from ..kinematics.routine import WARNINGS
 
     first, second = switch
     if max(first, second) >= model.postures:
@@ -185,8 +185,8 @@ def fk(robot, joints, more_joints, near, json_path, search):
     Exit 0 with at least one pose, 1 when none is found (the best residual is shown)."""
     import numpy as np
 
-    from ..files import write_atomic
-    from ..forward import assemblies, best_residual
+    from ..runtime.files import write_atomic
+    from ..kinematics.forward import assemblies, best_residual
 
     model = load_model(robot)
     try:
@@ -251,11 +251,11 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
     and a self-contained report.html."""
     import time
 
-    from ..analysis import Settings
-    from ..analysis import analyze as run_analysis
-    from ..collision import model_problem
-    from ..files import default_out_dir, write_atomic
-    from ..figures import figures, report_html
+    from ..design.analysis import Settings
+    from ..design.analysis import analyze as run_analysis
+    from ..kinematics.collision import model_problem
+    from ..runtime.files import default_out_dir, write_atomic
+    from ..design.figures import figures, report_html
 
     model = load_model(robot)
     if posture is not None and posture >= model.postures:
@@ -315,6 +315,6 @@ def _steps(names):
 
 
 def _warning_name(code):
-    from ..routine import WARNING_NAMES
+    from ..kinematics.routine import WARNING_NAMES
 
     return WARNING_NAMES.get(int(code), f"UNWRITTEN({code})")

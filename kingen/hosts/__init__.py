@@ -1,5 +1,5 @@
 """The hosts a robot file can be built for, found through this registry as limb models are
-through :mod:`kingen.limbs`.
+through :mod:`kingen.robot.limbs`.
 
 ``HOSTS`` maps each ``--host`` name to a :class:`~kingen.hosts.base.Host` instance.
 ``register`` adds one at run time (tests do, with a toy host); ``get_host`` is how every
@@ -7,6 +7,7 @@ command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``) and Linu
 """
 
 from ..errors import KingenError
+from ..robot.model import NAME_CHECKS
 from .base import BuildResult, Host, LoadedRoutine
 from .delmia import DelmiaHost
 from .linuxcnc import LinuxcncHost
@@ -16,8 +17,10 @@ HOSTS = {}
 
 
 def register(host):
-    """Add ``host`` (a Host instance) under ``host.name``; returns it."""
+    """Add ``host`` (a Host instance) under ``host.name``, and its name check to what reading
+    a robot file asks (kingen.robot.model.NAME_CHECKS); returns it."""
     HOSTS[host.name] = host
+    NAME_CHECKS[host.name] = host.name_problem
     return host
 
 
@@ -25,6 +28,7 @@ def unregister(host):
     """Remove ``host`` again."""
     if HOSTS.get(host.name) is host:
         del HOSTS[host.name]
+        del NAME_CHECKS[host.name]
 
 
 def get_host(name=DEFAULT_HOST):

@@ -3,7 +3,7 @@ reference, verify) and a program that runs a generated routine (DELMIA, a contro
 
 A host renders and builds a routine for a robot, builds a hand-written source, loads a
 compiled routine (generated or hand-written) as a :class:`LoadedRoutine` whose ``call``
-answers a batch of T6 with :class:`kingen.routine.Calls` in kingen's units, names the verify
+answers a batch of T6 with :class:`kingen.kinematics.routine.Calls` in kingen's units, names the verify
 checks it runs, and writes a package. Hosts are registered in :mod:`kingen.hosts`; nothing
 outside a host's own package names its files, symbols or checks (docs/architecture.md).
 """
@@ -14,7 +14,7 @@ from typing import ClassVar, Optional, Protocol
 
 from ..defaults import DEFAULT_TIMEOUT
 from ..errors import KingenError
-from ..files import default_out_dir
+from ..runtime.files import default_out_dir
 
 
 @dataclass(frozen=True)
@@ -109,12 +109,12 @@ class Host:
     def load(self, library, routine, robot) -> LoadedRoutine:
         """Load ``routine`` of ``library`` for ``robot`` (as :meth:`as_seen` gives it) in this
         process (runs the library's constructors: callers do it in a child process,
-        :mod:`kingen.isolation`)."""
+        :mod:`kingen.runtime.isolation`)."""
         raise NotImplementedError
 
     def as_seen(self, robot):
         """``robot`` as this host's routines answer it (every posture by default; a host with
-        one answer gives :func:`kingen.one_posture.at_posture`). What verify compares with."""
+        one answer gives :func:`kingen.robot.one_posture.at_posture`). What verify compares with."""
         return robot
 
     def routine_name(self, robot) -> str:

@@ -1,33 +1,15 @@
-"""The limb models: one module and one template partial each, found through this registry.
+"""Deprecated import path: the limb models and their registry are :mod:`kingen.robot.limbs`
+(``kingen.limbs.register``, ``kingen.limbs.base.LimbModel`` and the rest keep working here,
+with a DeprecationWarning, for code written against the old layout)."""
 
-``MODELS`` maps each YAML tag (``model: rail``) to its class. Everything that works per
-model (schema, reference solver, C tables, setup sheet words, diagnoses, verify's
-conditioning bound) asks the class; nothing else in kingen names a model. ``register``
-adds a model at run time (tests do, with a toy model); the robot-file schema follows
-the registry's content (:func:`kingen.model.robot_file_schema`).
-"""
+import sys
+import warnings
 
-from .base import LimbModel, LimbSolution, c_double, c_vector, model_name, partial_path
-from .crank import Crank
-from .leg import Leg
-from .rail import Rail
+from ..robot.limbs import *  # noqa: F401,F403  (the same names)
+from ..robot.limbs import __all__  # noqa: F401
+from ..robot.limbs import base, crank, leg, rail
 
-MODELS = {}
+for _module in (base, crank, leg, rail):
+    sys.modules[f"{__name__}.{_module.__name__.rpartition('.')[2]}"] = _module
 
-
-def register(cls):
-    """Add limb model class ``cls`` (a LimbModel subclass with a ``model`` literal)."""
-    MODELS[model_name(cls)] = cls
-    return cls
-
-
-def unregister(cls):
-    """Remove limb model class ``cls`` again."""
-    MODELS.pop(model_name(cls), None)
-
-
-for _cls in (Leg, Rail, Crank):
-    MODELS[model_name(_cls)] = _cls
-
-__all__ = ["MODELS", "LimbModel", "LimbSolution", "register", "unregister", "c_double", "c_vector", "model_name", "partial_path",
-           "Leg", "Rail", "Crank"]
+warnings.warn("kingen.limbs is now kingen.robot.limbs; import it from there", DeprecationWarning, stacklevel=2)

@@ -8,7 +8,7 @@ warning itself is compared as everywhere). A warning may differ only inside the 
 tolerance band (``WARNING_BAND``): where the reference's decision quantity (a
 normalised radicand or a joint value) lies that close to its threshold, both
 answers are right within floating-point rounding. Each clause is a named check;
-failed value checks carry diagnoses (:mod:`kingen.diagnose`).
+failed value checks carry diagnoses (:mod:`kingen.verify.diagnose`).
 
 This module orchestrates only: the poses are drawn and compared in chunks over processes
 by :mod:`kingen.verify.processes`, tallied by :mod:`kingen.verify.tally`, and judged by the
@@ -17,7 +17,7 @@ which checks it gets (its ``checks`` tuple), verify runs them in that order.
 
 ``verify`` runs in the calling process (for tests and kingen's own code);
 ``verify_library`` loads and verifies a library in a child process
-(:mod:`kingen.isolation`), so that a crash, an ``exit()`` or a hang in foreign code
+(:mod:`kingen.runtime.isolation`), so that a crash, an ``exit()`` or a hang in foreign code
 becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
@@ -25,10 +25,10 @@ import functools
 import time
 
 from ..errors import KingenError, PluginDefect
-from ..isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
-from ..poses import chunk_bounds
-from ..report import Report
-from ..wire import typed
+from ..runtime.isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
+from ..kinematics.poses import chunk_bounds
+from .report import Report
+from ..runtime.wire import typed
 from .checks import PHASES, Check, Context, by_need
 from .options import VerifyOptions, report_tolerance_mm, value_tolerance_mm
 from .boundaries import boundary_poses
@@ -120,7 +120,7 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
 
 REPORT_DECODERS = {"result": functools.partial(typed, Report), "check": functools.partial(typed, Check),
                    "progress": functools.partial(typed, int)}
-"""What verify's child sends, checked field by field before use (kingen.wire): the report is
+"""What verify's child sends, checked field by field before use (kingen.runtime.wire): the report is
 only data here, and its verdict (Report.passed) is computed from its checks in this process."""
 
 

@@ -11,7 +11,7 @@ verification region. So rays are cast from the verification home, in directions 
 from the region's half-widths, out to ``REACH`` times them; where the reference's warning of
 a posture turns into the warning sought between two steps, the boundary is found by
 bisection, and a pose just before and one just after it join the sample, each outside the
-tolerance band in which routine and reference may disagree (mm, degrees; kingen.poses).
+tolerance band in which routine and reference may disagree (mm, degrees; kingen.kinematics.poses).
 """
 
 import math
@@ -19,8 +19,8 @@ import math
 import numpy as np
 
 from ..conventions import t6_from_pose
-from ..reference import solve
-from ..routine import WARNINGS, warnings_to_exercise
+from ..kinematics.reference import solve
+from ..kinematics.routine import WARNINGS, warnings_to_exercise
 from .tally import warnings_in_band
 
 RAYS = 64

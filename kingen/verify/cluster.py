@@ -1,5 +1,5 @@
 """verify's chunks on a Dask cluster (``--scheduler ADDRESS``), through the executor the
-design search uses (:mod:`kingen.executors`).
+design search uses (:mod:`kingen.runtime.executors`).
 
 Each chunk is one job: a worker loads the library (its bytes travel with the job, so the
 workers need kingen, not the build folder; loaded once per worker process), draws the
@@ -18,8 +18,8 @@ from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..executors import executor
-from ..poses import PoseStream
+from ..runtime.executors import executor
+from ..kinematics.poses import PoseStream
 from . import processes
 
 AHEAD = 4

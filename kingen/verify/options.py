@@ -7,7 +7,7 @@ from typing import Optional
 import numpy as np
 
 from ..defaults import DEFAULT_TIMEOUT
-from ..routine import VALUE_TOLERANCE_MM
+from ..kinematics.routine import VALUE_TOLERANCE_MM
 
 RELATIVE_TOLERANCE = 256 * np.finfo(float).eps
 """For robots larger than about 17 m the prismatic bound grows with size: 256 eps x size."""
@@ -27,10 +27,10 @@ class VerifyOptions:
     link_offsets: tuple = None
     timeout: float = DEFAULT_TIMEOUT
     snapshot: object = None
-    """A loaded kingen.snapshot.Snapshot to check the routine against (check ``snapshot``)."""
+    """A loaded kingen.verify.snapshot.Snapshot to check the routine against (check ``snapshot``)."""
     processes: Optional[int] = 1
     """Processes comparing the sampled poses: 1 keeps everything in the calling process, more
-    fork the others (compared_chunks); None: comparing_processes(), one per core."""
+    fork the others (compared_chunks); None: kingen.runtime.cores.usable_cores(), one per core."""
     scheduler: Optional[str] = None
     """A Dask scheduler's address (tcp://host:8786): the poses are compared by its cluster's
     workers instead (kingen.verify.cluster; ``processes`` does not apply)."""

@@ -12,14 +12,14 @@ from pathlib import Path
 import numpy as np
 
 from ..conventions import t6_from_pose
-from ..defaults import MAX_PROCESSES
-from ..household import die_with_parent
-from ..isolation import captured_output
-from ..poses import PoseStream
-from ..reference import CERTIFY_PROBE_POSES, certificate_settles, solve
-from ..report import Report
-from ..routine import VALUE_TOLERANCE_RAD, WARNINGS
-from ..singularity import PACKED, partial_sum_split
+from ..runtime.cores import usable_cores
+from ..runtime.household import die_with_parent
+from ..runtime.isolation import captured_output
+from ..kinematics.poses import PoseStream
+from ..kinematics.reference import CERTIFY_PROBE_POSES, certificate_settles, solve
+from .report import Report
+from ..kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ..kinematics.singularity import PACKED, partial_sum_split
 from .options import value_tolerance_mm
 from .tally import Tally, accumulate, compares_by_branch
 
@@ -50,45 +50,12 @@ def chunk_size(robot):
     return min(MAX_CHUNK_POSES, max(1000, CHUNK_ENTRIES // entries))
 
 
-CPU_QUOTA_FILES = (("/sys/fs/cgroup/cpu.max", None),
-                   ("/sys/fs/cgroup/cpu/cpu.cfs_quota_us", "/sys/fs/cgroup/cpu/cpu.cfs_period_us"))
-"""Where Linux control groups (v2, then v1) state a container's CPU time quota and period."""
-
-
-def comparing_processes():
-    """Processes a verification compares with by default: one per core this process may run
-    on, no more than its container's CPU quota allows, at most MAX_PROCESSES."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # not Linux
-        cores = os.cpu_count() or 1
-    quota = cpu_quota()
-    if quota is not None:
-        cores = min(cores, quota)
-    return max(1, min(MAX_PROCESSES, cores))
-
-
-def cpu_quota():
-    """The cores a control group's CPU quota amounts to (rounded up), or None without one."""
-    for quota_file, period_file in CPU_QUOTA_FILES:
-        try:
-            words = Path(quota_file).read_text().split()
-            if period_file is not None:
-                words.append(Path(period_file).read_text().strip())
-            quota, period = float(words[0]), float(words[1])
-        except (OSError, ValueError, IndexError):  # no such file, "max" (v2) or unreadable
-            continue
-        if quota > 0 and period > 0:
-            return math.ceil(quota / period)
-    return None
-
-
 def process_count(options, chunks):
     """How many processes compare ``chunks`` chunks: ``options.processes`` (None:
-    comparing_processes()), at most one per chunk; one where processes cannot be forked."""
+    usable_cores()), at most one per chunk; one where processes cannot be forked."""
     if "fork" not in multiprocessing.get_all_start_methods():
         return 1
-    return max(1, min(chunks, comparing_processes() if options.processes is None else options.processes))
+    return max(1, min(chunks, usable_cores() if options.processes is None else options.processes))
 
 
 def _taker(number, processes):
@@ -157,7 +124,7 @@ def compared_chunks(robot, calibrated, plugin, options, bounds, processes, phase
     killer, say), its chunks are drawn and compared here again, so that a crash is named by
     this process's stage as always; if they run to the end here, (first index, pose count,
     exit code) of the chunk it died in is appended to ``deaths``, for the ``crash`` check to
-    tell which of those it was (kingen.isolation.killed_from_outside)."""
+    tell which of those it was (kingen.runtime.isolation.killed_from_outside)."""
     set_chunk_job(robot, calibrated, plugin, options)
     stream = PoseStream(robot, options.seed)
     helpers = _Helpers(robot, options, bounds, processes) if processes > 1 else None

@@ -8,8 +8,8 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..conventions import joint_errors
-from ..routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
-from ..singularity import branch_table, branch_values, posture_values, representative_postures
+from ..kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
+from ..kinematics.singularity import branch_table, branch_values, posture_values, representative_postures
 from .options import CONDITIONING_FACTOR
 
 DIAGNOSIS_POSES = 2000
@@ -209,7 +209,7 @@ def compared_columns(robot, calls, expected):
     """The _Columns of one chunk: by branch when the routine allows it and the robot has more
     than two postures, else by posture. Whether it allows it, and its values by branch, come
     from the host's summary of the calls where it made one (Calls.repeats), else from
-    _repeats_branches and kingen.singularity.branch_values: the same test and values."""
+    _repeats_branches and kingen.kinematics.singularity.branch_values: the same test and values."""
     reference_solves = expected.warnings != UNREACHABLE
     same_reach = (np.array_equal(calls.warnings != UNREACHABLE, reference_solves)
                   and np.array_equal(reference_solves, np.broadcast_to(reference_solves[:, :1], reference_solves.shape)))

@@ -10,12 +10,12 @@ from pathlib import Path
 import cffi
 import numpy as np
 
-from kingen.compiler import compile_c, compiler_command
+from kingen.runtime.compiler import compile_c, compiler_command
 from kingen.errors import KingenError
-from kingen.files import default_out_dir, write_atomic, write_folder
+from kingen.runtime.files import default_out_dir, write_atomic, write_folder
 from kingen.hosts import BuildResult, Host
-from kingen.render import robot_view, template
-from kingen.routine import Calls, WARNINGS
+from kingen.hosts.render import robot_view, template
+from kingen.kinematics.routine import Calls, WARNINGS
 from kingen.verify.checks import SHARED, Check, VerifyCheck
 
 TEMPLATES = Path(__file__).parent

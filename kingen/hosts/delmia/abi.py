@@ -3,10 +3,10 @@
 The stand-in ``shlibdefs.h``, the generated plugin's prototypes and the cffi
 declarations used to load plugins are all rendered from these lists, so the C
 side and the Python side cannot drift apart. Values are those of the vendor
-header (docs/delmia-abi.md). The warnings are kingen's status codes (:mod:`kingen.routine`).
+header (docs/delmia-abi.md). The warnings are kingen's status codes (:mod:`kingen.kinematics.routine`).
 """
 
-from ...routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNINGS
+from ...kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNINGS
 
 HEADER_VERSION = 1
 """Bumped when the stand-in header changes in a way generated sources rely on."""

@@ -1,7 +1,7 @@
 """Building DELMIA plugins: compiled exactly as for DELMIA, against the stand-in
 ``shlibdefs.h``, with the host symbols (``DNBVMAP_*``) left undefined for the host process
 to resolve. The stand-in header and the host emulator library live in kingen's cache folder
-(:func:`kingen.files.cache_dir`) keyed by their content and compiler. A plugin build is
+(:func:`kingen.runtime.files.cache_dir`) keyed by their content and compiler. A plugin build is
 skipped when its folder already holds the same source built with the same compiler and
 flags (``.kingen-build-<target>.json``).
 """
@@ -12,11 +12,11 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from ... import __version__
-from ...compiler import CompileError, compile_c, compiler_command
+from ...defaults import VERSION
+from ...runtime.compiler import CompileError, compile_c, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
 from ...errors import KingenError, refuse_special_file
-from ...files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
+from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
 from .pe import dll_exports
 from .render import host_source, render, render_header, source_name
@@ -33,7 +33,7 @@ def host_support(timeout=DEFAULT_TIMEOUT):
     """(include folder with shlibdefs.h, host emulator library), built once per content."""
     header, source = render_header(), host_source()
     command = compiler_command()
-    folder = cache_dir() / f"host-{digest(__version__, header, source, *command)[:16]}"
+    folder = cache_dir() / f"host-{digest(VERSION, header, source, *command)[:16]}"
     include, library = folder / "include", folder / "libkingen_host.so"
 
     def make():
@@ -58,7 +58,7 @@ def windows_host_import_library(timeout=DEFAULT_TIMEOUT):
     """An import library standing in for DELMIA's: the host emulator cross-built as a DLL."""
     include, _ = host_support(timeout)
     command = mingw_command()
-    folder = cache_dir() / f"host-windows-{digest(__version__, render_header(), host_source(), *command)[:16]}"
+    folder = cache_dir() / f"host-windows-{digest(VERSION, render_header(), host_source(), *command)[:16]}"
     import_library = folder / "libkingen_host.dll.a"
 
     def make():
@@ -96,7 +96,7 @@ def build_plugin(robot, out_dir=None, defines=(), target="linux", timeout=DEFAUL
         flags = [*STRICT_C89, *SHARED_FLAGS, f"-I{include}", *(f"-D{d}" for d in defines)]
         extra_sources = []
     source, library = out_dir / name, out_dir / library_name(robot, target)
-    key = digest(__version__, text, *command, *flags)
+    key = digest(VERSION, text, *command, *flags)
     stamp = out_dir / f".kingen-build-{target}.json"
     if (read_stamp(stamp, "key") == key and read_stamp(stamp, "library_sha256") == file_digest(library)
             and file_digest(source) == hashlib.sha256(text.encode()).hexdigest()):
@@ -116,7 +116,7 @@ def build_plugin(robot, out_dir=None, defines=(), target="linux", timeout=DEFAUL
         write_atomic(source, text)
         write_atomic(library, data, executable=True)
     write_atomic(stamp, json.dumps({"key": key, "library_sha256": hashlib.sha256(data).hexdigest(),
-                                    "robot": robot.name, "kingen": __version__}) + "\n")
+                                    "robot": robot.name, "kingen": VERSION}) + "\n")
     return BuildResult(source, library, robot.routine, compiled=True)
 
 

@@ -9,7 +9,7 @@ routine never wrote stays visible, and placed against inaccessible pages, so a w
 past (or far before) them faults and is reported per call instead of corrupting memory.
 
 Loading runs the library's constructors and every call runs foreign code: the
-command line does both only in a child process (:mod:`kingen.isolation`).
+command line does both only in a child process (:mod:`kingen.runtime.isolation`).
 """
 
 import shutil
@@ -21,8 +21,8 @@ import cffi
 import numpy as np
 
 from ...errors import KingenError, PluginDefect, refuse_special_file
-from ...routine import Calls, check_routine_name
-from ...singularity import branch_table, representative_postures
+from ...kinematics.routine import Calls, check_routine_name
+from ...kinematics.singularity import branch_table, representative_postures
 from . import abi
 from .build import host_support
 from .checks import CHECKS

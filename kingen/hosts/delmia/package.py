@@ -10,10 +10,10 @@ from pathlib import Path
 
 from ...conventions import branch_of_posture
 from ...defaults import DEFAULT_TIMEOUT, TARGETS
-from ...files import write_atomic, write_folder
-from ...placement import branch_words, frames
-from ...routine import warnings_to_exercise
-from ...schema import dialog_label
+from ...runtime.files import write_atomic, write_folder
+from ...robot.placement import branch_words, frames
+from ...kinematics.routine import warnings_to_exercise
+from ...robot.schema import dialog_label
 from . import abi
 from .build import WINDOWS_DEFINES, build_plugin, library_name
 from .render import delmia_template, render, view_model
@@ -29,7 +29,7 @@ WARNING_MEANINGS = {
 }
 """What each warning means from a kingen routine, for the setup sheet (order: precedence last);
 the sheet lists WARN_GOOD_SOLUTION and the warnings the robot's routine can give
-(:func:`kingen.routine.warnings_to_exercise`)."""
+(:func:`kingen.kinematics.routine.warnings_to_exercise`)."""
 
 
 def sheet_view(robot, target):
@@ -114,7 +114,7 @@ def render_package(robot, target):
 
 
 def write_package(robot, out_dir, target, timeout=DEFAULT_TIMEOUT):
-    """Write the package folder ``out_dir``, whole or not at all (:func:`kingen.files.write_folder`:
+    """Write the package folder ``out_dir``, whole or not at all (:func:`kingen.runtime.files.write_folder`:
     an existing folder is replaced only if it is empty or kingen wrote it); for linux also
     compile and add lib<name>.so. Returns the written paths."""
     files = {name: text.encode() for name, text in render_package(robot, target).items()}

@@ -1,13 +1,13 @@
 """Rendering DELMIA's files: robot -> the plugin source, the stand-in ``shlibdefs.h`` and
 the host emulator, from this host's templates and the shared view-model
-(:func:`kingen.render.robot_view`). Pure: nothing is written here.
+(:func:`kingen.hosts.render.robot_view`). Pure: nothing is written here.
 """
 
 from pathlib import Path
 
-from ... import __version__
-from ...limbs import c_double
-from ...render import robot_view, template
+from ...defaults import VERSION
+from ...robot.limbs import c_double
+from ..render import robot_view, template
 from . import abi
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -15,7 +15,7 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 
 
 def delmia_template(name):
-    """The template ``name`` of this host (kingen.render.template in TEMPLATES)."""
+    """The template ``name`` of this host (kingen.hosts.render.template in TEMPLATES)."""
     return template(name, TEMPLATES)
 
 
@@ -45,7 +45,7 @@ def render(robot):
 def render_header():
     """The stand-in ``shlibdefs.h`` text, from :mod:`kingen.hosts.delmia.abi`."""
     return delmia_template("shlibdefs.h.j2").render(
-        version=__version__,
+        version=VERSION,
         header_version=abi.HEADER_VERSION,
         warnings=list(abi.WARNINGS.items()),
         warning_aliases=list(abi.WARNING_ALIASES.items()),

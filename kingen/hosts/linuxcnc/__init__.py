@@ -36,7 +36,7 @@ class LinuxcncHost(Host):
     def as_seen(self, robot):
         """The robot at its working posture; a translating platform without rotations (LinuxCNC's
         A B C pass through to other joints), so verify draws its poses without them."""
-        from ...one_posture import at_posture
+        from ...robot.one_posture import at_posture
         from .render import check_robot, translating
 
         check_robot(robot)

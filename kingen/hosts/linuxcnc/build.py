@@ -7,11 +7,11 @@ import os
 import tempfile
 from pathlib import Path
 
-from ... import __version__
-from ...compiler import CompileError, compile_c, compiler_command
+from ...defaults import VERSION
+from ...runtime.compiler import CompileError, compile_c, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
 from ...errors import KingenError, refuse_special_file
-from ...files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
+from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
 from .render import harness_source, module_name, render, source_name
 
@@ -39,7 +39,7 @@ def default_dir(robot):
 def harness(timeout=DEFAULT_TIMEOUT):
     """The HAL stand-in library (libkingen_hal.so), built once per content and compiler."""
     source, command = harness_source(), compiler_command()
-    folder = cache_dir() / f"linuxcnc-hal-{digest(__version__, source, *command)[:16]}"
+    folder = cache_dir() / f"linuxcnc-hal-{digest(VERSION, source, *command)[:16]}"
     library = folder / "libkingen_hal.so"
 
     def make():
@@ -59,7 +59,7 @@ def build_module(robot, out_dir=None, units="mm", timeout=DEFAULT_TIMEOUT):
     command = compiler_command()
     flags = [*MODULE_FLAGS, f"-I{linuxcnc_headers()}"]
     source, library = out_dir / name, out_dir / f"{module_name(robot)}.so"
-    key = digest(__version__, text, *command, *flags)
+    key = digest(VERSION, text, *command, *flags)
     stamp = out_dir / ".kingen-build-linuxcnc.json"
     if read_stamp(stamp, "key") == key and read_stamp(stamp, "library_sha256") == file_digest(library) \
             and file_digest(source) == digest(text):
@@ -76,7 +76,7 @@ def build_module(robot, out_dir=None, units="mm", timeout=DEFAULT_TIMEOUT):
         write_atomic(source, text)
         write_atomic(library, data, executable=True)
     write_atomic(stamp, json.dumps({"key": key, "library_sha256": file_digest(library), "robot": robot.name,
-                                    "kingen": __version__}) + "\n")
+                                    "kingen": VERSION}) + "\n")
     return BuildResult(source, library, module_name(robot), compiled=True)
 
 

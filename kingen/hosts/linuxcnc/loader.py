@@ -17,7 +17,7 @@ import numpy as np
 
 from ...conventions import pose_from_t6
 from ...errors import KingenError, PluginDefect, refuse_special_file
-from ...routine import WARNINGS, Calls
+from ...kinematics.routine import WARNINGS, Calls
 from .build import harness
 from .render import translating
 from .checks import CHECKS
@@ -72,7 +72,7 @@ class Module:
         refuse_special_file(path)
         if not path.is_file():
             raise KingenError(f"{path}: no such module")
-        # in a child (kingen.isolation.run_in_child) the temporary folder is the parent's to remove,
+        # in a child (kingen.runtime.isolation.run_in_child) the temporary folder is the parent's to remove,
         # so the copy goes even when the module's constructor never lets the child get to rmtree below
         folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))
         copy = folder / path.name  # a fresh copy: each load gets the module's own static state

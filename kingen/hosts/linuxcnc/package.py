@@ -8,14 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ... import __version__
+from ...defaults import VERSION
 from ...conventions import t6_from_pose
 from ...defaults import DEFAULT_TIMEOUT
-from ...files import write_atomic, write_folder
-from ...placement import frames
-from ...reference import solve
-from ...render import template
-from ...routine import WARNINGS, warnings_to_exercise
+from ...runtime.files import write_atomic, write_folder
+from ...robot.placement import frames
+from ...kinematics.reference import solve
+from ..render import template
+from ...kinematics.routine import WARNINGS, warnings_to_exercise
 from .build import build_module
 from ...units import LENGTH_UNITS, robot_in_units
 from .render import TEMPLATES, module_name, source_name, view_model
@@ -38,7 +38,7 @@ STATUS_WORDS = {"WARN_GOOD_SOLUTION": "good", "WARN_JOINT_LIMITS_EXCEEDED": "a j
 def sheet_view(robot, units="mm"):
     """What the snippets and the sheet show, in the machine's ``units``: the module view plus
     the joints' homes and limits, the frames placed by the limbs' joints, and only the
-    statuses the robot's module can give (:func:`kingen.routine.warnings_to_exercise`)."""
+    statuses the robot's module can give (:func:`kingen.kinematics.routine.warnings_to_exercise`)."""
     view = view_model(robot, units)
     home = np.asarray(robot.verification.home, dtype=float)
     joints = solve(robot, t6_from_pose(home[None]), indices=False).joints[0, :, robot.working_posture]
@@ -60,7 +60,7 @@ def sheet_view(robot, units="mm"):
     statuses = sorted((WARNINGS[name], STATUS_WORDS[name]) for name in can_give)
     refused = [str(code) for code, _ in statuses if code in (WARNINGS["WARN_UNREACHABLE"], WARNINGS["WARN_SINGULAR_SOLUTION"])]
     return {**view, "ini_joints": ini, "frames": frames(robot, units),
-            "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": __version__,
+            "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": VERSION,
             "joint_count": robot.dof,
             "home_text": " ".join(_exact(value) for value in (*position, *home[3:])), "description": robot.description}
 

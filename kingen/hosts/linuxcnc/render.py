@@ -1,15 +1,15 @@
 """Rendering a LinuxCNC kinematics module: robot -> ``<name>kins.c``, from this host's
-template, the shared view-model (:func:`kingen.render.robot_view`) and the limb models'
+template, the shared view-model (:func:`kingen.hosts.render.robot_view`) and the limb models'
 partials (with their force lines and transmissions, for the forward Jacobian). Pure."""
 
 import math
 from pathlib import Path
 
 from ...errors import KingenError
-from ...limbs import c_double
-from ...placement import branch_words
-from ...render import build_info, gram_lines, robot_view, schur_test_lines, template
-from ...routine import SINGULAR_TOLERANCE
+from ...robot.limbs import c_double
+from ...robot.placement import branch_words
+from ..render import build_info, gram_lines, robot_view, schur_test_lines, template
+from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...units import LENGTH_UNITS, robot_in_units
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"

@@ -3,7 +3,7 @@
 A check is a :class:`VerifyCheck`: its ``name`` in the reports, what it ``needs`` (one of
 ``NEEDS``: the library file, the loaded routine, the calls on the sampled poses, the
 compared poses, the robot's golden values, a snapshot), and ``run(context)`` returning
-:class:`~kingen.report.Check` results (a verdict, the detail behind it, diagnoses). verify
+:class:`~kingen.verify.report.Check` results (a verdict, the detail behind it, diagnoses). verify
 runs a routine's checks (its ``checks`` tuple, which its host composes from ``SHARED`` and
 its own) in that order, each once what it needs is there; adding or removing a check is one
 module and one entry in a host's tuple (:mod:`kingen.verify.checks`).
@@ -12,7 +12,7 @@ module and one entry in a host's tuple (:mod:`kingen.verify.checks`).
 from dataclasses import dataclass
 from typing import Any, ClassVar, Optional
 
-from ...report import Check  # noqa: F401  (the result every check returns)
+from ..report import Check  # noqa: F401  (the result every check returns)
 
 NEEDS = ("library", "routine", "sampled calls", "compared poses", "golden values", "snapshot")
 """What a check can need, in the order verify has it: ``library`` the file (read in kingen's

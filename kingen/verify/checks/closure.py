@@ -2,7 +2,7 @@
 the limb (:func:`kingen.verify.tally.closure_error`): catches a formula mistake that the
 routine and the reference share."""
 
-from ...report import not_exercised
+from ..report import not_exercised
 from .base import Check, VerifyCheck
 
 CLOSURE_TOLERANCE = 1e-9

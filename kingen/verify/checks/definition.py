@@ -1,10 +1,10 @@
 """``definition``: whether the library says it was built from this robot file (the sha256 its
-build information carries; :mod:`kingen.library_info`), read from its bytes, never loaded.
+build information carries; :mod:`kingen.runtime.library_info`), read from its bytes, never loaded.
 That information is a label the library carries, not a proof: the check catches a stale
 build, not a forged one, and says so."""
 
-from ...library_info import build_info
-from ...report import not_exercised
+from ...runtime.library_info import build_info
+from ..report import not_exercised
 from .base import Check, VerifyCheck
 
 

@@ -8,8 +8,8 @@ import math
 import numpy as np
 
 from ...conventions import t6_from_pose
-from ...reference import solve
-from ...report import GoldenResult
+from ...kinematics.reference import solve
+from ..report import GoldenResult
 from ...units import LENGTH_UNITS
 from .base import Check, VerifyCheck
 

@@ -1,12 +1,12 @@
 """``jacobian``: finite differences of the routine's own joints against the analytic Jacobian
-of the limbs' constraint geometry (:mod:`kingen.singularity`), on regular postures."""
+of the limbs' constraint geometry (:mod:`kingen.kinematics.singularity`), on regular postures."""
 
 import numpy as np
 
-from ...reference import solve
-from ...routine import WARNINGS
-from ...singularity import finite_difference_jacobian, jacobian, posture_wrenches
-from ...report import not_exercised
+from ...kinematics.reference import solve
+from ...kinematics.routine import WARNINGS
+from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
+from ..report import not_exercised
 from .base import Check, VerifyCheck
 
 JACOBIAN_POSES = 200
@@ -25,7 +25,7 @@ of an ill-conditioned joint would measure the conditioning, not the formula."""
 
 def jacobian_check(robot, plugin, options, t6):
     """Finite differences of the routine's own joints along the six unit twists, against
-    the analytic Jacobian of the limbs' constraint geometry (kingen.singularity), on the
+    the analytic Jacobian of the limbs' constraint geometry (kingen.kinematics.singularity), on the
     reachable, regular postures of ``t6``: catches a formula mistake the routine and the
     reference share."""
     calibrated = robot.calibrated(options.link_lengths, options.link_offsets)

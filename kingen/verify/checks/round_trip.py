@@ -1,16 +1,16 @@
 """``round trip``: forward kinematics from the routine's joints of regular postures returns
-the sampled pose (:mod:`kingen.forward`), within what the joints explain."""
+the sampled pose (:mod:`kingen.kinematics.forward`), within what the joints explain."""
 
 import numpy as np
 
 from ...conventions import pose_from_t6
-from ...forward import closure_derivative, free_mask, newton, t6_of
-from ...reference import solve
-from ...routine import VALUE_TOLERANCE_RAD, WARNINGS
-from ...singularity import posture_wrenches
+from ...kinematics.forward import closure_derivative, free_mask, newton, t6_of
+from ...kinematics.reference import solve
+from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ...kinematics.singularity import posture_wrenches
 from ..options import CONDITIONING_FACTOR, report_tolerance_mm
 from ..tally import closure_miss
-from ...report import not_exercised
+from ..report import not_exercised
 from .base import Check, VerifyCheck
 from .closure import CLOSURE_TOLERANCE
 from .jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION

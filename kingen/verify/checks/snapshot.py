@@ -1,9 +1,9 @@
-"""``snapshot``: the routine against a recorded snapshot (:mod:`kingen.snapshot`): joints
+"""``snapshot``: the routine against a recorded snapshot (:mod:`kingen.verify.snapshot`): joints
 where the recording solved the posture, warnings everywhere; the detail names the worst."""
 
 import numpy as np
 
-from ...routine import WARNING_NAMES, WARNINGS
+from ...kinematics.routine import WARNING_NAMES, WARNINGS
 from .base import Check, VerifyCheck
 
 WORST_SHOWN = 3

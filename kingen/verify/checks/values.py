@@ -1,9 +1,9 @@
 """``values``: every joint of every posture the reference reaches, within the value bounds
 (1e-9 mm and rad; a limb's singular band within its conditioning bound), with diagnoses of
-what a failing routine got wrong (:mod:`kingen.diagnose`)."""
+what a failing routine got wrong (:mod:`kingen.verify.diagnose`)."""
 
-from ...diagnose import diagnose
-from ...text import counted
+from ..diagnose import diagnose
+from ...runtime.text import counted
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
 MIN_REACHABLE_POSES = 10

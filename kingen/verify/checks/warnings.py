@@ -3,8 +3,8 @@ band around a threshold (:func:`kingen.verify.tally.warnings_in_band`)."""
 
 import numpy as np
 
-from ...diagnose import diagnose_warnings
-from ...routine import WARNING_NAMES, warnings_to_exercise
+from ..diagnose import diagnose_warnings
+from ...kinematics.routine import WARNING_NAMES, warnings_to_exercise
 from ..boundaries import DIRECT_INDEX, RAYS, threshold_boundaries
 from ..tally import WARNING_KINDS
 from .base import STOPPED_CALLS, Check, VerifyCheck

@@ -5,7 +5,7 @@ any sampled pose."""
 import numpy as np
 
 from ....conventions import t6_from_pose
-from ....routine import UNWRITTEN_WARNING, WARNINGS
+from ....kinematics.routine import UNWRITTEN_WARNING, WARNINGS
 from ....verify.checks.base import Check, VerifyCheck
 from .. import abi
 

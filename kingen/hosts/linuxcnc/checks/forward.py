@@ -9,11 +9,11 @@ the all-zero pose: on a mm machine genhexkins' max-error, sized for inches, stop
 import numpy as np
 
 from ....conventions import pose_from_t6, t6_from_pose
-from ....forward import free_mask
-from ....reference import solve
-from ....routine import VALUE_TOLERANCE_RAD, WARNINGS
-from ....singularity import posture_wrenches
-from ....report import not_exercised
+from ....kinematics.forward import free_mask
+from ....kinematics.reference import solve
+from ....kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ....kinematics.singularity import posture_wrenches
+from ....verify.report import not_exercised
 from ....verify.checks.base import Check, VerifyCheck
 from ....verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
 from ....verify.options import value_tolerance_mm

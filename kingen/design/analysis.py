@@ -1,0 +1,384 @@
+"""Where the machine works: tilt limits, single-coordinate sweeps and workspace slices of one
+posture (the robot's working posture), each pose judged by what stops it.
+
+Only the coordinates the robot can move are analysed (``forward.free``; all six for six
+limbs): a delta is swept in x, y, z and never tilted. Causes, in this order:
+``unreachable`` (a limb has no solution, or is at its own singularity), ``joint_limits``,
+``direct_singularity`` (the direct index at most the robot's ``direct_index_min``; or, with
+or without one, a singular pose (see SINGULAR) or a crossing: the index below ``CROSSING``
+of its value at home, or the sign of the closure Jacobian's determinant over the free
+coordinates differing from home's; a home that is itself singular stops every pose judged
+from it at home, and the crossing rules then do not apply),
+``collision`` (:mod:`kingen.kinematics.collision`, with the robot file's ``collision:`` radii), else
+``none``. Poses are mm and degrees. Everything is the numpy reference's: no plugin runs here.
+"""
+
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+
+from ..kinematics.collision import MODELS, clearances
+from ..conventions import matrix_from_pose, rpy_from_rotation, t6_from_matrix
+from ..kinematics.forward import COORDINATES, closure_derivative, unit_wrenches
+from ..kinematics.reference import solve
+from ..kinematics.routine import WARNINGS
+from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
+
+CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none")
+TILT_CONVENTIONS = {
+    "axis": "axis: the platform turned by the tilt about the horizontal axis (cos a, sin a, 0) through home",
+    "euler": "euler: roll = tilt cos a, pitch = tilt sin a (R = Rz(yaw) Ry(pitch) Rx(roll)), "
+             "the 6-RUS thesis's polar graph",
+}
+SWEEP_STEP_DEG = 1.0
+SWEEP_STEPS = 61
+SLICE_CELLS = 81
+SLICE_RAYS = 32
+SLICE_DOUBLINGS = 12
+"""A slice's window is the workspace's extent in its plane: along SLICE_RAYS rays from home,
+doubling from the verification range up to 2**SLICE_DOUBLINGS times it, then bisected."""
+TILT_CHUNK_POSES = 4096
+"""Poses tilt_limits judges at once (about 10 MB of the reference's arrays)."""
+CROSSING = 0.05
+"""A direct index below this fraction of its value at home stops a pose as a direct
+singularity even where the robot file sets no ``direct_index_min``."""
+SINGULAR = 1e-6
+"""A reachable pose is singular, whatever home's values, where its direct index is at most
+this fraction of the robot's size (robots with a direct index), or, for the others, where
+the closure Jacobian over the free coordinates, its columns and then its rows scaled to unit
+length, has a determinant of at most SINGULAR ** 2 in magnitude. At an exact singularity
+rounding leaves about 1e-8 and 1e-15 of them; the thresholds lie far above."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What an analysis is asked for: the tilt convention (TILT_CONVENTIONS), the tilt step,
+    azimuth step and cap (degrees; a tilt's limit is the largest multiple of the step up to
+    which every step passes, without refinement), and the collision model (collision.MODELS)."""
+
+    tilt_convention: str = "axis"
+    tilt_step_deg: float = 0.1
+    azimuth_step_deg: float = 15.0
+    tilt_max_deg: float = 90.0
+    collision: str = "segments"
+
+    @property
+    def azimuths(self):
+        return np.arange(0.0, 360.0 - 1e-9, self.azimuth_step_deg)
+
+    @property
+    def tilts(self):
+        return np.arange(round(self.tilt_max_deg / self.tilt_step_deg) + 1) * self.tilt_step_deg
+
+
+@dataclass(frozen=True)
+class Home:
+    """A posture's values at the verification home: direct index (mm, NaN: not available),
+    the sign of the closure Jacobian's determinant (0: singular or unreachable) and whether
+    home itself is a singular pose (SINGULAR)."""
+
+    index_mm: float
+    det_sign: float
+    singular: bool = False
+
+
+def singular_index_mm(robot):
+    """The direct index (mm) at or below which a pose of ``robot`` is singular (SINGULAR)."""
+    return SINGULAR * robot.size_mm
+
+
+def free_coordinates(robot):
+    """Indices into COORDINATES of what the robot can move (forward.free; all six otherwise)."""
+    return [COORDINATES.index(name) for name in (robot.forward_free or COORDINATES)]
+
+
+def home_values(robot, posture, settings=Settings()):
+    """The posture's Home at the verification home (det_sign 0 where home is singular)."""
+    evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(np.array([robot.verification.home]))), posture,
+                         settings, Home(np.nan, 0.0))
+    singular = bool(evaluated["singular"][0])
+    return Home(float(evaluated["direct_index_mm"][0]), 0.0 if singular else float(evaluated["det_sign"][0]),
+                singular)
+
+
+def evaluate(robot, t6, posture, settings=Settings(), home=None):
+    """Per pose of t6 (n, 4, 4), for ``posture``: a dict of arrays: cause (n,) index into
+    CAUSES, warning, direct_index_mm (NaN: not available or unreachable), det_sign (sign of
+    the closure Jacobian's determinant over the free coordinates; 0 where unreachable),
+    min_inverse_index, min_rod_distance_mm and min_crank_distance_mm (clearances; NaN when
+    not configured or not applicable), joints (n, dof), singular (n,) bool (SINGULAR).
+    ``home``: the posture's Home (computed when not given) for the crossing rules."""
+    home = home_values(robot, posture, settings) if home is None else home
+    plain = replace(robot, direct_index_min=None)
+    expected = solve(plain, t6)
+    joints = expected.joints[:, :, posture]
+    warning = expected.warnings[:, posture].copy()
+    index = np.full(len(t6), np.nan)
+    reachable = warning != WARNINGS["WARN_UNREACHABLE"]
+    if robot.has_direct_index and np.any(reachable):
+        wrenches, _ = limb_wrenches(plain, expected.points[reachable], expected.branch_joints[reachable],
+                                    with_transmissions=False)
+        index[reachable] = direct_index_of_entries(posture_gram_entries(plain, wrenches)[:, :, posture],
+                                                   robot.direct_index_min)
+    sign = np.where(reachable, _det_sign(robot, t6, expected.points, joints), 0.0)
+    singular = reachable & ((index <= singular_index_mm(robot)) if robot.has_direct_index else (sign == 0.0))
+    rods, cranks = clearances(robot, expected.points, joints, settings.collision)
+    threshold = robot.direct_index_min if robot.direct_index_min is not None else -1.0
+    crossed = (index < CROSSING * home.index_mm) | ((home.det_sign != 0) & (sign != home.det_sign) & reachable)
+    cause = np.full(len(t6), CAUSES.index("none"))
+    candidates = [
+        ("collision", (rods < 0.0) | (cranks < 0.0)),
+        ("direct_singularity", (index <= threshold) | crossed | singular),
+        ("joint_limits", warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]),
+        ("unreachable", ~reachable | (np.min(np.abs(expected.radicands), axis=1) <= 1e-5)),
+    ]
+    for name, mask in candidates:  # the last assigned wins: unreachable over limits over ...
+        cause = np.where(mask, CAUSES.index(name), cause)
+    return {"cause": cause, "warning": warning, "direct_index_mm": index, "det_sign": sign,
+            "min_inverse_index": np.where(np.isfinite(expected.min_inverse_index), expected.min_inverse_index, np.nan),
+            "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints, "singular": singular}
+
+
+def _det_sign(robot, t6, points, joints):
+    """Sign of det d(closure residuals)/d(free coordinates) (n,): over the platform twist
+    for six limbs (free of any angle convention), over the free pose coordinates otherwise;
+    for robots without a direct index, 0 where that matrix is singular (SINGULAR)."""
+    wrenches = unit_wrenches(robot, points, joints)
+    free = free_coordinates(robot)
+    if len(free) == 6:
+        square = wrenches
+    else:
+        poses = np.concatenate([t6[:, 3, :3], rpy_from_rotation(np.swapaxes(t6[:, :3, :3], 1, 2))], axis=1)
+        square = closure_derivative(wrenches, poses, free)
+    with np.errstate(invalid="ignore"):
+        sign = np.nan_to_num(np.sign(np.linalg.det(square)))
+        if not robot.has_direct_index:
+            sign = np.where(np.abs(_equilibrated_det(square)) <= SINGULAR ** 2, 0.0, sign)
+    return sign
+
+
+def _equilibrated_det(square):
+    """det of square matrices (n, k, k) with their columns and then their rows scaled to unit
+    length (at most 1 in magnitude, Hadamard; free of the coordinates' units); 0 for a zero
+    column or row."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scaled = square / np.linalg.norm(square, axis=1, keepdims=True)
+        scaled = scaled / np.linalg.norm(scaled, axis=2, keepdims=True)
+        return np.nan_to_num(np.linalg.det(np.nan_to_num(scaled)))
+
+
+def tilted_t6(robot, azimuths, tilts, convention="axis"):
+    """T6 (len(azimuths) * len(tilts), 4, 4): home tilted by each tilt (degrees) towards
+    each azimuth (degrees) in ``convention`` (TILT_CONVENTIONS)."""
+    home = np.array(robot.verification.home, dtype=float)
+    if convention == "euler":
+        poses = np.tile(home, (len(azimuths) * len(tilts), 1))
+        a, k = np.meshgrid(np.radians(azimuths), tilts, indexing="ij")
+        poses[:, 3] += (k * np.cos(a)).ravel()
+        poses[:, 4] += (k * np.sin(a)).ravel()
+        return t6_from_matrix(matrix_from_pose(poses))
+    start = matrix_from_pose(home)
+    matrices = []
+    for azimuth in np.radians(azimuths):
+        axis = np.array([np.cos(azimuth), np.sin(azimuth), 0.0])
+        for angle in np.radians(tilts):
+            turned = start.copy()
+            turned[:3, :3] = _rotation(axis, angle) @ start[:3, :3]
+            matrices.append(turned)
+    return t6_from_matrix(np.array(matrices))
+
+
+def _rotation(axis, angle):
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+
+
+def can_tilt(robot):
+    """Whether the platform can tilt: roll and pitch are both free coordinates."""
+    return {3, 4} <= set(free_coordinates(robot))
+
+
+def tilt_limits(robot, posture, settings=Settings(), home=None):
+    """[{azimuth_deg, max_tilt_deg, cause, min_direct_index_mm}] per azimuth: the largest
+    multiple of the tilt step up to which every step passes; cause 'none' when nothing stops
+    it up to the cap; the least direct index up to where it stops (None: not available).
+    Empty when the platform cannot tilt."""
+    if not can_tilt(robot):
+        return []
+    home = home_values(robot, posture, settings) if home is None else home
+    tilts = settings.tilts
+    first, causes, least = _first_stops(robot, posture, settings, home)
+    return [{"azimuth_deg": round(float(azimuth), 6), "max_tilt_deg": round(float(tilts[max(stop - 1, 0)]), 6),
+             "cause": CAUSES[cause], "min_direct_index_mm": float(index) if np.isfinite(index) else None}
+            for azimuth, stop, cause, index in zip(settings.azimuths, first, causes, least)]
+
+
+def _first_stops(robot, posture, settings, home):
+    """(first stopping step (len(tilts): none), its cause, least direct index mm before it
+    (NaN: none available)) per azimuth of ``settings``. The poses are judged in chunks of at
+    most max(TILT_CHUNK_POSES, azimuths) along the tilts, each azimuth until its first stop:
+    memory is independent of the step counts."""
+    azimuths, tilts = settings.azimuths, settings.tilts
+    first = np.full(len(azimuths), len(tilts))
+    causes = np.full(len(azimuths), CAUSES.index("none"))
+    least = np.full(len(azimuths), np.nan)
+    going, start = np.arange(len(azimuths)), 0
+    while len(going) and start < len(tilts):
+        chunk = tilts[start:start + max(1, TILT_CHUNK_POSES // len(going))]
+        evaluated = evaluate(robot, tilted_t6(robot, azimuths[going], chunk, settings.tilt_convention), posture,
+                             settings, home)
+        cause = evaluated["cause"].reshape(len(going), len(chunk))
+        stopped = cause != CAUSES.index("none")
+        stops = np.where(stopped.any(axis=1), stopped.argmax(axis=1), len(chunk))
+        reached = np.arange(len(chunk)) < stops[:, None]
+        index = np.where(reached, evaluated["direct_index_mm"].reshape(len(going), len(chunk)), np.nan)
+        least[going] = np.fmin(least[going], np.fmin.reduce(index, axis=1))
+        ended = stops < len(chunk)
+        first[going[ended]] = start + stops[ended]
+        causes[going[ended]] = cause[ended, stops[ended]]
+        going, start = going[~ended], start + len(chunk)
+    return first, causes, least
+
+
+def sweeps(robot, posture, settings=Settings(), home=None):
+    """{coordinate: [entries]} for each free coordinate: sweeps from home, angles over
+    +-tilt_max in SWEEP_STEP_DEG steps, positions over +-the verification range."""
+    start = np.array(robot.verification.home, dtype=float)
+    result = {}
+    for axis in sorted(free_coordinates(robot), key=lambda axis: (axis < 3, axis)):
+        if axis >= 3:
+            values = start[axis] + np.arange(-settings.tilt_max_deg, settings.tilt_max_deg + SWEEP_STEP_DEG / 2,
+                                             SWEEP_STEP_DEG)
+        else:
+            values = start[axis] + np.linspace(-1.0, 1.0, SWEEP_STEPS) * max(robot.verification.range[axis], 1.0)
+        poses = np.tile(start, (len(values), 1))
+        poses[:, axis] = values
+        evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)
+        result[COORDINATES[axis]] = [_entry(robot, float(value), evaluated, i) for i, value in enumerate(values)]
+    return result
+
+
+def _entry(robot, value, evaluated, i):
+    def number(key):
+        value = float(evaluated[key][i])
+        return value if np.isfinite(value) else None
+
+    scale = 1.0 / robot.joint_scale()
+    return {"value": value, "warning": int(evaluated["warning"][i]), "cause": CAUSES[evaluated["cause"][i]],
+            "direct_index_mm": number("direct_index_mm"), "min_inverse_index": number("min_inverse_index"),
+            "min_rod_distance_mm": number("min_rod_distance_mm"),
+            "min_crank_distance_mm": number("min_crank_distance_mm"),
+            "joints": [float(v) for v in evaluated["joints"][i] * scale]}
+
+
+def workspace_extent(robot, posture, axes, settings=Settings(), home=None):
+    """(low, high, capped) per axis of ``axes`` (two position indices): the bounding box (mm)
+    of the workspace at home orientation in their plane, found along SLICE_RAYS rays from
+    home (a pose is inside while nothing limits it: cause 'none'); ``capped``: some ray was
+    still inside at the search's end."""
+    start = np.array(robot.verification.home, dtype=float)
+    angles = np.linspace(0.0, 2 * np.pi, SLICE_RAYS, endpoint=False)
+    directions = np.column_stack([np.cos(angles), np.sin(angles)])
+    scale = max(max(robot.verification.range[axis] for axis in axes), 1.0)
+
+    def inside(distances):
+        poses = np.tile(start, (SLICE_RAYS, 1))
+        for column, axis in enumerate(axes):
+            poses[:, axis] += directions[:, column] * distances
+        cause = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)["cause"]
+        return cause == CAUSES.index("none")
+
+    low, high = np.zeros(SLICE_RAYS), np.full(SLICE_RAYS, scale)
+    searching = np.ones(SLICE_RAYS, dtype=bool)
+    for _ in range(SLICE_DOUBLINGS):
+        moved = searching & inside(high)
+        low, high = np.where(moved, high, low), np.where(moved, 2 * high, high)
+        searching = moved
+    capped = bool(np.any(searching))
+    for _ in range(30):
+        middle = (low + high) / 2
+        good = inside(middle)
+        low, high = np.where(good, middle, low), np.where(good, high, middle)
+    reach = np.where(searching, low, high)
+    points = directions * reach[:, None]
+    return [(float(start[axis] + points[:, column].min()), float(start[axis] + points[:, column].max()))
+            for column, axis in enumerate(axes)], capped
+
+
+def slices(robot, posture, settings=Settings(), home=None):
+    """{'xy', 'xz'} for each plane of two free position coordinates: grids at home
+    orientation over the workspace's extent in that plane plus a tenth (equal cell size on
+    both axes), each {axes, first, second, causes, extent_mm, capped}."""
+    start = np.array(robot.verification.home, dtype=float)
+    free = set(free_coordinates(robot))
+    result = {}
+    for name, axes in (("xy", (0, 1)), ("xz", (0, 2))):
+        if not set(axes) <= free:
+            continue
+        extent, capped = workspace_extent(robot, posture, axes, settings, home)
+        margins = [0.1 * (high - low) + 1e-9 for low, high in extent]
+        widest = max(high - low + 2 * margin for (low, high), margin in zip(extent, margins))
+        cell = widest / (SLICE_CELLS - 1)
+        spans = [np.arange(low - margin, high + margin + cell / 2, cell) for (low, high), margin in zip(extent, margins)]
+        grid_first, grid_second = np.meshgrid(*spans, indexing="ij")
+        poses = np.tile(start, (grid_first.size, 1))
+        poses[:, axes[0]], poses[:, axes[1]] = grid_first.ravel(), grid_second.ravel()
+        causes = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)["cause"]
+        result[name] = {"axes": [COORDINATES[axes[0]], COORDINATES[axes[1]]], "first": spans[0].tolist(),
+                        "second": spans[1].tolist(), "causes": causes.reshape(grid_first.shape).tolist(),
+                        "extent_mm": [list(pair) for pair in extent], "capped": capped}
+    return result
+
+
+def analyze(robot, posture=None, settings=Settings(), progress=None):
+    """The analysis of ``posture`` (default: the robot's working posture) as JSON-ready data:
+    {robot, posture, available, settings, tilt_limits, sweeps, slices, direct_index_min_mm,
+    singular_at_home} (singular_at_home: null, or what makes home a singular pose; every tilt
+    then stops at 0 degrees)."""
+    posture = robot.working_posture if posture is None else posture
+    step = progress or (lambda text: None)
+    home = home_values(robot, posture, settings)
+    step("tilt limits")
+    limits = tilt_limits(robot, posture, settings, home)
+    step("sweeps")
+    swept = sweeps(robot, posture, settings, home)
+    step("workspace slices")
+    sliced = slices(robot, posture, settings, home)
+    free = [COORDINATES[axis] for axis in free_coordinates(robot)]
+    available = {
+        "direct_index": "available" if robot.has_direct_index else
+        f"not available: {robot.dof} limbs (the constraints that complete the platform are not modelled)",
+        "direct_singularity": "available" if robot.direct_index_min is not None else
+        "crossings only: no singularity: {direct_index_min} in the robot file",
+        "collision": "available" if robot.collision is not None else
+        "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file",
+        "tilt_limits": "available" if limits else f"not analysed: the platform cannot tilt (free: {', '.join(free)})",
+        "slices": "available" if sliced else
+        f"not analysed: fewer than two free position coordinates (free: {', '.join(free)})",
+    }
+    described = {**asdict(settings), "tilt_convention": TILT_CONVENTIONS[settings.tilt_convention],
+                 "collision": MODELS[settings.collision], "free_coordinates": free,
+                 "azimuths": len(settings.azimuths) if limits else 0, "tilt_steps": len(settings.tilts),
+                 "sweep_angle_step_deg": SWEEP_STEP_DEG, "sweep_position_steps": SWEEP_STEPS,
+                 "slice_cells": SLICE_CELLS, "slice_rays": SLICE_RAYS,
+                 "crossing_fraction": CROSSING, "crossing_sign_of_det_j": True,
+                 "direct_index_at_home_mm": _finite_or_none(home.index_mm), "det_j_sign_at_home": home.det_sign,
+                 "singular_fraction": SINGULAR}
+    return {"robot": robot.name, "posture": posture, "available": available, "settings": described,
+            "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min,
+            "singular_at_home": singular_at_home(robot, home)}
+
+
+def singular_at_home(robot, home):
+    """None, or one sentence saying why ``home`` (the posture's Home) is a singular pose."""
+    if not home.singular:
+        return None
+    if robot.has_direct_index:
+        return (f"home is a direct singularity: its direct index is {home.index_mm:.3g} mm, at most "
+                f"{singular_index_mm(robot):.3g} mm ({SINGULAR:g} of the robot's size)")
+    return (f"home is a direct singularity: the closure Jacobian over the free coordinates is singular there "
+            f"(scaled determinant at most {SINGULAR ** 2:g})")
+
+
+def _finite_or_none(value):
+    return float(value) if np.isfinite(value) else None

@@ -1,0 +1,253 @@
+"""Rendering, shared by every host: robot -> the view-model its C templates substitute.
+Pure: nothing here touches the file system except reading templates (and jinja2's compiled
+templates, kept in kingen's cache: PrivateBytecodeCache); the build layer
+writes files.
+
+All decisions are made here in a Python view-model; the templates only loop and
+substitute. Numbers are written with Python's shortest round-trip repr, so the
+C tables hold exactly the doubles the reference uses. Templates are found in the host's
+own folder first, then in the shared ``templates/`` (limb model partials from the registry).
+"""
+
+import functools
+import math
+import pickle
+import textwrap
+
+import jinja2
+
+from ..defaults import VERSION
+from ..errors import KingenError
+from ..runtime.files import atomic_file, cache_dir, private_file, private_folder, private_writes
+from ..runtime.library_info import BUILD_INFO_MARKER
+from ..robot.limbs import MODELS, c_double, partial_path
+from ..runtime.resources import templates_dir
+from ..robot.schema import dialog_label, field_index
+from ..kinematics.singularity import PACKED, partial_sum_split
+from ..runtime.text import finalizer, markdown
+
+TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown", ".html.j2": "html"}
+"""Which escaping (:func:`kingen.runtime.text.finalizer`) a template's substitutions get, by suffix
+(HTML: jinja2's autoescape); every other template is plain text. Headers (``.h.j2``) hold no
+user text and get none."""
+
+
+def _partial_source(name):
+    """Limb model partials ('limbs/<model>.c.j2') from the registry, wherever they live."""
+    model = name[len("limbs/"):-len(".c.j2")] if name.startswith("limbs/") and name.endswith(".c.j2") else None
+    if model not in MODELS:
+        return None
+    path = partial_path(MODELS[model])
+    return path.read_text(), str(path), lambda: True
+
+
+class PrivateBytecodeCache(jinja2.BytecodeCache):
+    """jinja2's compiled templates, kept in kingen's cache folder (``<cache>/<name>``, looked
+    up at each use), so that a process renders without compiling its templates first (about
+    50 ms a process). Compiled code is loaded only from a private folder's private files (as
+    kingen.runtime.files.cached runs only what this user built) and written whole, private, or not
+    at all: a cache that cannot be read or written costs the compilation, never the render."""
+
+    def __init__(self, name):
+        self.name = name
+
+    def _path(self, bucket):
+        return cache_dir() / self.name / f"{bucket.key}.jinja"
+
+    def load_bytecode(self, bucket):
+        path = self._path(bucket)
+        try:
+            for folder in (path.parent.parent, path.parent):
+                private_folder(folder)
+            private_file(path)
+            with open(path, "rb") as stream:
+                bucket.load_bytecode(stream)
+        except FileNotFoundError:  # not compiled yet
+            pass
+        except (KingenError, OSError, EOFError, ValueError, pickle.UnpicklingError):  # not ours, or cut short
+            bucket.reset()
+
+    def dump_bytecode(self, bucket):
+        path = self._path(bucket)
+        try:
+            private_folder(path.parent.parent)
+            with private_writes(path.parent):
+                private_folder(path.parent)
+                with atomic_file(path) as stream:
+                    bucket.write_bytecode(stream)
+        except (KingenError, OSError):  # not ours, or not writable: the next process compiles again
+            pass
+
+
+@functools.lru_cache(maxsize=None)
+def _environment(kind, folder):
+    folders = [str(folder)] if folder is not None else []
+    return jinja2.Environment(
+        loader=jinja2.ChoiceLoader([jinja2.FunctionLoader(_partial_source),
+                                    jinja2.FileSystemLoader([*folders, str(templates_dir())])]),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=kind == "html",
+        finalize=finalizer(kind) if kind not in (None, "html") else None,
+        bytecode_cache=PrivateBytecodeCache(f"templates-{VERSION}-{kind}"),  # compiled per settings
+    )
+
+
+def template(name, folder=None):
+    """The jinja2 template ``name`` from ``folder`` (a host's templates) or the shared
+    templates/, in the environment that escapes its substitutions for its kind of file
+    (C, Markdown, HTML, plain text): strict undefined."""
+    kind = None if name.endswith(".h.j2") else next(
+        (kind for suffix, kind in TEMPLATE_KINDS.items() if name.endswith(suffix)), "plain")
+    environment = _environment(kind, folder)
+    environment.filters["markdown"] = markdown
+    return environment.get_template(name)
+
+
+def calibration_line(robot, joint, parameter, dialog_field, built_in):
+    """'Length 3 -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners."""
+    unit = robot.limbs[joint].calibratable[parameter]
+    return f"{dialog_label(dialog_field)} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:.10g})"
+
+
+def build_info(robot, routine=None, postures=None, extra=()):
+    """What the library says about itself, compiled in as data (read back by kingen info):
+    the robot, the routine (default the DELMIA routine's name), its joints and postures,
+    the definition's sha256, kingen's version, then any ``extra`` (key, value) pairs."""
+    text = (f"{BUILD_INFO_MARKER} robot={robot.name} routine={routine or robot.routine} dof={robot.dof} "
+            f"postures={robot.postures if postures is None else postures} sha256={robot.sha256} kingen={VERSION}")
+    return text + "".join(f" {key}={value}" for key, value in extra)
+
+
+def _model_tables(robot):
+    """Per limb model used, in first-use order: its name, partial, column words and rows."""
+    tables = {}
+    for index, limb in enumerate(robot.limbs):
+        cls = type(limb)
+        table = tables.setdefault(cls, {"name": limb.model, "partial": f"limbs/{limb.model}.c.j2",
+                                        "columns": f"Columns: {cls.c_columns}.", "rows": []})
+        row = {"joint": index, "name": robot.joint_names[index], **limb.c_row()}
+        row.update({f"{parameter}_field": field_index(limb.calibrate[parameter]) if parameter in limb.calibrate
+                    else -1 for parameter in cls.calibratable})
+        table["rows"].append(row)
+    return list(tables.values())
+
+
+def schur_test_lines(entry):
+    """Straight-line C89 (declarations first) that sets ``double margin``: positive exactly when
+    M - KINGEN_DIRECT_MIN^2 diag(0, 0, 0, 1, 1, 1) is positive definite (the direct index lies
+    above the threshold), else zero, negative or NaN. ``entry`` formats M's packed entry k
+    (lower triangle, row by row) as a C expression, e.g. ``"first[{k}] + second[{k}]"``.
+
+    Division-free and branch-free, so a loop over postures vectorises: with M's force block
+    A, mixed block B (moment rows) and moment block C, the test holds exactly when A's
+    leading minors a00, j22 = a00 a11 - a10^2 and det A are positive and so are the leading
+    minors of X = det(A) (C - d^2 I) - B adj(A) B^T, which is det(A) times the Schur
+    complement minus d^2 I (docs/conventions.md, 'Force lines and the direct index').
+    margin is their minimum; det X, taken last, involves every entry, so a NaN anywhere in M
+    reaches margin."""
+    names = {(r, c): f"a{r}{c}" for r in range(3) for c in range(r + 1)}
+    names.update({(3 + r, c): f"b{r}{c}" for r in range(3) for c in range(3)})
+    names.update({(3 + r, 3 + c): f"c{r}{c}" for r in range(3) for c in range(r + 1)})
+    declarations = [f"double {names[pair]} = {entry.format(k=k)};" for k, pair in enumerate(PACKED)]
+    adjugate = {(0, 0): "a11 * a22 - a21 * a21", (1, 1): "a00 * a22 - a20 * a20", (2, 2): "a00 * a11 - a10 * a10",
+                (1, 0): "a20 * a21 - a10 * a22", (2, 0): "a10 * a21 - a11 * a20", (2, 1): "a10 * a20 - a00 * a21"}
+    declarations += [f"double j{r}{c} = {value};" for (r, c), value in adjugate.items()]
+    declarations.append("double det = a00 * j00 + a10 * j10 + a20 * j20, shift = det * KINGEN_DIRECT_MIN * KINGEN_DIRECT_MIN;")
+
+    def adj(r, c):
+        return f"j{max(r, c)}{min(r, c)}"
+
+    declarations += [f"double p{r}{c} = {' + '.join(f'b{r}{k} * {adj(k, c)}' for k in range(3))};"
+                     for r in range(3) for c in range(3)]
+    declarations += [f"double x{r}{c} = det * c{r}{c}{' - shift' if r == c else ''}"
+                     f" - ({' + '.join(f'p{r}{k} * b{c}{k}' for k in range(3))});" for r in range(3) for c in range(r + 1)]
+    declarations += ["double y11 = x00 * x11 - x10 * x10;",
+                     "double y22 = x00 * (x11 * x22 - x21 * x21) - x10 * (x10 * x22 - x21 * x20)"
+                     " + x20 * (x10 * x21 - x11 * x20);",
+                     "double margin = a00;"]
+    return declarations + [f"margin = margin < {minor} ? margin : {minor};"
+                           for minor in ("j22", "det", "x00", "y11", "y22")]
+
+
+def gram_lines(accumulate):
+    """C statements that fill gram[21] with the packed lower triangle of w w^T (from w0 .. w5),
+    or add it to gram[21] when ``accumulate``: a routine with one posture sums its lines
+    straight into M, without a table of lines."""
+    operator = "+=" if accumulate else "="
+    return [f"gram[{k}] {operator} w{r} * w{c};" for k, (r, c) in enumerate(PACKED)]
+
+
+def partial_sums(robot):
+    """The C sums (over grams[limb][branch][k]) of the two partial Gram tables of
+    singularity.partial_sum_split: 'low' per combination of the low posture digits (their
+    limbs), 'high' per combination of the other digits (with every one-branch limb)."""
+    low_bits, low_limbs, high_limbs = partial_sum_split(robot)
+
+    def sums(limbs, postures):
+        return [" + ".join(f"grams[{i}][{robot.posture_branches(k)[i]}][k]" for i in limbs) or "0.0"
+                for k in postures]
+
+    return {"low": sums(low_limbs, range(1 << low_bits)),
+            "high": sums(high_limbs, range(0, robot.postures, 1 << low_bits))}
+
+
+def joint_sum(robot):
+    """The terms, one per joint, of the C sum of every joint value the routine computed (both
+    branches of two-branch limbs): finite exactly when all of them are, unless the sum
+    itself overflows."""
+    return [" + ".join(f"joints[{index}].value[{branch}]" for branch in ((0, 1) if bit >= 0 else (0,)))
+            for index, bit in enumerate(robot.branch_bits)]
+
+
+def robot_view(robot):
+    """What every host's routine template substitutes about the robot, already formatted as C:
+    names, joints, limb model tables, singularity tests and the build information."""
+    lower, upper = robot.travel_limits()
+    joints = []
+    for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
+        limited = limb.travel is not None
+        joints.append({
+            "index": index,
+            "name": robot.joint_names[index],
+            "model": limb.model,
+            "units": limb.joint_type.c_units,
+            "bit": bit,
+            "limited": int(limited),
+            "lower": c_double(lower[index] if limited else 0.0),
+            "upper": c_double(upper[index] if limited else 0.0),
+            "travel_text": f"[{limb.travel[0]:.10g}, {limb.travel[1]:.10g}] {limb.joint_type.yaml_unit}"
+            if limited else "",
+        })
+    return {
+        "version": VERSION,
+        "source_name": robot.path.name,
+        "source_hash": robot.sha256,
+        "name": robot.name,
+        "description_lines": textwrap.wrap(" ".join(robot.description.split()), 88) or [""],
+        "library": robot.library,
+        "routine": robot.routine,
+        "dof": robot.dof,
+        "postures": robot.postures,
+        "two_branch_count": sum(1 for bit in robot.branch_bits if bit >= 0),
+        "joint_sum": joint_sum(robot),
+        "joints": joints,
+        "any_limits": any(limb.travel is not None for limb in robot.limbs),
+        "any_revolute": any(limb.joint_type.wraps for limb in robot.limbs),
+        "has_radicand": any(limb.has_radicand for limb in robot.limbs),
+        "models": _model_tables(robot),
+        "direct_index": robot.direct_index_min is not None,
+        "jacobian": False,
+        "low_bits": partial_sum_split(robot)[0],
+        "split_sums": bool(partial_sum_split(robot)[1]),
+        "schur_lines": schur_test_lines("high[{k} * KINGEN_HIGH + h] + low[{k} * KINGEN_LOW + l]"
+                                     if partial_sum_split(robot)[1] else "high[{k} * KINGEN_HIGH + h]"),
+        "gram_lines": gram_lines(accumulate=robot.postures == 1),
+        "partial_sums": partial_sums(robot),
+        "direct_index_min": c_double(robot.direct_index_min or 0.0),
+        "degree": c_double(math.pi / 180.0),
+        "calibration": [calibration_line(robot, *entry) for entry in robot.calibration()],
+        "build_info": build_info(robot),
+    }

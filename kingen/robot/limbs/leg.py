@@ -1,0 +1,54 @@
+"""Leg (S-P-S, U-P-S): a prismatic leg from base point b to platform point t.
+
+q = |R t + p - b| - L0 (mm). One branch, always reachable (docs/conventions.md, 'Leg'). With
+L0 = 0 the joint is the leg's absolute length.
+"""
+
+from typing import Literal
+
+import numpy as np
+
+from ...conventions import PRISMATIC
+from ..schema import ReferenceLength, Vec3
+from .base import LimbModel, LimbSolution, c_double, c_vector
+
+
+class Leg(LimbModel):
+    """S-P-S / U-P-S leg: q = |R t + p - b| - L0 (mm). One branch."""
+
+    model: Literal["leg"]
+    base_point: Vec3
+    reference_length: ReferenceLength
+    """mm; 0: the joint is the leg's absolute length (as LinuxCNC's genhexkins reports it)."""
+
+    joint_type = PRISMATIC
+    calibratable = {"reference_length": "mm"}
+    length_fields = ("base_point", "platform_point", "reference_length")
+    c_columns = ("joint, base point b (mm, base frame), platform point t (mm, platform frame), "
+                 "reference length L0 (mm), its dialog field")
+
+    def solve(self, platform_point):
+        length = np.linalg.norm(platform_point - np.asarray(self.base_point), axis=-1)
+        q = length - self.reference_length
+        return LimbSolution(values=np.stack([q, q], axis=-1))
+
+    link_length_rate = 1.0
+    passive_radius = "leg_radius"
+
+    def base_side_point(self, platform_point, joint):
+        return np.broadcast_to(np.asarray(self.base_point, dtype=float), np.shape(platform_point))
+
+    def passive_length(self, joint):
+        return self.reference_length + np.asarray(joint)
+
+    def c_row(self):
+        return {"base_point": c_vector(self.base_point), "platform_point": c_vector(self.platform_point),
+                "reference_length": c_double(self.reference_length)}
+
+    def explain_offset(self, offset):
+        if self.reference_length > 0 and abs(offset - self.reference_length) <= 1e-9 * max(1.0, self.reference_length):
+            return (f"the routine reports the leg's absolute strut length, not its extension from the reference "
+                    f"length {self.reference_length:g} mm (as LinuxCNC's genhexkins does): to verify it, set "
+                    "reference_length: 0")
+        return (f"a wrong reference length (the routine behaves as if L0 = "
+                f"{self.reference_length - offset:.6g} mm; the robot says {self.reference_length:g} mm)")

@@ -1,0 +1,74 @@
+"""Rail (P-S-S, Gantry-Tau, Hexaglide, linear Delta): a carriage on a rail drives a link
+of fixed length to a platform point.
+
+With w = R n + p - s - d: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) - origin (mm), branch 0
+the minus sign; D = radicand / l^2 = cos^2 of the link-to-rail angle (docs/conventions.md, 'Rail').
+"""
+
+from typing import Literal
+
+import numpy as np
+
+from ...conventions import PRISMATIC
+from ..schema import Coordinate, Length, UnitVec3, Vec3
+from .base import LimbSolution, TwoBranchModel, axis_words, c_double, c_vector, components_last
+
+
+class Rail(TwoBranchModel):
+    """P-S-S carriage on a rail: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) (mm). Two branches."""
+
+    model: Literal["rail"]
+    rail_point: Vec3
+    direction: UnitVec3
+    carriage_offset: Vec3
+    link_length: Length
+    origin: Coordinate = 0.0
+    """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
+
+    joint_type = PRISMATIC
+    calibratable = {"origin": "mm", "link_length": "mm"}
+    length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
+    c_columns = ("joint, rail point s (mm, base frame), direction u (unit), carriage offset d (mm), "
+                 "platform point n (mm, platform frame), link length l (mm), origin (mm), "
+                 "dialog fields of l and origin")
+
+    def solve(self, platform_point):
+        direction = np.asarray(self.direction)
+        w = platform_point - np.asarray(self.rail_point) - np.asarray(self.carriage_offset)
+        along = w @ direction
+        link_squared = self.link_length * self.link_length
+        radicand = link_squared - np.sum(w * w, axis=-1) + along * along
+        root = np.sqrt(np.where(radicand > 0.0, radicand, 0.0))
+        return LimbSolution(values=np.stack([along - root, along + root], axis=-1) - self.origin,
+                            radicand=radicand / link_squared)
+
+    def base_side_point(self, platform_point, joint):
+        start = np.asarray(self.rail_point) + np.asarray(self.carriage_offset)
+        along = np.asarray(joint) + self.origin
+        return components_last([start[axis] + along * self.direction[axis] for axis in range(3)])
+
+    def passive_length(self, joint):
+        return np.full(np.shape(joint), self.link_length)
+
+    def base_side_velocity(self, joint):
+        return np.broadcast_to(np.asarray(self.direction, dtype=float), np.shape(joint) + (3,))
+
+    def c_row(self):
+        return {"rail_point": c_vector(self.rail_point), "direction": c_vector(self.direction),
+                "carriage_offset": c_vector(self.carriage_offset), "platform_point": c_vector(self.platform_point),
+                "link_length": c_double(self.link_length), "origin": c_double(self.origin)}
+
+    def joint_axis(self):
+        return np.asarray(self.direction, dtype=float)
+
+    def branch_labels(self, platform_point, centre):
+        """Branch 0 puts the carriage's joint on the -u side of its link's platform joint
+        (along the rail), branch 1 on the +u side, wherever the platform is."""
+        return tuple(f"carriage on the {axis_words(sign * np.asarray(self.direction))} side of its link's platform joint"
+                     for sign in (-1.0, 1.0))
+
+    def singular_scale(self):
+        return self.link_length
+
+    def explain_offset(self, offset):
+        return "a wrong rail origin or carriage offset along the rail"

@@ -1,0 +1,83 @@
+"""The field types robot files are made of, with their ranges, shared by every schema.
+
+Units: mm for lengths and coordinates, degrees for angles (see docs/conventions.md).
+The ranges are the stated geometry range of README's 'Exit codes and limits'.
+"""
+
+import math
+from typing import Annotated
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
+
+from ..defaults import MAX_MM
+
+MIN_LENGTH_MM = 1e-3
+MAX_DEGREES = 720.0
+"""Angles in robot files (directions, offsets, poses) are within +/- two turns."""
+UNIT_TOLERANCE = 1e-6
+"""How far from 1 the norm of a declared direction may be; it is then normalised exactly."""
+
+
+def _check_pose(pose):
+    if any(abs(value) > MAX_MM for value in pose[:3]) or any(abs(value) > MAX_DEGREES for value in pose[3:]):
+        raise ValueError(f"x, y, z must be within +/-{MAX_MM:g} mm and angles within +/-{MAX_DEGREES:g} degrees")
+    return pose
+
+
+def _check_travel(travel):
+    if not travel[0] < travel[1]:
+        raise ValueError(f"lower limit {travel[0]} must be below upper limit {travel[1]}")
+    return travel
+
+
+def _check_unit(vector):
+    norm = math.sqrt(sum(component * component for component in vector))
+    if norm == 0.0:
+        raise ValueError("direction is the zero vector")
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        raise ValueError(f"direction must be a unit vector, its norm is {norm:.9g}")
+    return [component / norm for component in vector]
+
+
+MAX_NAME = 63
+"""Characters in a robot's or joint's name at most."""
+Identifier = Annotated[str, Field(pattern=rf"^[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}$")]
+Coordinate = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
+"""mm, or for travel limits of revolute joints degrees."""
+Angle = Annotated[float, Field(ge=-MAX_DEGREES, le=MAX_DEGREES)]
+Vec3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+UnitVec3 = Annotated[Vec3, AfterValidator(_check_unit)]
+Pose = Annotated[list[float], Field(min_length=6, max_length=6), AfterValidator(_check_pose)]
+SixAngles = Annotated[list[Angle], Field(min_length=6, max_length=6)]
+Length = Annotated[float, Field(ge=MIN_LENGTH_MM, le=MAX_MM)]
+ReferenceLength = Annotated[float, Field(ge=0, le=MAX_MM)]
+"""A leg's length at joint value 0 (mm): 0 makes the joint the leg's absolute length."""
+Travel = Annotated[list[Coordinate], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
+DialogField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
+"""A Solver Attributes field: length1..length6 (link_lengths[0..5]), offset1..offset6 (link_offsets[0..5])."""
+
+
+def field_index(dialog_field):
+    """length1..6 -> 0..5, offset1..6 -> 6..11: the encoding the generated C uses."""
+    number = int(dialog_field[-1]) - 1
+    return number if dialog_field.startswith("length") else 6 + number
+
+
+def dialog_label(dialog_field):
+    """length3 -> 'Length 3', as the Solver Attributes tab labels it."""
+    return f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
+
+
+def dialog_value(dialog_field, link_lengths, link_offsets):
+    """The number the user typed into that field (0 when left empty)."""
+    index = field_index(dialog_field)
+    values = link_lengths if index < 6 else link_offsets
+    return 0.0 if values is None else float(values[index % 6])
+
+
+class Strict(BaseModel):
+    """Every schema object: unknown keys refused, no type coercion, immutable, finite numbers."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True, allow_inf_nan=False)
+
+
