@@ -1,4 +1,4 @@
-"""Every diagnosis of kingen/diagnose.py asserted word for word on data built to have it, where
+"""Every diagnosis of kingen/verify/diagnose.py asserted word for word on data built to have it, where
 its count and its complement differ. The routines here are the reference's own joints with
 one constructed defect; each expected number follows from that construction (an offset of
 22.913 mm on leg6 makes L0 look like 399.413 - 22.913 = 376.5 mm, the Flexapod's)."""

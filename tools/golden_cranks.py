@@ -8,7 +8,7 @@ pose is R = Rz(yaw) Ry(pitch) Rx(roll) (the thesis's and LinuxCNC's fixed-axis o
 crank angle is a root of the closure |B(theta) - N|^2 - L^2 with
 B(theta) = A + r (cos theta cos beta, cos theta sin beta, -sin theta), found by scanning
 theta over a turn in 0.1-degree steps and refining each sign change with scipy's brentq to
-1e-13 rad: no closed form, no acos, nothing shared with kingen/limbs/crank.py. Branch 0 is
+1e-13 rad: no closed form, no acos, nothing shared with kingen/robot/limbs/crank.py. Branch 0 is
 the root that turns past the direction from the pivot to N (in the crank's plane), branch 1
 the other (docs/conventions.md, Postures). Checked against the CEART simulator's CAE crank
 angles at its home (robots/ceart.yaml): -43.394 and 32.345 degrees.
