@@ -6,7 +6,7 @@ This is the public face, for a notebook or a script::
     import kingen
     robot = kingen.load_robot("hexapod")
     solution = kingen.solve(robot, [[0, 0, 800, 0, 0, 0]])
-    report = kingen.verify(robot)
+    report = kingen.verify_library(robot)
 
 Every function here imports what it needs when it is called, so ``import kingen`` is
 cheap. The packages below are kingen's own (docs/architecture.md): ``kingen.robot``
@@ -21,7 +21,7 @@ revolute joints.
 from .defaults import VERSION
 
 __version__ = VERSION
-__all__ = ["analyze", "assembly_modes", "build", "load_robot", "shipped_robots", "solve", "verify"]
+__all__ = ["analyze", "assembly_modes", "build", "load_robot", "shipped_robots", "solve", "verify_library"]
 
 
 def shipped_robots():
@@ -148,7 +148,7 @@ def build(robot, host="delmia", out_dir=None):
     return get_host(host).build(robot, None if out_dir is None else Path(out_dir))
 
 
-def verify(robot, library=None, routine=None, host="delmia", samples=10000, seed=0):
+def verify_library(robot, library=None, routine=None, host="delmia", samples=10000, seed=0):
     """Check a compiled routine against the reference, its golden values and its host's
     contract; the routine runs in a child process, never in this one.
 
@@ -174,13 +174,13 @@ def verify(robot, library=None, routine=None, host="delmia", samples=10000, seed
     from pathlib import Path
 
     from .hosts import get_host
-    from .verify import VerifyOptions, verify_library
+    from .verify import VerifyOptions, verify_library as verify
 
     chosen = get_host(host)
     if library is None:
         built = chosen.build(robot)
         library, routine = built.library, built.routine
-    return verify_library(chosen.as_seen(robot), Path(library), routine or chosen.routine_name(robot),
+    return verify(chosen.as_seen(robot), Path(library), routine or chosen.routine_name(robot),
                           VerifyOptions(samples=samples, seed=seed), host=chosen)
 
 
