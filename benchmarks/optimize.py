@@ -69,7 +69,7 @@ def _optimize(path, folder, *options):
 def speedup():
     """Designs a second through the executor on 1 and 2 workers: 120 designs near the thesis's
     optimum (what a converging swarm evaluates), and a short search from random starts."""
-    from kingen.design.search import executor
+    from kingen.runtime.executors import executor
 
     problem = Problem(read_robot_file(PATH)[0], PATH)
     rng = np.random.default_rng(0)
@@ -77,7 +77,8 @@ def speedup():
                        problem.lower, problem.upper) for _ in range(120)]
     rates = {}
     for workers in (1, 2):
-        with executor(workers) as (pool, _):
+        with executor(workers) as opened:
+            pool = opened.pool
             list(pool.map(evaluate, [problem] * workers, designs[:workers]))  # start the workers
             started = time.perf_counter()
             list(pool.map(evaluate, [problem] * len(designs), designs))
