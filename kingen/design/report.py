@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .figures import COLOURS, LABELS, png
-from ..hosts.render import template
+from ..runtime.templates import template
 
 
 def polar_comparison(result):
