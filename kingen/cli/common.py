@@ -11,7 +11,8 @@ import click
 
 from ..defaults import VERSION
 from ..defaults import DEFAULT_TIMEOUT, MAX_MM
-from ..errors import KingenError, PluginDefect, refuse_special_file
+from ..errors import KingenError, PluginDefect
+from ..runtime.file_gate import refuse_special_file
 from ..runtime.text import printable
 
 EXIT_FAILED = 1

@@ -20,7 +20,8 @@ from pydantic import AfterValidator, Field, ValidationError
 
 from ..conventions import SIX, branch_of_posture
 from .design_schema import Optimize
-from ..errors import KingenError, refuse_special_file
+from ..errors import KingenError
+from ..runtime.file_gate import refuse_special_file
 from .layouts import Layout
 from .located import Locator, diagnostic
 from .limbs import MODELS
