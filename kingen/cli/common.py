@@ -9,8 +9,7 @@ from pathlib import Path
 
 import click
 
-from ..defaults import VERSION
-from ..defaults import DEFAULT_TIMEOUT, MAX_MM
+from ..defaults import DEFAULT_HOST, DEFAULT_TIMEOUT, MAX_MM, VERSION
 from ..errors import KingenError, PluginDefect
 from ..runtime.file_gate import refuse_special_file
 from ..runtime.text import printable
@@ -18,7 +17,6 @@ from ..runtime.text import printable
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 3
-DEFAULT_HOST = "delmia"
 
 ROBOT = click.argument("robot", metavar="ROBOT")
 
