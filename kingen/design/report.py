@@ -1,6 +1,6 @@
 """What an optimisation shows: the polar graph of the best design's tilt limits against the
 starting design's, the convergence of the swarm's best, and the self-contained HTML report
-that holds them (kingen/optimize.py runs the search)."""
+that holds them (:mod:`kingen.design.search` runs the search)."""
 
 import base64
 
