@@ -18,7 +18,7 @@ the angles of a pose (x y z roll pitch yaw, R = Rz(yaw) Ry(pitch) Rx(roll)), rad
 revolute joints.
 """
 
-from .defaults import VERSION
+from .defaults import DEFAULT_HOST, VERSION
 
 __version__ = VERSION
 __all__ = ["analyze", "assembly_modes", "build", "load_robot", "shipped_robots", "solve", "verify_library"]
@@ -123,7 +123,7 @@ def assembly_modes(robot, joints, near=None, search=2.0):
     return assemblies(robot, joints, near, search)
 
 
-def build(robot, host="delmia", out_dir=None):
+def build(robot, host=DEFAULT_HOST, out_dir=None):
     """Render and compile the robot's routine for a host (skipped when up to date).
 
     Parameters
@@ -148,7 +148,7 @@ def build(robot, host="delmia", out_dir=None):
     return get_host(host).build(robot, None if out_dir is None else Path(out_dir))
 
 
-def verify_library(robot, library=None, routine=None, host="delmia", samples=10000, seed=0):
+def verify_library(robot, library=None, routine=None, host=DEFAULT_HOST, samples=10000, seed=0):
     """Check a compiled routine against the reference, its golden values and its host's
     contract; the routine runs in a child process, never in this one.
 

@@ -9,6 +9,8 @@ MAX_MM = 1e6
 double precision keeps plugin and reference within verify's bound (see verify.value_tolerance_mm)."""
 DEFAULT_TIMEOUT = 300.0
 """Seconds a compiler run may take (``--timeout``, ``$KINGEN_TIMEOUT``) before it is killed."""
+DEFAULT_HOST = "delmia"
+"""The host a command builds for without ``--host``, and :func:`kingen.hosts.get_host`'s."""
 TARGETS = ("linux", "windows")
 """What ``build --target`` and ``package --target`` can produce."""
 MAX_PROCESSES = 16

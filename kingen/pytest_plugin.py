@@ -24,6 +24,8 @@ from pathlib import Path
 
 import pytest
 
+from .defaults import DEFAULT_HOST
+
 ROBOT_SUFFIXES = (".yaml", ".yml")
 ITEMS = ("build", "interface", "values", "warnings", "closure", "jacobian")
 """The items every robot file gives (golden[i] and snapshot report their own checks)."""
@@ -61,8 +63,8 @@ def pytest_addoption(parser):
                     help="collect every robot YAML in DIR as kingen tests (repeatable)")
     group.addoption("--kingen-samples", type=sample_count, default=None, metavar="N",
                     help=f"poses each robot is verified on (default {DEFAULT_SAMPLES})")
-    group.addoption("--kingen-host", default="delmia", metavar="NAME",
-                    help="the host each robot is built for and verified against (default delmia)")
+    group.addoption("--kingen-host", default=DEFAULT_HOST, metavar="NAME",
+                    help=f"the host each robot is built for and verified against (default {DEFAULT_HOST})")
     parser.addini("kingen_robots", "folders whose robot YAML files are collected as kingen tests", type="paths")
 
 

@@ -10,6 +10,7 @@ from conftest import SHIPPED, ChangedJoints, random_t6
 from kingen.cli import main
 from kingen.conventions import pose_from_t6, t6_from_pose
 from kingen.kinematics.forward import assemblies, closure, free_mask, newton
+from kingen.kinematics.posture_switch import predict_switch
 from kingen.robot.model import load_robot
 from kingen.kinematics.reference import solve
 
@@ -83,6 +84,21 @@ def test_solve_switch_explains_the_thesis_jump_of_the_gantry_tau(capsys, tmp_pat
     assert "switch 0 -> 7: the joints move by carriage1 +1822.449573 mm" in out
     assert "assembly mode 1: pose (-1105.570, -1097.373, -3365.639, 0.000, 0.000, 0.000), 1509.199 mm" in out
     assert "may jump up to 1509.199 mm (2 assembly modes)" in out
+
+
+def test_the_gantry_tau_switch_is_predicted_without_the_command_line():
+    """The kinematics of the thesis's switch, as a notebook gets them: B's joints' modes and the
+    TCP jump; a switch to an unreachable posture predicts nothing."""
+    robot = load_robot("tau")
+    t6 = t6_from_pose([THESIS_POSE])
+    expected = solve(robot, t6)
+    predicted = predict_switch(robot, t6[0], expected.joints[0], expected.warnings[0], 0, 7)
+    assert predicted.unreachable is None and predicted.change[0] == pytest.approx(1822.449573, abs=1e-6)
+    assert len(predicted.modes) == 2 and predicted.jump_mm == pytest.approx(1509.199, abs=1e-3)
+    far = t6_from_pose([[5000.0, -750.0, -1900.0, 0.0, 0.0, 0.0]])
+    unreachable = solve(robot, far)
+    predicted = predict_switch(robot, far[0], unreachable.joints[0], unreachable.warnings[0], 0, 1)
+    assert predicted.unreachable == 0 and predicted.modes is None and predicted.jump_mm is None
 
 
 def perturbed(plugin, ulps, shift=0.0):

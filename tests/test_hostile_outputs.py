@@ -124,9 +124,10 @@ def plant_compiled_template(name, planted_text):
     code in kingen's template cache under the real source's key and checksum (as another
     user could, into a cache they may write): the file a render would load."""
     from kingen.hosts.delmia.render import TEMPLATES
-    from kingen.hosts.render import _environment
+    from kingen.hosts.render import _partial_source
+    from kingen.runtime.templates import _environment
 
-    environment = _environment("c", TEMPLATES)
+    environment = _environment("c", TEMPLATES, _partial_source)
     source, filename, _ = environment.loader.get_source(environment, name)
     cache = environment.bytecode_cache
     bucket = jinja2.bccache.Bucket(environment, cache.get_cache_key(name, filename), cache.get_source_checksum(source))
@@ -145,7 +146,7 @@ def render_afresh():
     they are dropped again after the test."""
     from kingen.hosts.delmia.render import render
     from kingen.robot.model import load_robot
-    from kingen.hosts.render import _environment
+    from kingen.runtime.templates import _environment
 
     def rendered(name):
         _environment.cache_clear()

@@ -79,14 +79,14 @@ def test_special_input_files_are_refused_up_front(tmp_path, argv):
 def test_a_fifo_swapped_in_after_the_check_is_still_not_read(tmp_path, monkeypatch):
     """read_limited opens without blocking and checks the open file again: a FIFO that
     takes a regular file's place after the first look is refused, not waited on."""
-    from kingen import errors
+    from kingen.runtime import file_gate
 
     fifo = _fifo(tmp_path, "snapshot.json")
-    monkeypatch.setattr(errors, "refuse_special_file", lambda path: None)  # as if it were swapped in since
+    monkeypatch.setattr(file_gate, "refuse_special_file", lambda path: None)  # as if it were swapped in since
     signal.alarm(10)  # a regression hangs here: fail instead
     try:
         with pytest.raises(KingenError, match=r"snapshot.json: not a regular file \(a FIFO\)"):
-            errors.read_limited(fifo, 1 << 20, "not a kingen snapshot")
+            file_gate.read_limited(fifo, 1 << 20, "not a kingen snapshot")
     finally:
         signal.alarm(0)
 

@@ -9,15 +9,14 @@ from pathlib import Path
 
 import click
 
-from ..defaults import VERSION
-from ..defaults import DEFAULT_TIMEOUT, MAX_MM
-from ..errors import KingenError, PluginDefect, refuse_special_file
+from ..defaults import DEFAULT_HOST, DEFAULT_TIMEOUT, MAX_MM, VERSION
+from ..errors import KingenError, PluginDefect
+from ..runtime.file_gate import refuse_special_file
 from ..runtime.text import printable
 
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERNAL = 3
-DEFAULT_HOST = "delmia"
 
 ROBOT = click.argument("robot", metavar="ROBOT")
 
@@ -251,12 +250,18 @@ def load_model(robot):
     """The validated robot named by a shipped name or a YAML path (see kingen.robot.model). Every
     command that computes starts here, so numpy's floating-point warnings are turned off
     here too: kingen judges NaN and inf itself, and the warnings would only be noise."""
+    return load_model_and_data(robot)[0]
+
+
+def load_model_and_data(robot):
+    """(model, data, lines): load_model's robot with the plain data and field lines of its
+    file, read once (kingen.robot.model.load_robot_and_data)."""
     import numpy as np
 
-    from ..robot.model import load_robot
+    from ..robot.model import load_robot_and_data
 
     np.seterr(all="ignore")
-    return load_robot(robot)
+    return load_robot_and_data(robot)
 
 
 def finite(data):

@@ -11,7 +11,7 @@ import click
 
 from ..errors import KingenError
 from ..runtime.executors import checked_scheduler
-from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model, say
+from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model_and_data, say
 
 
 @cli.command()
@@ -44,10 +44,8 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     from ..design.problem import Problem, design_yaml, optimized_name
     from ..design.report import convergence, polar_comparison, report_html
     from ..runtime.files import default_out_dir, write_atomic
-    from ..robot.reading import read_robot_file
 
-    model = load_model(robot)
-    data, lines, _ = read_robot_file(model.path)
+    model, data, lines = load_model_and_data(robot)
     if not data.get("optimize"):
         raise KingenError(f"{model.path}: optimize: no design problem in this robot file (see README, "
                           "'Design optimisation')")

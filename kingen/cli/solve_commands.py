@@ -106,43 +106,35 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
 
 
 def _predict_switch(model, t6, expected, switch, scale, units):
-    """What a host that recomputes the TCP from posture B's joints may do after A -> B; no
-    prediction when A or B is unreachable at the pose."""
+    """What a host that recomputes the TCP from posture B's joints may do after A -> B
+    (kingen.kinematics.posture_switch), printed; no prediction when A or B is unreachable at
+    the pose."""
     import numpy as np
 
-    from ..conventions import pose_from_t6, wrap_angle
-    from ..kinematics.forward import assemblies
-    from ..kinematics.routine import WARNINGS
+    from ..kinematics.posture_switch import predict_switch
 
     first, second = switch
     if max(first, second) >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--switch")
-    unreachable = [k for k in (first, second) if expected.warnings[0, k] == WARNINGS["WARN_UNREACHABLE"]]
-    if unreachable:
-        say(f"switch {first} -> {second}: posture {unreachable[0]} is unreachable at this pose; no switch to predict")
+    predicted = predict_switch(model, t6, expected.joints[0], expected.warnings[0], first, second)
+    if predicted.unreachable is not None:
+        say(f"switch {first} -> {second}: posture {predicted.unreachable} is unreachable at this pose; "
+            "no switch to predict")
         return
-    joints = expected.joints[0]
-    if not model.has_forward:
+    if predicted.modes is None:
         say(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)")
         return
-    pose = pose_from_t6(t6)
-    commanded = np.concatenate([pose[:3], np.radians(pose[3:])])
-    change = joints[:, second] - joints[:, first]
-    change = np.where(model.revolute, wrap_angle(change), change)
     moved = ", ".join(f"{name} {value * s:+.6f} {unit}" for name, value, s, unit in
-                      zip(model.joint_names, change, scale, units))
+                      zip(model.joint_names, predicted.change, scale, units))
     say(f"switch {first} -> {second}: the joints move by {moved}")
-    found = assemblies(model, joints[:, second], commanded).found
-    if not found:
+    if not predicted.modes:
         say(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP")
         return
-    for number, assembly in enumerate(found):
-        distance = float(np.linalg.norm(assembly.pose[:3] - commanded[:3]))
-        pose = ", ".join(f"{v:.3f}" for v in np.concatenate([assembly.pose[:3], np.degrees(assembly.pose[3:])]))
+    for number, (mode, distance) in enumerate(zip(predicted.modes, predicted.distances_mm)):
+        pose = ", ".join(f"{v:.3f}" for v in np.concatenate([mode.pose[:3], np.degrees(mode.pose[3:])]))
         say(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP")
-    worst = max(float(np.linalg.norm(a.pose[:3] - commanded[:3])) for a in found)
-    say(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {worst:.3f} mm "
-         f"({len(found)} assembly modes)")
+    say(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {predicted.jump_mm:.3f} mm "
+        f"({len(predicted.modes)} assembly modes)")
 
 
 def _index_text(value):

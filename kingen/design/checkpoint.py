@@ -18,7 +18,8 @@ from typing import List, Literal, Optional, Tuple
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from ..errors import KingenError, size_text
+from ..errors import KingenError
+from ..runtime.file_gate import size_text
 from ..runtime.files import private_writes, write_atomic
 
 CHECKPOINT = "checkpoint.json"

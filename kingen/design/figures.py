@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
 from .analysis import CAUSES
-from ..hosts.render import template
+from ..runtime.templates import template
 
 COLOURS = {"unreachable": "#d62728", "joint_limits": "#ff7f0e", "direct_singularity": "#9467bd",
            "collision": "#8c564b", "none": "#2ca02c"}

@@ -1,6 +1,6 @@
 """What an optimisation shows: the polar graph of the best design's tilt limits against the
 starting design's, the convergence of the swarm's best, and the self-contained HTML report
-that holds them (kingen/design/search.py runs the search)."""
+that holds them (:mod:`kingen.design.search` runs the search)."""
 
 import base64
 
@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .figures import COLOURS, LABELS, png
-from ..hosts.render import template
+from ..runtime.templates import template
 
 
 def polar_comparison(result):

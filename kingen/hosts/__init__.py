@@ -6,13 +6,13 @@ through :mod:`kingen.robot.limbs`.
 command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``) and LinuxCNC (``linuxcnc``) are built in.
 """
 
+from ..defaults import DEFAULT_HOST
 from ..errors import KingenError
 from ..robot.model import NAME_CHECKS
 from .base import BuildResult, Host, LoadedRoutine
 from .delmia import DelmiaHost
 from .linuxcnc import LinuxcncHost
 
-DEFAULT_HOST = "delmia"
 HOSTS = {}
 
 

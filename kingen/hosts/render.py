@@ -1,7 +1,7 @@
 """Rendering, shared by every host: robot -> the view-model its C templates substitute.
-Pure: nothing here touches the file system except reading templates (and jinja2's compiled
-templates, kept in kingen's cache: PrivateBytecodeCache); the build layer
-writes files.
+Pure: nothing here touches the file system except reading templates (through
+:mod:`kingen.runtime.templates`, which keeps jinja2's compiled templates in kingen's cache);
+the build layer writes files.
 
 All decisions are made here in a Python view-model; the templates only loop and
 substitute. Numbers are written with Python's shortest round-trip repr, so the
@@ -9,27 +9,15 @@ C tables hold exactly the doubles the reference uses. Templates are found in the
 own folder first, then in the shared ``templates/`` (limb model partials from the registry).
 """
 
-import functools
 import math
-import pickle
 import textwrap
 
-import jinja2
-
 from ..defaults import VERSION
-from ..errors import KingenError
-from ..runtime.files import atomic_file, cache_dir, private_file, private_folder, private_writes
+from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, partial_path
-from ..runtime.resources import templates_dir
 from ..robot.schema import dialog_label, field_index
 from ..kinematics.singularity import PACKED, partial_sum_split
-from ..runtime.text import finalizer, markdown
-
-TEMPLATE_KINDS = {".c.j2": "c", ".md.j2": "markdown", ".html.j2": "html"}
-"""Which escaping (:func:`kingen.runtime.text.finalizer`) a template's substitutions get, by suffix
-(HTML: jinja2's autoescape); every other template is plain text. Headers (``.h.j2``) hold no
-user text and get none."""
 
 
 def _partial_source(name):
@@ -41,69 +29,11 @@ def _partial_source(name):
     return path.read_text(), str(path), lambda: True
 
 
-class PrivateBytecodeCache(jinja2.BytecodeCache):
-    """jinja2's compiled templates, kept in kingen's cache folder (``<cache>/<name>``, looked
-    up at each use), so that a process renders without compiling its templates first (about
-    50 ms a process). Compiled code is loaded only from a private folder's private files (as
-    kingen.runtime.files.cached runs only what this user built) and written whole, private, or not
-    at all: a cache that cannot be read or written costs the compilation, never the render."""
-
-    def __init__(self, name):
-        self.name = name
-
-    def _path(self, bucket):
-        return cache_dir() / self.name / f"{bucket.key}.jinja"
-
-    def load_bytecode(self, bucket):
-        path = self._path(bucket)
-        try:
-            for folder in (path.parent.parent, path.parent):
-                private_folder(folder)
-            private_file(path)
-            with open(path, "rb") as stream:
-                bucket.load_bytecode(stream)
-        except FileNotFoundError:  # not compiled yet
-            pass
-        except (KingenError, OSError, EOFError, ValueError, pickle.UnpicklingError):  # not ours, or cut short
-            bucket.reset()
-
-    def dump_bytecode(self, bucket):
-        path = self._path(bucket)
-        try:
-            private_folder(path.parent.parent)
-            with private_writes(path.parent):
-                private_folder(path.parent)
-                with atomic_file(path) as stream:
-                    bucket.write_bytecode(stream)
-        except (KingenError, OSError):  # not ours, or not writable: the next process compiles again
-            pass
-
-
-@functools.lru_cache(maxsize=None)
-def _environment(kind, folder):
-    folders = [str(folder)] if folder is not None else []
-    return jinja2.Environment(
-        loader=jinja2.ChoiceLoader([jinja2.FunctionLoader(_partial_source),
-                                    jinja2.FileSystemLoader([*folders, str(templates_dir())])]),
-        undefined=jinja2.StrictUndefined,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        keep_trailing_newline=True,
-        autoescape=kind == "html",
-        finalize=finalizer(kind) if kind not in (None, "html") else None,
-        bytecode_cache=PrivateBytecodeCache(f"templates-{VERSION}-{kind}"),  # compiled per settings
-    )
-
-
 def template(name, folder=None):
     """The jinja2 template ``name`` from ``folder`` (a host's templates) or the shared
-    templates/, in the environment that escapes its substitutions for its kind of file
-    (C, Markdown, HTML, plain text): strict undefined."""
-    kind = None if name.endswith(".h.j2") else next(
-        (kind for suffix, kind in TEMPLATE_KINDS.items() if name.endswith(suffix)), "plain")
-    environment = _environment(kind, folder)
-    environment.filters["markdown"] = markdown
-    return environment.get_template(name)
+    templates/, with the limb models' partials from the registry
+    (:func:`kingen.runtime.templates.template`)."""
+    return templates.template(name, folder, _partial_source)
 
 
 def calibration_line(robot, joint, parameter, dialog_field, built_in):

@@ -1,4 +1,4 @@
-"""The ``optimize:`` section of a robot file (kingen/design/problem.py turns it into a design
+"""The ``optimize:`` section of a robot file (:mod:`kingen.design.problem` turns it into a design
 problem). Defaults are the 6-RUS thesis's (``../shared/optimisation.md``); lengths mm,
 angles degrees."""
 

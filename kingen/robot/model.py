@@ -20,7 +20,8 @@ from pydantic import AfterValidator, Field, ValidationError
 
 from ..conventions import SIX, branch_of_posture
 from .design_schema import Optimize
-from ..errors import KingenError, refuse_special_file
+from ..errors import KingenError
+from ..runtime.file_gate import refuse_special_file
 from .layouts import Layout
 from .located import Locator, diagnostic
 from .limbs import MODELS
@@ -287,9 +288,16 @@ def resolve_robot_path(spec):
 
 def load_robot(spec):
     """Load, validate and expand a robot definition (path or shipped name)."""
+    return load_robot_and_data(spec)[0]
+
+
+def load_robot_and_data(spec):
+    """(robot, data, lines): the robot of :func:`load_robot` with the plain data and the
+    {field path tuple: 1-based line} of its file (kingen.robot.reading.read_robot_file), the
+    file read once: what a design problem is built from beside the robot."""
     path = resolve_robot_path(spec)
     data, lines, raw = read_robot_file(path)
-    return robot_from_data(data, path, lines, raw)
+    return robot_from_data(data, path, lines, raw), data, lines
 
 
 def robot_from_data(data, path, lines=None, raw=None):

@@ -24,7 +24,8 @@ from ruamel.yaml.comments import CommentedMap, CommentedSeq
 from ruamel.yaml.error import MarkedYAMLError, YAMLError
 from ruamel.yaml.events import AliasEvent, CollectionEndEvent, CollectionStartEvent, MappingStartEvent, ScalarEvent
 
-from ..errors import located, read_limited
+from ..errors import located
+from ..runtime.file_gate import read_limited
 from ..runtime.text import unprintable
 
 MAX_FILE_BYTES = 1_000_000

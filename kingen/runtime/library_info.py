@@ -10,7 +10,7 @@ library carries, not a proof of where it came from: any file can hold one.
 import re
 import struct
 
-from ..errors import read_limited
+from .file_gate import read_limited
 
 BUILD_INFO_MARKER = "kingen-build-info:"
 """Starts the build-info string compiled into every generated library (kingen.hosts.render writes it)."""

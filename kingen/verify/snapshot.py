@@ -16,7 +16,8 @@ from pydantic import Field, ValidationError
 
 from ..defaults import VERSION
 from ..conventions import t6_from_pose
-from ..errors import InternalError, PluginDefect, located, read_limited, size_text
+from ..errors import InternalError, PluginDefect, located
+from ..runtime.file_gate import read_limited, size_text
 from ..runtime.files import atomic_file
 from ..kinematics.poses import pose_chunks
 from ..kinematics.routine import WARNINGS

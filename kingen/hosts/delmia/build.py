@@ -15,7 +15,8 @@ from pathlib import Path
 from ...defaults import VERSION
 from ...runtime.compiler import CompileError, compile_c, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
-from ...errors import KingenError, refuse_special_file
+from ...errors import KingenError
+from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
 from .pe import dll_exports

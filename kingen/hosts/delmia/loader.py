@@ -20,7 +20,8 @@ from pathlib import Path
 import cffi
 import numpy as np
 
-from ...errors import KingenError, PluginDefect, refuse_special_file
+from ...errors import KingenError, PluginDefect
+from ...runtime.file_gate import refuse_special_file
 from ...kinematics.routine import Calls, check_routine_name
 from ...kinematics.singularity import branch_table, representative_postures
 from . import abi

@@ -16,7 +16,8 @@ import cffi
 import numpy as np
 
 from ...conventions import pose_from_t6
-from ...errors import KingenError, PluginDefect, refuse_special_file
+from ...errors import KingenError, PluginDefect
+from ...runtime.file_gate import refuse_special_file
 from ...kinematics.routine import WARNINGS, Calls
 from .build import harness
 from .render import translating
