@@ -4,7 +4,7 @@
 - YAML files and command-line poses give angles in degrees.
 - A pose ``x y z roll pitch yaw`` (mm, degrees) is the platform frame in the base
   frame with R = Rz(yaw) . Ry(pitch) . Rx(roll) (fixed axes X, then Y, then Z).
-- H is the usual homogeneous matrix (columns n, o, a, p). DELMIA passes
+- H is the usual homogeneous matrix (columns n, o, a, p). A routine is called with
   T6 = transpose(H): rows n, o, a, p, column 3 = (0, 0, 0, 1).
 - Posture k: each two-branch limb gives one binary digit, the first such limb
   most significant, branch 0 before branch 1.
@@ -24,7 +24,8 @@ SIX = 6
 
 @dataclass(frozen=True)
 class JointType:
-    """A kind of joint and every unit and label that follows from it, defined once."""
+    """A kind of joint and every unit that follows from it, defined once; a host names the
+    kind by ``name``."""
 
     name: str
     unit: str
@@ -37,15 +38,10 @@ class JointType:
     """Values are angles, compared modulo 2 pi (pi equals -pi)."""
     c_units: str
     """How generated C comments name the unit."""
-    delmia_type: str
-    """The Actuator Space Map's joint type."""
-    delmia_axis: str
-    kinstat_constant: str
-    """The vendor header's joint-type constant for DLM_Data_KinStat.joint_types."""
 
 
-PRISMATIC = JointType("prismatic", "mm", "mm", 1.0, False, "mm", "Translational", "Trans Z", "TRANSLATIONAL")
-REVOLUTE = JointType("revolute", "rad", "deg", math.pi / 180.0, True, "radians", "Rotational", "Rot Z", "ROTATIONAL")
+PRISMATIC = JointType("prismatic", "mm", "mm", 1.0, False, "mm")
+REVOLUTE = JointType("revolute", "rad", "deg", math.pi / 180.0, True, "radians")
 
 
 def rotation_from_rpy(roll, pitch, yaw):
@@ -79,22 +75,22 @@ def matrix_from_pose(pose):
 
 
 def t6_from_matrix(matrix):
-    """DELMIA's transposed T6 (rows n, o, a, p) from homogeneous matrices H."""
+    """The transposed T6 (rows n, o, a, p) from homogeneous matrices H."""
     return np.swapaxes(np.asarray(matrix, dtype=float), -1, -2).copy()
 
 
 def matrix_from_t6(t6):
-    """Homogeneous matrices H from DELMIA's transposed T6."""
+    """Homogeneous matrices H from the transposed T6."""
     return t6_from_matrix(t6)
 
 
 def t6_from_pose(pose):
-    """DELMIA's T6 (..., 4, 4) for poses (..., 6) in mm and degrees."""
+    """T6 (..., 4, 4) for poses (..., 6) in mm and degrees."""
     return t6_from_matrix(matrix_from_pose(pose))
 
 
 def pose_from_t6(t6):
-    """Poses (..., 6) x y z in mm and roll pitch yaw in degrees from DELMIA's T6 (..., 4, 4);
+    """Poses (..., 6) x y z in mm and roll pitch yaw in degrees from T6 (..., 4, 4);
     pitch in [-90, 90] degrees (the inverse of t6_from_pose away from pitch = +/-90)."""
     t6 = np.asarray(t6, dtype=float)
     angles = rpy_from_rotation(np.swapaxes(t6[..., :3, :3], -1, -2))

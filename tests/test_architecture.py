@@ -8,7 +8,12 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "kingen"
 MAX_LINES = 400
-DELMIA_ONLY = ("DNBVMAP", "get_kin_config", "kin_check_definition")
+DELMIA_ONLY = ("DNBVMAP", "get_kin_config", "kin_check_definition", "kinstat", "KinStat", "delmia_type",
+               "delmia_axis", "Actuator Space", "kin_{", "lib{", "dialog_label", "dialog_value", "DialogField")
+"""DELMIA's symbols and names, and how it names a robot's routine, library, calibration fields and
+joint types: kingen/hosts/delmia/ alone says them; the rest asks the host (kingen.hosts.base.Host)."""
+HOST_NEUTRAL = ("foundation", "runtime", "robot", "kinematics")
+"""The layers that name no host at all: the robot, its model and its kinematics."""
 
 
 def module_name(path):
@@ -152,6 +157,19 @@ def test_delmia_names_live_only_in_its_host_package():
                if path.is_file() and path.suffix in (".py", ".j2", ".c", ".h") and delmia not in path.parents
                for word in DELMIA_ONLY if word in path.read_text()]
     assert outside == []
+
+
+def test_the_host_neutral_layers_name_no_host():
+    """Only the setting of which host commands use by default (``DEFAULT_HOST``, read before
+    anything heavy loads) may spell a host's name below the hosts: it is a choice, not
+    knowledge of that host."""
+    known = modules()
+    named = [f"{path.relative_to(PACKAGE.parent)}: {word}" for name, path in sorted(known.items())
+             if LAYERS[layer(name)][0] in HOST_NEUTRAL
+             for word in ("delmia", "igrip")
+             if word in "".join(line for line in path.read_text().lower().splitlines(True)
+                                if not line.startswith("default_host = "))]
+    assert named == []
 
 
 def test_no_module_grows_past_a_few_hundred_lines():

@@ -12,6 +12,7 @@ from conftest import SHIPPED, random_t6, require_tool
 from kingen.runtime.compiler import compile_c
 from kingen.hosts.delmia.build import MINGW, STRICT_C89, build_plugin, host_support, windows_host_import_library
 from kingen.conventions import rotation_from_rpy, t6_from_matrix
+from kingen.hosts import get_host
 from kingen.robot.model import load_robot
 from kingen.hosts.delmia.package import render_package, write_package
 from kingen.hosts.delmia.pe import dll_exports
@@ -69,7 +70,7 @@ def test_sanitized_plugin_reports_nothing_on_random_extreme_and_non_finite_t6(sa
     compile_c([source], library, [*STRICT_C89, *SANITIZE, "-fPIC", "-shared", f"-I{include}"], compiler=["gcc"])
     t6 = extreme_t6(robot, seed=17)
     lines = "\n".join(" ".join(repr(float(v)) for v in matrix.ravel()) for matrix in t6)
-    result = subprocess.run([str(sanitized_client), str(library), robot.routine], input=lines,
+    result = subprocess.run([str(sanitized_client), str(library), get_host("delmia").routine_name(robot)], input=lines,
                             capture_output=True, text=True, env={"ASAN_OPTIONS": "detect_leaks=0",
                                                                  "UBSAN_OPTIONS": "print_stacktrace=1"})
     assert result.returncode == 0 and result.stderr == "", result.stderr[-3000:]
@@ -88,7 +89,8 @@ def test_windows_dll_exports_both_entry_points(tmp_path, name):
     robot = load_robot(name)
     result = build_plugin(robot, tmp_path, target="windows")
     assert result.library.name == f"lib{name}.dll"
-    assert dll_exports(result.library) == sorted(["get_kin_config", robot.routine, "kingen_build_info"])
+    assert dll_exports(result.library) == sorted(["get_kin_config", get_host("delmia").routine_name(robot),
+                                                  "kingen_build_info"])
 
 
 @pytest.mark.usefixtures("needs_mingw")

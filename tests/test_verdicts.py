@@ -20,6 +20,7 @@ import pytest
 from conftest import ONE_RAIL, PLUMB_LEG, ChangedCalls
 
 from kingen.conventions import t6_from_pose
+from kingen.hosts import get_host
 from kingen.robot.model import load_robot
 from kingen.kinematics.reference import solve
 from kingen.verify.report import Report
@@ -40,7 +41,8 @@ def calls_of(expected, warnings=None, solutions=None):
 
 
 def compared(robot, t6, calls, expected):
-    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    report = Report(robot=robot.name, routine=get_host("delmia").routine_name(robot), samples=len(t6), seed=0,
+                    postures=robot.postures)
     tally = Tally.start(robot)
     accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
     return report, tally
@@ -387,7 +389,8 @@ def test_accumulate_adds_each_chunk_to_the_running_totals(tmp_path):
     calls = calls_of(expected, warnings, joints)
     calls.faults[5] = INPUTS_MODIFIED  # a faulty call whose outputs are still compared
     calls.faults[8] = 1  # a call stopped at a faulting write (pose 8, unreachable): left out
-    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    report = Report(robot=robot.name, routine=get_host("delmia").routine_name(robot), samples=len(t6), seed=0,
+                    postures=robot.postures)
     tally = Tally.start(robot)
     counts = []
     for _ in range(2):

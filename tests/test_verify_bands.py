@@ -12,6 +12,7 @@ from conftest import ONE_RAIL
 from kingen.kinematics.routine import SINGULAR_TOLERANCE, WARNING_BAND, WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.kinematics.routine import Calls
+from kingen.hosts import get_host
 from kingen.robot.model import load_robot
 from kingen.kinematics.reference import solve
 from kingen.verify.report import Report
@@ -43,7 +44,8 @@ def flipped(expected, joint_shift=0.0):
 
 
 def accumulate(robot, t6, calls, expected):
-    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    report = Report(robot=robot.name, routine=get_host("delmia").routine_name(robot), samples=len(t6), seed=0,
+                    postures=robot.postures)
     _accumulate(robot, report, _Tally.start(robot), robot.revolute, t6, calls, expected)
     return report
 

@@ -9,6 +9,7 @@ import pytest
 from kingen.verify import tally as verify
 from kingen.kinematics.routine import WARNINGS
 from kingen.kinematics.routine import Calls
+from kingen.hosts import get_host
 from kingen.robot.model import load_robot
 from kingen.kinematics.reference import solve
 from kingen.verify.report import Report
@@ -35,7 +36,8 @@ def shifted_branch(robot, expected, limb, branch, shift):
 
 
 def report_and_tally(robot, t6, calls, expected):
-    report = Report(robot=robot.name, routine=robot.routine, samples=len(t6), seed=0, postures=robot.postures)
+    report = Report(robot=robot.name, routine=get_host("delmia").routine_name(robot), samples=len(t6), seed=0,
+                    postures=robot.postures)
     tally = _Tally.start(robot)
     _accumulate(robot, report, tally, robot.revolute, t6, calls, expected)
     return report, tally

@@ -121,6 +121,17 @@ class Host:
         """The routine kingen generates for ``robot``."""
         raise NotImplementedError
 
+    def library_name(self, robot) -> str:
+        """The name the host is given for the compiled routine's library, without a file
+        suffix; the routine's name by default."""
+        return self.routine_name(robot)
+
+    def calibration_label(self, field) -> str:
+        """What this host calls a calibration field (``length1`` .. ``offset6``,
+        :data:`kingen.robot.schema.CALIBRATION_FIELDS`) where its sheets and sources name
+        it; the robot file's spelling by default."""
+        return field
+
     def package(self, robot, out_dir, *, target=None, timeout=DEFAULT_TIMEOUT) -> list:
         """Write the package folder whole or not at all; the written paths."""
         raise NotImplementedError

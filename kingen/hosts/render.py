@@ -16,7 +16,7 @@ from ..defaults import VERSION
 from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, partial_path
-from ..robot.schema import dialog_label, field_index
+from ..robot.schema import calibration_index
 from ..kinematics.singularity import PACKED, partial_sum_split
 
 
@@ -36,17 +36,19 @@ def template(name, folder=None):
     return templates.template(name, folder, _partial_source)
 
 
-def calibration_line(robot, joint, parameter, dialog_field, built_in):
-    """'Length 3 -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners."""
+def calibration_line(robot, host, joint, parameter, field, built_in):
+    """'<field> -> leg3.reference_length (mm, built-in 803.887)' for sheets and banners: one
+    entry of ``robot.calibration()``, the field named as ``host`` labels it."""
     unit = robot.limbs[joint].calibratable[parameter]
-    return f"{dialog_label(dialog_field)} -> {robot.joint_names[joint]}.{parameter} ({unit}, built-in {built_in:.10g})"
+    return (f"{host.calibration_label(field)} -> {robot.joint_names[joint]}.{parameter} "
+            f"({unit}, built-in {built_in:.10g})")
 
 
-def build_info(robot, routine=None, postures=None, extra=()):
+def build_info(robot, routine, postures=None, extra=()):
     """What the library says about itself, compiled in as data (read back by kingen info):
-    the robot, the routine (default the DELMIA routine's name), its joints and postures,
-    the definition's sha256, kingen's version, then any ``extra`` (key, value) pairs."""
-    text = (f"{BUILD_INFO_MARKER} robot={robot.name} routine={routine or robot.routine} dof={robot.dof} "
+    the robot, the ``routine``'s name, its joints and postures (default the robot's), the
+    definition's sha256, kingen's version, then any ``extra`` (key, value) pairs."""
+    text = (f"{BUILD_INFO_MARKER} robot={robot.name} routine={routine} dof={robot.dof} "
             f"postures={robot.postures if postures is None else postures} sha256={robot.sha256} kingen={VERSION}")
     return text + "".join(f" {key}={value}" for key, value in extra)
 
@@ -59,7 +61,7 @@ def _model_tables(robot):
         table = tables.setdefault(cls, {"name": limb.model, "partial": f"limbs/{limb.model}.c.j2",
                                         "columns": f"Columns: {cls.c_columns}.", "rows": []})
         row = {"joint": index, "name": robot.joint_names[index], **limb.c_row()}
-        row.update({f"{parameter}_field": field_index(limb.calibrate[parameter]) if parameter in limb.calibrate
+        row.update({f"{parameter}_field": calibration_index(limb.calibrate[parameter]) if parameter in limb.calibrate
                     else -1 for parameter in cls.calibratable})
         table["rows"].append(row)
     return list(tables.values())
@@ -132,9 +134,10 @@ def joint_sum(robot):
             for index, bit in enumerate(robot.branch_bits)]
 
 
-def robot_view(robot):
+def robot_view(robot, host):
     """What every host's routine template substitutes about the robot, already formatted as C:
-    names, joints, limb model tables, singularity tests and the build information."""
+    names (the routine's and library's as ``host`` names them), joints, limb model tables,
+    singularity tests, the calibration fields (in ``host``'s words) and the build information."""
     lower, upper = robot.travel_limits()
     joints = []
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
@@ -157,8 +160,8 @@ def robot_view(robot):
         "source_hash": robot.sha256,
         "name": robot.name,
         "description_lines": textwrap.wrap(" ".join(robot.description.split()), 88) or [""],
-        "library": robot.library,
-        "routine": robot.routine,
+        "library": host.library_name(robot),
+        "routine": host.routine_name(robot),
         "dof": robot.dof,
         "postures": robot.postures,
         "two_branch_count": sum(1 for bit in robot.branch_bits if bit >= 0),
@@ -178,6 +181,6 @@ def robot_view(robot):
         "partial_sums": partial_sums(robot),
         "direct_index_min": c_double(robot.direct_index_min or 0.0),
         "degree": c_double(math.pi / 180.0),
-        "calibration": [calibration_line(robot, *entry) for entry in robot.calibration()],
-        "build_info": build_info(robot),
+        "calibration": [calibration_line(robot, host, *entry) for entry in robot.calibration()],
+        "build_info": build_info(robot, host.routine_name(robot)),
     }

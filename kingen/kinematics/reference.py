@@ -3,7 +3,7 @@
 Independent of the C templates: neither is generated from the other. Each limb
 model's numpy solver lives with its model (:mod:`kingen.robot.limbs`); this module maps
 poses to platform points, assembles postures and decides warnings. Vectorised
-over poses. Inputs are DELMIA T6 arrays (n, 4, 4) in the base frame, mm; outputs
+over poses. Inputs are T6 arrays (n, 4, 4) in the base frame, mm; outputs
 are every posture's joint values (mm, radians in (-pi, pi]) and warning.
 
 Warnings follow the generated C exactly (README, 'Warnings'):
@@ -91,7 +91,7 @@ def _points_from_rows(rows, points):
 def solve(robot, t6, link_lengths=None, link_offsets=None, indices=False):
     """Every posture of ``robot`` for T6 arrays (n, 4, 4); see the module docstring.
 
-    ``link_lengths`` / ``link_offsets`` (6 each, the dialog's Length i / Offset i) replace
+    ``link_lengths`` / ``link_offsets`` (6 each, the calibration fields length i / offset i) replace
     the parameters the robot marks as calibrated, where non-zero. The direct index is
     computed when the robot's warnings need it (``direct_index_min``) or ``indices`` asks
     for it, for robots with six force lines."""

@@ -4,7 +4,7 @@ for a batch of poses, in kingen's units, and how close it must come to the refer
 A host (:mod:`kingen.hosts`) loads a routine and calls it on T6 matrices (mm); whatever its
 own interface, it hands verify a :class:`Calls`: every posture's joints (mm for prismatic,
 radians for revolute joints) and a status per posture in the codes of ``WARNINGS``
-(docs/conventions.md). DELMIA's warnings are these codes; another host maps its own.
+(docs/conventions.md). A host whose routines report other codes maps them to these.
 """
 
 import re
@@ -27,7 +27,7 @@ WARNING_NAMES = {value: name for name, value in WARNINGS.items()}
 
 SINGULAR_TOLERANCE = 0.00001
 """Band |D| <= 1e-5 around a limb singularity (D: a limb's normalised radicand): the
-routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5 (DELMIA's ZERO_TOL)."""
+routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5."""
 
 
 def warnings_to_exercise(robot, vocabulary=None):

@@ -12,13 +12,13 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import Field, field_validator
 
 from .limbs import Crank, Leg, Rail, model_name
-from .schema import MAX_MM, Coordinate, DialogField, Length, ReferenceLength, SixAngles, Strict, Travel
+from .schema import MAX_MM, Coordinate, CalibrationField, Length, ReferenceLength, SixAngles, Strict, Travel
 
 class _Layout(Strict):
     """A generator of six limbs of one model; ``calibrate`` maps a parameter to six fields."""
 
     travel: Optional[Travel] = None
-    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=6, max_length=6)]] = {}
+    calibrate: dict[str, Annotated[list[CalibrationField], Field(min_length=6, max_length=6)]] = {}
     limb_class: ClassVar[type] = None
 
     @field_validator("calibrate")
@@ -109,7 +109,7 @@ class Rus6Layout(_Layout):
 class _DeltaLayout(_Layout):
     """Three limbs 120 degrees apart, named and placed as LinuxCNC's delta modules do."""
 
-    calibrate: dict[str, Annotated[list[DialogField], Field(min_length=3, max_length=3)]] = {}
+    calibrate: dict[str, Annotated[list[CalibrationField], Field(min_length=3, max_length=3)]] = {}
 
 
 class LinearDeltaLayout(_DeltaLayout):

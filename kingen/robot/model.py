@@ -27,7 +27,7 @@ from .located import Locator, diagnostic
 from .limbs import MODELS
 from ..runtime.resources import robots_dir
 from .reading import read_robot_file
-from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict, dialog_value
+from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict, calibration_value
 from ..units import LENGTH_UNITS, document_in_mm
 
 MAX_GOLDEN = 1000
@@ -174,14 +174,6 @@ class Robot:
         return self.dof == SIX
 
     @property
-    def routine(self):
-        return f"kin_{self.name}"
-
-    @property
-    def library(self):
-        return f"lib{self.name}"
-
-    @property
     def dof(self):
         return len(self.limbs)
 
@@ -222,19 +214,21 @@ class Robot:
         return lower, upper
 
     def calibration(self):
-        """Per calibrated parameter: (joint index, parameter, dialog field, built-in value in YAML units)."""
+        """Per calibrated parameter: (joint index, parameter, calibration field, built-in value in
+        YAML units)."""
         return [
-            (index, parameter, dialog_field, getattr(limb, parameter))
+            (index, parameter, field, getattr(limb, parameter))
             for index, limb in enumerate(self.limbs)
-            for parameter, dialog_field in limb.calibrate.items()
+            for parameter, field in limb.calibrate.items()
         ]
 
     def calibrated(self, link_lengths=None, link_offsets=None):
-        """This robot with the dialog's values applied: a zero or non-finite field keeps the
+        """This robot with the calibration fields' values applied (``link_lengths`` and
+        ``link_offsets``, 6 each or None): a zero or non-finite field keeps the
         built-in value, any other replaces it (mm, or degrees for a crank's zero_offset)."""
         limbs = list(self.limbs)
-        for index, parameter, dialog_field, _ in self.calibration():
-            value = dialog_value(dialog_field, link_lengths, link_offsets)
+        for index, parameter, field, _ in self.calibration():
+            value = calibration_value(field, link_lengths, link_offsets)
             if value != 0.0 and math.isfinite(value):
                 limbs[index] = limbs[index].model_copy(update={parameter: value})
         return replace(self, limbs=tuple(limbs))
@@ -357,11 +351,11 @@ def _expand_limbs(document, locate):
             raise locate.error(["limbs", index, "name"], f"joint name '{name}' is used twice")
     used = {}
     for index, limb in enumerate(limbs):
-        for parameter, dialog_field in limb.calibrate.items():
-            if dialog_field in used:
+        for parameter, field in limb.calibrate.items():
+            if field in used:
                 raise locate.error(["limbs", index, "calibrate", parameter],
-                                   f"dialog field {dialog_field} is already read for {used[dialog_field]}")
-            used[dialog_field] = f"{names[index]}.{parameter}"
+                                   f"dialog field {field} is already read for {used[field]}")
+            used[field] = f"{names[index]}.{parameter}"
     two_branch = sum(1 for limb in limbs if limb.branches == 2)
     if two_branch > MAX_TWO_BRANCH_LIMBS:
         raise locate.error(

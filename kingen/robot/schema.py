@@ -53,24 +53,24 @@ Length = Annotated[float, Field(ge=MIN_LENGTH_MM, le=MAX_MM)]
 ReferenceLength = Annotated[float, Field(ge=0, le=MAX_MM)]
 """A leg's length at joint value 0 (mm): 0 makes the joint the leg's absolute length."""
 Travel = Annotated[list[Coordinate], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
-DialogField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
-"""A Solver Attributes field: length1..length6 (link_lengths[0..5]), offset1..offset6 (link_offsets[0..5])."""
+CalibrationField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
+"""A calibration field, read by the routine at run time: length1..length6 (link_lengths[0..5]),
+offset1..offset6 (link_offsets[0..5]). A host names them in its own words
+(kingen.hosts.base.Host.calibration_label)."""
+CALIBRATION_FIELDS = tuple(f"{kind}{number}" for kind in ("length", "offset") for number in range(1, 7))
+"""Every calibration field, in the order of :func:`calibration_index`."""
 
 
-def field_index(dialog_field):
+def calibration_index(field):
     """length1..6 -> 0..5, offset1..6 -> 6..11: the encoding the generated C uses."""
-    number = int(dialog_field[-1]) - 1
-    return number if dialog_field.startswith("length") else 6 + number
+    number = int(field[-1]) - 1
+    return number if field.startswith("length") else 6 + number
 
 
-def dialog_label(dialog_field):
-    """length3 -> 'Length 3', as the Solver Attributes tab labels it."""
-    return f"{dialog_field[:-1].capitalize()} {dialog_field[-1]}"
-
-
-def dialog_value(dialog_field, link_lengths, link_offsets):
-    """The number the user typed into that field (0 when left empty)."""
-    index = field_index(dialog_field)
+def calibration_value(field, link_lengths, link_offsets):
+    """The number given for that field (0 when none is given): link_lengths[i] for length i+1,
+    link_offsets[i] for offset i+1."""
+    index = calibration_index(field)
     values = link_lengths if index < 6 else link_offsets
     return 0.0 if values is None else float(values[index % 6])
 

@@ -19,7 +19,7 @@ scale = link length (mm) for rails, 1 rad for cranks. Everywhere else the fixed 
 
 @dataclass(frozen=True)
 class VerifyOptions:
-    """What a verification is asked to do: poses, seed, the dialog's fields, time limit (s)."""
+    """What a verification is asked to do: poses, seed, the calibration fields, time limit (s)."""
 
     samples: int = 10000
     seed: int = 0

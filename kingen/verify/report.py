@@ -110,7 +110,7 @@ class Report:
         return self.samples / self.seconds if self.seconds > 0 else math.inf
 
     def as_json(self, options=None):
-        """The report as JSON-ready data, with the dialog fields it was run with (``options``,
+        """The report as JSON-ready data, with the calibration fields it was run with (``options``,
         a VerifyOptions); NaN and infinities become None (JSON null)."""
         return _finite({
             "robot": self.robot,

@@ -75,7 +75,7 @@ class Tally:
     """Running totals over the chunks of one verification."""
 
     calibrated: object = None
-    """The robot with the dialog's fields applied, for the closure check."""
+    """The robot with the calibration fields applied, for the closure check."""
     returns_wrong: int = 0
     reachable_poses: int = 0
     """Poses at which the reference reaches at least one posture."""
@@ -102,7 +102,7 @@ class Tally:
 
     @classmethod
     def start(cls, calibrated):
-        """Empty totals for ``calibrated`` (the robot with the dialog's fields applied)."""
+        """Empty totals for ``calibrated`` (the robot with the calibration fields applied)."""
         postures = calibrated.postures
         return cls(calibrated=calibrated, posture_counts=np.zeros((4, postures), dtype=np.int64),
                    posture_worst=[np.zeros(postures), np.zeros(postures)],

@@ -83,7 +83,7 @@ class ToyHost(Host):
     def render(self, robot):
         if any(limb.model != "leg" for limb in robot.limbs):
             raise KingenError(f"{robot.path}: limbs: the toy host drives legs only")
-        return {f"toy_{robot.name}.c": template("toy.c.j2", TEMPLATES).render(**robot_view(robot))}
+        return {f"toy_{robot.name}.c": template("toy.c.j2", TEMPLATES).render(**robot_view(robot, self))}
 
     def write_source(self, robot, out_dir):
         for name, text in self.render(robot).items():

@@ -3,15 +3,16 @@ built into ``lib<name>.so`` or ``.dll``), loaded through a host emulator exactly
 loads it, verified with the interface checks of docs/delmia-abi.md, packaged with a setup
 sheet for the Inverse Kinematics dialog.
 
-Everything DELMIA's is in this package: the ABI (:mod:`.abi`), the templates (``templates/``),
-rendering (:mod:`.render`), building (:mod:`.build`), loading (:mod:`.loader`), its checks
-(:mod:`.checks`) and its package (:mod:`.package`). The work is imported lazily, so that
-registering the host costs nothing but :mod:`.abi`.
+Everything DELMIA's is in this package: the ABI (:mod:`.abi`), what its dialogs call things
+(:mod:`.dialog`: the routine's and library's names, the calibration fields' labels, the joint
+types), the templates (``templates/``), rendering (:mod:`.render`), building (:mod:`.build`),
+loading (:mod:`.loader`), its checks (:mod:`.checks`) and its package (:mod:`.package`). The work is imported lazily, so that
+registering the host costs nothing but :mod:`.abi` and :mod:`.dialog`.
 """
 
 from ...defaults import DEFAULT_TIMEOUT, TARGETS
 from ..base import Host
-from . import abi
+from . import abi, dialog
 
 
 class DelmiaHost(Host):
@@ -24,7 +25,7 @@ class DelmiaHost(Host):
     def name_problem(self, robot_name):
         """The robot's own name may be anything identifier-shaped ('int' gives kin_int); the C
         names made from it must not collide with a C keyword or a name the vendor header defines."""
-        for made in (f"kin_{robot_name}", f"lib{robot_name}"):
+        for made in (dialog.routine_name(robot_name), dialog.library_name(robot_name)):
             if made in abi.RESERVED_NAMES:
                 return f"gives the C name '{made}', which the DELMIA header or the C language already uses"
         return None
@@ -64,7 +65,13 @@ class DelmiaHost(Host):
         return Plugin(library, routine)
 
     def routine_name(self, robot):
-        return robot.routine
+        return dialog.routine_name(robot.name)
+
+    def library_name(self, robot):
+        return dialog.library_name(robot.name)
+
+    def calibration_label(self, field):
+        return dialog.field_label(field)
 
     def package(self, robot, out_dir, *, target=None, timeout=DEFAULT_TIMEOUT):
         from .package import write_package

@@ -36,6 +36,10 @@ KINSTAT_FIELDS = (
     ("double", "curr_tool_offset[6]"),
 )
 
+KINSTAT_JOINT_TYPES = {"prismatic": "TRANSLATIONAL", "revolute": "ROTATIONAL"}
+"""Joint type name (kingen.conventions.JointType.name) -> the vendor header's constant in
+DLM_Data_KinStat.joint_types."""
+
 GET_KIN_CONFIG = "int get_kin_config(char *kin_routine, int *kin_dof, int *solution_count, int *usrKinDataHint)"
 
 HOST_MATH = {

@@ -19,6 +19,7 @@ from ...errors import KingenError
 from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
+from . import dialog
 from .pe import dll_exports
 from .render import host_source, render, render_header, source_name
 
@@ -74,7 +75,7 @@ def windows_host_import_library(timeout=DEFAULT_TIMEOUT):
 
 def library_name(robot, target="linux"):
     """lib<name>.so (or .dll), as DELMIA's Solver Attributes tab names the library (libtau)."""
-    return f"{robot.library}{'.dll' if target == 'windows' else '.so'}"
+    return f"{dialog.library_name(robot.name)}{'.dll' if target == 'windows' else '.so'}"
 
 
 def build_plugin(robot, out_dir=None, defines=(), target="linux", timeout=DEFAULT_TIMEOUT):
@@ -101,7 +102,7 @@ def build_plugin(robot, out_dir=None, defines=(), target="linux", timeout=DEFAUL
     stamp = out_dir / f".kingen-build-{target}.json"
     if (read_stamp(stamp, "key") == key and read_stamp(stamp, "library_sha256") == file_digest(library)
             and file_digest(source) == hashlib.sha256(text.encode()).hexdigest()):
-        return BuildResult(source, library, robot.routine, compiled=False)
+        return BuildResult(source, library, dialog.routine_name(robot.name), compiled=False)
     with tempfile.TemporaryDirectory(prefix="kingen-build-") as scratch:
         scratch_source, scratch_library = Path(scratch) / name, Path(scratch) / library.name
         scratch_source.write_text(text)
@@ -118,11 +119,11 @@ def build_plugin(robot, out_dir=None, defines=(), target="linux", timeout=DEFAUL
         write_atomic(library, data, executable=True)
     write_atomic(stamp, json.dumps({"key": key, "library_sha256": hashlib.sha256(data).hexdigest(),
                                     "robot": robot.name, "kingen": VERSION}) + "\n")
-    return BuildResult(source, library, robot.routine, compiled=True)
+    return BuildResult(source, library, dialog.routine_name(robot.name), compiled=True)
 
 
 def _check_exports(library, robot):
-    missing = {"get_kin_config", robot.routine} - set(dll_exports(library))
+    missing = {"get_kin_config", dialog.routine_name(robot.name)} - set(dll_exports(library))
     if missing:
         raise KingenError(f"{library.name}: does not export {', '.join(sorted(missing))}")
 

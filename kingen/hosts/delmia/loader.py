@@ -258,7 +258,7 @@ class KinStat:
     def __init__(self, robot, joint_values=None, kin_mode=0):
         lower, upper = robot.travel_limits()
         self.types = ffi.new("int[]", [
-            abi.CONSTANTS[t.kinstat_constant] for t in robot.joint_types
+            abi.CONSTANTS[abi.KINSTAT_JOINT_TYPES[t.name]] for t in robot.joint_types
         ])
         self.values = ffi.new("double[]", list(joint_values if joint_values is not None else np.zeros(robot.dof)))
         self.lower = ffi.new("double[]", [float(v) if np.isfinite(v) else -1e30 for v in lower])

@@ -13,8 +13,8 @@ from ...defaults import DEFAULT_TIMEOUT, TARGETS
 from ...runtime.files import write_atomic, write_folder
 from ...robot.placement import branch_words, frames
 from ...kinematics.routine import warnings_to_exercise
-from ...robot.schema import dialog_label
-from . import abi
+from ...robot.schema import CALIBRATION_FIELDS
+from . import abi, dialog
 from .build import WINDOWS_DEFINES, build_plugin, library_name
 from .render import delmia_template, render, view_model
 
@@ -37,19 +37,20 @@ def sheet_view(robot, target):
     limbs' joints, each two-branch limb's branches in its model's words (true at the
     verification home), and only the warnings the robot's routine can give."""
     two_branch = [(index, bit) for index, bit in enumerate(robot.branch_bits) if bit >= 0]
-    used = {dialog_field for _, _, dialog_field, _ in robot.calibration()}
+    used = {field for _, _, field, _ in robot.calibration()}
     calibration = [
-        {"label": dialog_label(dialog_field), "joint": robot.joint_names[index], "parameter": parameter,
+        {"label": dialog.field_label(field), "joint": robot.joint_names[index], "parameter": parameter,
          "unit": robot.limbs[index].calibratable[parameter], "built_in": f"{built_in:.10g}"}
-        for index, parameter, dialog_field, built_in in robot.calibration()
+        for index, parameter, field, built_in in robot.calibration()
     ]
     joints = []
     for index, limb in enumerate(robot.limbs):
+        kind, axis = dialog.ACTUATOR_SPACE[limb.joint_type.name]
         joints.append({
             "index": index,
             "name": robot.joint_names[index],
-            "kind": limb.joint_type.delmia_type,
-            "axis": limb.joint_type.delmia_axis,
+            "kind": kind,
+            "axis": axis,
             "unit": limb.joint_type.yaml_unit,
             "lower": f"{limb.travel[0]:.10g}" if limb.travel else "-",
             "upper": f"{limb.travel[1]:.10g}" if limb.travel else "-",
@@ -61,11 +62,8 @@ def sheet_view(robot, target):
         **view_model(robot),
         "description": robot.description,
         "target": target,
-        "library": robot.library,
-        "dialog_fields": [
-            {"label": dialog_label(f"{kind}{i}"), "meaning": "read, see below" if f"{kind}{i}" in used else "leave empty"}
-            for kind in ("length", "offset") for i in range(1, 7)
-        ],
+        "dialog_fields": [{"label": dialog.field_label(field), "meaning": "read, see below" if field in used
+                           else "leave empty"} for field in CALIBRATION_FIELDS],
         "calibration": calibration,
         "frames": frames(robot),
         "home": " ".join(f"{value:g}" for value in robot.verification.home),
@@ -106,9 +104,9 @@ def render_package(robot, target):
     view = sheet_view(robot, target)
     files["SETUP.md"] = delmia_template("setup_sheet.md.j2").render(**view)
     if target == "windows":
-        extra = {"object": f"kin_{robot.name}.obj", "host_import_lib": HOST_IMPORT_LIB_PLACEHOLDER}
+        extra = {"object": f"{dialog.routine_name(robot.name)}.obj", "host_import_lib": HOST_IMPORT_LIB_PLACEHOLDER}
         files["makefile"] = delmia_template("makefile.nmake.j2").render(**view, **extra)
-        files[f"{robot.library}.def"] = delmia_template("exports.def.j2").render(**view)
+        files[f"{view['library']}.def"] = delmia_template("exports.def.j2").render(**view)
         files["BUILD.txt"] = delmia_template("BUILD.txt.j2").render(**view)
     return files
 

@@ -8,10 +8,12 @@ from pathlib import Path
 from ...defaults import VERSION
 from ...robot.limbs import c_double
 from ..render import robot_view, template
-from . import abi
+from . import DelmiaHost, abi, dialog
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 """DELMIA's templates: plugin source, stand-in header, host emulator, makefile, .def, sheets."""
+HOST = DelmiaHost()
+"""The host the shared view-model asks for DELMIA's names (kingen.hosts.render.robot_view)."""
 
 
 def delmia_template(name):
@@ -21,18 +23,18 @@ def delmia_template(name):
 
 def source_name(robot):
     """The generated source's file name, kin_<name>.c, as DELMIA's makefile expects."""
-    return f"kin_{robot.name}.c"
+    return f"{dialog.routine_name(robot.name)}.c"
 
 
 def view_model(robot):
     """Everything the plugin template substitutes, already formatted as C."""
     return {
-        **robot_view(robot),
+        **robot_view(robot, HOST),
         "header_version": abi.HEADER_VERSION,
         "file_name": source_name(robot),
         "singular_tolerance": c_double(abi.SINGULAR_TOLERANCE),
         "get_kin_config": abi.GET_KIN_CONFIG,
-        "routine_prototype": abi.routine_prototype(robot.routine, "NUM_SOLUTIONS"),
+        "routine_prototype": abi.routine_prototype(dialog.routine_name(robot.name), "NUM_SOLUTIONS"),
     }
 
 

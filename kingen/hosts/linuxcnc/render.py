@@ -9,10 +9,13 @@ from ...errors import KingenError
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
 from ..render import build_info, gram_lines, robot_view, schur_test_lines, template
+from . import LinuxcncHost
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...units import LENGTH_UNITS, robot_in_units
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
+HOST = LinuxcncHost()
+"""The host the shared view-model asks for the module's names (kingen.hosts.render.robot_view)."""
 STOCK_MODULES = frozenset({
     "5axiskins", "corexykins", "genhexkins", "genserkins", "lineardeltakins", "maxkins", "pentakins", "pumakins",
     "rosekins", "rotarydeltakins", "rotatekins", "scarakins", "scorbot-kins", "tripodkins", "trivkins", "userkins",
@@ -97,7 +100,7 @@ def view_model(robot, units="mm"):
     check_robot(robot)
     labels = branch_words(robot)
     robot = robot_in_units(robot, units)
-    view = robot_view(robot)
+    view = robot_view(robot, HOST)
     branches = robot.posture_branches(robot.working_posture)
     lower, upper = robot.travel_limits()
     joints = []

@@ -16,7 +16,7 @@ from pydantic import field_validator
 
 from ...conventions import PRISMATIC, JointType
 from ...runtime.resources import templates_dir
-from ..schema import DialogField, Identifier, Strict, Travel, Vec3
+from ..schema import CalibrationField, Identifier, Strict, Travel, Vec3
 
 
 @dataclass(frozen=True)
@@ -61,8 +61,8 @@ class LimbModel(Strict):
     """Where the limb's passive link meets the platform (mm, platform frame): every model has one."""
     travel: Optional[Travel] = None
     """[lower, upper] in mm (prismatic) or degrees (revolute); absent: no limits."""
-    calibrate: dict[str, DialogField] = {}
-    """Parameter -> dialog field read at run time; a zero field keeps the built-in value."""
+    calibrate: dict[str, CalibrationField] = {}
+    """Parameter -> calibration field read at run time; a zero field keeps the built-in value."""
 
     joint_type: ClassVar[JointType] = PRISMATIC
     branches: ClassVar[int] = 1
@@ -70,7 +70,7 @@ class LimbModel(Strict):
     """Whether :meth:`solve` gives a normalised radicand (and the limb can be unreachable or
     singular); the C partial then classifies it with kingen_classify."""
     calibratable: ClassVar[dict] = {}
-    """Parameter -> the unit its dialog field is read in ('mm' or 'degrees')."""
+    """Parameter -> the unit its calibration field is read in ('mm' or 'degrees')."""
     length_fields: ClassVar[tuple] = ()
     """Fields in mm (numbers or 3-vectors): the robot's size is the largest of them."""
     c_columns: ClassVar[str] = ""
@@ -167,7 +167,7 @@ class LimbModel(Strict):
         raise NotImplementedError
 
     def calibration_scale(self, parameter):
-        """Factor from the dialog's unit for ``parameter`` to the routine's unit."""
+        """Factor from the unit of ``parameter``'s calibration field to the routine's unit."""
         return math.pi / 180.0 if self.calibratable[parameter] == "degrees" else 1.0
 
 
