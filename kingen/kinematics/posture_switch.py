@@ -46,7 +46,7 @@ class PostureSwitch:
 
 def predict_switch(robot, t6, joints, warnings, first, second):
     """The PostureSwitch from posture ``first`` to ``second`` at the commanded ``t6`` (4, 4;
-    4 x 4, mm), given the reference's ``joints`` (dof, postures; mm or rad) and
+    mm), given the reference's ``joints`` (dof, postures; mm or rad) and
     ``warnings`` (postures,) there. Both postures must be below ``robot.postures``."""
     unreachable = [k for k in (first, second) if warnings[k] == WARNINGS["WARN_UNREACHABLE"]]
     if unreachable:
