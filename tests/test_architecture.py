@@ -1,9 +1,13 @@
 """The layout docs/architecture.md describes, pinned: imports run one way, down the layers
 (no circle, no import of a higher layer, counting imports inside functions too), DELMIA's
-names live only in its host package, the package's top holds a handful of modules, and no
-module grows past a few hundred lines."""
+names live only in its host package, the package's top holds a handful of modules, no
+module grows past a few hundred lines, and no code (Python, C, C templates) stands twice."""
 
 import ast
+import io
+import keyword
+import re
+import tokenize
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "kingen"
@@ -176,3 +180,150 @@ def test_no_module_grows_past_a_few_hundred_lines():
     long = {str(path.relative_to(PACKAGE.parent)): count for path in PACKAGE.rglob("*.py")
             if (count := len(path.read_text().splitlines())) > MAX_LINES}
     assert long == {}
+
+
+SAME_SHAPE_RUN = 6
+"""Duplicated code: a run of this many lines of the same shape standing in two places."""
+C_SUFFIXES = (".c", ".h", ".c.j2", ".h.j2")
+PLACEHOLDERS = {"N", "0", "S"}
+"""What a line's names (and a template's ``{{ }}`` substitutions), numbers and strings become
+in its shape."""
+DECLARATION = re.compile(r"N(?: : [N.,\[\] ]+?)?(?: = (?:- )?(?:0|S|N|True|False|None))?")
+"""The shape of a line that only names a value or a type (a constant, a dataclass field)."""
+C_WORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto if inline int long "
+    "register return short signed sizeof static struct switch typedef union unsigned void volatile while "
+    "as call elif endcall endfor endif endmacro endwith import in include is macro not and or set with".split())
+"""C's keywords and jinja2's statement words: kept in a C line's shape, as Python's keywords are."""
+C_COMMENT = re.compile(r'"(?:\\.|[^"\\\n])*"|/\*.*?\*/|//[^\n]*|\{#.*?#\}', re.DOTALL)
+C_TOKEN = re.compile(r'"(?:\\.|[^"\\\n])*"|\'(?:\\.|[^\'\\\n])*\'|\{\{.*?\}\}|[A-Za-z_]\w*|\.?\d[\w.]*|\S')
+
+
+def _c_placeholder(token):
+    """A C token's part in its line's shape."""
+    if token[0] in "\"'":
+        return "S"
+    if token.startswith("{{") or (token[0].isalpha() or token[0] == "_") and token not in C_WORDS:
+        return "N"
+    if token[0].isdigit() or token[0] == "." and len(token) > 1:
+        return "0"
+    return token
+
+
+def c_shapes(text):
+    """[(line number, shape)] of a C file or C template: names, numbers, strings and
+    ``{{ }}`` substitutions as placeholders, C keywords and jinja2's words kept; comments
+    (C's and jinja2's) and #include lines left out."""
+    text = C_COMMENT.sub(lambda match: match.group() if match.group()[0] == '"' else "\n" * match.group().count("\n"),
+                         text)
+    return [(number, " ".join(_c_placeholder(token) for token in C_TOKEN.findall(line)))
+            for number, line in enumerate(text.splitlines(), 1) if not line.lstrip().startswith("#include")]
+
+
+def python_shapes(text):
+    """[(line number, shape)] of a Python module: names, numbers and strings as placeholders
+    (an f-string one string), keywords kept; comments, docstrings (statements that are only a
+    string) and imports left out."""
+    rows, statement, depth = {}, [], 0
+    for token in tokenize.generate_tokens(io.StringIO(text).readline):
+        if token.type in (tokenize.NL, tokenize.COMMENT, tokenize.INDENT, tokenize.DEDENT, tokenize.ENCODING):
+            continue
+        if token.type in (tokenize.NEWLINE, tokenize.ENDMARKER):
+            words = [word for _, word in statement]
+            if words and words[0] not in ("import", "from") and set(words) != {"S"}:
+                for row, word in statement:
+                    rows.setdefault(row, []).append(word)
+            statement = []
+            continue
+        if token.type == getattr(tokenize, "FSTRING_START", None):  # Python 3.12: an f-string in parts
+            depth += 1
+            if depth == 1:
+                statement.append((token.start[0], "S"))
+        elif token.type == getattr(tokenize, "FSTRING_END", None):
+            depth -= 1
+        elif not depth:
+            word = {tokenize.NUMBER: "0", tokenize.STRING: "S"}.get(token.type, token.string)
+            if token.type == tokenize.NAME and not keyword.iskeyword(word):
+                word = "N"
+            statement.append((token.start[0], word))
+    return [(row, " ".join(words)) for row, words in sorted(rows.items())]
+
+
+def same_shape_runs(sources):
+    """'a:10-17 ~ b:40-47' for each pair of places (the first of each pair of files) where
+    ``sources`` ({name: [(line number, shape)]}) hold the same run of SAME_SHAPE_RUN line
+    shapes. Only lines that hold a name, number, string or substitution count (not lines of
+    punctuation and keywords alone, such as closing brackets or ``try:``, nor declarations:
+    ``NAME = 3``, ``field: int = 0``), and a run of a single shape (a table) is no duplicate."""
+    seen, found = {}, {}
+    for name, shapes in sources.items():
+        lines = [(number, shape) for number, shape in shapes
+                 if PLACEHOLDERS & set(shape.split()) and not DECLARATION.fullmatch(shape)]
+        for start in range(len(lines) - SAME_SHAPE_RUN + 1):
+            window = lines[start:start + SAME_SHAPE_RUN]
+            run = tuple(shape for _, shape in window)
+            if len(set(run)) == 1:
+                continue
+            place = (name, window[0][0], window[-1][0])
+            for other in seen.get(run, []):
+                if other[0] != name or other[2] < place[1]:  # in one file, two runs that do not overlap
+                    found.setdefault((other[0], name),
+                                     f"{other[0]}:{other[1]}-{other[2]} ~ {name}:{place[1]}-{place[2]}")
+            seen.setdefault(run, []).append(place)
+    return sorted(found.values())
+
+
+def scanned_sources():
+    """{path: line shapes} of kingen's Python modules and of the C files and C templates under
+    kingen/ and templates/, vendored code aside."""
+    sources = {}
+    for folder in (PACKAGE, PACKAGE.parent / "templates"):
+        for path in sorted(folder.rglob("*")):
+            name = str(path.relative_to(PACKAGE.parent))
+            if "vendor" in path.relative_to(folder).parts or not path.is_file():
+                continue
+            if path.suffix == ".py":
+                sources[name] = python_shapes(path.read_text())
+            elif path.name.endswith(C_SUFFIXES):
+                sources[name] = c_shapes(path.read_text())
+    return sources
+
+
+LEFT_TO_THE_INTERFACE = ["kingen/cli/common.py:35-47 ~ kingen/cli/common.py:60-70"]
+"""Pairs the interface layer still holds (its two option callbacks that turn a KingenError
+into click.BadParameter): to fold there, then to strike from here."""
+
+
+def test_no_code_stands_twice():
+    pairs = [pair for pair in same_shape_runs(scanned_sources()) if pair not in LEFT_TO_THE_INTERFACE]
+    assert not pairs, "the same run of lines (alike but for names and values) stands in two places: give it one " \
+                      "home:\n" + "\n".join(pairs)
+
+
+def test_a_planted_duplicate_fails_the_duplication_test():
+    module = '''
+import os
+from pathlib import Path
+
+LIMIT = 3
+"""A declaration."""
+
+
+def first(path):
+    """A docstring."""
+    if path is not None:  # a comment
+        try:
+            check(path, LIMIT)
+        except KingenError as error:
+            raise click.BadParameter(str(error)) from None
+    return path
+'''
+    renamed = module.replace("first", "second").replace("path", "value").replace("check", "verify")
+    assert same_shape_runs({"a.py": python_shapes(module), "b.py": python_shapes(renamed)}) == [
+        "a.py:9-16 ~ b.py:9-16"]
+    shorter = renamed.replace("    return value\n", "")
+    assert same_shape_runs({"a.py": python_shapes(module), "b.py": python_shapes(shorter)}) == []
+    c = "static int f(int x)\n{\n    /* c */\n    int y = x + 1;\n    y *= scale;\n    if (y > 3)\n" \
+        "        y = 3;\n    return y;\n}\n"
+    template = c.replace("f(", "g(").replace("scale", "{{ scale }}").replace("/* c */", "{# jinja #}")
+    assert same_shape_runs({"a.c": c_shapes(c), "b.c.j2": c_shapes(template)}) == ["a.c:1-8 ~ b.c.j2:1-8"]

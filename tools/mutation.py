@@ -72,9 +72,11 @@ TESTS = {
     "kingen/runtime/isolation.py": ["tests/test_hostile.py"],
     "templates/limbs/*.c.j2": _C + _REPORTS + ["tests/test_linuxcnc.py"],
     "kingen/hosts/delmia/templates/kin_robot.c.j2": _C + ["tests/test_exercised.py"] + _REPORTS,
+    "templates/routine_helpers.c.j2": _C + ["tests/test_exercised.py"] + _REPORTS + ["tests/test_linuxcnc.py"],
 }
 C_ROBOTS = {"templates/limbs/leg.c.j2": "hexapod", "templates/limbs/rail.c.j2": "tau",
-            "templates/limbs/crank.c.j2": "ceart", "kingen/hosts/delmia/templates/kin_robot.c.j2": "ceart"}
+            "templates/limbs/crank.c.j2": "ceart", "kingen/hosts/delmia/templates/kin_robot.c.j2": "ceart",
+            "templates/routine_helpers.c.j2": "ceart"}
 
 
 def targets(patterns=None):

@@ -31,7 +31,7 @@ class SearchState:
     random state), the best design so far, the history of the best objective per iteration,
     and the counts."""
 
-    algorithm: object
+    algorithm: "pymoo.algorithms.soo.nonconvex.pso.PSO"
     seed: int
     fingerprint: str
     iteration: int = 0

@@ -30,10 +30,8 @@ int kingen_hal_set(const char *name, double value);
 int kingen_hal_get(const char *name, double *value);
 int kingen_hal_count(void);
 const char *kingen_hal_name(int index);
-void kingen_inverse_batch(void *routine, int count, const double *poses, double *joints, int *returns,
-                          const char *status_pin, double *statuses);
-void kingen_forward_batch(void *routine, int count, const double *joints, double *poses, int *returns,
-                          const char *iterations_pin, double *iterations);
+void kingen_batch(void *routine, int forward, int count, double *poses, double *joints, int *returns,
+                  const char *pin, double *pins);
 int rtapi_app_main(void);
 int kinematicsForward(const double *joint, void *world, const unsigned long *fflags, unsigned long *iflags);
 int kinematicsInverse(const void *world, double *joint, const unsigned long *iflags, unsigned long *fflags);
@@ -55,6 +53,18 @@ def _hal():
 
 def _pointer(ctype, array):
     return ffi.cast(ctype, ffi.from_buffer(array))
+
+
+def _batch(routine, forward, poses, joints, pin):
+    """The HAL stand-in's kingen_batch: ``routine`` (kinematicsInverse, or with ``forward``
+    kinematicsForward) called once per row of ``poses`` (n, 9) and ``joints`` (n, 16),
+    writing the other (forward: the pose, started from the one given) in place: (returns
+    (n,), the pin named ``pin`` after each call (n,), NaN without one)."""
+    count = len(poses)
+    returns, pins = np.empty(count, dtype=np.intc), np.full(count, np.nan)
+    _hal().kingen_batch(ffi.cast("void *", routine), forward, count, _pointer("double *", poses),
+                        _pointer("double *", joints), _pointer("int *", returns), pin, _pointer("double *", pins))
+    return returns, pins
 
 
 class Module:
@@ -157,26 +167,14 @@ class Module:
         """kinematicsInverse on EmcPose numbers (n, 9): (joints (n, 16) machine units and degrees,
         returns (n,), status pin (n,) or NaN without one)."""
         world = np.ascontiguousarray(world, dtype=float)
-        count = len(world)
-        joints = np.full((count, JOINT_SLOTS), np.nan)
-        returns = np.empty(count, dtype=np.intc)
-        statuses = np.full(count, np.nan)
-        _hal().kingen_inverse_batch(ffi.cast("void *", self.library.kinematicsInverse), count,
-                                    _pointer("double *", world), _pointer("double *", joints),
-                                    _pointer("int *", returns), self.status_pin, _pointer("double *", statuses))
-        return joints, returns, statuses
+        joints = np.full((len(world), JOINT_SLOTS), np.nan)
+        return (joints, *_batch(self.library.kinematicsInverse, 0, world, joints, self.status_pin))
 
     def forward(self, joints, seeds):
         """kinematicsForward on joints (n, 16) from seeds (n, 9): (poses (n, 9), returns, iterations)."""
         joints = np.ascontiguousarray(joints, dtype=float)
         poses = np.ascontiguousarray(seeds, dtype=float).copy()
-        count = len(poses)
-        returns = np.empty(count, dtype=np.intc)
-        iterations = np.full(count, np.nan)
-        _hal().kingen_forward_batch(ffi.cast("void *", self.library.kinematicsForward), count,
-                                    _pointer("double *", joints), _pointer("double *", poses),
-                                    _pointer("int *", returns), self.iterations_pin, _pointer("double *", iterations))
-        return poses, returns, iterations
+        return (poses, *_batch(self.library.kinematicsForward, 1, poses, joints, self.iterations_pin))
 
     def batch_runner(self, t6):
         """A function running kinematicsInverse over ``t6`` (n, 4, 4) from C into buffers made
@@ -184,11 +182,11 @@ class Module:
         world = np.ascontiguousarray(self.emc_poses(t6))
         count = len(world)
         joints, returns = np.empty((count, JOINT_SLOTS)), np.empty(count, dtype=np.intc)
-        arguments = (ffi.cast("void *", self.library.kinematicsInverse), count, _pointer("double *", world),
+        arguments = (ffi.cast("void *", self.library.kinematicsInverse), 0, count, _pointer("double *", world),
                      _pointer("double *", joints), _pointer("int *", returns), ffi.NULL, ffi.NULL)
 
         def run():
-            _hal().kingen_inverse_batch(*arguments)
+            _hal().kingen_batch(*arguments)
             return world, joints, returns
 
         return run

@@ -51,7 +51,9 @@ class Context:
 
 
 class VerifyCheck:
-    """One check: subclass, set ``name`` and ``needs``, implement ``run``."""
+    """One check: subclass with its ``name`` and ``needs`` (and ``item``, ``uncompared``) as
+    class keywords, ``class Closure(VerifyCheck, name="closure", needs="compared poses")``,
+    or as class attributes; implement ``run``."""
 
     name: ClassVar[str]
     needs: ClassVar[str]
@@ -60,6 +62,14 @@ class VerifyCheck:
     uncompared: ClassVar[Optional[str]] = None
     """For ``compared poses`` checks: the failure reported when no call's outputs could be
     compared (None: the check is left out then)."""
+
+    def __init_subclass__(cls, **attributes):
+        unknown = sorted(set(attributes) - {"name", "needs", "item", "uncompared"})
+        if unknown:
+            raise TypeError(f"{cls.__name__}: a check has no class keyword {', '.join(unknown)}")
+        super().__init_subclass__()
+        for key, value in attributes.items():
+            setattr(cls, key, value)
 
     def run(self, context) -> list:
         """The check's results (usually one Check named ``name``)."""

@@ -9,11 +9,7 @@ CLOSURE_TOLERANCE = 1e-9
 """Relative to the passive link's length."""
 
 
-class Closure(VerifyCheck):
-    name = "closure"
-    needs = "compared poses"
-    item = "closure"
-
+class Closure(VerifyCheck, name="closure", needs="compared poses", item="closure"):
     def run(self, context):
         tally = context.tally
         if not tally.closure_checked:

@@ -25,10 +25,6 @@ def definition_check(robot, library):
                                       "rebuild it from the reviewed file")
 
 
-class Definition(VerifyCheck):
-    name = "definition"
-    needs = "library"
-    item = "build"
-
+class Definition(VerifyCheck, name="definition", needs="library", item="build"):
     def run(self, context):
         return [definition_check(context.robot, context.library)]

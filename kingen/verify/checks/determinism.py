@@ -8,11 +8,7 @@ from .base import Check, VerifyCheck
 DETERMINISM_POSES = 1000
 
 
-class Determinism(VerifyCheck):
-    name = "determinism"
-    needs = "compared poses"
-    item = "interface"
-
+class Determinism(VerifyCheck, name="determinism", needs="compared poses", item="interface"):
     def run(self, context):
         t6, solutions, warnings, _, _ = context.tally.first
         again = context.call(t6[:DETERMINISM_POSES])

@@ -80,10 +80,7 @@ def check_golden(robot, plugin):
     return results
 
 
-class Golden(VerifyCheck):
-    name = "golden"
-    needs = "golden values"
-
+class Golden(VerifyCheck, name="golden", needs="golden values"):
     def run(self, context):
         context.report.golden = check_golden(context.robot, context.routine)
         return [Check(f"golden[{i}]", result.passed, golden_detail(context.robot, result))

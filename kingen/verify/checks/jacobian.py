@@ -64,11 +64,7 @@ def jacobian_check(robot, plugin, options, t6):
     return Check("jacobian", passed, detail, judged=compared)
 
 
-class Jacobian(VerifyCheck):
-    name = "jacobian"
-    needs = "compared poses"
-    item = "jacobian"
-
+class Jacobian(VerifyCheck, name="jacobian", needs="compared poses", item="jacobian"):
     def run(self, context):
         t6 = context.tally.first[0]
         return [jacobian_check(context.robot, context.routine, context.options, t6[:JACOBIAN_POSES])]

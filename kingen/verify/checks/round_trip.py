@@ -89,10 +89,7 @@ def pose_conditioning(robot, wrenches, poses, free):
     return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)
 
 
-class RoundTrip(VerifyCheck):
-    name = "round trip"
-    needs = "compared poses"
-
+class RoundTrip(VerifyCheck, name="round trip", needs="compared poses"):
     def run(self, context):
         t6 = context.tally.first[0]
         return [round_trip_check(context.robot, context.routine, context.options, t6[:ROUND_TRIP_POSES])]

@@ -48,11 +48,7 @@ def check(robot, snapshot, call):
     return result
 
 
-class Snapshot(VerifyCheck):
-    name = "snapshot"
-    needs = "snapshot"
-    item = "snapshot"
-
+class Snapshot(VerifyCheck, name="snapshot", needs="snapshot", item="snapshot"):
     def run(self, context):
         def call(t6):
             calls = context.call(t6)

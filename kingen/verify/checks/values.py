@@ -11,12 +11,7 @@ MIN_REACHABLE_POSES = 10
 drawn) are reachable at some posture: a comparison of nothing proves nothing."""
 
 
-class Values(VerifyCheck):
-    name = "values"
-    needs = "compared poses"
-    item = "values"
-    uncompared = STOPPED_CALLS
-
+class Values(VerifyCheck, name="values", needs="compared poses", item="values", uncompared=STOPPED_CALLS):
     def run(self, context):
         report, tally = context.report, context.tally
         t6, solutions, _, reference_joints, reference_warnings = tally.first

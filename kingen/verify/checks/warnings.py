@@ -10,12 +10,7 @@ from ..tally import WARNING_KINDS
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
 
-class Warnings(VerifyCheck):
-    name = "warnings"
-    needs = "compared poses"
-    item = "warnings"
-    uncompared = STOPPED_CALLS
-
+class Warnings(VerifyCheck, name="warnings", needs="compared poses", item="warnings", uncompared=STOPPED_CALLS):
     def run(self, context):
         report, tally = context.report, context.tally
         _, _, warnings, _, reference_warnings = tally.first

@@ -5,13 +5,9 @@ from ....verify.checks.base import Check, VerifyCheck
 from .. import abi
 
 
-class Buffers(VerifyCheck):
+class Buffers(VerifyCheck, name="buffers", needs="sampled calls", item="interface"):
     """No call wrote outside solutions/warnings (each placed against an inaccessible page by
     the host emulator's guarded driver) or changed its inputs."""
-
-    name = "buffers"
-    needs = "sampled calls"
-    item = "interface"
 
     def run(self, context):
         return [buffers_check(context.tally.faulty_calls, context.tally.fault_bits)]

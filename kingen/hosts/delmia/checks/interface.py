@@ -14,12 +14,8 @@ def _home(robot):
     return t6_from_pose(np.asarray([robot.verification.home]))
 
 
-class GetKinConfig(VerifyCheck):
+class GetKinConfig(VerifyCheck, name="get_kin_config", needs="routine", item="interface"):
     """get_kin_config answers the robot's counts and a known data hint, and refuses other names."""
-
-    name = "get_kin_config"
-    needs = "routine"
-    item = "interface"
 
     def run(self, context):
         robot, plugin = context.robot, context.routine
@@ -37,12 +33,8 @@ class GetKinConfig(VerifyCheck):
                       f"hint {config.data_hint}; refuses other names")]
 
 
-class KinCheckDefinition(VerifyCheck):
+class KinCheckDefinition(VerifyCheck, name="kin_check_definition", needs="routine", item="interface"):
     """The routine asks the host once per call whether the device definition matches."""
-
-    name = "kin_check_definition"
-    needs = "routine"
-    item = "interface"
 
     def run(self, context):
         plugin = context.routine
@@ -54,12 +46,8 @@ class KinCheckDefinition(VerifyCheck):
                       f"({plugin.dof}, {plugin.postures})")]
 
 
-class Refusal(VerifyCheck):
+class Refusal(VerifyCheck, name="refusal", needs="routine", item="interface"):
     """When the host refuses the definition, the routine returns 1 and writes nothing."""
-
-    name = "refusal"
-    needs = "routine"
-    item = "interface"
 
     def run(self, context):
         plugin = context.routine
@@ -75,12 +63,8 @@ class Refusal(VerifyCheck):
                       (" and ".join(problems) if problems else "returns 1 and writes nothing"))]
 
 
-class NonFiniteT6(VerifyCheck):
+class NonFiniteT6(VerifyCheck, name="non-finite T6", needs="routine", item="interface"):
     """A T6 holding NaN or inf gives return 1, finite joints and WARN_UNREACHABLE everywhere."""
-
-    name = "non-finite T6"
-    needs = "routine"
-    item = "interface"
 
     def run(self, context):
         plugin = context.routine

@@ -4,13 +4,9 @@
 from ....verify.checks.base import STOPPED_CALLS, Check, VerifyCheck
 
 
-class ReturnValue(VerifyCheck):
+class ReturnValue(VerifyCheck, name="return value", needs="compared poses", item="interface",
+                  uncompared=STOPPED_CALLS):
     """The routine returns 1 when no posture is reachable, 0 otherwise (counted by the tally)."""
-
-    name = "return value"
-    needs = "compared poses"
-    item = "interface"
-    uncompared = STOPPED_CALLS
 
     def run(self, context):
         wrong = context.tally.returns_wrong

@@ -41,10 +41,7 @@ def regular_poses(robot, poses):
     return poses[regular], joints[regular]
 
 
-class Forward(VerifyCheck):
-    name = "forward"
-    needs = "compared poses"
-
+class Forward(VerifyCheck, name="forward", needs="compared poses"):
     def run(self, context):
         robot, module = context.robot, context.routine
         poses = pose_from_t6(context.tally.first[0][:FORWARD_POSES])

@@ -7,11 +7,7 @@ import numpy as np
 from ....verify.checks.base import Check, VerifyCheck
 
 
-class Refusal(VerifyCheck):
-    name = "inverse refusal"
-    needs = "routine"
-    item = "interface"
-
+class Refusal(VerifyCheck, name="inverse refusal", needs="routine", item="interface"):
     def run(self, context):
         robot, module = context.robot, context.routine
         home = np.array(robot.verification.home, dtype=float)

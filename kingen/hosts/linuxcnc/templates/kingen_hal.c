@@ -131,74 +131,58 @@ static kingen_hal_item *kingen_find(const char *name)
     return NULL;
 }
 
-/* setp: 0 when the pin or parameter exists, -1 otherwise. */
-int kingen_hal_set(const char *name, double value)
+/* setp (write) or getp: 0 when the pin or parameter exists, -1 otherwise; *value is written
+ * to it, converted to its type (a bit: value != 0), or read from it. */
+static int kingen_access(const char *name, double *value, int write)
 {
     kingen_hal_item *item = kingen_find(name);
     if (item == NULL)
         return -1;
-    if (item->type == KINGEN_HAL_FLOAT)
-        *(double *)item->address = value;
-    else if (item->type == KINGEN_HAL_S32)
-        *(int32_t *)item->address = (int32_t)value;
-    else if (item->type == KINGEN_HAL_U32)
-        *(uint32_t *)item->address = (uint32_t)value;
-    else
-        *(unsigned char *)item->address = value != 0.0;
-    return 0;
-}
-
-/* getp: 0 and the value when the pin or parameter exists, -1 otherwise. */
-int kingen_hal_get(const char *name, double *value)
-{
-    kingen_hal_item *item = kingen_find(name);
-    if (item == NULL)
-        return -1;
-    if (item->type == KINGEN_HAL_FLOAT)
-        *value = *(double *)item->address;
-    else if (item->type == KINGEN_HAL_S32)
-        *value = *(int32_t *)item->address;
-    else if (item->type == KINGEN_HAL_U32)
-        *value = *(uint32_t *)item->address;
+    if (item->type == KINGEN_HAL_FLOAT) {
+        if (write)
+            *(double *)item->address = *value;
+        else
+            *value = *(double *)item->address;
+    } else if (item->type == KINGEN_HAL_S32) {
+        if (write)
+            *(int32_t *)item->address = (int32_t)*value;
+        else
+            *value = *(int32_t *)item->address;
+    } else if (item->type == KINGEN_HAL_U32) {
+        if (write)
+            *(uint32_t *)item->address = (uint32_t)*value;
+        else
+            *value = *(uint32_t *)item->address;
+    } else if (write)
+        *(unsigned char *)item->address = *value != 0.0;
     else
         *value = *(unsigned char *)item->address;
     return 0;
 }
 
+int kingen_hal_set(const char *name, double value) { return kingen_access(name, &value, 1); }
+int kingen_hal_get(const char *name, double *value) { return kingen_access(name, value, 0); }
 int kingen_hal_count(void) { return kingen_item_count; }
 const char *kingen_hal_name(int index) { return index >= 0 && index < kingen_item_count ? kingen_items[index].name : NULL; }
 
-/* kinematicsInverse over count poses (9 numbers each: x y z a b c u v w), joints out (16 per
- * pose), the return values, and the s32 pin status_pin after each call (when given). */
-void kingen_inverse_batch(void *routine, int count, const double *poses, double *joints, int *returns,
-                          const char *status_pin, double *statuses)
+/* kinematicsInverse (forward 0) over count poses (9 numbers each: x y z a b c u v w) into
+ * joints (16 per pose), or kinematicsForward (forward 1) over count joint sets (16 each), each
+ * started from poses[9 i ...] and overwritten with the result; the return values, and the pin
+ * named pin after each call (when given; -1 when it cannot be read). */
+void kingen_batch(void *routine, int forward, int count, double *poses, double *joints, int *returns,
+                  const char *pin, double *pins)
 {
-    kingen_inverse_t inverse = (kingen_inverse_t)routine;
     int i;
     for (i = 0; i < count; i++) {
         kingen_emc_pose world;
         unsigned long iflags = 0, fflags = 0;
         memcpy(&world, poses + 9 * i, sizeof(world));
-        returns[i] = inverse(&world, joints + 16 * i, &iflags, &fflags);
-        if (status_pin != NULL && kingen_hal_get(status_pin, &statuses[i]) != 0)
-            statuses[i] = -1.0;
-    }
-}
-
-/* kinematicsForward over count joint sets (16 each), each started from poses[9 i ...] and
- * overwritten with the result; the return values and the pin iterations_pin after each call. */
-void kingen_forward_batch(void *routine, int count, const double *joints, double *poses, int *returns,
-                          const char *iterations_pin, double *iterations)
-{
-    kingen_forward_t forward = (kingen_forward_t)routine;
-    int i;
-    for (i = 0; i < count; i++) {
-        kingen_emc_pose world;
-        unsigned long iflags = 0, fflags = 0;
-        memcpy(&world, poses + 9 * i, sizeof(world));
-        returns[i] = forward(joints + 16 * i, &world, &fflags, &iflags);
-        memcpy(poses + 9 * i, &world, sizeof(world));
-        if (iterations_pin != NULL && kingen_hal_get(iterations_pin, &iterations[i]) != 0)
-            iterations[i] = -1.0;
+        if (forward) {
+            returns[i] = ((kingen_forward_t)routine)(joints + 16 * i, &world, &fflags, &iflags);
+            memcpy(poses + 9 * i, &world, sizeof(world));
+        } else
+            returns[i] = ((kingen_inverse_t)routine)(&world, joints + 16 * i, &iflags, &fflags);
+        if (pin != NULL && kingen_hal_get(pin, &pins[i]) != 0)
+            pins[i] = -1.0;
     }
 }
