@@ -34,17 +34,22 @@ class FiniteRange(click.FloatRange):
         return number
 
 
+def _checked(check, value):
+    """``value`` after ``check(value)`` (skipped for None); its KingenError as click's BadParameter."""
+    if value is not None:
+        try:
+            check(value)
+        except KingenError as error:
+            raise click.BadParameter(str(error)) from None
+    return value
+
+
 def _out_folder(context, parameter, path):
     """An output folder is checked before the work, not after it: it, or the existing folder
     it would be made in, must be a writable folder."""
     from ..runtime.files import writable_folder
 
-    if path is not None:
-        try:
-            writable_folder(path)
-        except KingenError as error:
-            raise click.BadParameter(str(error)) from None
-    return path
+    return _checked(writable_folder, path)
 
 
 OUT_DIR = click.option(
@@ -60,14 +65,10 @@ def _dialog_fields(context, parameter, values):
 
 
 def _routine_name(context, parameter, value):
-    if value is not None:
-        try:
-            from ..kinematics.routine import check_routine_name
+    """A ``--routine`` that is a C identifier (it is looked up as a symbol)."""
+    from ..kinematics.routine import check_routine_name
 
-            check_routine_name(value)
-        except KingenError as error:
-            raise click.BadParameter(str(error)) from None
-    return value
+    return _checked(check_routine_name, value)
 
 
 def _pose(context, parameter, values):
