@@ -52,7 +52,7 @@ def limbs(draw, scale):
 
 @st.composite
 def robots(draw):
-    scale = 10.0 ** draw(st.floats(-1.0, 5.7))
+    scale = 10.0 ** draw(st.floats(-1.0, 5.69))  # lengths reach 2 x scale: within the 1,000,000 mm range
     home = [scale * 0.5 * c for c in draw(vector)]
     return {
         "name": "fuzz",
