@@ -256,7 +256,9 @@ def _default(field):
 
 
 def _cell(text):
-    return str(text).replace("|", "\\|").replace("\n", " ")
+    """A table cell: pipes escaped outside code spans (inside them the table reads them as text)."""
+    parts = str(text).replace("\n", " ").split("`")
+    return "`".join(part if index % 2 else part.replace("|", "\\|") for index, part in enumerate(parts))
 
 
 def _model_checks(model, words):
