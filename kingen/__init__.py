@@ -1,7 +1,7 @@
 """kingen: a robot's YAML definition to verified inverse-kinematics C routines for DELMIA V5 /
 IGRIP and LinuxCNC, with forward kinematics, workspace analysis and design optimisation.
 
-This is the public face, for a notebook or a script::
+This is the public face, for a notebook or a script:
 
     import kingen
     robot = kingen.load_robot("hexapod")
