@@ -1,4 +1,4 @@
-"""Reference inverse kinematics in numpy, written from docs/conventions.md's equations.
+"""Reference inverse kinematics in numpy, written from docs/explanation/conventions.md's equations.
 
 Independent of the C templates: neither is generated from the other. Each limb
 model's numpy solver lives with its model (:mod:`kingen.robot.limbs`); this module maps

@@ -1,6 +1,6 @@
 """The field types robot files are made of, with their ranges, shared by every schema.
 
-Units: mm for lengths and coordinates, degrees for angles (see docs/conventions.md).
+Units: mm for lengths and coordinates, degrees for angles (see docs/explanation/conventions.md).
 The ranges are the stated geometry range of README's 'Exit codes and limits'.
 """
 
