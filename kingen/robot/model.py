@@ -100,7 +100,7 @@ class Collision(Strict):
 
 def robot_file_schema():
     """The YAML schema over the registered limb models (built anew when the registry changed);
-    documented field by field in README.md ('Robot definitions')."""
+    documented field by field in docs/how-to/robot-files.md."""
     return _schema_over(tuple(MODELS.values()))
 
 
