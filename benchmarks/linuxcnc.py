@@ -1,4 +1,4 @@
-"""LinuxCNC's stock kinematics modules against kingen, printed as Markdown (for the README's
+"""LinuxCNC's stock kinematics modules against kingen, printed as Markdown (for docs/how-to/linuxcnc.md's
 LinuxCNC section and the closing notes). Needs Debian's linuxcnc-uspace (the modules) and
 linuxcnc-uspace-dev (the headers, to build kingen's).
 

@@ -1,5 +1,5 @@
 """The design optimiser on the 6-RUS thesis's problem (robots/rus_optimized.yaml), printed as
-Markdown for the README's design-optimisation section and the closing notes.
+Markdown for docs/how-to/optimize.md and the closing notes.
 
     python benchmarks/optimize.py [--part objective|speedup|full|seeds] [--seeds 1 2 3 4 5]
 

@@ -9,7 +9,7 @@ This is the public face, for a notebook or a script:
     report = kingen.verify_library(robot)
 
 Every function here imports what it needs when it is called, so ``import kingen`` is
-cheap. The packages below are kingen's own (docs/architecture.md): ``kingen.robot``
+cheap. The packages below are kingen's own (docs/developer/architecture.md): ``kingen.robot``
 (reading a robot file, the ``Robot``, limb models), ``kingen.kinematics`` (the reference,
 singularities, forward kinematics), ``kingen.verify``, ``kingen.hosts`` (DELMIA, LinuxCNC
 and the host interface), ``kingen.design`` (analysis and optimisation), ``kingen.runtime``

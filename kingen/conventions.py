@@ -9,7 +9,7 @@
 - Posture k: each two-branch limb gives one binary digit, the first such limb
   most significant, branch 0 before branch 1.
 
-All functions are vectorised over leading axes. docs/conventions.md states all of this
+All functions are vectorised over leading axes. docs/explanation/conventions.md states all of this
 with the limb models' equations.
 """
 

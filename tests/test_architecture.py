@@ -1,4 +1,4 @@
-"""The layout docs/architecture.md describes, pinned: imports run one way, down the layers
+"""The layout docs/developer/architecture.md describes, pinned: imports run one way, down the layers
 (no circle, no import of a higher layer, counting imports inside functions too), DELMIA's
 names live only in its host package, the package's top holds a handful of modules, no
 module grows past a few hundred lines, and no code (Python, C, C templates) stands twice."""
@@ -86,7 +86,7 @@ LAYERS = (
     ("design", ("kingen.design",)),
     ("interface", ("kingen.cli", "kingen.pytest_plugin", "kingen")),
 )
-"""kingen's layers, lowest first (docs/architecture.md): a module may import its own layer's
+"""kingen's layers, lowest first (docs/developer/architecture.md): a module may import its own layer's
 and lower ones' modules, never a higher one's. ``kingen`` itself is the public face, on top."""
 
 
@@ -94,7 +94,7 @@ def layer(name):
     """The index in LAYERS of module ``name``'s layer (its longest matching prefix)."""
     matches = [(len(prefix), index) for index, (_, prefixes) in enumerate(LAYERS) for prefix in prefixes
                if name == prefix or name.startswith(prefix + ".")]
-    assert matches, f"{name} is in no layer: add it to LAYERS and docs/architecture.md"
+    assert matches, f"{name} is in no layer: add it to LAYERS and docs/developer/architecture.md"
     return max(matches)[1]
 
 

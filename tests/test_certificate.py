@@ -1,4 +1,4 @@
-"""The direct index's certificate (kingen.kinematics.certificate; docs/conventions.md, 'A certificate for
+"""The direct index's certificate (kingen.kinematics.certificate; docs/explanation/conventions.md, 'A certificate for
 the direct index'): its det W against LAPACK's within the proven rounding allowance, its
 bound never above the index, certification just below the bound and never just above it,
 the rounding and translation conditions each shown to be what refuses a posture, and the
@@ -22,7 +22,7 @@ from kingen.kinematics.singularity import (PACKED, TRANSLATION_SINGULAR, direct_
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 UNIT_ROUNDOFF = Fraction(1, 2 ** 53)
 G30 = 30 * UNIT_ROUNDOFF / (1 - 30 * UNIT_ROUNDOFF)
-"""docs/conventions.md's rounding constant g30 = 30u / (1 - 30u), exactly."""
+"""docs/explanation/conventions.md's rounding constant g30 = 30u / (1 - 30u), exactly."""
 
 
 def lines_of(robot, count, seed):
@@ -98,7 +98,7 @@ def test_it_certifies_below_its_bound_and_never_above(posture):
 
 
 def test_it_certifies_exactly_where_the_proven_test_passes():
-    """The test of docs/conventions.md with its constants, |det| > 2 g30 P + t (F / 3)^(3/2)
+    """The test of docs/explanation/conventions.md with its constants, |det| > 2 g30 P + t (F / 3)^(3/2)
     T / 2 (1 + 1e-12), solved for t per posture from the certificate's own det: certified
     1e-9 below that t, not 1e-9 above it."""
     robot = load_robot("ceart")
@@ -157,7 +157,7 @@ def triangular_lines(x, d):
 
 
 def documented_test(x, d, bound):
-    """docs/conventions.md's test for triangular_lines(x, d) in exact rational arithmetic (F / 3 = 1):
+    """docs/explanation/conventions.md's test for triangular_lines(x, d) in exact rational arithmetic (F / 3 = 1):
     |det| > 2 g30 P + t (F / 3)^(3/2) T / 2 (1 + 1e-12) and det^2 > 1e3 TRANSLATION_SINGULAR (F / 3)^3 (T / 3)^3."""
     x, d, bound = Fraction(x), Fraction(d), Fraction(bound)
     det, terms, moment_trace = d ** 3, (1 + x) * d ** 3, x * x + 3 * d * d

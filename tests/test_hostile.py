@@ -270,7 +270,7 @@ def test_processes_a_constructor_starts_end_with_the_run(tmp_path, monkeypatch, 
 def test_a_constructor_cannot_stop_kingen_through_its_process_group(tmp_path):
     """kill(0, SIGSTOP) stops the plugin's own process group only: kingen goes on, and names
     the stopped child's lack of progress. (kill(getppid(), SIGSTOP) would stop kingen: no
-    process of the same user can prevent that; see README.)"""
+    process of the same user can prevent that; see docs/reference/limits.md.)"""
     robot = tmp_path / "probe.yaml"
     robot.write_text(ROBOT)
     source = tmp_path / "kin_probe.c"

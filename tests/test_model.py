@@ -9,7 +9,7 @@ from conftest import SHIPPED
 from kingen.errors import KingenError
 from kingen.robot.model import load_robot
 
-EXPECTED_SHAPE = {  # (dof, postures, limb model) from docs/conventions.md
+EXPECTED_SHAPE = {  # (dof, postures, limb model) from docs/explanation/conventions.md
     "hexapod": (6, 1, "leg"), "flexapod": (6, 1, "leg"), "exechon": (3, 1, "leg"), "tau": (3, 8, "rail"),
     "ceart": (6, 64, "crank"), "iwf": (6, 64, "crank"), "rus_optimized": (6, 64, "crank"),
     "stewart_gough_example": (6, 1, "leg"),

@@ -207,7 +207,7 @@ def test_a_force_block_is_translation_singular_below_1e_12_of_its_trace_cubed(sm
 
 @pytest.mark.parametrize("entry", [(0, 0), (1, 1), (2, 2), (3, 3), (4, 4), (5, 5)])
 def test_a_gram_with_an_infinite_diagonal_entry_has_index_0(entry):
-    """README, Singularities: the index is 0 where M is not finite (an overflowed pose)."""
+    """docs/explanation/warnings.md, Singularities: the index is 0 where M is not finite (an overflowed pose)."""
     gram = np.eye(6)
     gram[entry] = np.inf
     assert direct_index(gram) == 0.0
@@ -216,7 +216,7 @@ def test_a_gram_with_an_infinite_diagonal_entry_has_index_0(entry):
 def test_a_crank_whose_platform_point_lies_on_its_axis_is_unreachable_with_finite_joints():
     """Pivot (200, 0, 0), crank turning in the x-z plane (direction 0 degrees): a platform
     point on the line through the pivot along y has a = b = 0 (rho = 0): no crank angle
-    reaches it; the joints stay finite (README, Warnings)."""
+    reaches it; the joints stay finite (docs/explanation/warnings.md)."""
     robot = load_robot("ceart")
     limb = robot.limbs[0].model_copy(update={"pivot": (200.0, 0.0, 0.0), "crank_direction": 0.0})
     solution = limb.solve(np.array([[200.0, 50.0, 0.0]]))
@@ -267,7 +267,7 @@ def test_a_singular_leading_minor_is_not_positive_definite_whatever_the_last_rou
 
 @pytest.mark.parametrize("index, name", list(enumerate(["x", "y", "z", "roll", "pitch", "yaw"])))
 def test_each_named_coordinate_frees_its_own_pose_coordinate(index, name):
-    """README, robot file: forward: {free: [...]} names pose coordinates x, y, z, roll, pitch,
+    """docs/how-to/robot-files.md: forward: {free: [...]} names pose coordinates x, y, z, roll, pitch,
     yaw (the pose's order): freeing one name frees that coordinate alone; naming none frees all."""
     from dataclasses import replace
 

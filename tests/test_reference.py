@@ -136,7 +136,7 @@ def test_a_leg_of_no_reference_length_blames_no_absolute_length():
 
 
 def test_each_model_names_the_collision_radius_of_its_passive_link():
-    """README, robot file: collision: {leg_radius, rod_radius, crank_radius}; a leg is its own
+    """docs/how-to/robot-files.md: collision: {leg_radius, rod_radius, crank_radius}; a leg is its own
     passive link (leg_radius), a crank's and a rail's link is a rod (rod_radius). CEART's
     rods of 15 mm radius: every rod clearance is 30 mm less than with no radius; so for its
     cranks' 15.5 mm, 31 mm."""
@@ -164,7 +164,7 @@ def test_each_model_names_the_collision_radius_of_its_passive_link():
 
 def test_a_parameter_in_degrees_is_scaled_to_radians_and_lengths_are_not():
     """LimbModel.calibration_scale: what a dialog value of a parameter is multiplied by, from
-    its unit word in ``calibratable`` (README: a crank's zero_offset in degrees, lengths in mm)."""
+    its unit word in ``calibratable`` (docs/how-to/robot-files.md: a crank's zero_offset in degrees, lengths in mm)."""
     import math
 
     from kingen.robot.limbs.crank import Crank

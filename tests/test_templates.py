@@ -107,7 +107,7 @@ def test_crank_zero_offsets_beyond_a_turn_wrap_as_the_reference(tmp_path, zero_o
 def test_a_non_finite_t6_entry_no_limb_reads_still_makes_every_posture_unreachable(tmp_path, entry):
     """A leg to the platform origin, whose point takes T6's rotation rows times 0 (NaN still:
     NaN x 0 is NaN): a non-finite entry anywhere makes the routine return 1, every posture
-    WARN_UNREACHABLE and every joint 0 (README, Warnings)."""
+    WARN_UNREACHABLE and every joint 0 (docs/explanation/warnings.md)."""
     robot, plugin = loaded(tmp_path, "name: plumb\ndescription: one leg to the platform origin\nlimbs:\n"
                            "  - {model: leg, base_point: [0, 0, 0], platform_point: [0, 0, 0], reference_length: 0}\n"
                            "verification: {home: [0, 0, 150, 0, 0, 0], range: [10, 10, 10, 5, 5, 5]}\n", "plumb")

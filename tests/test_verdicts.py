@@ -1,6 +1,6 @@
 """verify's verdicts on constructed cases, each boundary from both sides and each count exact.
 
-- The warning band has three parts (README, 'What verify proves'): a radicand within
+- The warning band has three parts (docs/explanation/verify.md): a radicand within
   WARNING_BAND of +/-1e-5 (tests/test_verify_bands.py), a joint within WARNING_BAND of a
   travel limit, a direct index within WARNING_BAND relative of direct_index_min. Each is
   pinned here by poses built to lie a third of the band inside and thirty bands outside, on
@@ -100,7 +100,7 @@ def test_a_warning_may_differ_beside_the_direct_index_threshold_only_inside_the_
 
 
 def test_verify_draws_10000_poses_unless_told():
-    assert VerifyOptions().samples == 10000  # README, Commands: verify's --samples, default 10000
+    assert VerifyOptions().samples == 10000  # docs/explanation/verify.md: verify's --samples, default 10000
 
 
 def test_an_unwritten_warning_is_never_excused_inside_a_band(leg):
@@ -272,7 +272,7 @@ def test_a_snapshot_names_exactly_the_entries_that_differ(tmp_path, capsys):
 def test_just_outside_the_band_a_long_link_is_held_to_its_conditioning_bound(tmp_path):
     """A 20 m rail at D = 1e-3, outside the singular band: its bound 16 eps x 20 m / sqrt(1e-3)
     (about 2.2e-9 mm) exceeds the fixed 1e-9 mm, so a joint off by the mean of the two is
-    within it (README, 'What verify proves': a 20 m rail up to |D| of about 5e-3)."""
+    within it (docs/explanation/verify.md: a 20 m rail up to |D| of about 5e-3)."""
     from kingen.verify.tally import singular_bounds
 
     path = tmp_path / "long_rail.yaml"
@@ -427,7 +427,7 @@ def test_a_chunk_whose_every_call_was_stopped_counts_only_its_faults(tmp_path):
 
 
 def test_each_pytest_item_reports_its_checks():
-    """README, 'Robot definitions in your own pytest': the items build, interface, values,
+    """docs/how-to/pytest.md: the items build, interface, values,
     warnings, closure, jacobian (golden[i] and snapshot report their own). values, warnings,
     closure and jacobian report their namesake check; build the library's definition;
     interface the loaded routine's contract (loading, the interface checks, return values,
@@ -458,7 +458,7 @@ def values_context(tmp_path):
 
 @pytest.mark.parametrize("field", ["max_abs_error_mm", "max_abs_error_rad"])
 def test_the_value_bounds_are_inclusive(tmp_path, field):
-    """'within 1e-9 mm and rad' (README): an error of exactly the bound passes, the next float
+    """'within 1e-9 mm and rad' (docs/explanation/verify.md): an error of exactly the bound passes, the next float
     above it fails; so does one entry beyond its singular band's bound."""
     from kingen.verify.checks.values import Values
 

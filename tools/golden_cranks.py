@@ -3,14 +3,14 @@
     python tools/golden_cranks.py iwf rus_optimized ceart
 
 The robot file is read as plain YAML (no kingen); the pivots A_i and platform points c_i
-come from the 6-RUS thesis's layout equations as docs/conventions.md restates them; the
+come from the 6-RUS thesis's layout equations as docs/explanation/conventions.md restates them; the
 pose is R = Rz(yaw) Ry(pitch) Rx(roll) (the thesis's and LinuxCNC's fixed-axis order). Each
 crank angle is a root of the closure |B(theta) - N|^2 - L^2 with
 B(theta) = A + r (cos theta cos beta, cos theta sin beta, -sin theta), found by scanning
 theta over a turn in 0.1-degree steps and refining each sign change with scipy's brentq to
 1e-13 rad: no closed form, no acos, nothing shared with kingen/robot/limbs/crank.py. Branch 0 is
 the root that turns past the direction from the pivot to N (in the crank's plane), branch 1
-the other (docs/conventions.md, Postures). Checked against the CEART simulator's CAE crank
+the other (docs/explanation/conventions.md, Postures). Checked against the CEART simulator's CAE crank
 angles at its home (robots/ceart.yaml): -43.394 and 32.345 degrees.
 """
 

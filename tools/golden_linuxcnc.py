@@ -12,11 +12,11 @@ posture 7). For the other leg robots:
 
 genhexkins is loaded through the HAL stand-in kingen's LinuxCNC tests use, on a mm machine,
 its base.N / platform.N pins set to the robot file's points (for the Stewart-Gough layout,
-computed here from the layout's equation in docs/conventions.md, not by kingen's layout
+computed here from the layout's equation in docs/explanation/conventions.md, not by kingen's layout
 code); its kinematicsInverse is given each pose as LinuxCNC's EmcPose (x y z mm, a b c
 degrees: pmRpyMatConvert's R = Rz(c) Ry(b) Rx(a), the same convention as kingen's poses)
 and answers each strut's absolute length. The joint kingen reports is that length minus
-the leg's reference length L0 (docs/conventions.md, Leg). Prints YAML golden entries.
+the leg's reference length L0 (docs/explanation/conventions.md, Leg). Prints YAML golden entries.
 """
 
 import math
@@ -45,7 +45,7 @@ POSES = {
 def layout_points(layout):
     """Base and platform points of the Stewart-Gough layout, by its equation: point i at angle
     60 + 120 floor(i / 2) -/+ pair / 2 degrees (minus for even i), at z = base_height or
-    platform_height (docs/conventions.md, Layouts)."""
+    platform_height (docs/explanation/conventions.md, Layouts)."""
     base, platform = [], []
     for i in range(6):
         sign = -1 if i % 2 == 0 else 1

@@ -1,6 +1,6 @@
 """Mutation testing of the code that decides kingen's verdicts and generates its C: one small
 change at a time, each mutant run against the test files that cover its file, results as a
-table per file. Run on demand, not in CI (docs/contributing.md):
+table per file. Run on demand, not in CI (docs/developer/contributing.md):
 
     pip install -e ".[mutation]"
     python tools/mutation.py list                         # mutants per file

@@ -1,6 +1,6 @@
 /* floor.h: what the hand-written floor routines share. Each floor is what a careful
  * engineer would write by hand for one robot, honouring the contract kingen's generated
- * routines honour (docs/delmia-abi.md, docs/conventions.md): host math and
+ * routines honour (docs/explanation/delmia-abi.md, docs/explanation/conventions.md): host math and
  * kin_check_definition through the header, the robot's calibration fields, the singular
  * band, WARN_* precedence, travel limits, finite joints for NaN, inf and overflowing T6,
  * and the direct index where the robot file asks for it. They exist to measure how far the

@@ -5,7 +5,7 @@ A host renders and builds a routine for a robot, builds a hand-written source, l
 compiled routine (generated or hand-written) as a :class:`LoadedRoutine` whose ``call``
 answers a batch of T6 with :class:`kingen.kinematics.routine.Calls` in kingen's units, names the verify
 checks it runs, and writes a package. Hosts are registered in :mod:`kingen.hosts`; nothing
-outside a host's own package names its files, symbols or checks (docs/architecture.md).
+outside a host's own package names its files, symbols or checks (docs/developer/architecture.md).
 """
 
 from dataclasses import dataclass

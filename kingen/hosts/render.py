@@ -77,7 +77,7 @@ def schur_test_lines(entry):
     A, mixed block B (moment rows) and moment block C, the test holds exactly when A's
     leading minors a00, j22 = a00 a11 - a10^2 and det A are positive and so are the leading
     minors of X = det(A) (C - d^2 I) - B adj(A) B^T, which is det(A) times the Schur
-    complement minus d^2 I (docs/conventions.md, 'Force lines and the direct index').
+    complement minus d^2 I (docs/explanation/conventions.md, 'Force lines and the direct index').
     margin is their minimum; det X, taken last, involves every entry, so a NaN anywhere in M
     reaches margin."""
     names = {(r, c): f"a{r}{c}" for r in range(3) for c in range(r + 1)}

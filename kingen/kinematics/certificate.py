@@ -10,7 +10,7 @@ det W is computed by Laplace's expansion along limbs 0-2 against 3-5: per pose, 
 of each triple for each of its branch combinations, then one 20-term dot product per
 posture. Its rounding is at most ROUNDING times P, the product of the rows' 1-norms, and a
 posture is certified only where the bound, less twice that, still clears the threshold.
-docs/conventions.md ('A certificate for the direct index') proves the bound and the rounding
+docs/explanation/conventions.md ('A certificate for the direct index') proves the bound and the rounding
 allowance, and why a certified posture is never one the reference's own factorisation would
 call translation-singular.
 """

@@ -3,7 +3,7 @@
 The unknowns are the robot's free pose coordinates (all six for six limbs; a robot with
 fewer limbs declares them, ``forward: {free: [x, y, z]}``), the others held at the pose
 the search starts near. Each limb closes when its passive link has its length,
-|C_i(pose) - P_i(q_i)| = l_i(q_i) (docs/conventions.md); the residuals' derivative with
+|C_i(pose) - P_i(q_i)| = l_i(q_i) (docs/explanation/conventions.md); the residuals' derivative with
 respect to a platform twist is the limb's unit wrench, so Newton-Raphson needs no
 finite differences. How every assembly mode is found, and said:
 

@@ -1,5 +1,5 @@
 """The seeded poses of a robot's verification region, drawn the same way by verify, snapshots
-and benchmarks: uniform in home +/- range (mm, degrees; docs/conventions.md), from one
+and benchmarks: uniform in home +/- range (mm, degrees; docs/explanation/conventions.md), from one
 PCG64 generator, so that a seed names the same poses bit for bit whatever the chunking."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Reference inverse kinematics in numpy, written from docs/conventions.md's equations.
+"""Reference inverse kinematics in numpy, written from docs/explanation/conventions.md's equations.
 
 Independent of the C templates: neither is generated from the other. Each limb
 model's numpy solver lives with its model (:mod:`kingen.robot.limbs`); this module maps
@@ -6,7 +6,7 @@ poses to platform points, assembles postures and decides warnings. Vectorised
 over poses. Inputs are T6 arrays (n, 4, 4) in the base frame, mm; outputs
 are every posture's joint values (mm, radians in (-pi, pi]) and warning.
 
-Warnings follow the generated C exactly (README, 'Warnings'):
+Warnings follow the generated C exactly (docs/explanation/warnings.md):
 ``WARN_UNREACHABLE`` when some limb has no real solution, ``WARN_SINGULAR_SOLUTION``
 when some limb's normalised radicand D (rails, cranks) is within ``routine.SINGULAR_TOLERANCE``
 of zero or the posture's direct index is at most the robot's ``direct_index_min``, ``WARN_JOINT_LIMITS_EXCEEDED`` when a joint is outside its travel limits;

@@ -4,7 +4,7 @@ for a batch of poses, in kingen's units, and how close it must come to the refer
 A host (:mod:`kingen.hosts`) loads a routine and calls it on T6 matrices (mm); whatever its
 own interface, it hands verify a :class:`Calls`: every posture's joints (mm for prismatic,
 radians for revolute joints) and a status per posture in the codes of ``WARNINGS``
-(docs/conventions.md). A host whose routines report other codes maps them to these.
+(docs/explanation/conventions.md). A host whose routines report other codes maps them to these.
 """
 
 import re

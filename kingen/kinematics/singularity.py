@@ -3,7 +3,7 @@
 Every limb transmits a pure force to the platform along its passive link, through its
 platform point C (base frame): from the base point (leg), the carriage joint (rail) or the
 crank tip (crank) to C. Its unit wrench is w = [f; C x f], f the unit direction, moments in
-mm. The line depends on the posture through the limb's branch. docs/conventions.md
+mm. The line depends on the posture through the limb's branch. docs/explanation/conventions.md
 ('Force lines and the direct index') states the definitions; the limb models give the
 geometry (``base_side_point``, ``transmission``), so nothing here names a model.
 

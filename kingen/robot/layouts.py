@@ -3,7 +3,7 @@
 Each layout takes its parameters (mm, degrees) and returns the limbs of one model (six, or
 three for the deltas, whose parameters are named as LinuxCNC's pins name them),
 sharing travel limits and giving each limb its own calibration fields.
-docs/conventions.md states the formulas.
+docs/explanation/conventions.md states the formulas.
 """
 
 import math
@@ -71,7 +71,7 @@ class StewartGoughLayout(_Layout):
 
 
 class Rus6Layout(_Layout):
-    """Six cranks on the 6-RUS flight-simulator layout (docs/conventions.md, '6-RUS layout')."""
+    """Six cranks on the 6-RUS flight-simulator layout (docs/explanation/conventions.md, '6-RUS layout')."""
 
     type: Literal["rus6"]
     base_radius: Length
@@ -117,7 +117,7 @@ class LinearDeltaLayout(_DeltaLayout):
     and 330 degrees, at distance R from the axis, carriages moving up +z; a rod of length L
     joins each carriage to the effector's controlled point (the effector and carriage offsets
     are taken off R, as lineardeltakins' R). The joint is the carriage's height; the
-    carriage above the effector is branch 1 (docs/conventions.md, 'Linear delta')."""
+    carriage above the effector is branch 1 (docs/explanation/conventions.md, 'Linear delta')."""
 
     type: Literal["linear_delta"]
     R: Length
@@ -141,7 +141,7 @@ class RotaryDeltaLayout(_DeltaLayout):
     distance platformradius, thighs of thighlength pointing out at -90, 30 and 150 degrees for
     joints 0, 1 and 2, shins of shinlength to the foot's joints at footradius from the
     controlled point. Joints in degrees, 0 with the thigh horizontal, positive moving the knee
-    down (docs/conventions.md, 'Rotary delta')."""
+    down (docs/explanation/conventions.md, 'Rotary delta')."""
 
     type: Literal["rotary_delta"]
     platformradius: Length

@@ -3,7 +3,7 @@
 ``load_robot(spec)`` is the only entry point the other modules need. It returns
 a frozen :class:`Robot` or raises one :class:`~kingen.errors.KingenError` whose
 message names the file, the line, the field and the problem. Geometry in the
-YAML is in mm and degrees (docs/conventions.md); the Robot exposes travel limits
+YAML is in mm and degrees (docs/explanation/conventions.md); the Robot exposes travel limits
 in internal units (mm, radians). Limb models come from :mod:`kingen.robot.limbs`.
 """
 
@@ -100,7 +100,7 @@ class Collision(Strict):
 
 def robot_file_schema():
     """The YAML schema over the registered limb models (built anew when the registry changed);
-    documented field by field in README.md ('Robot definitions')."""
+    documented field by field in docs/how-to/robot-files.md."""
     return _schema_over(tuple(MODELS.values()))
 
 

@@ -3,7 +3,7 @@ controller's inverse kinematics has one answer) is verified against.
 
 ``at_posture(robot, k)`` is the same robot file with every two-branch limb held on the
 branch posture ``k`` takes: one posture, numbered 0, whose joints, warnings, force lines and
-direct index are posture ``k``'s of the full robot (docs/conventions.md, 'Postures').
+direct index are posture ``k``'s of the full robot (docs/explanation/conventions.md, 'Postures').
 """
 
 from dataclasses import replace

@@ -1,7 +1,7 @@
 """The field types robot files are made of, with their ranges, shared by every schema.
 
-Units: mm for lengths and coordinates, degrees for angles (see docs/conventions.md).
-The ranges are the stated geometry range of README's 'Exit codes and limits'.
+Units: mm for lengths and coordinates, degrees for angles (see docs/explanation/conventions.md).
+The ranges are the stated geometry range of docs/reference/limits.md.
 """
 
 import math

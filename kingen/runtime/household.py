@@ -34,8 +34,8 @@ class Household:
 
     Linux only, each part a no-op where the kernel lacks it. What it cannot do: a plugin
     that stops or kills kingen itself (``kill(getppid(), SIGSTOP)``), or processes a plugin
-    detached when kingen is killed with SIGKILL (nothing then runs to end them); see README,
-    'Exit codes and limits'. A process another thread of kingen forks while the child lives
+    detached when kingen is killed with SIGKILL (nothing then runs to end them); see
+    docs/reference/limits.md. A process another thread of kingen forks while the child lives
     would be taken for an orphan: kingen forks none."""
 
     def __init__(self):

@@ -1,5 +1,5 @@
 """Verification: a compiled routine (kingen's or hand-written) against the numpy
-reference, the golden values and the interface contract (docs: README, 'What verify proves').
+reference, the golden values and the interface contract (docs/explanation/verify.md).
 
 Everything is compared, nothing sampled away: every joint of every posture of
 every pose, and every warning. Where the reference calls a posture unreachable the

@@ -1,5 +1,5 @@
 """What a verification is asked to do, and the bounds every check shares: how close a
-routine's joints must be (docs: README, 'What verify proves')."""
+routine's joints must be (docs/explanation/verify.md)."""
 
 from dataclasses import dataclass
 from typing import Optional

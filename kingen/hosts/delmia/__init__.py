@@ -1,6 +1,6 @@
 """DELMIA V5 / IGRIP, kingen's first host: a user-inverse-kinematics plugin (``kin_<name>.c``
 built into ``lib<name>.so`` or ``.dll``), loaded through a host emulator exactly as DELMIA
-loads it, verified with the interface checks of docs/delmia-abi.md, packaged with a setup
+loads it, verified with the interface checks of docs/explanation/delmia-abi.md, packaged with a setup
 sheet for the Inverse Kinematics dialog.
 
 Everything DELMIA's is in this package: the ABI (:mod:`.abi`), what its dialogs call things

@@ -3,7 +3,7 @@
 The stand-in ``shlibdefs.h``, the generated plugin's prototypes and the cffi
 declarations used to load plugins are all rendered from these lists, so the C
 side and the Python side cannot drift apart. Values are those of the vendor
-header (docs/delmia-abi.md). The warnings are kingen's status codes (:mod:`kingen.kinematics.routine`).
+header (docs/explanation/delmia-abi.md). The warnings are kingen's status codes (:mod:`kingen.kinematics.routine`).
 """
 
 from ...kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNINGS

@@ -2,8 +2,8 @@
 
 A limb model is one class (a pydantic schema) in one module of :mod:`kingen.robot.limbs`, plus
 one template partial ``templates/limbs/<model>.c.j2``. Everything else in kingen iterates
-over the registry and asks the class; nothing names a model. docs/conventions.md has
-the equations; README's 'Adding a limb model' the checklist.
+over the registry and asks the class; nothing names a model. docs/explanation/conventions.md has
+the equations; docs/developer/extending.md the checklist.
 """
 
 import math
@@ -142,7 +142,7 @@ class LimbModel(Strict):
 
     def force_direction(self, platform_point, joint):
         """The unit direction f (n, 3) of the force the limb transmits to the platform: along
-        its passive link, from the base side to the platform point (docs/conventions.md,
+        its passive link, from the base side to the platform point (docs/explanation/conventions.md,
         'Force lines and the direct index')."""
         line = platform_point - self.base_side_point(platform_point, joint)
         return line / np.linalg.norm(line, axis=-1, keepdims=True)

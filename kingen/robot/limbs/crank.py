@@ -5,7 +5,7 @@ Tip B = A + r (cos(theta) cos(beta), cos(theta) sin(beta), -sin(theta)); with
 g = R c + p - A, a = g.(cos beta, sin beta, 0), b = -g_z, K = (|g|^2 + r^2 - L^2) / (2 r),
 rho^2 = a^2 + b^2: theta = atan2(b, a) +/- acos(K / rho) - zero_offset (rad, (-pi, pi]),
 branch 0 the plus sign; D = (rho^2 - K^2) / rho^2 = sin^2 of the crank-to-rod angle
-(docs/conventions.md, 'Crank').
+(docs/explanation/conventions.md, 'Crank').
 """
 
 import math

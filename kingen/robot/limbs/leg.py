@@ -1,6 +1,6 @@
 """Leg (S-P-S, U-P-S): a prismatic leg from base point b to platform point t.
 
-q = |R t + p - b| - L0 (mm). One branch, always reachable (docs/conventions.md, 'Leg'). With
+q = |R t + p - b| - L0 (mm). One branch, always reachable (docs/explanation/conventions.md, 'Leg'). With
 L0 = 0 the joint is the leg's absolute length.
 """
 

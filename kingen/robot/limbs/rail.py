@@ -2,7 +2,7 @@
 of fixed length to a platform point.
 
 With w = R n + p - s - d: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) - origin (mm), branch 0
-the minus sign; D = radicand / l^2 = cos^2 of the link-to-rail angle (docs/conventions.md, 'Rail').
+the minus sign; D = radicand / l^2 = cos^2 of the link-to-rail angle (docs/explanation/conventions.md, 'Rail').
 """
 
 from typing import Literal

@@ -1,4 +1,4 @@
-"""DELMIA's own verify checks, one module each: the interface contract of docs/delmia-abi.md
+"""DELMIA's own verify checks, one module each: the interface contract of docs/explanation/delmia-abi.md
 (:mod:`.interface`), the routine's return value (:mod:`.return_value`) and its buffers
 (:mod:`.buffers`); and ``CHECKS``: every check a DELMIA routine gets, in report order."""
 

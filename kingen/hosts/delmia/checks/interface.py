@@ -1,4 +1,4 @@
-"""DELMIA's interface contract (docs/delmia-abi.md) as four checks: ``get_kin_config``,
+"""DELMIA's interface contract (docs/explanation/delmia-abi.md) as four checks: ``get_kin_config``,
 ``kin_check_definition``, ``refusal`` and ``non-finite T6``, run on the loaded routine before
 any sampled pose."""
 
