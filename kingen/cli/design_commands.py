@@ -47,8 +47,7 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
 
     model, data, lines = load_model_and_data(robot)
     if not data.get("optimize"):
-        raise KingenError(f"{model.path}: optimize: no design problem in this robot file (see README, "
-                          "'Design optimisation')")
+        raise KingenError(f"{model.path}: optimize: no design problem in this robot file (see docs/how-to/optimize.md)")
     overrides = {key: value for key, value in (("iterations", iterations), ("swarm", swarm)) if value is not None}
     data["optimize"] = {**data["optimize"], "search": {**data["optimize"].get("search", {}), **overrides}}
     problem = Problem(data, model.path, lines)
