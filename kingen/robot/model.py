@@ -109,19 +109,23 @@ def _schema_over(models):
     limb = Annotated[Union[models], Field(discriminator="model")]
 
     class RobotFile(Strict):
-        name: Annotated[Identifier, AfterValidator(_check_c_names)]
-        description: Annotated[str, Field(min_length=1)]
-        source: Optional[str] = None
-        limbs: Optional[Annotated[list[limb], Field(min_length=1, max_length=MAX_LIMBS)]] = None
-        layout: Optional[Layout] = None
-        verification: Region
-        golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = []
-        singularity: Optional[Singularity] = None
-        forward: Optional[Forward] = None
-        working_posture: Annotated[int, Field(ge=0)] = 0
-        collision: Optional[Collision] = None
-        units: Literal["mm", "inch"] = "mm"
-        optimize: Optional[Optimize] = None
+        name: Annotated[Identifier, AfterValidator(_check_c_names),
+                        Field(description="The robot's name; each host makes its C names from it.")]
+        description: Annotated[str, Field(min_length=1, description="What the robot is, in a sentence.")]
+        source: Optional[str] = Field(None, description="Where the geometry comes from (a drawing, a paper).")
+        limbs: Optional[Annotated[list[limb], Field(min_length=1, max_length=MAX_LIMBS)]] = Field(
+            None, description="The limbs, one joint each, in joint order (or give a `layout`).")
+        layout: Optional[Layout] = Field(None, description="A parametric layout that makes the limbs.")
+        verification: Region = Field(description="The region verify draws its poses from, around a home pose.")
+        golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = Field(
+            [], description="Published pose-to-joints pairs every routine must reproduce.")
+        singularity: Optional[Singularity] = Field(None, description="When a pose counts as a direct singularity.")
+        forward: Optional[Forward] = Field(None, description="The pose coordinates forward kinematics solves for.")
+        working_posture: Annotated[int, Field(ge=0)] = Field(
+            0, description="The posture a host with one answer per pose (LinuxCNC) uses.")
+        collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")
+        units: Literal["mm", "inch"] = Field("mm", description="The file's length unit.")
+        optimize: Optional[Optimize] = Field(None, description="The design problem `kingen optimize` searches.")
 
     return RobotFile
 
