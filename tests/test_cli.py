@@ -35,6 +35,20 @@ def test_help_and_version_load_no_heavy_module(argv):
     assert done.stdout.splitlines()[-1] == "[]"
 
 
+@pytest.mark.parametrize("argv", [[], ["--help"]])
+def test_help_is_multi_line_and_says_what_kingen_is(capsys, argv):
+    """``kingen`` alone prints the same help as ``kingen --help``: line by line (no escaped
+    newlines), naming both hosts and what else kingen does."""
+    code, out, _ = run(capsys, *argv)
+    assert code == 0 and "<U+000A>" not in out
+    lines = out.splitlines()
+    assert lines[0] == "Usage: kingen [OPTIONS] COMMAND [ARGS]..."
+    text = " ".join(out.split())
+    assert "verified inverse-kinematics routines for DELMIA V5 / IGRIP and LinuxCNC, with forward kinematics, " \
+           "analysis and design optimisation." in text
+    assert any(line.split()[:1] == ["optimize"] for line in lines)
+
+
 def test_the_executable_collects_garbage_rarely_and_freezes_it_before_exiting():
     """kingen.cli.run, the executable's entry point: the youngest generation collected every
     GC_FIRST_THRESHOLD allocations during the command, everything left frozen at its end,
