@@ -35,6 +35,29 @@ def test_help_and_version_load_no_heavy_module(argv):
     assert done.stdout.splitlines()[-1] == "[]"
 
 
+@pytest.mark.parametrize("argv", [[], ["--help"]])
+def test_help_is_multi_line_and_says_what_kingen_is(capsys, argv):
+    """``kingen`` alone prints the same help as ``kingen --help``: line by line (no escaped
+    newlines), naming both hosts and what else kingen does."""
+    code, out, _ = run(capsys, *argv)
+    assert code == 0 and "<U+000A>" not in out
+    lines = out.splitlines()
+    assert lines[0] == "Usage: kingen [OPTIONS] COMMAND [ARGS]..."
+    text = " ".join(out.split())
+    assert "verified inverse-kinematics routines for DELMIA V5 / IGRIP and LinuxCNC, with forward kinematics, " \
+           "analysis and design optimisation." in text
+    assert any(line.split()[:1] == ["optimize"] for line in lines)
+
+
+def test_a_robot_of_one_posture_is_counted_in_the_singular(capsys, tmp_path):
+    """The hexapod has one posture: verify says '1 solution' and '1 posture', never '1 solutions'."""
+    code, out, _ = run(capsys, "verify", "hexapod", "--samples", "200", "-o", str(tmp_path))
+    assert code == 0
+    assert "answers 'kin_hexapod' with 6 joints, 1 solution, hint 0" in out
+    assert "worst error (1 posture: " in out
+    assert "1 solutions" not in out and "1 postures" not in out
+
+
 def test_the_executable_collects_garbage_rarely_and_freezes_it_before_exiting():
     """kingen.cli.run, the executable's entry point: the youngest generation collected every
     GC_FIRST_THRESHOLD allocations during the command, everything left frozen at its end,

@@ -176,6 +176,11 @@ def test_an_unknown_code_is_named_by_its_number():
     assert diagnose_warnings(mine, theirs, NAMES) == ["3 postures answer 7 where the reference says WARN_GOOD_SOLUTION"]
 
 
+def test_one_differing_posture_is_counted_in_the_singular():
+    mine, theirs = warnings_of([(7, GOOD, 1)])
+    assert diagnose_warnings(mine, theirs, NAMES) == ["1 posture answers 7 where the reference says WARN_GOOD_SOLUTION"]
+
+
 def test_unwritten_warnings_are_named_and_not_counted_as_differing():
     mine, theirs = warnings_of([(-1, GOOD, 1), (SINGULAR, GOOD, 2)])
     mine[1, 3] = -1  # postures 0 and 3 unwritten somewhere

@@ -103,7 +103,7 @@ HOSTILE = [
     ({"CONFIG": "exit(0);"},
      1, "FAILED crash: the plugin ended the host process (exit status 0) during loading the plugin"),
     ({"SOLUTIONS": "-5"},
-     1, "FAILED get_kin_config: get_kin_config answers 1 joints and -5 solutions"),
+     1, "FAILED get_kin_config: get_kin_config answers 1 joint and -5 solutions"),
     ({"DOF": "1000000000", "SOLUTIONS": "1000000000"},
      1, "FAILED get_kin_config: get_kin_config answers 1000000000 joints and 1000000000 solutions"),
     ({"ROUTINE": "for (;;) ;"},

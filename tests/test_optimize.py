@@ -59,6 +59,7 @@ def test_outputs_and_json_contract(two_workers, small_file):
     assert {"objective_deg", "evaluations", "seconds", "variables", "tilt_table", "history", "settings",
             "seed"} <= set(result)
     assert result["objective_deg"] >= result["swarm_objective_deg"] >= max(result["history"][:1])
+    assert result["objective_deg"] >= result["start_objective_deg"]
     assert result["evaluations"] >= 6 * 4 and len(result["history"]) == 4 and len(result["tilt_table"]) == 45
     assert min(row["max_tilt_deg"] for row in result["tilt_table"]) == result["objective_deg"]
     assert result["settings"]["search"]["constriction"] == pytest.approx(0.7298, abs=1e-4)
@@ -67,6 +68,24 @@ def test_outputs_and_json_contract(two_workers, small_file):
     data = read_robot_file(design)[0]
     problem = Problem(data, design)
     assert list(problem.start()) == pytest.approx([variable["value"] for variable in result["variables"]], abs=1e-6)
+
+
+def test_the_written_design_is_never_worse_than_the_start(small_file, tmp_path, capsys):
+    """One iteration of a small swarm finds nothing better than rus_optimized's own 47 deg: the
+    summary says so and the written design is the file's own."""
+    result = _run(small_file, tmp_path, "--iterations", "1", "--workers", "1")
+    out = capsys.readouterr().out
+    assert result["objective_deg"] >= result["start_objective_deg"] == 47.0
+    assert result["start_kept"] is True and result["swarm_objective_deg"] < 47.0
+    assert "optimize rus_small: no design beat the file's own (47 deg): the written design is the file's; " \
+           "1 iteration (iterations)" in out
+    assert [variable["value"] for variable in result["variables"]] == [variable["start"] for variable in
+                                                                      result["variables"]]
+    design = tmp_path / "rus_small_optimized.yaml"
+    written = Problem(read_robot_file(design)[0], design).start()
+    original = Problem(read_robot_file(small_file)[0], small_file).start()
+    assert list(written) == pytest.approx(list(original), abs=1e-9)
+    assert "no design beat the file's own" in design.read_text().splitlines()[0]
 
 
 def test_the_same_seed_gives_the_same_search_on_one_worker(two_workers, small_file, tmp_path):

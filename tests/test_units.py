@@ -52,6 +52,20 @@ def test_windows_package_files_line_ends_and_defines():
     assert "EXPORTS\n    get_kin_config\n    kin_tau\n    kingen_build_info DATA\n" in files["libtau.def"]
 
 
+def test_build_txt_explains_the_host_import_library():
+    """The makefile's placeholder import library is explained: what it resolves (the host
+    symbols the plugin imports), where it comes from (DELMIA's installation, the vendor
+    makefile's link line)."""
+    files = render_package(load_robot("tau"), "windows")
+    assert "HOST_IMPORT_LIB = DELMIA_HOST_IMPORT_LIB.lib" in files["makefile"]
+    text = " ".join(files["BUILD.txt"].split())
+    assert "replace DELMIA_HOST_IMPORT_LIB.lib (HOST_IMPORT_LIB) with DELMIA's import library" in text
+    assert ("DNBVMAP_kin_check_definition, DNBVMAP_Sqrt, DNBVMAP_Asin, DNBVMAP_Acos, DNBVMAP_Atan, "
+            "DNBVMAP_Atan2.") in text
+    assert "Where it comes from: DELMIA's installation provides it." in text
+    assert "the .lib named on the link line of the vendor makefile in the DNBUserKinematics folder" in text
+
+
 def test_written_packages_carry_their_marker_and_crlf(tmp_path):
     written = write_package(load_robot("tau"), tmp_path / "kit", "windows")
     assert sorted(path.name for path in written) == ["BUILD.txt", "SETUP.md", "kin_tau.c", "libtau.def", "makefile"]

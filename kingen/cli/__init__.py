@@ -61,7 +61,8 @@ def main(argv=None):
         say(f"kingen: error: {error}", err=True)
         return EXIT_BAD_INPUT
     except click.exceptions.NoArgsIsHelpError as error:
-        say(error.ctx.get_help())
+        for line in error.ctx.get_help().splitlines():
+            say(line)
         return 0
     except click.ClickException as error:
         say(f"kingen: error: {' '.join(error.format_message().split())}", err=True)

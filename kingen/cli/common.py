@@ -188,7 +188,8 @@ def plugin_options(function):
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(VERSION, prog_name="kingen")
 def cli():
-    """Robot YAML -> DELMIA V5 / IGRIP user-inverse-kinematics plugin, verified.
+    """Robot YAML -> verified inverse-kinematics routines for DELMIA V5 / IGRIP and LinuxCNC,
+    with forward kinematics, analysis and design optimisation.
 
     ROBOT is a YAML path or the name of a shipped robot (see `kingen list`).
     """

@@ -11,6 +11,7 @@ import click
 
 from ..errors import KingenError
 from ..runtime.executors import checked_scheduler
+from ..runtime.text import counted
 from .common import ROBOT, _out_folder, _output_file, cli, finite, load_model_and_data, say
 
 
@@ -70,24 +71,33 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
         started = time.perf_counter()
         best = search.refine(problem, state, pool)
     seconds = state.seconds + time.perf_counter() - started
-    outcome = search.result(problem, state, best[:3], best[3], described, seconds)
+    choice = search.choose(problem, best[:3])
+    outcome = search.result(problem, state, choice, best[3], described, seconds)
     text = json.dumps(finite(outcome), indent=1, allow_nan=False) + "\n"
     name = optimized_name(outcome["robot"])
-    header = [f"kingen optimize {model.name} --seed {state.seed}: least tilt {outcome['objective_deg']:g} degrees "
-              f"(the file's design: {outcome['start_objective_deg']:g}), {outcome['evaluations']} designs evaluated."]
+    found = _found(outcome)
+    header = [f"kingen optimize {model.name} --seed {state.seed}: {found}, {outcome['evaluations']} designs evaluated."]
     pngs = {"polar.png": polar_comparison(outcome), "convergence.png": convergence(outcome)}
-    outputs = {f"{name}.yaml": design_yaml(problem, best[0], outcome["objective_deg"], header),
+    outputs = {f"{name}.yaml": design_yaml(problem, choice.design, outcome["objective_deg"], header),
                "optimization.json": text, **pngs, "report.html": report_html(outcome, pngs)}
     for file_name, content in outputs.items():
         write_atomic(out_dir / file_name, content)
     if json_path is not None:
         write_atomic(json_path, text)
-    say(f"optimize {model.name}: least tilt {outcome['objective_deg']:g} deg (the file's design "
-        f"{outcome['start_objective_deg']:g} deg) after {outcome['iterations']} iterations "
-        f"({outcome['stopped_by']}) and {outcome['evaluations']} designs, {seconds:.1f} s with {described}")
+    say(f"optimize {model.name}: {found}; {counted(outcome['iterations'], 'iteration')} "
+        f"({outcome['stopped_by']}) and {counted(outcome['evaluations'], 'design')}, {seconds:.1f} s with {described}")
     for file_name in outputs:
         say(str(out_dir / file_name))
     return 0
+
+
+def _found(outcome):
+    """What the search found, in words: the written design's least tilt against the file's own,
+    or that no design beat the file's own and the written design is the file's."""
+    if outcome["start_kept"]:
+        return (f"no design beat the file's own ({outcome['start_objective_deg']:g} deg): "
+                f"the written design is the file's")
+    return f"least tilt {outcome['objective_deg']:g} deg (the file's design {outcome['start_objective_deg']:g} deg)"
 
 
 def _progress(iterations, state):

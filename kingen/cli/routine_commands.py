@@ -153,7 +153,7 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
     model = seen
     figures = in_child(_bench_job, (model, host, library, routine, calls, floor), timeout, host,
                        {"result": functools.partial(typed, Figures)})
-    say(f"bench {model.name} ({routine}, {model.postures} postures, {figures['calls']} calls)")
+    say(f"bench {model.name} ({routine}, {counted(model.postures, 'posture')}, {counted(figures['calls'], 'call')})")
     say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
     say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
     say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
@@ -214,7 +214,7 @@ def golden_record(robot, library, source, routine, samples, seed, output, host, 
             in_child(_record_job, (host, model, library, routine, samples, seed, chunk), timeout, host,
                      {"chunk": _chunk_decoder(t6_chunks(model, samples, seed, chunk))},
                      lambda kind, chunk: snapshot.add(chunk[0], chunk[1].solutions, chunk[1].warnings))
-    say(f"{output}: {samples} poses x {model.postures} postures recorded from {recorded_from}")
+    say(f"{output}: {counted(samples, 'pose')} x {counted(model.postures, 'posture')} recorded from {recorded_from}")
 
 
 @cli.command()

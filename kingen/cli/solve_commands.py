@@ -11,7 +11,7 @@ import click
 
 from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
 from ..errors import KingenError
-from ..runtime.text import shorten
+from ..runtime.text import counted, shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
                      _t6, calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check,
                      say, solve_job)
@@ -134,7 +134,7 @@ def _predict_switch(model, t6, expected, switch, scale, units):
         pose = ", ".join(f"{v:.3f}" for v in np.concatenate([mode.pose[:3], np.degrees(mode.pose[3:])]))
         say(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP")
     say(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {predicted.jump_mm:.3f} mm "
-        f"({len(predicted.modes)} assembly modes)")
+        f"({counted(len(predicted.modes), 'assembly mode')})")
 
 
 def _index_text(value):

@@ -45,7 +45,8 @@ def convergence(result):
     history = result["history"]
     axes.plot(np.arange(1, len(history) + 1), history, color="#1f77b4", label="swarm's best")
     axes.axhline(result["objective_deg"], color="#222222", linestyle="--", linewidth=1,
-                 label=f"after refinement: {result['objective_deg']:g} deg")
+                 label=f"the file's own design: {result['objective_deg']:g} deg" if result["start_kept"]
+                 else f"after refinement: {result['objective_deg']:g} deg")
     axes.set_xlabel("iteration")
     axes.set_ylabel("least tilt over the azimuths (deg)")
     axes.set_ylim(0.0, max(max(history, default=0.0), result["objective_deg"]) * 1.1 + 1.0)

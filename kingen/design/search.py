@@ -204,18 +204,44 @@ def refine(problem, state, executor):
     return best[0], best[1], best[2], count[0]
 
 
-def result(problem, state, best, refined_evaluations, workers, seconds):
-    """optimization.json's data for the search ``state`` and the ``best`` (design, objective,
-    table) after refinement."""
+@dataclass
+class Choice:
+    """The design optimize writes: the search's best (after refinement) when it beats the robot
+    file's own design, else the file's own (``start_kept``); the start's objective (degrees) and
+    tilt table beside it."""
+
+    design: np.ndarray
+    objective: float
+    table: list
+    start: np.ndarray
+    start_objective: float
+    start_table: list
+    start_kept: bool
+
+
+def choose(problem, best):
+    """The robot file's own design is a candidate too: ``best`` (design, objective, table) is
+    chosen only if its objective is strictly larger than the start's, so the chosen objective is
+    never below the start's."""
     design, objective, table = best
     start = problem.start()
     start_objective, start_table, _ = evaluate(problem, start)
+    kept = design is None or not objective > start_objective
+    if kept:
+        design, objective, table = start, start_objective, start_table
+    return Choice(design, objective, table, start, start_objective, start_table, kept)
+
+
+def result(problem, state, choice, refined_evaluations, workers, seconds):
+    """optimization.json's data for the search ``state`` and the ``choice`` (:func:`choose`)."""
+    design, objective, table, start = choice.design, choice.objective, choice.table, choice.start
+    start_objective, start_table = choice.start_objective, choice.start_table
     azimuths = settings_of(problem.section.objective).azimuths
     robot = problem.robot(design)
     search = problem.section.search
     return {
         "robot": robot.name, "posture": problem.posture(robot),
-        "objective_deg": objective, "start_objective_deg": start_objective,
+        "objective_deg": objective, "start_objective_deg": start_objective, "start_kept": choice.start_kept,
         "variables": [{"name": name, "value": float(value), "start": float(first), "lower": float(low),
                        "upper": float(high)} for name, value, first, low, high in
                       zip(problem.names, design, start, problem.lower, problem.upper)],

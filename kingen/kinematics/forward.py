@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import matrix_from_pose, t6_from_matrix
+from ..runtime.text import counted
 from .reference import platform_points_in_base
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -186,8 +187,9 @@ def assemblies(robot, joints, near, search=SEARCH):
         candidates = solutions.candidates
         exhaustive = solutions.failed == 0
         method = (f"{'exhaustive' if exhaustive else 'not exhaustive'}: {sgp.COMPLEX_SOLUTIONS} paths tracked from a "
-                  f"generic Stewart-Gough platform to the one these joints make: {solutions.finite} complex "
-                  f"solutions, {solutions.infinite} at infinity, {solutions.failed} lost")
+                  f"generic Stewart-Gough platform to the one these joints make: "
+                  f"{counted(solutions.finite, 'complex solution')}, {solutions.infinite} at infinity, "
+                  f"{solutions.failed} lost")
     else:
         exhaustive, candidates, method = _multi_start(robot, joints, near, free, search)
     found = _polished(robot, candidates, joints, near, free)
@@ -211,9 +213,10 @@ def check_exhaustive(robot, joints, near, free, found, method):
     singular = int(np.count_nonzero(_singular(robot, [assembly.pose for assembly in everything], joints, free)))
     if not missed and not singular:
         return True, found, method
-    evidence = [f"Newton from --near and home reaches {len(missed)} pose(s) the method did not find"] if missed else []
+    evidence = ([f"Newton from --near and home reaches {counted(len(missed), 'pose')} the method did not find"]
+                if missed else [])
     if singular:
-        evidence.append(f"the closure Jacobian is singular at {singular} of the {len(everything)} pose(s)")
+        evidence.append(f"the closure Jacobian is singular at {singular} of the {counted(len(everything), 'pose')}")
     kind = "the geometry has a continuum of solutions" if singular else "the method missed poses"
     return False, everything, (f"not exhaustive: {kind} ({'; '.join(evidence)}); "
                                f"{method.removeprefix('exhaustive: ')}: {len(found)} real isolated")
@@ -240,7 +243,7 @@ def _multi_start(robot, joints, near, free, search):
     region = ", ".join(f"{name} {centre:g} +- {width:g}" for name, centre, width, is_free in zip(
         COORDINATES, np.concatenate([home[:3], np.degrees(home[3:])]),
         np.concatenate([half[:3], np.degrees(half[3:])]), free) if is_free)
-    method = (f"not exhaustive: Newton from {len(begin)} starts over {search:g} x the verification region "
+    method = (f"not exhaustive: Newton from {counted(len(begin), 'start')} over {search:g} x the verification region "
               f"({region}; mm, deg); --search widens it")
     return False, candidates, method
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..kinematics.routine import UNWRITTEN_WARNING, WARNINGS
 from ..conventions import joint_errors, wrap_difference
+from ..runtime.text import counted
 from ..kinematics.reference import solve
 
 UNREACHABLE_CODE = WARNINGS["WARN_UNREACHABLE"]
@@ -141,7 +142,8 @@ def diagnose_warnings(plugin_warnings, reference_warnings, warning_names):
                 key = (warning_names.get(int(mine), str(mine)), warning_names.get(int(theirs), str(theirs)))
                 pairs[key] = pairs.get(key, 0) + 1
         for (mine, theirs), count in sorted(pairs.items(), key=lambda item: -item[1])[:4]:
-            findings.append(f"{count} postures answer {mine} where the reference says {theirs}")
+            findings.append(f"{counted(count, 'posture')} {'answers' if count == 1 else 'answer'} {mine} "
+                            f"where the reference says {theirs}")
     return findings
 
 

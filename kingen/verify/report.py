@@ -8,7 +8,7 @@ import xml.etree.ElementTree as ElementTree
 from dataclasses import asdict, dataclass, field
 from typing import Dict, List, Optional, Tuple, Union
 
-from ..runtime.text import xml_text
+from ..runtime.text import counted, xml_text
 
 
 @dataclass
@@ -196,7 +196,7 @@ def statistics_lines(report, most=8):
     shown = [row for row in shown if len(rows) <= most or failures(row)]
     total = {key: sum(row[key] for row in rows) for key in ("right", "wrong", "unreachable_wrongly", "missed")}
     lines = [f"solutions per posture: right / wrong / unreachable wrongly / missed, worst error "
-             f"(all {len(rows)} postures: {total['right']} / {total['wrong']} / {total['unreachable_wrongly']} / "
+             f"({'all ' if len(rows) != 1 else ''}{counted(len(rows), 'posture')}: {total['right']} / {total['wrong']} / {total['unreachable_wrongly']} / "
              f"{total['missed']})"]
     for row in shown:
         worst = ", ".join(f"{row[key]:.3g} {unit}" for key, unit in (("worst_error_mm", "mm"), ("worst_error_rad", "rad"))

@@ -120,10 +120,13 @@ def _declared_name(prototype):
     return prototype.split("(")[0].split()[-1].lstrip("*")
 
 
+HOST_SYMBOLS = (_declared_name(HOST_CHECK), *(_declared_name(prototype) for prototype in HOST_MATH.values()))
+"""The symbols a plugin imports from the host process (the vendor header maps kin_check_definition
+and the math functions to them): on Windows, DELMIA's import library resolves them at link time."""
+
 RESERVED_NAMES = frozenset({
     *C_KEYWORDS, *WARNINGS, *WARNING_ALIASES, *CONSTANTS, "DllExport", "DLM_Data_KinStat",
-    "kin_check_definition", _declared_name(GET_KIN_CONFIG), _declared_name(HOST_CHECK),
-    *HOST_MATH, *(_declared_name(prototype) for prototype in HOST_MATH.values()),
+    "kin_check_definition", _declared_name(GET_KIN_CONFIG), *HOST_SYMBOLS, *HOST_MATH,
     *(_declared_name(prototype) for prototype in EMULATOR_FUNCTIONS),
     "kin_routine", "kin_dof",
 })

@@ -22,6 +22,7 @@ import numpy as np
 
 from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
+from ...runtime.text import counted
 from ...kinematics.routine import Calls, check_routine_name
 from ...kinematics.singularity import branch_table, representative_postures
 from . import abi
@@ -122,7 +123,8 @@ class Plugin:
             raise KingenError(f"{self.path}: no exported routine '{routine}'")
         self.dof, self.postures = self.config.dof, self.config.solutions
         if not (1 <= self.dof <= MAX_DOF and 1 <= self.postures <= MAX_SOLUTIONS):
-            raise PluginDefect(f"get_kin_config answers {self.dof} joints and {self.postures} solutions for "
+            raise PluginDefect(f"get_kin_config answers {counted(self.dof, 'joint')} and "
+                               f"{counted(self.postures, 'solution')} for "
                                f"'{routine}': the routine cannot be called with such buffers", check="get_kin_config")
         self.reset_host()
 

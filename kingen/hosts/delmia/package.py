@@ -107,7 +107,7 @@ def render_package(robot, target):
         extra = {"object": f"{dialog.routine_name(robot.name)}.obj", "host_import_lib": HOST_IMPORT_LIB_PLACEHOLDER}
         files["makefile"] = delmia_template("makefile.nmake.j2").render(**view, **extra)
         files[f"{view['library']}.def"] = delmia_template("exports.def.j2").render(**view)
-        files["BUILD.txt"] = delmia_template("BUILD.txt.j2").render(**view)
+        files["BUILD.txt"] = delmia_template("BUILD.txt.j2").render(**view, **extra, host_symbols=abi.HOST_SYMBOLS)
     return files
 
 

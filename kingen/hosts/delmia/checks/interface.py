@@ -6,6 +6,7 @@ import numpy as np
 
 from ....conventions import t6_from_pose
 from ....kinematics.routine import UNWRITTEN_WARNING, WARNINGS
+from ....runtime.text import counted
 from ....verify.checks.base import Check, VerifyCheck
 from .. import abi
 
@@ -22,14 +23,15 @@ class GetKinConfig(VerifyCheck, name="get_kin_config", needs="routine", item="in
         config = plugin.config
         problems = []
         if (config.dof, config.solutions) != (robot.dof, robot.postures):
-            problems.append(f"answers {config.dof} joints and {config.solutions} solutions; "
+            problems.append(f"answers {counted(config.dof, 'joint')} and {counted(config.solutions, 'solution')}; "
                             f"the robot has {robot.dof} and {robot.postures}")
         if config.data_hint not in (abi.CONSTANTS["USR_KIN_DATA_NULL"], abi.CONSTANTS["USR_KIN_DATA_KINSTAT"]):
             problems.append(f"answers an unknown data hint {config.data_hint}")
         if plugin.kin_config(plugin.routine + "_unknown").status == 0:
             problems.append(f"accepts a routine name that is not '{plugin.routine}'")
         return [Check("get_kin_config", not problems, "; ".join(problems) or
-                      f"answers '{plugin.routine}' with {config.dof} joints, {config.solutions} solutions, "
+                      f"answers '{plugin.routine}' with {counted(config.dof, 'joint')}, "
+                      f"{counted(config.solutions, 'solution')}, "
                       f"hint {config.data_hint}; refuses other names")]
 
 
