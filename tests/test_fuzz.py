@@ -108,7 +108,9 @@ def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition)
     robot = load_robot(path)
     result = build_plugin(robot, folder / "build")
     report = verify(robot, Plugin(result.library, result.routine), VerifyOptions(samples=2000))
-    failures = [(check.name, check.detail, check.diagnoses) for check in report.failures]
+    # A random robot need not be a machine that works at its home (the machine check judges the
+    # robot file, tests/test_machine.py): only the routine against the reference is judged here.
+    failures = [(check.name, check.detail, check.diagnoses) for check in report.failures if check.name != "machine"]
     # A random region may lie (mostly) outside the workspace: then verify must say so and fail, not
     # pass; the warnings it could not exercise there are said to be not exercised, none wrong.
     named = {name: detail for name, detail, _ in failures}
@@ -117,7 +119,7 @@ def test_random_valid_robots_build_verify_and_pass(tmp_path_factory, definition)
                and set(named) <= {"values", "warnings"}
                and ("warnings" not in named or (named["warnings"].startswith("0 mismatches")
                                                 and "; not exercised: " in named["warnings"])))
-    assert report.passed or vacuous, failures
+    assert not failures or vacuous, failures
 
 
 TOKENS = ["&a ", "*a", "[", "]", "{", "}", ": ", "- ", "!!str ", "!x ", "'", '"', "#", "\n", "\t", "---\n",

@@ -61,7 +61,7 @@ def test_a_registered_host_builds_verifies_and_packages_through_the_commands(toy
     report = json.loads((tmp_path / "report.json").read_text())
     names = [check["name"] for check in report["checks"]]
     assert names == ["definition", "toy return", "values", "warnings", "closure", "jacobian", "round trip",
-                     "determinism", "golden[0]"]
+                     "determinism", "machine", "golden[0]"]
     assert report["passed"] and report["samples"] == 3000 and report["max_abs_error_mm"] < 1e-9
     assert "built by kingen" in report["checks"][0]["detail"]
     code, out, err = run(capsys, "package", robot, "--host", "toy", "-o", tmp_path / "package")

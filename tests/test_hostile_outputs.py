@@ -190,9 +190,13 @@ def test_a_leg_whose_ends_meet_is_not_a_false_fail(tmp_path, capsys):
     robot = tmp_path / "meet.yaml"
     robot.write_text(f"name: meet\ndescription: a leg of no length at home\nlimbs:\n{text}\n"
                      "verification: {home: [0, 0, 508, 0, 0, 0], range: [0, 0, 0, 0, 0, 0]}\n")
-    assert main(["verify", str(robot), "--samples", "200", "-o", str(tmp_path / "out")]) == 0
+    assert main(["verify", str(robot), "--samples", "200", "-o", str(tmp_path / "out")]) == 1
     out = capsys.readouterr()
-    assert "FAILED" not in out.out and "RuntimeWarning" not in out.err
+    # only the machine itself fails: a leg of no length has no force line, its direct index is 0
+    failed = [line for line in out.out.splitlines() if line.startswith("  FAILED")]
+    assert len(failed) == 1 and failed[0].startswith("  FAILED machine: the direct index at the verification home is 0 mm")
+    assert "FAILED (1 of 14 checks)" in out.out
+    assert "RuntimeWarning" not in out.err
 
 
 # --- 7. numbers

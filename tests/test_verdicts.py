@@ -238,8 +238,8 @@ def test_the_jacobian_check_with_no_regular_posture_judges_nothing_and_says_so()
     robot = load_robot("stewart_gough_example")
     check = jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()[-1:])  # only the pose beyond travel
     assert (check.passed, check.exercised, check.judged) == (True, False, 0)
-    assert check.detail == ("no reachable, regular joint-posture among the 1 poses to differentiate (every one is "
-                            "near a limb singularity or unreachable)")
+    assert check.detail == ("no reachable, regular joint-posture among the 1 pose to differentiate: of their 1 posture, "
+                            "1 beyond travel")
 
 
 def test_a_snapshot_names_exactly_the_entries_that_differ(tmp_path, capsys):

@@ -20,6 +20,7 @@ import numpy as np
 from ..kinematics.collision import MODELS, clearances
 from ..conventions import matrix_from_pose, rpy_from_rotation, t6_from_matrix
 from ..kinematics.forward import COORDINATES, closure_derivative, unit_wrenches
+from ..kinematics.home import SINGULAR, singular_index_mm
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
@@ -42,12 +43,6 @@ TILT_CHUNK_POSES = 4096
 CROSSING = 0.05
 """A direct index below this fraction of its value at home stops a pose as a direct
 singularity even where the robot file sets no ``direct_index_min``."""
-SINGULAR = 1e-6
-"""A reachable pose is singular, whatever home's values, where its direct index is at most
-this fraction of the robot's size (robots with a direct index), or, for the others, where
-the closure Jacobian over the free coordinates, its columns and then its rows scaled to unit
-length, has a determinant of at most SINGULAR ** 2 in magnitude. At an exact singularity
-rounding leaves about 1e-8 and 1e-15 of them; the thresholds lie far above."""
 
 
 @dataclass(frozen=True)
@@ -80,11 +75,6 @@ class Home:
     index_mm: float
     det_sign: float
     singular: bool = False
-
-
-def singular_index_mm(robot):
-    """The direct index (mm) at or below which a pose of ``robot`` is singular (SINGULAR)."""
-    return SINGULAR * robot.size_mm
 
 
 def free_coordinates(robot):

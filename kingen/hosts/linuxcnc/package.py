@@ -9,11 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from ...defaults import VERSION
-from ...conventions import t6_from_pose
 from ...defaults import DEFAULT_TIMEOUT
 from ...runtime.files import write_atomic, write_folder
 from ...robot.placement import frames
-from ...kinematics.reference import solve
+from ...kinematics.home import home_postures, refuse_unworkable_home
 from ..render import template
 from ...kinematics.routine import WARNINGS, warnings_to_exercise
 from .build import build_module
@@ -38,10 +37,14 @@ STATUS_WORDS = {"WARN_GOOD_SOLUTION": "good", "WARN_JOINT_LIMITS_EXCEEDED": "a j
 def sheet_view(robot, units="mm"):
     """What the snippets and the sheet show, in the machine's ``units``: the module view plus
     the joints' homes and limits, the frames placed by the limbs' joints, and only the
-    statuses the robot's module can give (:func:`kingen.kinematics.routine.warnings_to_exercise`)."""
+    statuses the robot's module can give (:func:`kingen.kinematics.routine.warnings_to_exercise`).
+    KingenError when the working posture cannot be the machine's home (unreachable, a joint
+    beyond its travel, singular: :func:`kingen.kinematics.home.refuse_unworkable_home`): the
+    [JOINT_n] HOME values would lie outside their limits."""
+    refuse_unworkable_home(robot, robot.working_posture, "a LinuxCNC package")
     view = view_model(robot, units)
     home = np.asarray(robot.verification.home, dtype=float)
-    joints = solve(robot, t6_from_pose(home[None]), indices=False).joints[0, :, robot.working_posture]
+    joints = home_postures(robot)[robot.working_posture].joints
     machine = robot_in_units(robot, units)
     lower, upper = machine.travel_limits()
     ini = []

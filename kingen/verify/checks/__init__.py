@@ -10,13 +10,15 @@ from .definition import Definition
 from .determinism import Determinism
 from .golden import Golden
 from .jacobian import Jacobian
+from .machine import Machine
 from .round_trip import RoundTrip
 from .snapshot import Snapshot
 from .values import Values
 from .warnings import Warnings
 
-SHARED = (Definition(), Values(), Warnings(), Closure(), Jacobian(), RoundTrip(), Determinism(), Golden(), Snapshot())
+SHARED = (Definition(), Values(), Warnings(), Closure(), Jacobian(), RoundTrip(), Determinism(), Machine(), Golden(),
+          Snapshot())
 """Every host's checks, in report order: a host inserts its own among them."""
 
 __all__ = ["NEEDS", "PHASES", "SHARED", "Check", "Closure", "Context", "Definition", "Determinism", "Golden", "Jacobian",
-           "RoundTrip", "Snapshot", "Values", "VerifyCheck", "Warnings", "by_need"]
+           "Machine", "RoundTrip", "Snapshot", "Values", "VerifyCheck", "Warnings", "by_need"]

@@ -6,6 +6,7 @@ import numpy as np
 from ...kinematics.reference import solve
 from ...kinematics.routine import WARNINGS
 from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
+from ...runtime.text import counted
 from ..report import not_exercised
 from .base import Check, VerifyCheck
 
@@ -21,6 +22,19 @@ JACOBIAN_MIN_TRANSMISSION = 0.05
 JACOBIAN_MIN_RADICAND = 1e-3
 """Only regular postures are compared: away from limb singularities, where differences
 of an ill-conditioned joint would measure the conditioning, not the formula."""
+
+
+IRREGULAR_WORDS = (("WARN_UNREACHABLE", "unreachable"), ("WARN_SINGULAR_SOLUTION", "singular"),
+                   ("WARN_JOINT_LIMITS_EXCEEDED", "beyond travel"),
+                   ("WARN_GOOD_SOLUTION", "near a limb singularity"))
+"""Why a posture is not differentiated, by the reference's warning (a good one: ill-conditioned)."""
+
+
+def irregular_reasons(warnings):
+    """Why no posture of the reference's ``warnings`` (n, postures) was differentiated: their
+    count per warning, in words ('2006 beyond travel, 6 near a limb singularity')."""
+    counts = [(int(np.count_nonzero(warnings == WARNINGS[name])), words) for name, words in IRREGULAR_WORDS]
+    return ", ".join(f"{count} {words}" for count, words in counts if count)
 
 
 def jacobian_check(robot, plugin, options, t6):
@@ -55,8 +69,9 @@ def jacobian_check(robot, plugin, options, t6):
     relative = np.where(regular, np.where(np.isfinite(relative), relative, np.inf), 0.0)
     worst, compared = float(relative.max(initial=0.0)), int(np.count_nonzero(regular))
     if not compared:
-        return not_exercised("jacobian", f"no reachable, regular joint-posture among the {len(t6)} poses to "
-                                         "differentiate (every one is near a limb singularity or unreachable)")
+        return not_exercised("jacobian", f"no reachable, regular joint-posture among the {counted(len(t6), 'pose')} "
+                                         f"to differentiate: of their {counted(expected.warnings.size, 'posture')}, "
+                                         f"{irregular_reasons(expected.warnings)}")
     passed = worst <= JACOBIAN_TOLERANCE
     detail = (f"finite differences of the routine's joints against the analytic Jacobian on {compared} "
               f"regular joint-postures of {len(t6)} poses: max relative difference {worst:.3g} "

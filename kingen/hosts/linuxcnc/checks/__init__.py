@@ -3,12 +3,12 @@
 another assembly mode (:mod:`.forward`); and ``CHECKS``: every check a LinuxCNC module gets,
 in report order."""
 
-from ....verify.checks import Closure, Definition, Determinism, Golden, Jacobian, RoundTrip, Values, Warnings
+from ....verify.checks import Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Values, Warnings
 from .forward import Forward
 from .refusal import Refusal
 
 CHECKS = (Definition(), Refusal(), Values(), Warnings(), Closure(), Jacobian(), RoundTrip(), Forward(),
-          Determinism(), Golden())
+          Determinism(), Machine(), Golden())
 """Every check a LinuxCNC module gets, in report order."""
 
 __all__ = ["CHECKS", "Forward", "Refusal"]

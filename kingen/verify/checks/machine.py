@@ -1,0 +1,33 @@
+"""``machine``: whether the robot itself can work at its verification home, by the numpy
+reference alone (:mod:`kingen.kinematics.home`): a routine equal to the reference proves
+nothing of a machine whose legs cannot reach home or whose design is singular there. A robot
+implausibly small or large across gets a notice naming the units its file was read in."""
+
+import math
+
+from ...kinematics.home import home_problem, judged_posture, scale_notice
+from .base import Check, VerifyCheck
+
+
+def machine_check(robot):
+    """``machine``: passes when the judged posture (the working posture when the file gives one,
+    else some posture) can be the machine's home (:func:`kingen.kinematics.home.home_problem`:
+    reachable, within travel, not singular); the failure says why, in the robot file's units."""
+    home = judged_posture(robot)
+    problem = home_problem(robot, home)
+    if problem is not None:
+        if robot.working_posture_given:
+            problem += " (the file's working_posture)"
+        elif robot.postures > 1:
+            problem += f"; none of its {robot.postures} postures can be its home"
+        return Check("machine", False, f"{problem}: the machine cannot work there")
+    index = "" if math.isnan(home.direct_index) else f", direct index {home.direct_index:.3g} mm"
+    return Check("machine", True, f"posture {home.posture} reaches the verification home within travel{index}")
+
+
+class Machine(VerifyCheck, name="machine", needs="golden values"):
+    def run(self, context):
+        notice = scale_notice(context.robot)
+        if notice is not None:
+            context.report.notices.append(notice)
+        return [machine_check(context.robot)]
