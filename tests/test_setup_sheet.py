@@ -58,7 +58,7 @@ def test_sheet_says_when_nothing_is_read_and_no_limits_exist():
 def test_frames_are_placed_by_the_joints_of_the_robot_file(tmp_path):
     text = sheet("hexapod")
     assert "**Base frame:** Origin on the Z axis through the centre of the base joints, 40.205 mm on its -Z side." in text
-    assert "\\+Z is normal to their plane and points toward the platform" in text
+    assert "+Z is normal to their plane and points toward the platform" in text
     assert "| leg1 | (31, 118.156, 40.205) | - | (31, 48.799, -31.45) |" in text
     moved = tmp_path / "hexapod.yaml"
     moved.write_text((robots_dir() / "hexapod.yaml").read_text().replace("40.205]", "50]"))
@@ -121,3 +121,67 @@ def test_hexapod_sheet_says_its_only_warning_is_the_direct_index():
     assert "| 5 | WARN_SINGULAR_SOLUTION | the posture's direct index at most 6.5 mm (section 8) |" in text
     assert "WARN_JOINT_LIMITS_EXCEEDED" not in text and "WARN_UNREACHABLE" not in text
     assert "No limb has a singular band" in sheet("exechon")
+
+
+def test_linuxcnc_package_without_headers_writes_the_source_and_says_how_to_build_it(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    out = tmp_path / "package"
+    env = {**os.environ, "KINGEN_LINUXCNC_INCLUDE": str(tmp_path / "no-headers")}
+    done = subprocess.run([sys.executable, "-m", "kingen.cli", "package", "linear_delta", "--host", "linuxcnc",
+                           "--out-dir", str(out)], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert sorted(path.name for path in out.iterdir() if not path.name.startswith(".")) == [
+        "SETUP.md", "linear_deltakins.c", "linear_deltakins.hal", "linear_deltakins.ini"]
+    assert done.stdout.split() == [str(out / name) for name in
+                                   ("linear_deltakins.c", "linear_deltakins.hal", "linear_deltakins.ini", "SETUP.md")]
+    assert done.stderr == (f"notice: linear_deltakins.so not built: LinuxCNC's headers are not in {tmp_path / 'no-headers'} "
+                           "(install Debian's linuxcnc-uspace-dev or set KINGEN_LINUXCNC_INCLUDE); on the machine, "
+                           "build it with 'halcompile --install linear_deltakins.c' (SETUP.md)\n")
+    text = (out / "SETUP.md").read_text()
+    assert "build it with `halcompile --install linear_deltakins.c` (as root, with LinuxCNC's headers" in text
+    assert "this package holds no `linear_deltakins.so`" in text
+    assert (out / "linear_deltakins.c").read_text() == \
+        render_linuxcnc(load_robot("linear_delta"))["linear_deltakins.c"]
+
+
+def test_linuxcnc_sheet_of_a_closed_form_delta_speaks_of_carriages_not_newton_or_reference_lengths():
+    text = render_linuxcnc(load_robot("linear_delta"))["SETUP.md"]
+    assert "Newton's steps" not in text and "reference length" not in text
+    assert "`linear_deltakins.iterations` (s32 out): always 0: the forward is in closed form" in text
+    assert ("- A rail joint (mm) is the carriage's position along its rail, 0 at the origin's distance from the rail "
+            "point (positive moves it along the rail's direction); the link keeps its length.") in text
+    rotary = render_linuxcnc(load_robot("rotary_delta"))["SETUP.md"]
+    assert "`rotary_deltakins.iterations` (s32 out): Newton's steps in the last forward." in rotary
+    assert "`.max-step-angle` is unused: the platform does not turn." in rotary
+    assert "- A crank joint (degrees) is the crank's angle from the horizontal less its zero offset" in rotary
+    assert "reference length" not in rotary
+
+
+def test_linuxcnc_sheet_of_a_hexapod_speaks_of_newton_and_leg_extensions():
+    text = render_linuxcnc(load_robot("hexapod"))["SETUP.md"]
+    assert "`hexapodkins.iterations` (s32 out): Newton's steps in the last forward." in text
+    assert "`.max-step`, `.max-step-angle`: the forward's\n  settings (20, 1e-10, 25.0 mm, 10.0 degrees)." in text
+    assert "- A leg joint (mm) is the leg's extension from its reference length (positive extends it" in text
+    assert "closed form" not in text and "carriage" not in text
+
+
+@pytest.mark.parametrize("host", ["delmia", "linuxcnc"])
+def test_sheets_read_as_plain_text_and_neutralise_markdown_and_html(tmp_path, host):
+    import markdown as python_markdown
+
+    description = "Hexapod (centroid) +Z up, 1+1 & a_b; # not a heading <script>x</script> | [x](y) *e* _u_"
+    source = (robots_dir() / "hexapod.yaml").read_text()
+    path = tmp_path / "hexapod.yaml"
+    path.write_text(re.sub(r"(?m)^description:.*$", f"description: '{description}'", source))
+    robot = load_robot(path)
+    text = (render_package(robot, "windows") if host == "delmia" else render_linuxcnc(robot))["SETUP.md"]
+    line = next(line for line in text.splitlines() if line.startswith("Hexapod"))
+    assert line == ("Hexapod (centroid) +Z up, 1+1 & a_b; # not a heading \\<script\\>x\\</script\\> \\| "
+                    "\\[x\\](y) \\*e\\* \\_u\\_")
+    assert "\\(" not in text and "\\+" not in text and "\\)" not in text
+    for html in (python_markdown.markdown(line), python_markdown.markdown(line, extensions=["tables"])):
+        assert "(centroid) +Z up, 1+1 &amp; a_b; # not a heading" in html
+        assert "<script" not in html and "<a " not in html and "<em>" not in html and "<h1>" not in html

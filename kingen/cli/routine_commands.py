@@ -63,6 +63,8 @@ def package(robot, out_dir, target, host, timeout):
     paths = host.package(model, out_dir or host.package_dir(model, target), target=target, timeout=timeout)
     for path in paths:
         say(str(path))
+    for notice in getattr(paths, "notices", ()):
+        say(f"notice: {notice}", err=True)
 
 
 @cli.command()

@@ -27,6 +27,15 @@ class BuildResult:
     compiled: bool
 
 
+class Written(list):
+    """The paths a package wrote, and ``notices``: lines for the user about what it left
+    undone (a module not built, say), each whole on its own."""
+
+    def __init__(self, paths=(), notices=()):
+        super().__init__(paths)
+        self.notices = list(notices)
+
+
 class LoadedRoutine(Protocol):
     """A compiled routine loaded into this process, as its host would load it.
 
@@ -133,7 +142,8 @@ class Host:
         return field
 
     def package(self, robot, out_dir, *, target=None, timeout=DEFAULT_TIMEOUT) -> list:
-        """Write the package folder whole or not at all; the written paths."""
+        """Write the package folder whole or not at all; the written paths (a :class:`Written`
+        when there is something to tell the user, such as a part left unbuilt)."""
         raise NotImplementedError
 
     def package_dir(self, robot, target) -> Path:

@@ -18,8 +18,14 @@ Characters that are replaced are written as ``<U+XXXX>``, so nothing is silently
 import re
 import unicodedata
 
-_MARKDOWN_SPECIAL = re.compile(r"([\\`*_{}\[\]<>()#+!|~&$])")
-_LINE_START_SPECIAL = re.compile(r"^([-=>:.0-9]+)")
+_MARKDOWN_SPECIAL = re.compile(
+    r"[\\`*\[\]|~]"                          # code, emphasis, links and images, table cells, strikethrough
+    r"|(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])"    # emphasis: an underscore not inside a word
+    r"|<(?=[A-Za-z/!?])"                      # HTML tags and autolinks
+    r"|>"                                     # the end of such a tag (escaped only after one)
+    r"|&(?=#?[A-Za-z0-9]+;)")                 # character references
+_LINE_START_SPECIAL = re.compile(r"^(?:[#>+=:-]|[0-9]+[.)])")
+"""What would open a heading, quote, list, definition or thematic break where a line starts."""
 
 
 def _escaped(character):
@@ -69,9 +75,23 @@ def c_text(text):
 
 
 def markdown(text):
-    """``text`` as literal Markdown (no headings, lists, links, HTML or table breaks)."""
-    text = _MARKDOWN_SPECIAL.sub(r"\\\1", one_line(text))
-    return _LINE_START_SPECIAL.sub(lambda match: "".join("\\" + c for c in match.group(1)), text)
+    """``text`` as literal Markdown (no headings, lists, links, HTML, emphasis or table breaks),
+    wherever on a line it lands, that reads as typed in a plain editor too: a backslash only
+    before a character Markdown would read as syntax where it stands (``\\<b\\>``, ``a \\| b``,
+    ``\\_x\\_``), none before ``(``, ``+`` or ``#`` inside a line (``(centroid)``, ``+Z``). A tag's
+    ``>`` is escaped too, for renderers (Python-Markdown) that keep ``\\<`` as it is."""
+    opened = False
+
+    def escape(match):
+        nonlocal opened
+        if match.group(0) == ">":
+            closing, opened = opened, False
+            return "\\>" if closing else ">"
+        opened = opened or match.group(0) == "<"
+        return "\\" + match.group(0)
+
+    text = _MARKDOWN_SPECIAL.sub(escape, one_line(text))
+    return _LINE_START_SPECIAL.sub(lambda match: match.group(0)[:-1] + "\\" + match.group(0)[-1], text)
 
 
 def xml_text(text):

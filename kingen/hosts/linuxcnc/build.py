@@ -24,10 +24,20 @@ MODULE_FLAGS = ("-std=gnu99", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-s
 HARNESS_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared")
 
 
+def header_folder():
+    """Where LinuxCNC's headers are looked for: $KINGEN_LINUXCNC_INCLUDE, else Debian's folder."""
+    return Path(os.environ.get("KINGEN_LINUXCNC_INCLUDE") or HEADERS)
+
+
+def headers_found():
+    """Whether :func:`header_folder` holds LinuxCNC's kinematics.h (a module can be built)."""
+    return (header_folder() / "kinematics.h").is_file()
+
+
 def linuxcnc_headers():
     """The folder holding LinuxCNC's kinematics.h; KingenError naming the package otherwise."""
-    folder = Path(os.environ.get("KINGEN_LINUXCNC_INCLUDE") or HEADERS)
-    if not (folder / "kinematics.h").is_file():
+    folder = header_folder()
+    if not headers_found():
         raise KingenError(f"LinuxCNC's headers are not in {folder} (no kinematics.h): install Debian's "
                           "linuxcnc-uspace-dev or set KINGEN_LINUXCNC_INCLUDE")
     return folder

@@ -15,7 +15,8 @@ from ...robot.placement import frames
 from ...kinematics.home import home_postures, refuse_unworkable_home
 from ..render import template
 from ...kinematics.routine import WARNINGS, warnings_to_exercise
-from .build import build_module
+from .build import build_module, header_folder, headers_found
+from ..base import Written
 from ...units import LENGTH_UNITS, robot_in_units
 from .render import TEMPLATES, module_name, source_name, view_model
 
@@ -34,10 +35,21 @@ STATUS_WORDS = {"WARN_GOOD_SOLUTION": "good", "WARN_JOINT_LIMITS_EXCEEDED": "a j
 """The status pin's values in words; the sheet lists only those the robot's module can give."""
 
 
-def sheet_view(robot, units="mm"):
+def joint_meanings(robot, units):
+    """What each limb model's joint measures, once per model of ``robot`` in the order of its
+    limbs: {model, unit ('degrees' or ``units``), words (the model's ``joint_words``)}."""
+    meanings = {}
+    for limb in robot.limbs:
+        unit = "degrees" if limb.joint_type.wraps else units
+        meanings.setdefault(limb.model, {"model": limb.model, "unit": unit, "words": type(limb).joint_words})
+    return list(meanings.values())
+
+
+def sheet_view(robot, units="mm", compiled=True):
     """What the snippets and the sheet show, in the machine's ``units``: the module view plus
     the joints' homes and limits, the frames placed by the limbs' joints, and only the
-    statuses the robot's module can give (:func:`kingen.kinematics.routine.warnings_to_exercise`).
+    statuses the robot's module can give (:func:`kingen.kinematics.routine.warnings_to_exercise`);
+    ``compiled``: whether the package holds the built module (else the sheet says how to build it).
     KingenError when the working posture cannot be the machine's home (unreachable, a joint
     beyond its travel, singular: :func:`kingen.kinematics.home.refuse_unworkable_home`): the
     [JOINT_n] HOME values would lie outside their limits."""
@@ -64,13 +76,14 @@ def sheet_view(robot, units="mm"):
     refused = [str(code) for code, _ in statuses if code in (WARNINGS["WARN_UNREACHABLE"], WARNINGS["WARN_SINGULAR_SOLUTION"])]
     return {**view, "ini_joints": ini, "frames": frames(robot, units),
             "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": VERSION,
-            "joint_count": robot.dof,
+            "joint_count": robot.dof, "joint_meanings": joint_meanings(robot, units), "compiled": compiled,
             "home_text": " ".join(_exact(value) for value in (*position, *home[3:])), "description": robot.description}
 
 
-def render_package(robot, units="mm"):
-    """The text files of the package as {file name: text}."""
-    view = sheet_view(robot, units)
+def render_package(robot, units="mm", compiled=True):
+    """The text files of the package as {file name: text}; ``compiled``: whether the package
+    holds the built module beside them."""
+    view = sheet_view(robot, units, compiled)
     module = module_name(robot)
     return {source_name(robot): template("kins.c.j2", TEMPLATES).render(**view), f"{module}.hal": template("module.hal.j2", TEMPLATES).render(**view),
             f"{module}.ini": template("module.ini.j2", TEMPLATES).render(**view),
@@ -78,16 +91,25 @@ def render_package(robot, units="mm"):
 
 
 def write_package(robot, out_dir, units="mm", timeout=DEFAULT_TIMEOUT):
-    """Write the package folder whole or not at all, with the built module. Returns the paths."""
-    files = render_package(robot, units)
+    """Write the package folder whole or not at all, with the built module when LinuxCNC's
+    headers are found (:func:`.build.linuxcnc_headers`); without them, the source, snippets and
+    sheet only, and the returned paths' ``notices`` say so and how to build the module."""
+    compiled = headers_found()
+    files = render_package(robot, units, compiled)
     library = f"{module_name(robot)}.so"
 
     def fill(staging):
-        built = build_module(robot, staging / ".build", units, timeout=timeout)
-        write_atomic(staging / library, built.library.read_bytes(), executable=True)
-        shutil.rmtree(staging / ".build")
+        if compiled:
+            built = build_module(robot, staging / ".build", units, timeout=timeout)
+            write_atomic(staging / library, built.library.read_bytes(), executable=True)
+            shutil.rmtree(staging / ".build")
         for name, text in files.items():
             write_atomic(staging / name, text)
 
     write_folder(out_dir, fill, f"written by kingen for {robot.name} (linuxcnc)\n")
-    return [Path(out_dir) / name for name in (*files, library)]
+    if compiled:
+        return Written(Path(out_dir) / name for name in (*files, library))
+    notice = (f"{library} not built: LinuxCNC's headers are not in {header_folder()} (install Debian's "
+              f"linuxcnc-uspace-dev or set KINGEN_LINUXCNC_INCLUDE); on the machine, build it with "
+              f"'halcompile --install {source_name(robot)}' (SETUP.md)")
+    return Written((Path(out_dir) / name for name in files), [notice])

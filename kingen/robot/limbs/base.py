@@ -77,6 +77,9 @@ class LimbModel(Strict):
     """The table columns of the C partial, in order, in words (shown above the table)."""
     partial: ClassVar[Optional[Path]] = None
     """The template partial; None: templates/limbs/<model>.c.j2."""
+    joint_words: ClassVar[str] = ""
+    """What the joint's value measures, in words, for the setup sheet's joints table: its zero
+    and the direction of positive values."""
 
     @field_validator("calibrate")
     @classmethod

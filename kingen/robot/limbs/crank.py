@@ -35,6 +35,8 @@ class Crank(TwoBranchModel):
     joint_type = REVOLUTE
     calibratable = {"zero_offset": "degrees", "crank_length": "mm", "rod_length": "mm"}
     length_fields = ("pivot", "crank_length", "rod_length", "platform_point")
+    joint_words = ("the crank's angle from the horizontal less its zero offset (positive turns its tip "
+                   "down, toward -Z); the rod keeps its length")
     c_columns = ("joint, pivot A (mm, base frame), cos(beta), sin(beta), crank length r (mm), "
                  "rod length L (mm), platform point c (mm, platform frame), zero offset (rad), "
                  "dialog fields of zero offset, r and L")

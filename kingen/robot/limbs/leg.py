@@ -24,6 +24,8 @@ class Leg(LimbModel):
     joint_type = PRISMATIC
     calibratable = {"reference_length": "mm"}
     length_fields = ("base_point", "platform_point", "reference_length")
+    joint_words = ("the leg's extension from its reference length (positive extends it; with a reference "
+                   "length of 0, the leg's whole length)")
     c_columns = ("joint, base point b (mm, base frame), platform point t (mm, platform frame), "
                  "reference length L0 (mm), its dialog field")
 

@@ -26,6 +26,8 @@ class Rail(TwoBranchModel):
     """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
 
     joint_type = PRISMATIC
+    joint_words = ("the carriage's position along its rail, 0 at the origin's distance from the rail point "
+                   "(positive moves it along the rail's direction); the link keeps its length")
     calibratable = {"origin": "mm", "link_length": "mm"}
     length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
     c_columns = ("joint, rail point s (mm, base frame), direction u (unit), carriage offset d (mm), "
