@@ -16,6 +16,7 @@ settings.register_profile("ci", derandomize=True, database=None)
 if os.environ.get("CI"):
     settings.load_profile("ci")  # the same examples on every CI run: a red CI is reproducible
 
+os.environ.pop("COLUMNS", None)  # solve and verify fit $COLUMNS: tests that parse the full lines set none
 os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache-"))
 
 # Tests start kingen in new Python processes (`python -m kingen.cli` 49 times in one run, pytest

@@ -4,7 +4,9 @@ and the routine to check, running foreign code in a child process, and printing.
 import functools
 import math
 import os
+import shutil
 import sys
+import textwrap
 from pathlib import Path
 
 import click
@@ -281,10 +283,53 @@ def processes_text(count):
     return f"{count} process" if count == 1 else f"{count} processes"  # 'es': not text.counted
 
 
-def print_table(rows):
+def output_width():
+    """The columns that solve and verify fit their lines to: $COLUMNS when it is a positive
+    number, the terminal's width when stdout is a terminal, else None (no limit: a pipe or a
+    file gets the full lines, as scripts always saw them)."""
+    columns = os.environ.get("COLUMNS", "").strip()
+    if columns.isdigit() and int(columns) > 0:
+        return int(columns)
+    if sys.stdout is not None and sys.stdout.isatty():
+        return shutil.get_terminal_size().columns
+    return None
+
+
+def table_lines(rows, width=None):
+    """The table's lines, columns two spaces apart. When a line would be wider than ``width``
+    the columns wrap: blocks of as many columns as fit, each led by the first column again
+    and separated by an empty line (a single column wider than ``width`` stays whole)."""
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    for row in rows:
-        say("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip())
+    blocks = [list(range(len(widths)))]
+    if width is not None and sum(widths) + 2 * (len(widths) - 1) > width:
+        blocks = [[0]]
+        for column in range(1, len(widths)):
+            used = sum(widths[i] + 2 for i in blocks[-1])
+            if len(blocks[-1]) > 1 and used + widths[column] > width:
+                blocks.append([0])
+            blocks[-1].append(column)
+    lines = []
+    for block in blocks:
+        lines += [""] if lines else []
+        lines += ["  ".join(row[i].ljust(widths[i]) for i in block).rstrip() for row in rows]
+    return lines
+
+
+def print_table(rows, width=None):
+    """Print ``rows`` (lists of strings, the header first) as table_lines(rows, width)."""
+    for line in table_lines(rows, width):
+        say(line)
+
+
+def say_fitted(text, width, indent="  "):
+    """Print ``text`` wrapped to ``width`` columns (None: one line), continuation lines
+    indented by ``indent``; the first words stay on the first line, words (paths) never split."""
+    if width is None:
+        say(text)
+        return
+    for line in textwrap.wrap(text, width, subsequent_indent=indent, break_long_words=False,
+                              break_on_hyphens=False) or [""]:
+        say(line)
 
 
 def say(text, err=False):

@@ -13,7 +13,8 @@ from ..defaults import MAX_PROCESSES, TARGETS
 from ..runtime.executors import checked_scheduler
 from ..runtime.text import counted
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, _output_file, cli, host_target, in_child,
-                     load_model, plugin_options, processes_text, routine_to_check, say, calibration_options)
+                     load_model, output_width, plugin_options, processes_text, routine_to_check, say,
+                     say_fitted, calibration_options)
 
 MAX_BENCH_CALLS = 100_000_000
 
@@ -310,20 +311,23 @@ def _progress(total, robot):
 
 
 def print_report(report, library):
-    say(f"verify {report.robot}: {counted(report.samples, 'pose')} x {counted(report.postures, 'posture')}, {library} "
-        f"({report.routine})")
+    """The report as text, each line fitted to output_width() with continuation lines
+    indented, so every check's line still starts ``  ok     NAME:`` or ``  FAILED NAME:``."""
+    width = output_width()
+    say_fitted(f"verify {report.robot}: {counted(report.samples, 'pose')} x {counted(report.postures, 'posture')}, "
+               f"{library} ({report.routine})", width)
     for check in report.checks:
-        say(f"  {check.status:6} {check.name}: {check.detail}" if check.exercised or not check.passed
-            else f"  {check.name}: not exercised: {check.detail}")
+        say_fitted(f"  {check.status:6} {check.name}: {check.detail}" if check.exercised or not check.passed
+                   else f"  {check.name}: not exercised: {check.detail}", width, " " * 9)
         for diagnosis in check.diagnoses:
-            say(f"         diagnosis: {diagnosis}")
+            say_fitted(f"         diagnosis: {diagnosis}", width, " " * 11)
     from ..verify.report import statistics_lines
 
     for line in statistics_lines(report):
-        say(f"  {line}")
+        say_fitted(f"  {line}", width, "    ")
     for notice in report.notices:
-        say(f"  notice: {notice}")
+        say_fitted(f"  notice: {notice}", width, "    ")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
     speed = (f"; the sampled poses compared in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, "
              f"{processes_text(report.processes)})" if report.seconds > 0 else "")
-    say(verdict + speed)
+    say_fitted(verdict + speed, width)

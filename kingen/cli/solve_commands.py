@@ -13,8 +13,8 @@ from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
 from ..errors import KingenError
 from ..runtime.text import counted, shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
-                     _t6, calibration_options, cli, finite, in_child, load_model, print_table, routine_to_check,
-                     say, solve_job)
+                     _t6, calibration_options, cli, finite, in_child, load_model, output_width, print_table,
+                     routine_to_check, say, say_fitted, solve_job, table_lines)
 
 
 @cli.command("list")
@@ -42,10 +42,14 @@ def list_robots():
               callback=_output_file, help="Write every posture (joints in mm and rad, warnings, indices) as JSON.")
 @click.option("--switch", nargs=2, type=click.IntRange(min=0), default=None, metavar="A B",
               help="Predict a switch from posture A to B: B's joints, their assembly modes and the TCP jump.")
+@click.option("--wide", is_flag=True,
+              help="Always print the full table, the reference's joints beside the plugin's, however wide "
+                   "[default: when it is wider than the terminal ($COLUMNS), the reference is one column of "
+                   "differences and the columns wrap].")
 @calibration_options
 @HOST
 @TIMEOUT
-def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, link_offsets, host, timeout):
+def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengths, link_offsets, host, timeout):
     """Every posture's joints and warning from the plugin, with the reference's beside it."""
     import numpy as np
 
@@ -72,21 +76,26 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     names = [f"{name} ({unit})" for name, unit in zip(model.joint_names, units)]
     header = (["posture", "branches"] + names + ["warning", "| reference"] + names
               + ["warning", "direct index (mm)", "min inverse index"])
-    rows = [header]
+    compact = (["posture", "branches"] + names
+               + ["warning", "max |plugin - reference|", "reference warning", "direct index (mm)", "min inverse index"])
+    rows, compact_rows = [header], [compact]
     digits = [bit for bit in model.branch_bits if bit >= 0]
     for k in range(model.postures):
         branches = "".join(str(branch_of_posture(k, bit)) for bit in digits) or "-"
-        rows.append(
-            [str(k), branches]
-            + [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k]), "|"]
-            + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale] + [_warning_name(expected.warnings[0, k])]
-            + [_index_text(direct[k]), inverse_text]
-        )
-    print_table(rows)
+        plugin = [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k])]
+        indices = [_index_text(direct[k]), inverse_text]
+        difference = np.abs(calls.solutions[0, :, k] - expected.joints[0, :, k]) * scale
+        rows.append([str(k), branches] + plugin + ["|"] + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale]
+                    + [_warning_name(expected.warnings[0, k])] + indices)
+        compact_rows.append([str(k), branches] + plugin
+                            + [f"{difference.max():.3g}" if np.isfinite(difference).all() else "n/a",
+                               _warning_name(expected.warnings[0, k])] + indices)
+    width = None if wide else output_width()
+    print_table(rows if width is None or max(map(len, table_lines(rows))) <= width else compact_rows, width)
     say(f"routine returned {calls.returned[0]}")
-    say(_indices_note(model))
+    say_fitted(_indices_note(model), width)
     if switch is not None:
-        _predict_switch(model, matrix[0], expected, switch, scale, units)
+        _predict_switch(model, matrix[0], expected, switch, scale, units, width)
     if json_path is not None:
         write_atomic(json_path, json.dumps(finite({
             "robot": model.name, "routine": routine, "t6": matrix[0].tolist(), "returned": int(calls.returned[0]),
@@ -105,10 +114,10 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, link_lengths, li
     return 0
 
 
-def _predict_switch(model, t6, expected, switch, scale, units):
+def _predict_switch(model, t6, expected, switch, scale, units, width):
     """What a host that recomputes the TCP from posture B's joints may do after A -> B
-    (kingen.kinematics.posture_switch), printed; no prediction when A or B is unreachable at
-    the pose."""
+    (kingen.kinematics.posture_switch), printed with lines fitted to ``width`` columns (None:
+    no limit); no prediction when A or B is unreachable at the pose."""
     import numpy as np
 
     from ..kinematics.posture_switch import predict_switch
@@ -118,23 +127,23 @@ def _predict_switch(model, t6, expected, switch, scale, units):
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--switch")
     predicted = predict_switch(model, t6, expected.joints[0], expected.warnings[0], first, second)
     if predicted.unreachable is not None:
-        say(f"switch {first} -> {second}: posture {predicted.unreachable} is unreachable at this pose; "
-            "no switch to predict")
+        say_fitted(f"switch {first} -> {second}: posture {predicted.unreachable} is unreachable at this pose; "
+                   "no switch to predict", width)
         return
     if predicted.modes is None:
-        say(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)")
+        say_fitted(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)", width)
         return
     moved = ", ".join(f"{name} {value * s:+.6f} {unit}" for name, value, s, unit in
                       zip(model.joint_names, predicted.change, scale, units))
-    say(f"switch {first} -> {second}: the joints move by {moved}")
+    say_fitted(f"switch {first} -> {second}: the joints move by {moved}", width)
     if not predicted.modes:
-        say(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP")
+        say_fitted(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP", width, "    ")
         return
     for number, (mode, distance) in enumerate(zip(predicted.modes, predicted.distances_mm)):
         pose = ", ".join(f"{v:.3f}" for v in np.concatenate([mode.pose[:3], np.degrees(mode.pose[3:])]))
-        say(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP")
-    say(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {predicted.jump_mm:.3f} mm "
-        f"({counted(len(predicted.modes), 'assembly mode')})")
+        say_fitted(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP", width, "    ")
+    say_fitted(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {predicted.jump_mm:.3f} mm "
+               f"({counted(len(predicted.modes), 'assembly mode')})", width, "    ")
 
 
 def _index_text(value):

@@ -42,6 +42,51 @@ def png(figure):
     return buffer.getvalue()
 
 
+def ring_label_angle(curves, rings):
+    """The angle (deg) at which to put a polar graph's ring labels (at radii ``rings``) so
+    that they keep clear of the curves (each a list of (azimuth deg, radius) points, marked
+    at every point): halfway between two neighbouring azimuths, where the curves' radii at
+    both neighbours and halfway between are farthest from every labelled ring; ties go to the
+    wider gap, then to the angle nearest 67.5 deg. Never a point's azimuth when there are two
+    azimuths or more; 67.5 without points."""
+    azimuths = sorted({azimuth % 360.0 for curve in curves for azimuth, _ in curve})
+    if not azimuths:
+        return 67.5
+    radii = [{azimuth % 360.0: radius for azimuth, radius in curve} for curve in curves]
+    best = None
+    for first, second in zip(azimuths, azimuths[1:] + [azimuths[0] + 360.0]):
+        near = []
+        for curve in radii:
+            ends = [curve[a % 360.0] for a in (first, second) if a % 360.0 in curve]
+            near += ends + [sum(ends) / len(ends)] if ends else []
+        clearance = min((abs(radius - ring) for radius in near for ring in rings), default=0.0)
+        middle = (first + second) / 2.0 % 360.0
+        key = (round(clearance, 9), second - first, -abs((middle - 67.5 + 180.0) % 360.0 - 180.0))
+        best = max(best, (key, middle)) if best else (key, middle)
+    return best[1]
+
+
+def label_rings(axes, curves):
+    """Put the ring (radius) labels of polar ``axes``, drawn last (its figure complete: the
+    layout places the axes), at ring_label_angle of ``curves`` and the labelled rings,
+    then leave blank each label whose text would still cover a marker (its ring stays drawn)."""
+    top = axes.get_ylim()[1]
+    rings = [float(ring) for ring in axes.get_yticks() if 0.0 < ring <= top]
+    axes.set_rlabel_position(ring_label_angle(curves, rings))
+    axes.set_rgrids(rings)
+    axes.figure.draw_without_rendering()
+    scale = axes.figure.dpi / 72.0
+    markers = [(point, np.sqrt(size) / 2.0 * scale) for collection in axes.collections
+               for point, size in zip(axes.transData.transform(collection.get_offsets()),
+                                      np.broadcast_to(collection.get_sizes(), len(collection.get_offsets())))]
+    labels = [label.get_text() for label in axes.yaxis.get_ticklabels()]
+    for number, label in enumerate(axes.yaxis.get_ticklabels()):
+        box = label.get_window_extent()
+        if any(box.x0 - r < x < box.x1 + r and box.y0 - r < y < box.y1 + r for (x, y), r in markers):
+            labels[number] = ""
+    axes.set_rgrids(rings, labels)
+
+
 def polar_figure(analysis):
     """The polar graph of the tilt limits (radius from 0 to the largest tilt searched, each
     azimuth's marker coloured by what stops it, legend below), or None when the analysis has
@@ -64,7 +109,6 @@ def polar_figure(analysis):
             axes.scatter(np.radians([row["azimuth_deg"] for row in chosen]), [row["max_tilt_deg"] for row in chosen],
                          s=36, zorder=3, clip_on=False, **style)
     axes.set_ylim(0.0, searched)
-    axes.set_rlabel_position(67.5)
     axes.set_thetagrids(range(0, 360, 45), ["0°\nabout +X", "45°", "90°\nabout +Y", "135°", "180°\nabout -X",
                                             "225°", "270°\nabout -Y", "315°"])
     axes.tick_params(axis="x", pad=12, labelsize=9)
@@ -72,6 +116,7 @@ def polar_figure(analysis):
                    f"radius: largest tilt (deg), outer circle: {searched:g} deg, the largest searched;\n"
                    "angle: azimuth of the tilt axis", fontsize=10)
     figure.legend(loc="outside lower center", ncol=1, fontsize=8, frameon=False)
+    label_rings(axes, [[(row["azimuth_deg"], row["max_tilt_deg"]) for row in limits]])
     return figure
 
 
@@ -233,6 +278,8 @@ def slice_figure(analysis):
     from matplotlib.colors import ListedColormap
 
     figure = Figure(figsize=(12, 6), layout="constrained")
+    # the default padding lets an equal-aspect axes' title run into the figure's title
+    figure.get_layout_engine().set(h_pad=0.1)
     grid = figure.subplots(1, len(slices), squeeze=False)[0]
     colours = ListedColormap([COLOURS[cause] for cause in CAUSES])
     present = set()

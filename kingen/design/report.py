@@ -6,8 +6,9 @@ import base64
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
-from .figures import COLOURS, LABELS, png
+from .figures import COLOURS, LABELS, label_rings, png
 from ..runtime.templates import template
 
 
@@ -31,15 +32,22 @@ def polar_comparison(result):
                      s=6, zorder=3, color=COLOURS.get(cause, "#000000"),
                      label=f"best design stopped by {LABELS.get(cause, cause)}")
     axes.set_ylim(0.0, cap)
-    axes.set_rlabel_position(67.5)
     axes.set_title(f"{result['robot']}: largest tilt towards each azimuth\n"
                    f"radius: tilt (deg), outer circle {cap:g} deg, the largest searched", fontsize=10)
     figure.legend(loc="outside lower center", ncol=1, fontsize=8, frameon=False)
+    label_rings(axes, [[(row["azimuth_deg"], row["max_tilt_deg"]) for row in result[key]]
+                       for key in ("start_tilt_table", "tilt_table")])
     return png(figure)
 
 
 def convergence(result):
-    """PNG: the swarm's best objective after each iteration, from 0, with the refinement's."""
+    """PNG of convergence_figure(result)."""
+    return png(convergence_figure(result))
+
+
+def convergence_figure(result):
+    """The swarm's best objective after each iteration (whole iterations on the x axis),
+    from 0, with the refinement's."""
     figure = Figure(figsize=(7.5, 3.6), layout="constrained")
     axes = figure.add_subplot()
     history = result["history"]
@@ -48,11 +56,12 @@ def convergence(result):
                  label=f"the file's own design: {result['objective_deg']:g} deg" if result["start_kept"]
                  else f"after refinement: {result['objective_deg']:g} deg")
     axes.set_xlabel("iteration")
+    axes.xaxis.set_major_locator(MaxNLocator(integer=True))
     axes.set_ylabel("least tilt over the azimuths (deg)")
     axes.set_ylim(0.0, max(max(history, default=0.0), result["objective_deg"]) * 1.1 + 1.0)
     axes.grid(alpha=0.3)
     figure.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
-    return png(figure)
+    return figure
 
 
 def report_html(result, pngs):
