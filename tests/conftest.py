@@ -22,7 +22,7 @@ os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache
 # Tests start kingen in new Python processes (`python -m kingen.cli` 49 times in one run, pytest
 # sessions). Where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE,
 # as in CI containers) and kingen is installed editable, each compiled every kingen module
-# afresh (0.13 s of a 0.9 s `kingen verify`, by farm-bench's median); byte-compiled once here,
+# afresh (0.13 s of a 0.9 s `kingen verify`, median of paired runs); byte-compiled once here,
 # they load it. Up-to-date files are skipped; a read-only tree is left as it is.
 if not os.environ.get("PYTEST_XDIST_WORKER"):
     compileall.compile_dir(Path(importlib.util.find_spec("kingen").origin).parent, quiet=2)
