@@ -263,6 +263,7 @@ TAMPERED = {
     "code as text": (lambda data: data.update(seed="__import__('os')"), "seed: Input should be a valid integer"),
     "a field more": (lambda data: data.update(extra=1), "extra: Extra inputs are not permitted"),
     "a particle less": (lambda data: data["swarm"]["x"].pop(), "swarm.x: not 6 particles of "),
+    "a ragged swarm": (lambda data: data["swarm"]["v"][2].pop(), "swarm.v: not 6 particles of "),
     "another problem": (lambda data: data.update(fingerprint="0" * 64), "the checkpoint is of another design problem"),
 }
 

@@ -96,15 +96,16 @@ def load(folder, problem, expected):
     if data.fingerprint != expected:
         raise KingenError(f"{path}: the checkpoint is of another design problem (the robot file or its "
                           "optimize: section changed)")
-    swarm, size = data.swarm, (problem.section.search.swarm, len(problem.names))
+    swarm, particles, variables = data.swarm, problem.section.search.swarm, len(problem.names)
     for name in ("x", "v", "best_x"):
-        if np.shape(getattr(swarm, name)) != size:
-            raise KingenError(f"{path}: swarm.{name}: not {size[0]} particles of {size[1]} variables")
+        rows = getattr(swarm, name)
+        if len(rows) != particles or any(len(row) != variables for row in rows):
+            raise KingenError(f"{path}: swarm.{name}: not {particles} particles of {variables} variables")
     for name in ("f", "best_f"):
-        if len(getattr(swarm, name)) != size[0]:
-            raise KingenError(f"{path}: swarm.{name}: not {size[0]} particles")
-    if data.best_x is not None and len(data.best_x) != size[1]:
-        raise KingenError(f"{path}: best_x: not {size[1]} variables")
+        if len(getattr(swarm, name)) != particles:
+            raise KingenError(f"{path}: swarm.{name}: not {particles} particles")
+    if data.best_x is not None and len(data.best_x) != variables:
+        raise KingenError(f"{path}: best_x: not {variables} variables")
     state = new_state(problem, data.seed, expected)
     _restore_swarm(state.algorithm, swarm)
     best_x = None if data.best_x is None else np.array(data.best_x)
