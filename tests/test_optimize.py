@@ -16,7 +16,7 @@ import time
 import pytest
 from ruamel.yaml import YAML
 
-from conftest import require_tool
+from conftest import require_tool, skip_or_fail
 from kingen.design import search
 from kingen.cli import main
 from kingen.design.problem import Problem
@@ -299,7 +299,7 @@ def test_a_checkpoint_another_user_could_have_written_is_refused(checkpointed, s
     path.write_text(json.dumps(checkpointed))
     os.chmod(path, 0o600)
     if case == "owned by another user" and os.getuid() != 0:
-        pytest.skip("only root can give a file to another user")
+        skip_or_fail("only root can give a file to another user")
     place(path)
     code, error = _resume(small_file, tmp_path, capsys)
     assert code == 2 and len(error.splitlines()) == 1

@@ -71,13 +71,12 @@ def save(state, folder):
     """Checkpoint ``state`` into ``folder`` (atomically, as plain data: kingen.design.checkpoint)."""
     algorithm = state.algorithm
     particles, bests = algorithm.particles, algorithm.pop
-    generator = algorithm.random_state.bit_generator.state["state"]
+    generator = algorithm.random_state.bit_generator.state
     swarm = checkpoint.Swarm(
         iteration=algorithm.n_iter, x=particles.get("X").tolist(), v=particles.get("V").tolist(),
         f=particles.get("F")[:, 0].tolist(), best_x=bests.get("X").tolist(), best_f=bests.get("F")[:, 0].tolist(),
-        random_state=generator["state"], random_increment=generator["inc"],
-        random_has_uint32=algorithm.random_state.bit_generator.state["has_uint32"],
-        random_uinteger=algorithm.random_state.bit_generator.state["uinteger"])
+        random_state=generator["state"]["state"], random_increment=generator["state"]["inc"],
+        random_has_uint32=generator["has_uint32"], random_uinteger=generator["uinteger"])
     checkpoint.write(folder, checkpoint.Checkpoint(
         format=checkpoint.FORMAT, version=checkpoint.VERSION, fingerprint=state.fingerprint, seed=state.seed,
         iteration=state.iteration, evaluations=state.evaluations, poses=state.poses,
