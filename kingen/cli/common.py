@@ -347,10 +347,9 @@ def say(text, err=False):
 
 def detach(err):
     """Point a broken standard stream at /dev/null, so later writes and the final flush succeed."""
-    null = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(null, 2 if err else 1)
-    if null > 2:  # it is itself descriptor 1 or 2 when that one was closed
-        os.close(null)
+    from ..runtime.isolation import to_devnull
+
+    to_devnull(2 if err else 1)
     if err:
         sys.stderr = open(os.devnull, "w")
     else:

@@ -246,10 +246,17 @@ def keep_freed_memory():
 def _silence_standard_streams():
     """What foreign code prints goes nowhere unless a job captures it on purpose: it must
     not mix into kingen's own output (which may be a JSON stream read by a script)."""
+    to_devnull(1, 2)
+
+
+def to_devnull(*descriptors):
+    """Point each of ``descriptors`` (standard streams) at /dev/null. The descriptor opened
+    for it is closed unless it is itself one of them: when a standard stream was closed
+    before, /dev/null opens as that very number."""
     null = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(null, 1)
-    os.dup2(null, 2)
-    if null > 2:  # it is itself descriptor 1 or 2 when that one was closed
+    for descriptor in descriptors:
+        os.dup2(null, descriptor)
+    if null not in descriptors:
         os.close(null)
 
 
