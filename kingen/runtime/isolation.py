@@ -17,6 +17,7 @@ with it (:class:`kingen.runtime.household.Household`).
 
 import ctypes
 import faulthandler
+import functools
 import multiprocessing
 import os
 import signal
@@ -25,6 +26,7 @@ import tempfile
 import traceback
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Tuple
 
 from . import wire
 from ..errors import InternalError, KingenError, PluginDefect
@@ -128,19 +130,9 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
                                              f"during {stage}")
 
 
-def _text(value):
-    if not isinstance(value, str):
-        raise wire.WireError("a message whose text is not text")
-    return value
-
-
-def _defect(value):
-    if not (isinstance(value, list) and len(value) == 2 and all(isinstance(part, str) for part in value)):
-        raise wire.WireError("a defect message kingen cannot read")
-    return value
-
-
-CONTROL_DECODERS = {"stage": _text, "defect": _defect, "error": _text, "internal": _text}
+_TEXT = functools.partial(wire.typed, str)
+CONTROL_DECODERS = {"stage": _TEXT, "defect": functools.partial(wire.typed, Tuple[str, str]), "error": _TEXT,
+                    "internal": _TEXT}
 """The messages every job's child sends besides its own: stages, and how it ended if not
 with a result."""
 
