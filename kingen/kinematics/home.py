@@ -44,9 +44,14 @@ class HomePosture:
     direct_index: float
 
 
+def _solved_at_home(robot, indices=False):
+    """The reference's Solution for ``robot``'s verification home (one pose)."""
+    return solve(robot, t6_from_pose(np.asarray([robot.verification.home], dtype=float)), indices=indices)
+
+
 def home_postures(robot):
     """Every posture of ``robot`` at its verification home (HomePosture, in posture order)."""
-    solution = solve(robot, t6_from_pose(np.asarray([robot.verification.home], dtype=float)), indices=True)
+    solution = _solved_at_home(robot, indices=True)
     lower, upper = robot.travel_limits()
     postures = []
     for posture in range(robot.postures):
@@ -111,20 +116,22 @@ def home_problem(robot, home):
     return None
 
 
-def refuse_unworkable_home(robot, posture, what):
-    """Raise KingenError (the robot file's ``verification.home``, one line) when ``posture`` of
-    ``robot`` cannot be the machine's home (home_problem): ``what`` (e.g. 'a LinuxCNC package')
-    would hold joints at home the machine cannot take."""
-    problem = home_problem(robot, home_postures(robot)[posture])
+def workable_home(robot, posture, what):
+    """The HomePosture of ``posture`` of ``robot``; KingenError (the robot file's
+    ``verification.home``, one line) when it cannot be the machine's home (home_problem):
+    ``what`` (e.g. 'a LinuxCNC package') would hold joints at home the machine cannot take."""
+    home = home_postures(robot)[posture]
+    problem = home_problem(robot, home)
     if problem is not None:
         raise located(robot.path, robot.line_of("verification", "home"), "verification.home",
                       f"{problem}: {what} cannot be written for it")
+    return home
 
 
 def extent_mm(robot):
     """The largest distance (mm) between two of the limbs' base-side and platform points with
     the platform at the verification home, posture 0: how large the robot is across."""
-    solution = solve(robot, t6_from_pose(np.asarray([robot.verification.home], dtype=float)))
+    solution = _solved_at_home(robot)
     joints = solution.joints[0, :, 0]
     points = [solution.points[0, index] for index in range(robot.dof)]
     points += [limb.base_side_point(solution.points[:1, index], joints[index:index + 1])[0]

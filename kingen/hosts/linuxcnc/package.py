@@ -12,7 +12,7 @@ from ...defaults import VERSION
 from ...defaults import DEFAULT_TIMEOUT
 from ...runtime.files import write_atomic, write_folder
 from ...robot.placement import frames
-from ...kinematics.home import home_postures, refuse_unworkable_home
+from ...kinematics.home import workable_home
 from ..render import template
 from ...kinematics.routine import WARNINGS, warnings_to_exercise
 from .build import build_module, header_folder, headers_found
@@ -51,12 +51,11 @@ def sheet_view(robot, units="mm", compiled=True):
     statuses the robot's module can give (:func:`kingen.kinematics.routine.warnings_to_exercise`);
     ``compiled``: whether the package holds the built module (else the sheet says how to build it).
     KingenError when the working posture cannot be the machine's home (unreachable, a joint
-    beyond its travel, singular: :func:`kingen.kinematics.home.refuse_unworkable_home`): the
+    beyond its travel, singular: :func:`kingen.kinematics.home.workable_home`): the
     [JOINT_n] HOME values would lie outside their limits."""
-    refuse_unworkable_home(robot, robot.working_posture, "a LinuxCNC package")
+    joints = workable_home(robot, robot.working_posture, "a LinuxCNC package").joints
     view = view_model(robot, units)
     home = np.asarray(robot.verification.home, dtype=float)
-    joints = home_postures(robot)[robot.working_posture].joints
     machine = robot_in_units(robot, units)
     lower, upper = machine.travel_limits()
     ini = []
