@@ -90,6 +90,56 @@ def test_a_routine_that_never_gives_a_warning_fails_warnings(name, kind, plugin)
     assert not warnings.passed and not warnings.detail.startswith("0 mismatches"), warnings.detail
 
 
+def threshold_robots():
+    from conftest import SHIPPED
+    from kingen.robot.model import load_robot
+
+    return [name for name in SHIPPED if load_robot(name).direct_index_min is not None]
+
+
+@pytest.mark.parametrize("name", threshold_robots())
+def test_a_routine_without_the_direct_index_fails_warnings(name, tmp_path):
+    """Every shipped robot with a direct-index threshold: a routine built from the same file
+    without it (its limbs' singular band still gives WARN_SINGULAR_SOLUTION) fails warnings,
+    CEART's included, whose threshold no ray from home meets and the descent finds."""
+    from dataclasses import replace
+
+    from kingen.hosts.delmia.build import build_plugin
+    from kingen.hosts.delmia.loader import Plugin
+    from kingen.robot.model import load_robot
+    from kingen.verify import VerifyOptions, verify
+    from kingen.verify.boundaries import threshold_boundaries
+
+    robot = load_robot(name)
+    built = build_plugin(replace(robot, direct_index_min=None), tmp_path)
+    report = verify(robot, Plugin(built.library, built.routine), VerifyOptions(samples=300))
+    warnings = next(check for check in report.checks if check.name == "warnings")
+    assert threshold_boundaries(robot, report.boundary_poses["boundaries_found"]) > 0
+    assert not warnings.passed and report.warning_mismatches > 0, warnings.detail
+    said = " ".join(warnings.diagnoses)
+    assert "WARN_GOOD_SOLUTION" in said and "WARN_SINGULAR_SOLUTION" in said, said
+
+
+def test_a_threshold_the_search_does_not_meet_is_not_exercised_with_where_it_looked(plugin, monkeypatch):
+    """Where neither the rays nor the descent meet the direct index's threshold, the warnings
+    check says so with the search's region, method and how low it came, and passes on the
+    warning's other cause (CEART's cranks' singular band); a descent of 3 steps stands for
+    one that found nothing."""
+    from kingen.verify import VerifyOptions, descent, verify
+
+    monkeypatch.setattr(descent, "DESCENT_STEPS", 3)
+    robot, routine = plugin("ceart")
+    report = verify(robot, routine, VerifyOptions(samples=200))
+    warnings = next(check for check in report.checks if check.name == "warnings")
+    searched = report.boundary_poses["searched"]["direct_index_min"]
+    assert report.boundary_poses["boundaries_found"]["direct_index_min"] == 0 and warnings.passed
+    assert searched["steps"] == 3 and searched["crossed"] == 0 and searched["lowest"] > 0
+    assert ("the direct-index threshold (direct_index_min 29.3 mm) not exercised: no compared posture's index is at "
+            "or below it, no ray from the verification home met it, and a descent of its margin (16 chains, 16 at a "
+            "time, over 3 steps from 256 seeds in home +- 4 x the verification range, and home +- 325.2 mm and +- 45 "
+            f"degrees) came no lower than {searched['lowest']:.4g} mm above it") in warnings.detail
+
+
 def test_a_snapshot_in_other_units_or_of_an_unknown_version_is_refused(tmp_path, capsys):
     snapshot = tmp_path / "tau.golden.json"
     assert main(["golden", "record", "tau", "-o", str(snapshot), "--samples", "5"]) == 0

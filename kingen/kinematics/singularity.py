@@ -354,3 +354,13 @@ def finite_difference_jacobian(joints_of, t6, step_mm, step_rad, wraps):
     difference[:, :, wraps] = difference[:, :, wraps] - 2 * np.pi * np.rint(difference[:, :, wraps] / (2 * np.pi))
     steps = np.array([step_mm] * 3 + [step_rad] * 3)
     return np.moveaxis(difference / (2.0 * steps[None, :, None, None]), 1, -1)
+
+
+def posture_direct_index(robot, points, branch_joints, postures):
+    """(n,) the exact direct index (mm) of one posture per pose: ``postures`` (n,) for
+    platform points (n, dof, 3) and each limb's joint per branch (n, dof, 2), from that
+    posture's M = W^T W (W: its six unit line wrenches as rows), as direct_index computes it."""
+    wrenches, _ = limb_wrenches(robot, points, branch_joints, with_transmissions=False)  # (n, dof, 2, 6)
+    branches = branch_table(robot)[np.asarray(postures)]  # (n, dof)
+    lines = np.take_along_axis(wrenches, branches[:, :, None, None], axis=2)[:, :, 0]  # (n, dof, 6)
+    return direct_index(np.einsum("nki,nkj->nij", lines, lines))

@@ -22,6 +22,7 @@ becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
 import functools
+from dataclasses import asdict
 import time
 
 from ..errors import KingenError, PluginDefect
@@ -155,9 +156,10 @@ def _compare_samples(context, progress, printed, phase, loaded_from):
         if progress is not None:
             progress(begin + count)
     phase("the warnings' boundary poses")
-    boundary, found = boundary_poses(robot, options.seed, options.link_lengths, options.link_offsets,
-                                     getattr(plugin, "warning_vocabulary", None))
-    report.boundary_poses = {"poses": len(boundary), "boundaries_found": found}
+    boundary, found, searched = boundary_poses(robot, options.seed, options.link_lengths, options.link_offsets,
+                                               getattr(plugin, "warning_vocabulary", None))
+    report.boundary_poses = {"poses": len(boundary), "boundaries_found": found,
+                             "searched": {kind: asdict(descent) for kind, descent in searched.items()}}
     if len(boundary):
         part = compare_poses(boundary, first=True)
         tally.boundary_first, part.tally.first = part.tally.first, None  # for the warnings' diagnoses

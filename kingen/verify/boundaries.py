@@ -21,6 +21,7 @@ import numpy as np
 from ..conventions import t6_from_pose
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS, warnings_to_exercise
+from .descent import descend
 from .tally import warnings_in_band
 
 RAYS = 64
@@ -72,10 +73,14 @@ def threshold_boundaries(robot, found):
 
 
 def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary=None):
-    """(poses (m, 6) in mm and degrees, {boundary: boundaries found}) on both sides of each
-    boundary of boundaries_to_seek, seeded; the same poses whatever the number of processes.
-    Rays first span the verification region (``REACH`` times its half-widths); a boundary
-    they do not meet is sought again along translations up to ``FAR`` times the robot's size."""
+    """(poses (m, 6) in mm and degrees, {boundary: boundaries found}, {boundary: the
+    kingen.verify.descent.Descent that sought it}) on both sides of each boundary of
+    boundaries_to_seek, seeded; the same poses whatever the number of processes. Rays first
+    span the verification region (``REACH`` times its half-widths); a boundary they do not meet
+    is sought again along translations up to ``FAR`` times the robot's size (the direct index's
+    threshold is not: far translations leave the workspace), then by a descent of its margin
+    over reachable poses (kingen.verify.descent), bisected on the segment where a descent
+    stepped past it."""
     region = robot.verification
     home, widths = np.asarray(region.home, dtype=float), np.asarray(region.range, dtype=float)
     generator = np.random.default_rng([seed, 0x626f756e64])  # apart from the sample's own stream
@@ -85,15 +90,20 @@ def boundary_poses(robot, seed, link_lengths=None, link_offsets=None, vocabulary
     far[:, :3] = generator.normal(size=(RAYS, 3))
     far[:, :3] *= FAR * robot.size_mm / np.linalg.norm(far[:, :3], axis=1, keepdims=True)
     stages = [generator.uniform(-1.0, 1.0, size=(RAYS, 6)) * widths * REACH, far]
-    poses, found = [], {kind: 0 for kind in kinds}
-    for directions in stages:
-        missing = [kind for kind in kinds if not found[kind]]
+    poses, found, searched = [], {kind: 0 for kind in kinds}, {}
+    for stage, directions in enumerate(stages):
+        missing = [kind for kind in kinds if not found[kind] and not (stage and kind == DIRECT_INDEX)]
         if not missing or not np.any(directions):
             continue
-        for kind, count, sides in _boundaries(calibrated, home, directions, missing):
+        for kind, count, sides in _boundaries(calibrated, np.broadcast_to(home, directions.shape), directions, missing):
             found[kind] = count
             poses.append(sides)
-    return (np.concatenate(poses) if poses else np.zeros((0, 6))), found
+    for kind in [kind for kind in kinds if not found[kind]]:
+        origins, directions, searched[kind] = descend(calibrated, kind, home, widths, REACH, generator)
+        for _, count, sides in _boundaries(calibrated, origins, directions, [kind]):
+            found[kind] = count
+            poses.append(sides)
+    return (np.concatenate(poses) if poses else np.zeros((0, 6))), found, searched
 
 
 def _beyond(robot, kind, solution):
@@ -106,16 +116,18 @@ def _beyond(robot, kind, solution):
     return np.isin(solution.warnings, [WARNINGS[name] for name in PAST[kind]])
 
 
-def _boundaries(robot, home, directions, kinds):
+def _boundaries(robot, origins, directions, kinds):
     """(boundary, boundaries found, poses on both sides) for each of ``kinds`` that the rays
-    home + t directions (0 <= t <= 1) meet; ``robot`` calibrated as the routine is called.
+    origins + t directions (0 <= t <= 1; one origin and direction per ray) meet; ``robot`` calibrated as the routine is called.
     The brackets of every boundary are bisected together, one reference solve per step for
     all of them (each pose is solved on its own, so batching changes no pose)."""
     def warnings_at(fractions, rays):
-        poses = home + fractions[:, None] * directions[rays]
+        poses = origins[rays] + fractions[:, None] * directions[rays]
         return solve(robot, t6_from_pose(poses)), poses
 
     rays_count = len(directions)
+    if not rays_count:
+        return
     steps = np.linspace(0.0, 1.0, STEPS + 1)
     grid, _ = warnings_at(np.tile(steps, rays_count), np.repeat(np.arange(rays_count), STEPS + 1))
     met, rays, lows, postures, bracket_kinds = [], [], [], [], []

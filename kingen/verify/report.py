@@ -78,10 +78,12 @@ class Report:
     tolerance_mm: float = 1e-9
     """The bound on prismatic joints: 1e-9 mm, or relative to the robot's size for large robots."""
     tolerance_rad: float = 1e-9
-    boundary_poses: Dict[str, Union[int, Dict[str, int]]] = field(default_factory=dict)
+    boundary_poses: Dict[str, Union[int, Dict[str, int], Dict[str, Dict[str, Union[int, float, str]]]]] = field(
+        default_factory=dict)
     """{poses: how many poses on warnings' boundaries joined the sample, boundaries_found:
-    {warning, or direct_index_min for the direct index's threshold: boundaries found}}
-    (kingen.verify.boundaries)."""
+    {warning, or direct_index_min for the direct index's threshold: boundaries found},
+    searched: {boundary the rays missed: the descent that sought it (kingen.verify.descent.Descent's
+    fields)}} (kingen.verify.boundaries)."""
     interface_checks: Tuple[str, ...] = ()
     """Names of the host's interface checks (their failures are listed as ``interface_failures``)."""
     posture_statistics: List[Dict[str, Union[int, float, None]]] = field(default_factory=list)

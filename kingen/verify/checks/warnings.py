@@ -6,7 +6,9 @@ import numpy as np
 from ..diagnose import diagnose_warnings
 from ...kinematics.routine import WARNING_NAMES, warnings_to_exercise
 from ..boundaries import DIRECT_INDEX, RAYS, threshold_boundaries
+from ..descent import Descent
 from ..tally import WARNING_KINDS
+from ...runtime.text import counted
 from .base import STOPPED_CALLS, Check, VerifyCheck
 
 
@@ -23,16 +25,20 @@ class Warnings(VerifyCheck, name="warnings", needs="compared poses", item="warni
         missing = [kind for kind in warnings_to_exercise(context.robot, vocabulary) if not counts[kind]]
         detail = (f"{report.warning_mismatches} mismatches, {report.warnings_in_band} inside the tolerance band, "
                   f"over {judged} postures of {report.samples} sampled poses and {boundary.get('poses', 0)} poses "
-                  f"beside warnings' boundaries (boundaries found along {RAYS} rays: {found or 'none sought'}); the "
+                  f"beside warnings' boundaries (boundaries found along {RAYS} rays"
+                  f"{', or by a descent where they met none' if boundary.get('searched') else ''}: {found or 'none sought'}); the "
                   f"reference's warnings: {given or 'none'}")
         if vocabulary is not None:
             detail += f"; the routine tells only {', '.join(vocabulary)} (the reference's others read as good)"
+        searched = boundary.get("searched", {})
         if missing:
-            detail += (f"; not exercised: {', '.join(missing)} (the robot can give it, no compared pose did): "
-                       "widen the verification region or check the robot's limits")
+            detail += (f"; not exercised: {', '.join(missing)} (the robot can give it, no compared pose did"
+                       + "".join(f"; {kind}: {_searched(searched[kind])}" for kind in missing if kind in searched)
+                       + "): widen the verification region or check the robot's limits")
         threshold = threshold_boundaries(context.robot, boundary.get("boundaries_found", {}))
         if threshold is not None:
-            detail += "; " + _threshold_exercise(context.robot.direct_index_min, tally.direct_index_below, threshold)
+            detail += "; " + _threshold_exercise(context.robot.direct_index_min, tally.direct_index_below, threshold,
+                                                 searched.get(DIRECT_INDEX))
         check = Check("warnings", report.warning_mismatches == 0 and not missing, detail, judged=judged)
         if report.warning_mismatches:
             if tally.boundary_first is not None:
@@ -42,13 +48,21 @@ class Warnings(VerifyCheck, name="warnings", needs="compared poses", item="warni
         return [check]
 
 
-def _threshold_exercise(threshold, below, boundaries):
+def _searched(descent):
+    """A search's fields (kingen.verify.descent.Descent, as the report holds them) in words."""
+    return Descent(**descent).summary()
+
+
+def _threshold_exercise(threshold, below, boundaries, descent=None):
     """What exercised the direct index's threshold (``threshold`` mm): ``below`` compared
-    postures at or under it, ``boundaries`` of it found along the rays. Never reached, it is
-    not exercised, which no routine could change: said, not failed (the warning itself is
-    judged by its other causes' poses, or missing)."""
+    postures at or under it, ``boundaries`` of it found along the rays or, where they missed
+    it, by ``descent`` (its fields). Never reached, it is not exercised, with the region and
+    method of the search that did not meet it: said, not failed (the warning itself is judged
+    by its other causes' poses, or missing)."""
+    where = "along the rays" if descent is None else f"by {_searched(descent)}"
     if not below and not boundaries:
         return (f"the direct-index threshold ({DIRECT_INDEX} {threshold:g} mm) not exercised: no compared "
-                f"posture's index is at or below it and no ray from the verification home met it")
-    return (f"the direct-index threshold ({DIRECT_INDEX} {threshold:g} mm): {below} compared postures at or "
-            f"below it, {boundaries} of its boundaries found along the rays")
+                f"posture's index is at or below it, no ray from the verification home met it, and "
+                f"{_searched(descent) if descent else 'no search ran'}")
+    return (f"the direct-index threshold ({DIRECT_INDEX} {threshold:g} mm): {counted(below, 'compared posture')} at "
+            f"or below it, {boundaries} of its boundaries found {where}")
