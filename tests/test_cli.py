@@ -25,6 +25,19 @@ def test_list_shows_every_shipped_robot(capsys):
     assert any(line.split()[:5] == ["tau", "3", "8", "3", "rail"] for line in out.splitlines())
 
 
+@pytest.mark.parametrize("columns", ["60", "80", "132"])
+def test_list_fits_the_terminal_and_gives_pipes_whole_descriptions(capsys, monkeypatch, columns):
+    from kingen.robot.model import load_robot
+
+    monkeypatch.setenv("COLUMNS", columns)
+    _, out, _ = run(capsys, "list")
+    assert max(len(line) for line in out.splitlines()) <= max(int(columns), 68)  # 20 description characters at least
+    assert "..." in out
+    monkeypatch.delenv("COLUMNS")
+    _, out, _ = run(capsys, "list")
+    assert " ".join(load_robot("ceart").description.split()) in out
+
+
 @pytest.mark.parametrize("argv", [["--version"], ["--help"], ["info", "--help"]])
 def test_help_and_version_load_no_heavy_module(argv):
     """Start-up: the command line loads numpy, pydantic, jinja2 and cffi only for commands

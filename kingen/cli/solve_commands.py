@@ -19,14 +19,19 @@ from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _o
 
 @cli.command("list")
 def list_robots():
-    """The shipped robots with DOF, postures and limb models."""
+    """The shipped robots with DOF, postures and limb models (descriptions cut to fit the
+    terminal's width, at least 20 characters of them; whole to a pipe or file)."""
     from ..robot.model import shipped_robots
 
     rows = [("robot", "dof", "postures", "limbs", "description")]
     for name in shipped_robots():
         robot = load_model(name)
         counts = ", ".join(f"{sum(l.model == m for l in robot.limbs)} {m}" for m in robot.models)
-        rows.append((name, str(robot.dof), str(robot.postures), counts, shorten(robot.description, 60)))
+        rows.append((name, str(robot.dof), str(robot.postures), counts, " ".join(robot.description.split())))
+    width = output_width()
+    if width is not None:
+        lead = sum(max(len(row[column]) for row in rows) + 2 for column in range(4))
+        rows = [row[:4] + (shorten(row[4], max(20, width - lead)),) for row in rows]
     print_table(rows)
 
 
