@@ -27,8 +27,9 @@ def run(pytester, *args):
 
 def test_every_item_of_a_robot_file_passes(folder):
     result = run(folder, "-v")
-    result.assert_outcomes(passed=8)
-    for name in ("build", "interface", "values", "warnings", "closure", "jacobian", "golden[0]", "golden[1]"):
+    result.assert_outcomes(passed=9)
+    for name in ("build", "interface", "values", "warnings", "closure", "jacobian", "golden[0]", "golden[1]",
+                 "golden[2]"):
         assert f"tau.yaml::{name} PASSED" in result.stdout.str()
 
 
@@ -37,7 +38,7 @@ def test_a_changed_golden_joint_fails_exactly_its_item_at_its_line(folder):
     path.write_text(path.read_text().replace("joints: [417.2158, 361.0962, 265.8219]",
                                              "joints: [417.2158, 361.0962, 265.9219]"))
     result = run(folder)
-    result.assert_outcomes(passed=7, failed=1)
+    result.assert_outcomes(passed=8, failed=1)
     assert "FAILED tau.yaml::golden[0]" in result.stdout.str()
     line = path.read_text().splitlines().index("golden:") + 2  # the first entry's "- source:" line
     assert f"{path}:{line}: golden[0]\ngolden[0]: DELMIA V5 methodology thesis, Table 6" in result.stdout.str()

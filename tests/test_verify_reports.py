@@ -1,6 +1,7 @@
 """verify's JSON report is a contract: the same counts, verdicts and statistics whoever
 compares the poses and however fast. Recorded reports of small samples (tests/data/verify_reports,
-written by this version's comparison before it was sped up) must come out again, and a run on
+written by this version's comparison before it was sped up, CEART's and the Gantry-Tau's again since verify
+searches for the boundaries its rays miss and tau has a third golden entry) must come out again, and a run on
 a Dask cluster (--scheduler) must give the report a local run gives."""
 
 import json
