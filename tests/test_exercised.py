@@ -231,3 +231,25 @@ def test_halvings_decided_together_give_the_brackets_of_one_at_a_time(levels):
     assert calls == [40 * ((1 << levels) - 1)]
     np.testing.assert_array_equal(together_low, one_low)
     np.testing.assert_array_equal(together_high, one_high)
+
+
+@pytest.mark.parametrize("kind", ["WARN_JOINT_LIMITS_EXCEEDED", "WARN_UNREACHABLE", "WARN_SINGULAR_SOLUTION"])
+def test_the_descent_steps_across_each_kind_of_boundary(kind):
+    """kingen.verify.descent on the Gantry-Tau (travel limits, and rails' unreachable poses and
+    singular band): each segment it returns starts where the reference's posture is on the
+    good side of ``kind`` and ends where some posture is beyond it, as bisection needs."""
+    from kingen.conventions import t6_from_pose
+    from kingen.kinematics.reference import solve
+    from kingen.kinematics.routine import WARNINGS
+    from kingen.robot.model import load_robot
+    from kingen.verify.boundaries import PAST
+    from kingen.verify.descent import descend
+
+    robot = load_robot("tau")
+    region = robot.verification
+    origins, directions, search = descend(robot, kind, np.array(region.home, dtype=float),
+                                          np.array(region.range, dtype=float), 4.0, np.random.default_rng(0))
+    assert search.crossed == len(origins) > 0 and search.lowest <= 0.0 and 0 < search.steps <= 400
+    beyond = [WARNINGS[name] for name in PAST[kind]]
+    before, after = (solve(robot, t6_from_pose(poses)).warnings for poses in (origins, origins + directions))
+    assert np.all(np.any(~np.isin(before, beyond), axis=1)) and np.all(np.any(np.isin(after, beyond), axis=1))

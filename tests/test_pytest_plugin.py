@@ -45,13 +45,13 @@ def test_a_changed_golden_joint_fails_exactly_its_item_at_its_line(folder):
 
 
 def test_items_are_selected_by_keyword(folder):
-    run(folder, "-k", "tau and golden").assert_outcomes(passed=2)
+    run(folder, "-k", "tau and golden").assert_outcomes(passed=3)
 
 
 def test_a_snapshot_from_one_build_fails_after_a_geometry_change(folder, capsys):
     path = folder.path / "tau.yaml"
     assert main(["golden", "record", str(path), "-o", str(folder.path / "tau.golden.json"), "--samples", "30"]) == 0
-    run(folder).assert_outcomes(passed=9)
+    run(folder).assert_outcomes(passed=10)
     path.write_text(path.read_text().replace("link_length: 1499.775", "link_length: 1499.9"))
     result = run(folder)
     text = result.stdout.str()
@@ -96,7 +96,7 @@ def test_a_robot_file_reached_twice_is_collected_once(folder):
     result = folder.runpytest_subprocess("--kingen", ".", "-p", "no:cacheprovider", "--co", "-q")
     items = [line for line in result.stdout.lines if "::" in line]
     assert items == [f"tau.yaml::{name}" for name in ("build", "interface", "values", "warnings", "closure",
-                                                       "jacobian", "golden[0]", "golden[1]")]
+                                                       "jacobian", "golden[0]", "golden[1]", "golden[2]")]
 
 
 UNREADABLE = {
@@ -151,7 +151,7 @@ def test_a_bad_snapshot_fails_the_snapshot_item_alone_and_verify_runs_once(folde
     snapshot.write_text(json.dumps(data))
     folder.makeconftest(COUNTING.replace("FAILING", "pass"))
     result = run(folder)
-    result.assert_outcomes(passed=8, failed=1)
+    result.assert_outcomes(passed=9, failed=1)
     text = result.stdout.str()
     assert "FAILED tau.yaml::snapshot" in text and "Traceback" not in text and "internal error" not in text
     assert f"{snapshot}: entries.0.warnings.0: 1180591620717411303424 is not a warning code (0, 1, 2, 5)" in text
@@ -161,8 +161,8 @@ def test_a_bad_snapshot_fails_the_snapshot_item_alone_and_verify_runs_once(folde
 def test_an_error_inside_verify_is_reported_to_every_item_from_one_run(folder):
     folder.makeconftest(COUNTING.replace("FAILING", "raise RuntimeError('broken inside verify')"))
     result = run(folder)
-    result.assert_outcomes(failed=8)
-    assert result.stdout.str().count("RuntimeError: broken inside verify") >= 8
+    result.assert_outcomes(failed=9)
+    assert result.stdout.str().count("RuntimeError: broken inside verify") >= 9
     assert (folder.path / "verify_calls.txt").read_text() == "1"
 
 
@@ -170,11 +170,11 @@ def test_a_second_session_builds_nothing(folder, tmp_path, monkeypatch):
     """Robots are built in kingen's cache, named by content: a warm session reuses the
     libraries (same bytes, same file) instead of compiling again."""
     monkeypatch.setenv("KINGEN_CACHE", str(tmp_path / "cache"))
-    run(folder).assert_outcomes(passed=8)
+    run(folder).assert_outcomes(passed=9)
     libraries = sorted((tmp_path / "cache" / "pytest-builds").glob("*/libtau.so"))
     assert len(libraries) == 1
     before = libraries[0].stat()
-    run(folder).assert_outcomes(passed=8)
+    run(folder).assert_outcomes(passed=9)
     after = libraries[0].stat()
     assert (after.st_ino, after.st_mtime_ns) == (before.st_ino, before.st_mtime_ns)
 
@@ -185,7 +185,7 @@ def test_what_a_session_holds_after_collection_is_frozen_out_of_the_garbage_coll
     skip the imported modules and items); a session without them is left alone."""
     folder.makeconftest("import gc\n\n\ndef pytest_unconfigure(config):\n"
                         "    open('frozen.txt', 'w').write(str(gc.get_freeze_count()))\n")
-    run(folder).assert_outcomes(passed=8)
+    run(folder).assert_outcomes(passed=9)
     assert int((folder.path / "frozen.txt").read_text()) > 10000
     folder.makepyfile(test_plain="def test_nothing():\n    pass\n")
     folder.runpytest_subprocess("-p", "no:cacheprovider", "test_plain.py").assert_outcomes(passed=1)
@@ -197,7 +197,7 @@ def test_under_xdist_each_robot_files_items_run_on_one_worker(folder):
     robot is verified once, on one worker (pytest-xdist's own would spread them)."""
     shutil.copy(robots_dir() / "exechon.yaml", folder.path / "exechon.yaml")
     result = run(folder, "-n", "2", "-v")
-    result.assert_outcomes(passed=16)
+    result.assert_outcomes(passed=17)
     workers = {}
     for line in result.stdout.lines:
         if " PASSED " in line and line.startswith("[gw"):
@@ -223,6 +223,6 @@ def test_robot_scope_groups_a_robot_files_items_only(nodeid, scope):
 def test_a_snapshot_that_cannot_be_read_fails_the_snapshot_item(folder, make, problem):
     make(folder.path / "tau.golden.json")
     result = run(folder)
-    result.assert_outcomes(passed=8, failed=1)
+    result.assert_outcomes(passed=9, failed=1)
     assert f"{folder.path / 'tau.golden.json'}: {problem}" in result.stdout.str()
     assert "FAILED tau.yaml::snapshot" in result.stdout.str()
