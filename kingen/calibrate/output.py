@@ -1,0 +1,31 @@
+"""The calibrated robot file: the robot file with every limb written out (a layout expanded to
+explicit limbs) with the identified values, renamed ``<name>_calibrated``, its ``source``
+naming the measurement file; golden values are dropped (they were published for the
+drawing). The robot file's writer is the design optimiser's (kingen.design.problem)."""
+
+import copy
+
+from ..design.problem import robot_yaml, suffixed_name
+
+CALIBRATED = "_calibrated"
+
+
+def calibrated_name(name):
+    """``<name>_calibrated``, cut to stay a name kingen accepts."""
+    return suffixed_name(name, CALIBRATED)
+
+
+def calibrated_yaml(data, parameters, values, header):
+    """The calibrated robot file's text from the robot file's plain ``data``, Parameters
+    ``parameters`` and identified ``values`` (mm, degrees); ``header`` lines on top and as
+    the file's ``source``."""
+    data = copy.deepcopy(data)
+    for key in ("layout", "golden", "optimize"):
+        data.pop(key, None)
+    robot = parameters.robot_of(values)
+    data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model}
+                     for limb in robot.limbs]
+    data["name"] = calibrated_name(data["name"])
+    data["description"] = f"{' '.join(str(data.get('description', '')).split())} Calibrated by kingen."
+    data["source"] = " ".join(header)
+    return robot_yaml(data, header)
