@@ -212,9 +212,11 @@ def least_squares_fit(problem, values, columns, max_evaluations):
     return full(result.x), result
 
 
-def identify(parameters, measurements, selected, max_evaluations=MAX_EVALUATIONS):
-    """The Fit of ``parameters`` to ``measurements`` over the ``selected`` (mask) parameters."""
+def identify(parameters, measurements, selected, max_evaluations=None):
+    """The Fit of ``parameters`` to ``measurements`` over the ``selected`` (mask) parameters, each
+    least-squares stage stopped after ``max_evaluations`` (default MAX_EVALUATIONS)."""
     began = time.perf_counter()
+    max_evaluations = max_evaluations or MAX_EVALUATIONS
     values, start = align(parameters, measurements)
     rank, needed = needed_poses(parameters, values, selected)
     if len(measurements.joints) < needed:

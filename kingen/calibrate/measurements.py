@@ -126,5 +126,5 @@ def write_measurements(robot, measure, joints, measured):
     writer.writerow(_expected(robot, measure))
     shown = np.asarray(joints) / robot.joint_scale()
     for row_joints, row_measured in zip(shown, np.asarray(measured)):
-        writer.writerow([f"{value:.9g}" for value in (*row_joints, *row_measured)])
+        writer.writerow([f"{value:.12g}" for value in (*row_joints, *row_measured)])
     return buffer.getvalue()

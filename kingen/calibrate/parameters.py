@@ -26,15 +26,12 @@ import numpy as np
 from ..conventions import matrix_from_pose
 from ..errors import KingenError
 
-GROUPS = {
-    "base": "the limbs' base points (leg base points, rail points, crank pivots)",
-    "platform": "the limbs' platform points",
-    "length": "leg reference lengths, rail link lengths, crank and rod lengths",
-    "direction": "rail directions and crank directions",
-    "zero": "crank zero offsets and rail origins",
-    "frame": "the measuring frame (the device's pose in the base frame)",
-    "target": "the target (the measured frame or reflector on the platform)",
-}
+GROUPS = dict(
+    base="the limbs' base points (leg base points, rail points, crank pivots)", platform="the limbs' platform points",
+    length="leg reference lengths, rail link lengths, crank and rod lengths",
+    direction="rail directions and crank directions", zero="crank zero offsets and rail origins",
+    frame="the measuring frame (the device's pose in the base frame)",
+    target="the target (the measured frame or reflector on the platform)")
 """The groups --identify selects, in words."""
 
 MODEL_FIELDS = {
