@@ -23,12 +23,12 @@ import numpy as np
 
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..errors import KingenError
-from ..kinematics.forward import free_mask, search_region
+from ..kinematics.forward import assemblies, free_mask, search_region
 from ..kinematics.poses import sample_poses
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
-from .prediction import (errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
+from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
                          pose_radians, predicted_measurements, synthesize)
 
 STEP = 1e-4
@@ -108,9 +108,12 @@ def align(parameters, measurements):
     robot = parameters.robot
     home, _ = search_region(robot)
     poses, closed = forward_poses(robot, measurements.joints, np.tile(home, (len(measurements.joints), 1)))
+    closed &= _in_working_posture(robot, poses, measurements.joints)
+    for row in np.flatnonzero(~closed):
+        poses[row], closed[row] = _working_assembly(robot, measurements.joints[row], home)
     if not np.all(closed):
         row = int(np.flatnonzero(~closed)[0])
-        raise KingenError(f"{measurements.where(row, measurements.columns[0])}: the nominal robot reaches no pose "
+        raise KingenError(f"{measurements.where(row, 'q1')}: the nominal robot reaches no pose "
                           f"with these joints (forward kinematics from the verification home did not close)")
     platform = matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
     _check_units(measurements, platform[:, :3, 3])
@@ -120,6 +123,26 @@ def align(parameters, measurements):
     if parameters.measure == "pose":
         _check_reachable(parameters, values, measurements)
     return values, poses
+
+
+def _in_working_posture(robot, poses, joints):
+    """(n,) bool: whether the reference's working posture at poses (n, 6; mm, radians) gives
+    the joints (n, dof): the assembly mode the machine is built in."""
+    platform = matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
+    branches, _ = inverse_joints(robot, platform)
+    chosen = np.take_along_axis(branches, np.array(robot.posture_branches(robot.working_posture))[None, :, None]
+                                .repeat(len(poses), 0), axis=2)[..., 0]
+    difference = np.abs(chosen - joints) * np.where(robot.revolute, robot.size_mm, 1.0)
+    return np.all(difference <= CLOSED * robot.size_mm, axis=1)
+
+
+def _working_assembly(robot, joints, home):
+    """(pose (6,), found): the assembly mode of ``joints`` (dof,) in the working posture,
+    nearest home first, from kingen's forward kinematics."""
+    for assembly in assemblies(robot, joints, home).found:
+        if _in_working_posture(robot, assembly.pose[None], joints[None])[0]:
+            return assembly.pose, True
+    return home, False
 
 
 def _fitted_frame(parameters, values, measurements, platform):
