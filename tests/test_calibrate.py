@@ -220,6 +220,8 @@ def good_csv(hexapod_case):
     (lambda lines: lines[:2] + [lines[2].replace(lines[2].split(",")[2], "abc", 1)] + lines[3:],
      ":3: q3: 'abc' is not a number"),
     (lambda lines: lines[:4] + ["nan," + lines[4].split(",", 1)[1]] + lines[5:], ":5: q1: nan is not a finite number"),
+    (lambda lines: lines[:3] + ["300," + lines[3].split(",", 1)[1]] + lines[4:],
+     ":4: q1: the nominal robot reaches no pose with these joints in its working posture"),
     (lambda lines: lines[:4], ":4: poses: 3 measurements for 42 identifiable parameters: at least 7 poses are needed"),
     (lambda lines: [lines[0]] + [scaled(line, 1e-3) for line in lines[1:]], ":2: x: the measured positions spread"),
     (lambda lines: [lines[0]] + [scaled(line, 1 / 25.4) for line in lines[1:]], "they look like inches"),

@@ -114,7 +114,7 @@ def align(parameters, measurements):
     if not np.all(closed):
         row = int(np.flatnonzero(~closed)[0])
         raise KingenError(f"{measurements.where(row, 'q1')}: the nominal robot reaches no pose "
-                          f"with these joints (forward kinematics from the verification home did not close)")
+                          f"with these joints in its working posture (forward kinematics finds none)")
     platform = matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
     _check_units(measurements, platform[:, :3, 3])
     values = parameters.nominal.copy()

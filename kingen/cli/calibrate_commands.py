@@ -27,14 +27,14 @@ class _CalibrateGroup(click.Group):
         return super().parse_args(ctx, args)
 
 
-@cli.group(cls=_CalibrateGroup)
+@cli.group(cls=_CalibrateGroup, subcommand_metavar="ROBOT --measurements FILE [OPTIONS] | plan ROBOT --poses N [OPTIONS]")
 def calibrate():
     """Identify the machine as built from measurements.
 
-    kingen calibrate ROBOT --measurements FILE [--measure pose|position] [--identify SPEC]
-    [--validate FILE] [-o DIR] [--json FILE]: least squares on every limb's geometry, the
-    measuring frame and the target; writes <name>_calibrated.yaml, calibration.json and
-    report.html to DIR [default: build/<name>/calibrate]. FILE is a CSV with the header
+    kingen calibrate ROBOT --measurements FILE, with the options --measure pose|position,
+    --identify SPEC, --validate FILE, -o DIR and --json FILE: least squares on every limb's
+    geometry, the measuring frame and the target; writes <name>_calibrated.yaml,
+    calibration.json and report.html to DIR (default: build/<name>/calibrate). FILE is a CSV with the header
     q1 .. qN (joints as read: mm, degrees) then x, y, z, roll, pitch, yaw (mm, degrees; or
     x, y, z with --measure position), in the device's frame. Exit 0 calibrated, 1 the fit
     did not converge (nothing written), 2 bad input. kingen calibrate run --help lists the
