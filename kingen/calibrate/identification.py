@@ -5,7 +5,8 @@ Residuals: with pose measurements, each limb's joint predicted at the measured p
 limbs' closure there) minus the joint read; with positions, the point forward kinematics
 puts the target at for the read joints minus the measured point (mm). Steps:
 
-1. the nominal robot's forward kinematics of every read joint set (its failures, a spread of
+1. the nominal robot's forward kinematics of every read joint set, in the working posture and
+   within forward kinematics' search region around the verification home (its failures, a spread of
    positions that looks like metres or inches, a measured pose the nominal robot cannot
    reach: KingenError naming file, line and column); the measuring frame's first estimate
    fitted to those poses (rigid, closed form);
@@ -106,11 +107,11 @@ def align(parameters, measurements):
     mm, radians). KingenError for joints the nominal robot cannot close, positions that look
     like another unit, and measured poses it cannot reach."""
     robot = parameters.robot
-    home, _ = search_region(robot)
+    home, half = search_region(robot)
     poses, closed = forward_poses(robot, measurements.joints, np.tile(home, (len(measurements.joints), 1)))
-    closed &= _in_working_posture(robot, poses, measurements.joints)
+    closed &= _in_working_posture(robot, poses, measurements.joints) & np.all(np.abs(poses - home) <= half, axis=1)
     for row in np.flatnonzero(~closed):
-        poses[row], closed[row] = _working_assembly(robot, measurements.joints[row], home)
+        poses[row], closed[row] = _working_assembly(robot, measurements.joints[row], home, half)
     if not np.all(closed):
         row = int(np.flatnonzero(~closed)[0])
         raise KingenError(f"{measurements.where(row, 'q1')}: the nominal robot reaches no pose "
@@ -136,17 +137,19 @@ def _in_working_posture(robot, poses, joints):
     return np.all(difference <= CLOSED * robot.size_mm, axis=1)
 
 
-def _working_assembly(robot, joints, home):
-    """(pose (6,), found): the assembly mode of ``joints`` (dof,) in the working posture,
-    nearest home first, from kingen's forward kinematics."""
+def _working_assembly(robot, joints, home, half):
+    """(pose (6,), found): the assembly mode of ``joints`` (dof,) in the working posture within
+    ``half`` (6,) of ``home`` (forward kinematics' search region), nearest home first."""
     for assembly in assemblies(robot, joints, home).found:
-        if _in_working_posture(robot, assembly.pose[None], joints[None])[0]:
+        if (_in_working_posture(robot, assembly.pose[None], joints[None])[0]
+                and np.all(np.abs(assembly.pose - home) <= half)):
             return assembly.pose, True
     return home, False
 
 
 def _fitted_frame(parameters, values, measurements, platform):
-    """The measuring frame F (4, 4) that best maps the measurements onto the platform poses."""
+    """The measuring frame F (4, 4) that best maps the measurements onto the platform poses (for
+    positions on a line, its rotation is left to the least squares that follow: identity)."""
     if parameters.measure == "pose":
         each = platform @ parameters.target(values) @ np.linalg.inv(matrix_from_pose(measurements.measured))
         rotation = _nearest_rotation(np.sum(each[:, :3, :3], axis=0))
@@ -155,7 +158,8 @@ def _fitted_frame(parameters, values, measurements, platform):
         points = platform[:, :3, :3] @ parameters.target(values) + platform[:, :3, 3]
         measured = measurements.measured
         cross = (measured - measured.mean(0)).T @ (points - points.mean(0))
-        rotation = _nearest_rotation(cross.T) if len(measured) >= 3 else np.eye(3)
+        spread = np.linalg.svd(points - points.mean(0), compute_uv=False)
+        rotation = _nearest_rotation(cross.T) if spread[min(1, len(spread) - 1)] > 1e-3 * spread[0] else np.eye(3)
         translation = points.mean(0) - rotation @ measured.mean(0)
     frame = np.eye(4)
     frame[:3, :3], frame[:3, 3] = rotation, translation
@@ -241,6 +245,7 @@ def identify(parameters, measurements, selected, max_evaluations=None):
     began = time.perf_counter()
     max_evaluations = max_evaluations or MAX_EVALUATIONS
     values, start = align(parameters, measurements)
+    selected, words = _translating(parameters, selected)
     rank, needed = needed_poses(parameters, values, selected)
     if len(measurements.joints) < needed:
         raise KingenError(f"{measurements.path}:{measurements.lines[-1]}: poses: {len(measurements.joints)} "
@@ -268,11 +273,26 @@ def identify(parameters, measurements, selected, max_evaluations=None):
     std[identified] = identifiability.deviations(final[:, taken], residuals) * parameters.step[identified]
     full = np.zeros((final.shape[0], len(parameters)))
     full[:, order] = final
-    words = identifiability.combinations(full, parameters.names, chosen, selected)
+    words += identifiability.combinations(full, parameters.names, chosen, selected)
     return Fit(values=values, before=before, selected=selected, chosen=chosen, std=std,
                indices=identifiability.indices(final[:, taken]), unidentifiable=words,
                converged=bool(result.status > 0), message=result.message, evaluations=int(evaluations),
                seconds=time.perf_counter() - began, problem=problem)
+
+
+def _translating(parameters, selected):
+    """(selected, words): for pose measurements of a platform that does not rotate (forward
+    kinematics solves for no angle), the target's angles deselected, with the words why."""
+    robot = parameters.robot
+    if parameters.measure != "pose" or not robot.forward_free or set(robot.forward_free) & {"roll", "pitch", "yaw"}:
+        return selected, []
+    angles = selected & (parameters.groups == "target") & np.array([entry.unit == "deg" for entry in parameters.entries])
+    if not np.any(angles):
+        return selected, []
+    names = ", ".join(np.array(parameters.names)[angles])
+    return selected & ~angles, [f"{names}: the platform does not rotate, so the measured orientation fixes only the "
+                                "measuring frame's and the target's rotations together: the target's cannot be "
+                                "identified from pose measurements (kept at its nominal value)"]
 
 
 def validation_problem(parameters, values, measurements):

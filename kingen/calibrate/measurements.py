@@ -1,6 +1,6 @@
 """Reading a measurement file: a CSV with a header row, the joints as the controller reads them
-(``q1`` .. ``qN``, the robot file's units: mm, degrees) and what the device measured, in its
-own frame: ``x, y, z, roll, pitch, yaw`` (mm, degrees; ``--measure pose``) or ``x, y, z``
+(``q1`` .. ``qN``, the robot file's units: mm or inches, degrees) and what the device measured, in its
+own frame: ``x, y, z, roll, pitch, yaw`` (the robot file's length unit, degrees; ``--measure pose``) or ``x, y, z``
 (``--measure position``). Columns may come in any order; blank lines and lines starting with
 ``#`` are skipped. Every problem is one KingenError naming file, line and column.
 """
@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import located
 from ..runtime.file_gate import read_limited
+from ..units import LENGTH_UNITS
 from .parameters import POSE_NAMES
 
 MAX_BYTES = 64 * 1024 * 1024
@@ -24,7 +25,7 @@ MEASURED = {"pose": POSE_NAMES, "position": POSE_NAMES[:3]}
 @dataclass(frozen=True)
 class Measurements:
     """Measurements read from ``path``: ``joints`` (n, dof) in kingen's internal units (mm,
-    radians), ``measured`` (n, 6) mm and degrees or (n, 3) mm, ``lines`` (n,) each row's
+    radians), ``measured`` (n, 6) mm and degrees or (n, 3) mm (converted from the robot file's unit), ``lines`` (n,) each row's
     1-based line in the file, ``columns`` the header as written (for errors)."""
 
     path: str
@@ -72,9 +73,15 @@ def read_measurements(path, robot, measure):
             raise located(path, number, None, f"{len(row)} values; the header has {len(header)} columns")
         for column, (name, cell) in enumerate(zip(header, row)):
             values[row_index, column] = _number(path, number, name, cell)
-    joints = values[:, order[:robot.dof]] * robot.joint_scale()
-    return Measurements(str(path), measure, joints, values[:, order[robot.dof:]],
-                        tuple(number for number, _ in data), header)
+    joints = values[:, order[:robot.dof]] * _joint_scale(robot)
+    measured = values[:, order[robot.dof:]]
+    measured[:, :3] *= LENGTH_UNITS[robot.length_unit]
+    return Measurements(str(path), measure, joints, measured, tuple(number for number, _ in data), header)
+
+
+def _joint_scale(robot):
+    """Per joint: internal units (mm, radians) per unit of the robot file (mm or inches, degrees)."""
+    return robot.joint_scale() * np.where(robot.revolute, 1.0, LENGTH_UNITS[robot.length_unit])
 
 
 def _rows(path, text):
@@ -120,11 +127,13 @@ def _number(path, line, column, cell):
 
 def write_measurements(robot, measure, joints, measured):
     """CSV text of ``joints`` (n, dof; internal units) and ``measured`` (n, 6 or 3; mm,
-    degrees) in the layout read_measurements reads."""
+    degrees) in the layout and units read_measurements reads (the robot file's)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(_expected(robot, measure))
-    shown = np.asarray(joints) / robot.joint_scale()
-    for row_joints, row_measured in zip(shown, np.asarray(measured)):
+    shown = np.asarray(joints) / _joint_scale(robot)
+    measured = np.array(measured, dtype=float)
+    measured[:, :3] /= LENGTH_UNITS[robot.length_unit]
+    for row_joints, row_measured in zip(shown, measured):
         writer.writerow([f"{value:.12g}" for value in (*row_joints, *row_measured)])
     return buffer.getvalue()

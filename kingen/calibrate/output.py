@@ -1,11 +1,12 @@
 """The calibrated robot file: the robot file with every limb written out (a layout expanded to
-explicit limbs) with the identified values, renamed ``<name>_calibrated``, its ``source``
+explicit limbs) with the identified values in the file's own length unit, renamed ``<name>_calibrated``, its ``source``
 naming the measurement file; golden values are dropped (they were published for the
 drawing). The robot file's writer is the design optimiser's (kingen.design.problem)."""
 
 import copy
 
 from ..design.problem import robot_yaml, suffixed_name
+from ..units import LENGTH_UNITS, scaled_limbs
 
 CALIBRATED = "_calibrated"
 
@@ -23,8 +24,8 @@ def calibrated_yaml(data, parameters, values, header):
     for key in ("layout", "golden", "optimize"):
         data.pop(key, None)
     robot = parameters.robot_of(values)
-    data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model}
-                     for limb in robot.limbs]
+    limbs = scaled_limbs(robot.limbs, 1.0 / LENGTH_UNITS[robot.length_unit])
+    data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model} for limb in limbs]
     data["name"] = calibrated_name(data["name"])
     data["description"] = f"{' '.join(str(data.get('description', '')).split())} Calibrated by kingen."
     data["source"] = " ".join(header)

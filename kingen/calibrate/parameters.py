@@ -1,6 +1,6 @@
 """The calibration's parameter vector: every limb's geometry, the measuring frame and the target.
 
-Values are in the robot file's units (mm, degrees). Per limb model:
+Values are in mm and degrees (a robot file in inches is read in mm, as kingen holds every robot). Per limb model:
 
 - leg: base point (3), platform point (3), reference length;
 - rail: rail point (3), the direction's tilt about two axes across it (2, degrees, 0 nominal),
@@ -78,8 +78,6 @@ class Parameters:
     (6,) and the target's ``target`` (6,) or (3,) (mm, degrees)."""
 
     def __init__(self, robot, measure, frame=(0.0,) * 6, target=None):
-        if robot.length_unit != "mm":
-            raise KingenError(f"{robot.path}: units: calibrate reads robot files in mm; write this one in mm")
         self.robot, self.measure = robot, measure
         self.lever = robot.size_mm
         entries = []
