@@ -269,3 +269,21 @@ def test_bad_options_are_one_line(tmp_path, hexapod_case, capsys):
     assert status == 2 and "--identify: unknown group 'wheels'" in err
     status, err = bad(capsys, ["calibrate", "plan", "hexapod", "--poses", "3", "-o", str(tmp_path / "p.csv")])
     assert status == 2 and "--poses: 3 poses for 42 identifiable parameters: at least 7 are needed" in err
+
+
+def test_a_robot_file_in_inches_is_measured_and_written_in_inches(tmp_path):
+    """linuxcnc_hexapod is written in inches: the plan's CSV, the measurements read and the
+    calibrated file are in inches; measurements of the nominal robot give back its geometry."""
+    plan_csv = tmp_path / "poses.csv"
+    assert main(["calibrate", "plan", "linuxcnc_hexapod", "--poses", "12", "-o", str(plan_csv)]) == 0
+    home = load_robot("linuxcnc_hexapod").verification.home
+    rows = np.loadtxt(plan_csv, delimiter=",", skiprows=1)
+    assert abs(np.mean(rows[:, 8]) * 25.4 - home[2]) < 0.5 * abs(home[2])  # z in inches, near home's
+    assert main(["calibrate", "linuxcnc_hexapod", "--measurements", str(plan_csv), "-o", str(tmp_path / "out")]) == 0
+    result = json.loads((tmp_path / "out" / "calibration.json").read_text())
+    assert result["residuals_after"]["rms_mm"] < 1e-6
+    written = tmp_path / "out" / "linuxcnc_hexapod_calibrated.yaml"
+    assert read_robot_file(written)[0]["units"] == "inch"
+    for mine, theirs in zip(load_robot(str(written)).limbs, load_robot("linuxcnc_hexapod").limbs):
+        assert np.allclose(mine.base_point, theirs.base_point, atol=1e-6)
+        assert np.allclose(mine.platform_point, theirs.platform_point, atol=1e-6)
