@@ -83,7 +83,7 @@ LAYERS = (
     ("kinematics", ("kingen.kinematics",)),
     ("verify", ("kingen.verify",)),
     ("hosts", ("kingen.hosts",)),
-    ("design", ("kingen.design",)),
+    ("design", ("kingen.design", "kingen.calibrate")),
     ("interface", ("kingen.cli", "kingen.pytest_plugin", "kingen")),
 )
 """kingen's layers, lowest first (docs/developer/architecture.md): a module may import its own layer's

@@ -20,7 +20,7 @@ import traceback
 import click
 
 from ..errors import InternalError, KingenError, PluginDefect
-from . import design_commands, routine_commands, solve_commands  # noqa: F401  (they register the commands)
+from . import calibrate_commands, design_commands, routine_commands, solve_commands  # noqa: F401  (they register the commands)
 from .common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERNAL, cli, say
 
 EXIT_TERMINATED = 128 + signal.SIGTERM

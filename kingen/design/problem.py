@@ -124,19 +124,31 @@ def evaluate(problem, x):
 def optimized_name(name):
     """``<name>_optimized``, the name cut short where it must be for the whole to stay within
     MAX_NAME characters: a name kingen accepts."""
-    return f"{name[:MAX_NAME - len(OPTIMIZED)]}{OPTIMIZED}"
+    return suffixed_name(name, OPTIMIZED)
+
+
+def suffixed_name(name, suffix):
+    """``<name><suffix>``, the name cut short where it must be for the whole to stay within
+    MAX_NAME characters: a name kingen accepts."""
+    return f"{name[:MAX_NAME - len(suffix)]}{suffix}"
 
 
 def design_yaml(problem, x, objective, header):
     """The robot file of design ``x``: the file's data with the design in it, renamed
     optimized_name(name), ``header`` (lines) as comments on top."""
-    from ruamel.yaml import YAML
-
     data = problem.design_data(x)
     data["name"] = optimized_name(data["name"])
     data["description"] = f"{' '.join(str(data.get('description', '')).split())} Optimised by kingen: " \
                           f"least tilt {objective:g} degrees."
     data["source"] = " ".join(header)
+    return robot_yaml(data, header)
+
+
+def robot_yaml(data, header):
+    """A robot file's text from its plain ``data``, ``header`` (lines) as comments on top;
+    floats rounded to 1e-9."""
+    from ruamel.yaml import YAML
+
     buffer = io.StringIO()
     writer = YAML()
     writer.default_flow_style = None

@@ -1,0 +1,199 @@
+"""Calibration's goals, measured and printed as Markdown for docs/how-to/calibrate.md and the
+closing notes.
+
+    python benchmarks/calibrate.py [--runs 100] [--part hexapod|montecarlo|planning|positions|speed|all]
+
+- hexapod: the 42 limb parameters perturbed by up to 1 mm, the measuring frame unknown
+  (25 degrees and 150 mm off), 6-D measurements with noise 10 um and 20 urad per coordinate,
+  joints read to 1 um; 30 planned poses; the pose error on 200 held-out poses (measured
+  exactly) before (nominal robot, frame and target fitted) and after.
+- montecarlo: the same with ``--runs`` noise draws: how often each identifiable parameter lies
+  within three of its stated standard deviations of the truth (the truth in the identified
+  parameters' gauge: the fit of the same poses without noise).
+- planning: predicted parameter deviations of the 30 planned poses against 30 random
+  reachable ones (median over the parameters).
+- positions: a reflector at an unknown point, positions only (noise 10 um), 30 planned poses,
+  200 held-out: a 6-RUS with crank zeros and rods perturbed, and the Gantry-Tau with link
+  lengths, origins and platform points perturbed.
+- speed: one identification of the hexapod from 50 poses; planning 30 of 5,000 candidates.
+"""
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from kingen.calibrate import plan
+from kingen.calibrate.identification import identify, region_poses, validation_problem
+from kingen.calibrate.measurements import Measurements
+from kingen.calibrate.parameters import Parameters
+from kingen.calibrate.prediction import synthesize
+from kingen.conventions import t6_from_pose
+from kingen.kinematics.reference import solve
+from kingen.robot.model import load_robot
+
+NOISE_MM, NOISE_RAD, JOINT_STEP = 0.01, 20e-6, 0.001
+FRAME = [150.0, -80.0, 40.0, 2.0, -3.0, 25.0]
+
+
+def truth_values(parameters, rng, scale_of):
+    """Nominal values with each limb parameter moved by scale_of(entry) * uniform(-1, 1), the frame FRAME."""
+    values = parameters.nominal.copy()
+    for index, entry in enumerate(parameters.entries):
+        if entry.limb is not None:
+            values[index] += scale_of(entry) * rng.uniform(-1.0, 1.0)
+    values[parameters.groups == "frame"] = FRAME
+    return values
+
+
+def measure(parameters, truth, poses, rng, noisy=True):
+    """Measurements of the truth at poses: joints read to JOINT_STEP, device noise when ``noisy``."""
+    robot = parameters.robot
+    joints, measured = synthesize(parameters, truth, poses, robot.working_posture)
+    shown = joints / robot.joint_scale()
+    joints = np.round(shown / JOINT_STEP) * JOINT_STEP * robot.joint_scale() if noisy else joints
+    if noisy:
+        measured = measured.copy()
+        measured[:, :3] += rng.normal(0.0, NOISE_MM, measured[:, :3].shape)
+        measured[:, 3:] += np.degrees(rng.normal(0.0, NOISE_RAD, measured[:, 3:].shape))
+    return Measurements("synthetic", parameters.measure, joints, measured, tuple(range(2, len(poses) + 2)), ())
+
+
+def reachable_poses(robot, count, seed):
+    """``count`` seeded poses of the verification region good in the working posture (reference)."""
+    poses = region_poses(robot, 4 * count, seed)
+    good = solve(robot, t6_from_pose(poses)).warnings[:, robot.working_posture] == 0
+    return poses[good][:count]
+
+
+def planned(parameters, count=30):
+    found = plan.candidates(parameters, parameters.selected("all"), NOISE_MM, math.degrees(NOISE_RAD))
+    rows = plan.greedy(found.weighted, count, plan.limb_columns(found, parameters))
+    return found, rows
+
+
+def rms(values):
+    return float(np.sqrt(np.mean(np.square(values))))
+
+
+def held_out_error(parameters, values, held):
+    position, angle, _ = validation_problem(parameters, values, held).errors(values)
+    return rms(position), None if angle is None else rms(angle)
+
+
+def hexapod_case(seed=1):
+    parameters = Parameters(load_robot("hexapod"), "pose")
+    rng = np.random.default_rng(seed)
+    truth = truth_values(parameters, rng, lambda entry: 1.0)
+    found, rows = planned(parameters)
+    held = measure(parameters, truth, reachable_poses(parameters.robot, 200, 99), rng, noisy=False)
+    return parameters, truth, found.poses[rows], held, found, rows
+
+
+def hexapod():
+    parameters, truth, poses, held, _, _ = hexapod_case()
+    fit = identify(parameters, measure(parameters, truth, poses, np.random.default_rng(7)), parameters.selected("all"))
+    before = held_out_error(parameters, fit.before, held)
+    after = held_out_error(parameters, fit.values, held)
+    print("## Hexapod, 6-D measurements\n")
+    print(f"42 limb parameters perturbed by up to 1 mm, measuring frame {FRAME} (mm, deg) unknown, noise "
+          f"{NOISE_MM * 1000:g} um / {NOISE_RAD * 1e6:g} urad, joints read to {JOINT_STEP * 1000:g} um, "
+          f"30 planned poses, 200 held-out poses (exact measurements).\n")
+    print("| | position RMS (um) | orientation RMS (urad) |\n| --- | --- | --- |")
+    for label, (position, angle) in (("before (nominal, frame fitted)", before), ("after", after)):
+        print(f"| {label} | {position * 1000:.2f} | {math.radians(angle) * 1e6:.2f} |")
+    print(f"\nreduction {100 * (1 - after[0] / before[0]):.2f} %; converged {fit.converged}, "
+          f"{int(fit.chosen.sum())} identified, condition number {fit.indices['condition_number']:.4g}, "
+          f"{fit.seconds:.2f} s\n")
+
+
+def montecarlo(runs):
+    parameters, truth, poses, _, _, _ = hexapod_case()
+    selected = parameters.selected("all")
+    gauge = identify(parameters, measure(parameters, truth, poses, None, noisy=False), selected)
+    inside = []
+    started = time.perf_counter()
+    for run in range(runs):
+        fit = identify(parameters, measure(parameters, truth, poses, np.random.default_rng(100 + run)), selected)
+        chosen = fit.chosen & gauge.chosen
+        inside.append(np.where(chosen, np.abs(fit.values - gauge.values) <= 3.0 * fit.std, True))
+    coverage = np.mean(inside, axis=0)[gauge.chosen]
+    print("## Honest deviations (Monte-Carlo)\n")
+    print(f"{runs} noise draws on the same 30 planned poses ({time.perf_counter() - started:.0f} s): the share of "
+          f"runs in which each of the {int(gauge.chosen.sum())} identifiable parameters lies within 3 stated "
+          f"standard deviations of the truth (in the identified gauge): least {coverage.min() * 100:.0f} %, median "
+          f"{np.median(coverage) * 100:.0f} %; parameters at 95 % or more: {int(np.sum(coverage >= 0.95))} of "
+          f"{len(coverage)}\n")
+
+
+def planning(draws=5):
+    parameters, _, _, _, found, rows = hexapod_case()
+    limbs = plan.limb_columns(found, parameters)
+    chosen_std = plan.predicted(found, rows, parameters)[0][found.chosen][limbs]
+    print("## Planning pays\n")
+    print(f"Predicted standard deviations (noise {NOISE_MM * 1000:g} um, {NOISE_RAD * 1e6:g} urad) of the "
+          f"{len(chosen_std)} identifiable limb parameters: 30 planned poses (median {np.median(chosen_std) * 1000:.1f} "
+          f"um) against 30 random reachable poses, {draws} draws:\n")
+    print("| draw | random median (um) | ratio of medians | median of ratios |\n| --- | --- | --- | --- |")
+    for draw in range(draws):
+        random = np.random.default_rng(draw).choice(len(found.poses), len(rows), replace=False)
+        random_std = plan.predicted(found, random, parameters)[0][found.chosen][limbs]
+        print(f"| {draw} | {np.median(random_std) * 1000:.1f} | {np.median(random_std) / np.median(chosen_std):.2f} | "
+              f"{np.median(random_std / chosen_std):.2f} |")
+    print()
+
+
+def positions():
+    print("## Positions only\n")
+    print("| robot | perturbed | before RMS (um) | after RMS (um) | held-out poses |\n| --- | --- | --- | --- | --- |")
+    for name, scale_of, words in (
+            ("rus_optimized", lambda entry: {"zero_offset": 0.1, "rod_length": 1.0}.get(entry.field, 0.0),
+             "crank zeros 0.1 deg, rods 1 mm"),
+            ("tau", lambda entry: 1.0 if entry.field in ("link_length", "origin", "platform_point") else 0.0,
+             "link lengths, origins, platform points 1 mm")):
+        parameters = Parameters(load_robot(name), "position", target=(0.0, 0.0, 0.0))
+        rng = np.random.default_rng(4)
+        truth = truth_values(parameters, rng, scale_of)
+        truth[parameters.groups == "target"] = [10.0, -20.0, 20.0]
+        found, rows = planned(parameters)
+        fit = identify(parameters, measure(parameters, truth, found.poses[rows], rng), parameters.selected("all"))
+        held = measure(parameters, truth, reachable_poses(parameters.robot, 200, 99), rng, noisy=False)
+        before = held_out_error(parameters, fit.before, held)[0]
+        after = held_out_error(parameters, fit.values, held)[0]
+        print(f"| {name} | {words} | {before * 1000:.1f} | {after * 1000:.2f} | 200 |")
+    print()
+
+
+def speed():
+    parameters, truth, _, _, _, _ = hexapod_case()
+    poses = region_poses(parameters.robot, 50, 5)
+    data = measure(parameters, truth, poses, np.random.default_rng(2))
+    times = []
+    for _ in range(3):
+        started = time.perf_counter()
+        identify(parameters, data, parameters.selected("all"))
+        times.append(time.perf_counter() - started)
+    started = time.perf_counter()
+    planned(parameters)
+    planning_time = time.perf_counter() - started
+    print("## Speed\n")
+    print(f"one identification of the hexapod from 50 poses: {min(times):.2f} s (best of 3); planning 30 of "
+          f"5,000 candidates: {planning_time:.2f} s\n")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=100)
+    parser.add_argument("--part", choices=["hexapod", "montecarlo", "planning", "positions", "speed", "all"],
+                        default="all")
+    arguments = parser.parse_args()
+    parts = {"hexapod": hexapod, "montecarlo": lambda: montecarlo(arguments.runs), "planning": planning,
+             "positions": positions, "speed": speed}
+    for name, part in parts.items():
+        if arguments.part in (name, "all"):
+            part()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,139 @@
+"""Reading a measurement file: a CSV with a header row, the joints as the controller reads them
+(``q1`` .. ``qN``, the robot file's units: mm or inches, degrees) and what the device measured, in its
+own frame: ``x, y, z, roll, pitch, yaw`` (the robot file's length unit, degrees; ``--measure pose``) or ``x, y, z``
+(``--measure position``). Columns may come in any order; blank lines and lines starting with
+``#`` are skipped. Every problem is one KingenError naming file, line and column.
+"""
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import located
+from ..runtime.file_gate import read_limited
+from ..units import LENGTH_UNITS
+from .parameters import POSE_NAMES
+
+MAX_BYTES = 64 * 1024 * 1024
+MEASURED = {"pose": POSE_NAMES, "position": POSE_NAMES[:3]}
+"""The measured columns of each kind of measurement."""
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """Measurements read from ``path``: ``joints`` (n, dof) in kingen's internal units (mm,
+    radians), ``measured`` (n, 6) mm and degrees or (n, 3) mm (converted from the robot file's unit), ``lines`` (n,) each row's
+    1-based line in the file, ``columns`` the header as written (for errors)."""
+
+    path: str
+    measure: str
+    joints: np.ndarray
+    measured: np.ndarray
+    lines: tuple
+    columns: tuple
+
+    def where(self, row, column):
+        """'FILE:LINE: column' of measurement ``row`` (0-based), for errors."""
+        return f"{self.path}:{self.lines[row]}: {column}"
+
+    def subset(self, rows):
+        """The measurements at ``rows`` (indices or a mask)."""
+        rows = np.arange(len(self.lines))[rows]
+        return Measurements(self.path, self.measure, self.joints[rows], self.measured[rows],
+                            tuple(self.lines[i] for i in rows), self.columns)
+
+
+def joint_columns(robot):
+    """q1 .. qN for ``robot``."""
+    return tuple(f"q{i + 1}" for i in range(robot.dof))
+
+
+def read_measurements(path, robot, measure):
+    """The Measurements in the CSV at ``path`` for ``robot`` (a Robot) and ``measure``."""
+    text = read_limited(path, MAX_BYTES, "a measurement file")
+    try:
+        text = text.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise located(path, None, None, f"not UTF-8 text (byte {error.start})") from None
+    rows = [(number, row) for number, row in _rows(path, text) if row and not row[0].lstrip().startswith("#")]
+    if not rows:
+        raise located(path, 1, "header", "no header row (expected " + ", ".join(_expected(robot, measure)) + ")")
+    header_line, header = rows[0]
+    header = tuple(name.strip() for name in header)
+    order = _columns(path, header_line, header, robot, measure)
+    data = rows[1:]
+    if not data:
+        raise located(path, header_line + 1, None, "no measurements after the header")
+    values = np.empty((len(data), len(header)))
+    for row_index, (number, row) in enumerate(data):
+        if len(row) != len(header):
+            raise located(path, number, None, f"{len(row)} values; the header has {len(header)} columns")
+        for column, (name, cell) in enumerate(zip(header, row)):
+            values[row_index, column] = _number(path, number, name, cell)
+    joints = values[:, order[:robot.dof]] * _joint_scale(robot)
+    measured = values[:, order[robot.dof:]]
+    measured[:, :3] *= LENGTH_UNITS[robot.length_unit]
+    return Measurements(str(path), measure, joints, measured, tuple(number for number, _ in data), header)
+
+
+def _joint_scale(robot):
+    """Per joint: internal units (mm, radians) per unit of the robot file (mm or inches, degrees)."""
+    return robot.joint_scale() * np.where(robot.revolute, 1.0, LENGTH_UNITS[robot.length_unit])
+
+
+def _rows(path, text):
+    reader = csv.reader(io.StringIO(text))
+    try:
+        for row in reader:
+            yield reader.line_num, row
+    except csv.Error as error:
+        raise located(path, reader.line_num, None, f"not CSV: {error}") from None
+
+
+def _expected(robot, measure):
+    return joint_columns(robot) + MEASURED[measure]
+
+
+def _columns(path, line, header, robot, measure):
+    """The index in ``header`` of each expected column, in expected order."""
+    expected = _expected(robot, measure)
+    for name in header:
+        if header.count(name) > 1:
+            raise located(path, line, name, "this column is given twice")
+    missing = [name for name in expected if name not in header]
+    if missing:
+        hint = (" (a position measurement has x, y, z only: --measure position)" if measure == "pose"
+                and set(missing) <= set(POSE_NAMES[3:]) else "")
+        raise located(path, line, missing[0], f"missing column (expected {', '.join(expected)}){hint}")
+    extra = [name for name in header if name not in expected]
+    if extra:
+        hint = (" (a pose measurement: --measure pose)" if measure == "position" and extra[0] in POSE_NAMES else "")
+        raise located(path, line, extra[0], f"unexpected column (expected {', '.join(expected)}){hint}")
+    return [header.index(name) for name in expected]
+
+
+def _number(path, line, column, cell):
+    try:
+        value = float(cell.strip())
+    except ValueError:
+        raise located(path, line, column, f"'{cell.strip()[:40]}' is not a number") from None
+    if not math.isfinite(value):
+        raise located(path, line, column, f"{cell.strip()} is not a finite number")
+    return value
+
+
+def write_measurements(robot, measure, joints, measured):
+    """CSV text of ``joints`` (n, dof; internal units) and ``measured`` (n, 6 or 3; mm,
+    degrees) in the layout and units read_measurements reads (the robot file's)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(_expected(robot, measure))
+    shown = np.asarray(joints) / _joint_scale(robot)
+    measured = np.array(measured, dtype=float)
+    measured[:, :3] /= LENGTH_UNITS[robot.length_unit]
+    for row_joints, row_measured in zip(shown, measured):
+        writer.writerow([f"{value:.12g}" for value in (*row_joints, *row_measured)])
+    return buffer.getvalue()

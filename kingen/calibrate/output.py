@@ -1,0 +1,54 @@
+"""The calibrated robot file: the robot file with every limb written out (a layout expanded to
+explicit limbs) with the identified values in the file's own length unit, renamed ``<name>_calibrated``, its ``source``
+naming the measurement file; golden values are dropped (they were published for the
+drawing). The robot file's writer is the design optimiser's (kingen.design.problem)."""
+
+import copy
+from dataclasses import replace
+
+from ..errors import KingenError
+
+from ..design.problem import robot_yaml, suffixed_name
+from ..units import LENGTH_UNITS, scaled_limbs
+
+CALIBRATED = "_calibrated"
+
+
+def calibrated_name(name):
+    """``<name>_calibrated``, cut to stay a name kingen accepts."""
+    return suffixed_name(name, CALIBRATED)
+
+
+def calibrated_yaml(data, parameters, values, header):
+    """The calibrated robot file's text from the robot file's plain ``data``, Parameters
+    ``parameters`` and identified ``values`` (mm, degrees); ``header`` lines on top and as
+    the file's ``source``."""
+    data = copy.deepcopy(data)
+    for key in ("layout", "golden", "optimize"):
+        data.pop(key, None)
+    robot = parameters.robot_of(values)
+    robot = replace(robot, limbs=tuple(_held(robot.path, name, limb) for name, limb in zip(robot.joint_names, robot.limbs)))
+    limbs = scaled_limbs(robot.limbs, 1.0 / LENGTH_UNITS[robot.length_unit])
+    data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model} for limb in limbs]
+    data["name"] = calibrated_name(data["name"])
+    data["description"] = f"{' '.join(str(data.get('description', '')).split())} Calibrated by kingen."
+    data["source"] = " ".join(header)
+    return robot_yaml(data, header)
+
+
+ROUNDING_MM = 1e-6
+"""A reference length this far below zero is zero (the fit's rounding about a nominal 0)."""
+
+
+def _held(path, name, limb):
+    """``limb`` with a reference length within ROUNDING_MM below zero set to 0; KingenError when
+    one is further below: a leg whose joint is its whole length (reference length 0) read with
+    an offset, which a robot file cannot hold."""
+    length = getattr(limb, "reference_length", None)
+    if length is None or length >= 0.0:
+        return limb
+    if length < -ROUNDING_MM:
+        raise KingenError(f"{path}: {name}.reference_length: identified as {length:.6g} mm, below the 0 a robot file "
+                          "allows: the joint reads the leg's whole length with an offset; fix the reference lengths "
+                          "(--identify -length) or give the leg a reference length")
+    return limb.model_copy(update={"reference_length": 0.0})

@@ -1,0 +1,185 @@
+"""The calibration's parameter vector: every limb's geometry, the measuring frame and the target.
+
+Values are in mm and degrees (a robot file in inches is read in mm, as kingen holds every robot). Per limb model:
+
+- leg: base point (3), platform point (3), reference length;
+- rail: rail point (3), the direction's tilt about two axes across it (2, degrees, 0 nominal),
+  platform point (3), link length, origin (the carriage offset moves the carriage as the rail
+  point does: it is kept as written and the rail point stands for both);
+- crank: pivot (3), crank direction, crank length, rod length, zero offset, platform point (3).
+
+The measuring frame is the measuring device's frame in the base frame (x, y, z, roll, pitch,
+yaw); the target is the measured frame in the platform frame (a pose, ``--measure pose``) or
+the reflector's point (``--measure position``). A measured pose M (device frame) is then
+F M = T Tg: the platform's pose T = F M Tg^-1.
+
+The solver works on x, the deviation from nominal in mm-equivalents: an angle moves by
+x / (robot size) radians, so that one unit of x moves the machine by about a millimetre
+whatever the parameter (the parameters' scaling).
+"""
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..conventions import matrix_from_pose
+from ..errors import KingenError
+
+GROUPS = dict(
+    base="the limbs' base points (leg base points, rail points, crank pivots)", platform="the limbs' platform points",
+    length="leg reference lengths, rail link lengths, crank and rod lengths",
+    direction="rail directions and crank directions", zero="crank zero offsets and rail origins",
+    frame="the measuring frame (the device's pose in the base frame)",
+    target="the target (the measured frame or reflector on the platform)")
+"""The groups --identify selects, in words."""
+
+MODEL_FIELDS = {
+    "leg": (("base_point", "base", "vector"), ("platform_point", "platform", "vector"),
+            ("reference_length", "length", "mm")),
+    "rail": (("rail_point", "base", "vector"), ("direction", "direction", "tilt"),
+             ("platform_point", "platform", "vector"), ("link_length", "length", "mm"), ("origin", "zero", "mm")),
+    "crank": (("pivot", "base", "vector"), ("crank_direction", "direction", "deg"),
+              ("crank_length", "length", "mm"), ("rod_length", "length", "mm"), ("zero_offset", "zero", "deg"),
+              ("platform_point", "platform", "vector")),
+}
+"""Per limb model: (field, group, kind) of what calibration identifies."""
+
+POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One identified number: ``name`` ('leg1.base_point.z', 'measuring_frame.yaw'), its
+    ``group``, ``unit`` ('mm' or 'deg') and ``nominal`` value; where it lives (``limb`` index
+    or None, ``field``, ``component``: 0..2 of a vector, 'a'/'b' a rail direction's tilt, or None)."""
+
+    name: str
+    group: str
+    unit: str
+    nominal: float
+    limb: int = None
+    field: str = None
+    component: object = None
+
+
+def _across(direction):
+    """Two unit vectors across ``direction`` (3,), right-handed with it: the tilt axes."""
+    unit = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    helper = np.eye(3)[int(np.argmin(np.abs(unit)))]
+    first = np.cross(unit, helper)
+    first /= np.linalg.norm(first)
+    return first, np.cross(unit, first)
+
+
+class Parameters:
+    """The parameter vector of ``robot`` (a Robot, limbs expanded, mm) for measurements of
+    kind ``measure`` ('pose' or 'position'), with the measuring frame's nominal pose ``frame``
+    (6,) and the target's ``target`` (6,) or (3,) (mm, degrees)."""
+
+    def __init__(self, robot, measure, frame=(0.0,) * 6, target=None):
+        self.robot, self.measure = robot, measure
+        self.lever = robot.size_mm
+        entries = []
+        for index, limb in enumerate(robot.limbs):
+            fields = MODEL_FIELDS.get(limb.model)
+            if fields is None:
+                raise KingenError(f"{robot.path}: limbs: calibrate does not know the parameters of the "
+                                  f"'{limb.model}' limb model (it knows {', '.join(MODEL_FIELDS)})")
+            name = robot.joint_names[index]
+            for field, group, kind in fields:
+                entries.extend(_limb_entries(name, index, limb, field, group, kind))
+        target = (0.0,) * (6 if measure == "pose" else 3) if target is None else target
+        entries += [Parameter(f"measuring_frame.{axis}", "frame", "mm" if i < 3 else "deg", float(frame[i]))
+                    for i, axis in enumerate(POSE_NAMES)]
+        entries += [Parameter(f"target.{axis}", "target", "mm" if i < 3 else "deg", float(target[i]))
+                    for i, axis in enumerate(POSE_NAMES[:len(target)])]
+        self.entries = tuple(entries)
+        self.names = [entry.name for entry in entries]
+        self.nominal = np.array([entry.nominal for entry in entries])
+        self.step = np.array([1.0 if entry.unit == "mm" else math.degrees(1.0 / self.lever) for entry in entries])
+        """Value per unit of x: 1 for mm, the degrees one mm-equivalent turns for angles."""
+        self.groups = np.array([entry.group for entry in entries])
+        self._across = {index: _across(limb.direction) for index, limb in enumerate(robot.limbs)
+                        if limb.model == "rail"}
+
+    def __len__(self):
+        return len(self.entries)
+
+    def values(self, x):
+        """Values (mm, degrees) of the deviations ``x`` (mm-equivalents) from nominal."""
+        return self.nominal + np.asarray(x, dtype=float) * self.step
+
+    def deviations(self, values):
+        """The x of ``values``: values() inverted."""
+        return (np.asarray(values, dtype=float) - self.nominal) / self.step
+
+    def robot_of(self, values):
+        """The Robot with the limb parameters ``values`` (mm, degrees) put in."""
+        updates = [{} for _ in self.robot.limbs]
+        for entry, value in zip(self.entries, values):
+            if entry.limb is None:
+                continue
+            update = updates[entry.limb]
+            limb = self.robot.limbs[entry.limb]
+            if entry.component is None:
+                update[entry.field] = float(value)
+            elif entry.field == "direction":
+                update.setdefault("_tilt", [0.0, 0.0])["ab".index(entry.component)] = math.radians(value)
+            else:
+                update.setdefault(entry.field, list(getattr(limb, entry.field)))[entry.component] = float(value)
+        limbs = []
+        for index, (limb, update) in enumerate(zip(self.robot.limbs, updates)):
+            tilt = update.pop("_tilt", None)
+            if tilt is not None:
+                first, second = self._across[index]
+                direction = np.asarray(limb.direction) + tilt[0] * first + tilt[1] * second
+                update["direction"] = list(direction / np.linalg.norm(direction))
+            limbs.append(limb.model_copy(update=update))
+        return replace(self.robot, limbs=tuple(limbs))
+
+    def frame(self, values):
+        """The measuring frame's homogeneous matrix (4, 4) in the base frame."""
+        return matrix_from_pose(self._slice(values, "frame"))
+
+    def target(self, values):
+        """The target: its matrix (4, 4) in the platform frame (pose), or its point (3,) (position)."""
+        target = self._slice(values, "target")
+        return matrix_from_pose(target) if self.measure == "pose" else target
+
+    def _slice(self, values, group):
+        return np.asarray(values, dtype=float)[self.groups == group]
+
+    def with_nominal(self, values):
+        """The same parameters with ``values`` as their nominal values (a start for a second fit)."""
+        copy = object.__new__(Parameters)
+        copy.__dict__.update(self.__dict__)
+        copy.nominal = np.asarray(values, dtype=float).copy()
+        copy.entries = tuple(replace(entry, nominal=float(value)) for entry, value in zip(self.entries, values))
+        return copy
+
+    def selected(self, spec):
+        """(len,) bool: the parameters --identify ``spec`` selects: comma-separated 'all', a group
+        or '-group' (fix it); a spec that starts with '-group' starts from all."""
+        items = [item.strip() for item in spec.split(",") if item.strip()]
+        if not items:
+            raise KingenError("--identify: empty; give 'all', groups or -groups")
+        chosen = np.ones(len(self), dtype=bool) if items[0].startswith("-") else np.zeros(len(self), dtype=bool)
+        for item in items:
+            group = item.lstrip("-")
+            if group != "all" and group not in GROUPS:
+                raise KingenError(f"--identify: unknown group '{group}' (choose from all, {', '.join(GROUPS)})")
+            chosen[np.ones(len(self), dtype=bool) if group == "all" else self.groups == group] = \
+                not item.startswith("-")
+        return chosen
+
+
+def _limb_entries(name, index, limb, field, group, kind):
+    """The Parameters of one limb field of ``kind``: 'vector' (3 components, mm), 'tilt' (a rail
+    direction's two tilts, degrees, 0 nominal), 'mm' or 'deg' (one number)."""
+    if kind == "vector":
+        return [Parameter(f"{name}.{field}.{axis}", group, "mm", float(getattr(limb, field)[axis_index]),
+                          index, field, axis_index) for axis_index, axis in enumerate("xyz")]
+    if kind == "tilt":
+        return [Parameter(f"{name}.{field}.tilt_{part}", group, "deg", 0.0, index, field, part) for part in "ab"]
+    return [Parameter(f"{name}.{field}", group, kind, float(getattr(limb, field)), index, field)]

@@ -1,0 +1,159 @@
+"""Choosing the poses to measure: greedy D-optimal design among seeded candidates.
+
+Candidates are seeded poses of the robot's verification region (the coordinates forward
+kinematics does not solve for held at home) that kingen's reference judges good in the
+working posture (reachable, within travel, away from singularities by the robot's
+``direct_index_min``, and by MARGIN of the limbs' and forward kinematics' conditioning) and, where the robot file gives ``collision`` radii, whose links keep
+clear of each other. Each candidate's rows of the identification Jacobian (at the nominal
+parameters) are weighted by the standard deviation the measurement noise gives its residuals;
+poses are then added one at a time: first each the one that most increases log det of the
+information matrix J^T W J over the identifiable parameters (D-optimal, until it is regular
+and a few poses beyond), then each the one that most decreases the limb parameters' summed
+variance (A-optimal, the deviations a plan is judged by). The predicted standard deviations are sqrt(diag((J^T W J)^-1)).
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..conventions import t6_from_pose
+from ..errors import KingenError
+from ..kinematics.collision import clearances
+from ..kinematics.forward import closure, closure_derivative, free_mask
+from ..kinematics.reference import solve
+from ..kinematics.routine import WARNINGS
+from . import identifiability
+from .identification import Problem, region_poses
+from .measurements import Measurements
+from .prediction import joint_residuals, synthesize
+
+CANDIDATES = 5000
+MARGIN = 0.01
+"""Away from singularities: a candidate's least normalised radicand D (rails, cranks) and the
+ratio of the smallest to the largest singular value of its closure Jacobian over the free
+pose coordinates (angles per robot size) must be at least this; D-optimal designs otherwise
+crowd where the joints or the pose are ill-conditioned, and the fit with them."""
+STEP_MEASURED = 1e-4
+"""Central differences' step (mm, degrees) for the residuals' derivative by the measurement."""
+
+
+@dataclass
+class Candidates:
+    """The candidate poses (n, 6; mm, degrees), their nominal joints (n, dof; mm, radians),
+    the weighted Jacobian blocks (n, rows per pose, identifiable parameters), the unweighted
+    ones, and which parameters are identifiable (``chosen``, a mask over all)."""
+
+    poses: np.ndarray
+    joints: np.ndarray
+    weighted: np.ndarray
+    blocks: np.ndarray
+    chosen: np.ndarray
+
+
+def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed=1):
+    """The Candidates for Parameters ``parameters`` at their nominal values, ``selected``
+    (mask) the parameters to identify, the measurement noise ``noise_mm`` and ``noise_deg``
+    (one standard deviation per coordinate)."""
+    robot = parameters.robot
+    posture = robot.working_posture
+    poses = region_poses(robot, count, seed)
+    solution = solve(robot, t6_from_pose(poses))
+    good = solution.warnings[:, posture] == WARNINGS["WARN_GOOD_SOLUTION"]
+    if robot.collision is not None:
+        rods, cranks = clearances(robot, solution.points, solution.joints[:, :, posture])
+        good &= ~(rods < 0.0) & ~(cranks < 0.0)
+    good &= solution.min_inverse_index >= MARGIN
+    good[good] = _regular(robot, poses[good], solution.joints[good, :, posture])
+    poses = poses[good]
+    if not len(poses):
+        raise KingenError(f"{robot.path}: verification: no pose of the verification region is reachable, within "
+                          "travel and away from singularities and collisions")
+    values = parameters.nominal
+    joints, measured = synthesize(parameters, values, poses, posture)
+    data = Measurements("", parameters.measure, joints, measured, tuple(range(len(poses))), ())
+    problem = Problem(parameters, data, np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1))
+    order = [i for i in identifiability.priority(parameters) if selected[i]]
+    jacobian = problem.jacobian(values, order)
+    taken = identifiability.identifiable(jacobian, range(len(order)))
+    chosen = np.zeros(len(parameters), dtype=bool)
+    chosen[np.array(order)[taken]] = True
+    blocks = jacobian[:, taken].reshape(len(poses), -1, int(np.count_nonzero(taken)))
+    sigma = _row_sigma(parameters, data, noise_mm, noise_deg).reshape(len(poses), -1)
+    return Candidates(poses=poses, joints=joints, weighted=blocks / sigma[..., None], blocks=blocks, chosen=chosen)
+
+
+def _regular(robot, poses, joints):
+    """(n,) bool: whether forward kinematics is well-conditioned at poses (n, 6; mm, degrees)
+    for joints (n, dof): the closure Jacobian's singular values' ratio at least MARGIN."""
+    radians = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+    _, wrenches = closure(robot, radians, joints)
+    free = free_mask(robot)
+    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
+    values = np.linalg.svd(closure_derivative(wrenches, radians, free) * scale, compute_uv=False)
+    return values[:, -1] >= MARGIN * values[:, 0]
+
+
+def _row_sigma(parameters, data, noise_mm, noise_deg):
+    """(m,) the standard deviation of each residual the measurement noise gives: for positions,
+    ``noise_mm``; for poses, the joints' sensitivity to the measured pose times its noise."""
+    if parameters.measure == "position":
+        return np.full(data.measured.size, noise_mm)
+    variance = np.zeros(data.joints.size)
+    for column, noise in enumerate([noise_mm] * 3 + [noise_deg] * 3):
+        shifted = []
+        for sign in (1.0, -1.0):
+            measured = data.measured.copy()
+            measured[:, column] += sign * STEP_MEASURED
+            shifted.append(joint_residuals(parameters, parameters.nominal, Measurements(
+                "", "pose", data.joints, measured, data.lines, ())).ravel())
+        variance += ((shifted[0] - shifted[1]) / (2 * STEP_MEASURED) * noise) ** 2
+    return np.sqrt(np.maximum(variance, 1e-30))
+
+
+D_OPTIMAL_EXTRA = 3
+"""Poses chosen by D-optimality beyond the fewest that make the information matrix regular."""
+
+
+def greedy(weighted, count, limbs=None):
+    """Indices of ``count`` candidates chosen one at a time from the weighted blocks (n, rows,
+    parameters): first, each the one that most increases log det of the information matrix
+    (D-optimal) until D_OPTIMAL_EXTRA more poses than its rank needs are chosen; then each the
+    one that most decreases the summed variance of the parameters ``limbs`` (a mask over the
+    columns; None: all) (A-optimal): the deviations the plan is judged by."""
+    count = min(count, len(weighted))
+    rows, parameters = weighted.shape[1], weighted.shape[2]
+    limbs = np.ones(parameters, dtype=bool) if limbs is None else limbs
+    scale = float(np.mean(np.einsum("nij,nij->j", weighted, weighted))) / len(weighted)
+    information = 1e-9 * scale * np.eye(parameters)
+    chosen = []
+    available = np.ones(len(weighted), dtype=bool)
+    d_optimal = min(count, -(-parameters // rows) + D_OPTIMAL_EXTRA)
+    while len(chosen) < count:
+        inverse = np.linalg.inv(information)
+        projected = weighted @ inverse
+        growth = np.eye(rows) + projected @ np.swapaxes(weighted, 1, 2)
+        if len(chosen) < d_optimal:
+            gain = np.linalg.slogdet(growth)[1]
+        else:
+            gain = np.einsum("nij,nij->n", np.linalg.solve(growth, projected)[:, :, limbs], projected[:, :, limbs])
+        gain[~available] = -np.inf
+        best = int(np.argmax(gain))
+        chosen.append(best)
+        available[best] = False
+        information += weighted[best].T @ weighted[best]
+    return np.array(chosen)
+
+
+def limb_columns(candidates_, parameters):
+    """(identifiable parameters,) bool: which of the candidates' columns are limb parameters."""
+    return np.array([entry.limb is not None for entry in parameters.entries])[candidates_.chosen]
+
+
+def predicted(candidates_, rows, parameters):
+    """(predicted standard deviations (len(parameters),) in mm and degrees, NaN where not
+    identified; the observability indices) of measuring the candidates ``rows``."""
+    weighted = candidates_.weighted[rows].reshape(-1, candidates_.weighted.shape[2])
+    std = np.full(len(parameters), np.nan)
+    columns = np.flatnonzero(candidates_.chosen)
+    std[columns] = identifiability.predicted_deviations(weighted, np.ones(len(weighted))) * parameters.step[columns]
+    return std, identifiability.indices(candidates_.blocks[rows].reshape(-1, candidates_.blocks.shape[2]))

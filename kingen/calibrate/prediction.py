@@ -1,0 +1,112 @@
+"""What a parameter vector predicts: the joints a measured pose needs (the limbs' closure at the
+pose, through each limb model's inverse), the measurement that read joints give (kingen's
+forward kinematics, Newton from a nearby pose), and the errors between prediction and
+measurement. Frames: a measured pose M is in the device's frame, the platform's pose
+T = F M Tg^-1 in the base frame (kingen.calibrate.parameters); mm, degrees in and out,
+radians for revolute joints.
+"""
+
+import numpy as np
+
+from ..conventions import matrix_from_pose, pose_from_t6, rotation_from_rpy, t6_from_matrix, wrap_angle
+from ..kinematics.forward import free_mask, newton
+from ..kinematics.reference import platform_points_in_base
+
+CLOSED = 1e-7
+"""Forward kinematics reached the joints where no limb misses its length by more than this
+fraction of the robot's size."""
+
+
+def pose_radians(matrix):
+    """Poses (n, 6) in mm and radians (forward kinematics' unknowns) of matrices H (n, 4, 4)."""
+    pose = pose_from_t6(t6_from_matrix(matrix))
+    return np.concatenate([pose[:, :3], np.radians(pose[:, 3:])], axis=1)
+
+
+def matrix_radians(poses):
+    """Matrices H (n, 4, 4) of poses (n, 6) in mm and radians."""
+    poses = np.asarray(poses, dtype=float)
+    return matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
+
+
+def platform_of_measured(parameters, values, measured):
+    """The platform's poses H (n, 4, 4), base frame, that measured poses (n, 6; mm, degrees,
+    device frame) put it at: T = F M Tg^-1."""
+    return parameters.frame(values) @ matrix_from_pose(measured) @ np.linalg.inv(parameters.target(values))
+
+
+def measured_of_platform(parameters, values, platform):
+    """What the device measures (n, 6; mm, degrees) or (n, 3; mm) with the platform at H (n, 4, 4)."""
+    inverse = np.linalg.inv(parameters.frame(values))
+    if parameters.measure == "pose":
+        return pose_from_t6(t6_from_matrix(inverse @ platform @ parameters.target(values)))
+    point = platform[:, :3, :3] @ parameters.target(values) + platform[:, :3, 3]
+    return point @ inverse[:3, :3].T + inverse[:3, 3]
+
+
+def inverse_joints(robot, platform):
+    """Both branches' joints (n, dof, 2; mm, radians) and radicands (n, dof) of ``robot`` with
+    the platform at H (n, 4, 4)."""
+    points = platform_points_in_base(t6_from_matrix(platform), [limb.platform_point for limb in robot.limbs])
+    joints = np.empty(points.shape[:2] + (2,))
+    radicands = np.full(points.shape[:2], np.inf)
+    for index, limb in enumerate(robot.limbs):
+        solution = limb.solve(points[:, index])
+        joints[:, index] = solution.values
+        if solution.radicand is not None:
+            radicands[:, index] = solution.radicand
+    return joints, radicands
+
+
+def joint_residuals(parameters, values, measurements):
+    """Predicted minus read joints (n, dof) in mm-equivalents (radians times the robot's size)
+    at the measured poses, each limb on the branch nearer its read joint."""
+    robot = parameters.robot_of(values)
+    joints, _ = inverse_joints(robot, platform_of_measured(parameters, values, measurements.measured))
+    difference = joints - measurements.joints[:, :, None]
+    revolute = robot.revolute
+    difference[:, revolute] = wrap_angle(difference[:, revolute])
+    nearer = np.take_along_axis(difference, np.argmin(np.abs(difference), axis=2)[..., None], axis=2)[..., 0]
+    return nearer * np.where(revolute, parameters.lever, 1.0)
+
+
+def forward_poses(robot, joints, start):
+    """Forward kinematics of ``robot`` for joints (n, dof) by Newton from poses ``start`` (n, 6;
+    mm, radians): (poses (n, 6), closed (n,) bool: every limb within CLOSED of its length)."""
+    poses, residuals = newton(robot, start, joints, free_mask(robot))
+    return poses, residuals <= CLOSED * robot.size_mm
+
+
+def predicted_measurements(parameters, values, joints, start):
+    """(measured (n, 6 or 3), platform poses (n, 6; mm, radians), closed (n,)) that read joints
+    (n, dof) give with ``values``, forward kinematics started at ``start`` (n, 6)."""
+    poses, closed = forward_poses(parameters.robot_of(values), joints, start)
+    return measured_of_platform(parameters, values, matrix_radians(poses)), poses, closed
+
+
+def errors(predicted, measured):
+    """(position error (n,) mm, orientation error (n,) degrees or None) between predicted and
+    measured poses (n, 6) or points (n, 3)."""
+    position = np.linalg.norm(predicted[:, :3] - measured[:, :3], axis=1)
+    if measured.shape[1] == 3:
+        return position, None
+    relative = np.swapaxes(_rotation(predicted), 1, 2) @ _rotation(measured)
+    cosine = np.clip((np.trace(relative, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    return position, np.degrees(np.arccos(cosine))
+
+
+def _rotation(poses):
+    angles = np.radians(poses[:, 3:])
+    return rotation_from_rpy(angles[:, 0], angles[:, 1], angles[:, 2])
+
+
+def synthesize(parameters, values, poses, posture):
+    """(joints (n, dof; mm, radians), measured (n, 6 or 3)) a robot with ``values`` reads and
+    the device measures with the platform at ``poses`` (n, 6; mm, degrees, base frame), in
+    ``posture``: measurements made from the parameters' own model (for plans and tests)."""
+    robot = parameters.robot_of(values)
+    platform = matrix_from_pose(poses)
+    joints, _ = inverse_joints(robot, platform)
+    branches = np.array(robot.posture_branches(posture))
+    chosen = np.take_along_axis(joints, np.broadcast_to(branches[None, :, None], joints.shape[:2] + (1,)), 2)[..., 0]
+    return chosen, measured_of_platform(parameters, values, platform)

@@ -1,0 +1,183 @@
+"""The commands that calibrate: ``calibrate`` (identify the machine as built from measurements,
+write its robot file) and ``calibrate plan`` (choose the poses to measure)."""
+
+import json
+import math
+from pathlib import Path
+
+import click
+
+from .common import EXIT_FAILED, ROBOT, FiniteRange, _out_folder, _output_file, cli, finite, load_model_and_data, say
+
+MEASURE = click.option("--measure", type=click.Choice(["pose", "position"]), default="pose", show_default=True,
+                       help="What the device measures: the target's pose (x y z roll pitch yaw) or a reflector's "
+                            "position (x y z).")
+IDENTIFY = click.option("--identify", "spec", default="all", show_default=True, metavar="SPEC",
+                        help="Parameter groups to identify, comma-separated: all, base, platform, length, direction, "
+                             "zero, frame, target; -GROUP keeps a group at its nominal value (e.g. -target when "
+                             "the target is known).")
+
+
+class _CalibrateGroup(click.Group):
+    """``calibrate ROBOT ...`` runs the hidden ``run`` command; ``calibrate plan ...`` plans."""
+
+    def parse_args(self, ctx, args):
+        if args and args[0] not in self.commands and args[0] not in ("--help", "-h"):
+            args = ["run", *args]
+        return super().parse_args(ctx, args)
+
+
+@cli.group(cls=_CalibrateGroup, subcommand_metavar="ROBOT --measurements FILE [OPTIONS] | plan ROBOT --poses N [OPTIONS]")
+def calibrate():
+    """Identify the machine as built from measurements.
+
+    kingen calibrate ROBOT --measurements FILE, with the options --measure pose|position,
+    --identify SPEC, --validate FILE, -o DIR and --json FILE: least squares on every limb's
+    geometry, the measuring frame and the target; writes <name>_calibrated.yaml,
+    calibration.json and report.html to DIR (default: build/<name>/calibrate). FILE is a CSV with the header
+    q1 .. qN (joints as read: mm, degrees) then x, y, z, roll, pitch, yaw (mm, degrees; or
+    x, y, z with --measure position), in the device's frame. Exit 0 calibrated, 1 the fit
+    did not converge (nothing written), 2 bad input. kingen calibrate run --help lists the
+    options.
+
+    kingen calibrate plan ROBOT --poses N: the poses to measure."""
+
+
+@calibrate.command(hidden=True)
+@ROBOT
+@click.option("--measurements", "measurements_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="The measurement CSV.")
+@MEASURE
+@IDENTIFY
+@click.option("--validate", "validate_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Held-out measurements (same layout) to report the calibrated robot's errors on.")
+@click.option("-o", "--out-dir", type=click.Path(file_okay=False, path_type=Path), default=None, callback=_out_folder,
+              help="Output folder [default: build/<name>/calibrate].")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Also write calibration.json to this file.")
+def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_path):
+    """Calibrate ROBOT from measurements (see kingen calibrate --help)."""
+    from ..calibrate import report
+    from ..calibrate.identification import identify, validation_problem
+    from ..calibrate.measurements import read_measurements
+    from ..calibrate.output import calibrated_name, calibrated_yaml
+    from ..calibrate.parameters import Parameters
+    from ..runtime.files import default_out_dir, write_atomic
+
+    model, data, _ = load_model_and_data(robot)
+    parameters = Parameters(model, measure)
+    selected = parameters.selected(spec)
+    measurements = read_measurements(measurements_path, model, measure)
+    held_out = read_measurements(validate_path, model, measure) if validate_path is not None else None
+    fit = identify(parameters, measurements, selected)
+    if not fit.converged:
+        say(f"kingen: calibrate {model.name}: the fit did not converge ({fit.message}; {fit.evaluations} "
+            "evaluations): no calibrated robot file written", err=True)
+        return EXIT_FAILED
+    before = fit.problem.errors(fit.before)[:2]
+    after = fit.problem.errors(fit.values)[:2]
+    validation = (validation_problem(parameters, fit.values, held_out).errors(fit.values)[:2]
+                  if held_out is not None else None)
+    outcome = report.result(parameters, fit, before, after, validation, fit.seconds)
+    text = json.dumps(finite(outcome), indent=1, allow_nan=False) + "\n"
+    name = calibrated_name(model.name)
+    header = [f"kingen calibrate {model.name} from {measurements_path.name}: {len(measurements.joints)} {measure} "
+              f"measurements, after {outcome['residuals_after']['rms_mm']:.4g} mm RMS (before "
+              f"{outcome['residuals_before']['rms_mm']:.4g} mm)."]
+    robot_text = calibrated_yaml(data, parameters, fit.values, header)
+    _check_loads(robot_text, model.path.parent / f"{name}.yaml")
+    pngs = {"residuals.png": report.residual_figure(before, after), "parameters.png": report.parameter_figure(outcome)}
+    settings = {"measure": measure, "measurements": str(measurements_path), "identify": spec}
+    out_dir = out_dir or default_out_dir(model) / "calibrate"
+    outputs = {f"{name}.yaml": robot_text, "calibration.json": text, **pngs,
+               "report.html": report.report_html(model.name, outcome, pngs, settings)}
+    for file_name, content in outputs.items():
+        write_atomic(out_dir / file_name, content)
+    if json_path is not None:
+        write_atomic(json_path, text)
+    _say_outcome(model.name, outcome, fit)
+    for file_name in outputs:
+        say(str(out_dir / file_name))
+    return 0
+
+
+def _check_loads(text, path):
+    """The calibrated robot file's text loads as a robot (else an internal error: kingen wrote it)."""
+    from ruamel.yaml import YAML
+
+    from ..robot.model import robot_from_data
+
+    robot_from_data(YAML(typ="safe").load(text), path)
+
+
+def _say_outcome(name, outcome, fit):
+    def words(summary):
+        angle = f", {summary['rms_deg']:.3g} deg RMS" if summary["rms_deg"] is not None else ""
+        return f"{summary['rms_mm'] * 1000:.3g} um RMS (max {summary['max_mm'] * 1000:.3g} um){angle}"
+
+    identified = int(sum(row["identifiable"] for row in outcome["parameters"]))
+    say(f"calibrate {name}: {identified} parameters identified from {outcome['poses']} poses "
+        f"({len(fit.unidentifiable)} kept nominal, not identifiable), {fit.evaluations} evaluations, "
+        f"{outcome['seconds']:.2f} s")
+    say(f"  residuals before {words(outcome['residuals_before'])}; after {words(outcome['residuals_after'])}")
+    if outcome["validation"] is not None:
+        say(f"  held-out validation: {words(outcome['validation'])}")
+    say(f"  condition number {outcome['condition_number']:.4g}, smallest singular value "
+        f"{outcome['min_singular_value']:.4g}, noise amplification {outcome['noise_amplification']:.4g}")
+    for line in fit.unidentifiable:
+        say(f"  not identifiable: {line}")
+
+
+@calibrate.command()
+@ROBOT
+@click.option("--poses", "count", type=click.IntRange(min=1, max=10000), required=True, help="Poses to choose.")
+@click.option("--noise-mm", type=FiniteRange(min=1e-9, max=1000.0), default=0.01, show_default=True,
+              help="The device's position noise, one standard deviation per coordinate (mm).")
+@click.option("--noise-deg", type=FiniteRange(min=1e-12, max=90.0), default=0.001, show_default=True,
+              help="The device's angle noise, one standard deviation per angle (degrees).")
+@MEASURE
+@IDENTIFY
+@click.option("-o", "--output", "output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="The poses' CSV [default: build/<name>/calibrate/poses.csv].")
+def plan(robot, count, noise_mm, noise_deg, measure, spec, output):
+    """Choose N poses to measure for calibrating ROBOT: greedy D- then A-optimal among 5,000 seeded
+    poses of the verification region that the reference finds reachable, within travel and
+    away from singularities (and collisions, with collision radii). Writes them as a CSV in
+    calibrate's layout (nominal joints; the measured columns hold the nominal pose: replace
+    them with what the device measures) and prints the predicted condition number and
+    parameter deviations for the given noise."""
+    import numpy as np
+
+    from ..calibrate import plan as planning
+    from ..calibrate.measurements import write_measurements
+    from ..calibrate.parameters import Parameters
+    from ..errors import KingenError
+    from ..runtime.files import default_out_dir, write_atomic
+
+    model, _, _ = load_model_and_data(robot)
+    parameters = Parameters(model, measure)
+    selected = parameters.selected(spec)
+    found = planning.candidates(parameters, selected, noise_mm, noise_deg)
+    identifiable = int(np.count_nonzero(found.chosen))
+    per_pose = found.blocks.shape[1]
+    needed = -(-identifiable // per_pose)
+    if count < needed:
+        raise KingenError(f"--poses: {count} poses for {identifiable} identifiable parameters: at least {needed} "
+                          f"are needed ({per_pose} equations per pose)")
+    if count > len(found.poses):
+        raise KingenError(f"--poses: {count} poses asked, {len(found.poses)} candidates qualify")
+    rows = planning.greedy(found.weighted, count, planning.limb_columns(found, parameters))
+    std, indices = planning.predicted(found, rows, parameters)
+    poses = found.poses[rows]
+    output = output or default_out_dir(model) / "calibrate" / "poses.csv"
+    write_atomic(output, write_measurements(model, measure, found.joints[rows], poses[:, :6 if measure == "pose" else 3]))
+    mm = [(value, entry.name) for value, entry in zip(std, parameters.entries) if math.isfinite(value)
+          and entry.unit == "mm"]
+    say(f"plan {model.name}: {count} of {len(found.poses)} candidate poses (seeded in the verification region: "
+        f"reachable, within travel, away from singularities{', clear of collisions' if model.collision else ''}), "
+        f"{identifiable} identifiable parameters")
+    say(f"  predicted condition number {indices['condition_number']:.4g}; with noise {noise_mm:g} mm and "
+        f"{noise_deg:g} deg, parameter deviations (one std): median {np.median([v for v, _ in mm]):.3g} mm, "
+        f"largest {max(mm)[0]:.3g} mm ({max(mm)[1]})")
+    say(str(output))
+    return 0
