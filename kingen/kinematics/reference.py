@@ -13,7 +13,10 @@ of zero or the posture's direct index is at most the robot's ``direct_index_min`
 unreachable wins over singular, singular over joint limits. A limb without a
 real solution reports the value at the clamped radicand (closest approach), so
 values are always finite. Non-finite T6: all postures unreachable, all joints 0. A limb
-whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0.
+whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0. A machine with task
+coordinates (kingen.robot.constraints) is solved at the pose its constraints give for the T6's
+z, roll and pitch (kingen.kinematics.parasitic): a T6 off that manifold, or one whose task
+coordinates no pose has, is unreachable with the joints of that pose.
 """
 
 import functools
@@ -22,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .certificate import certified_above
+from .parasitic import solve_parasitic
 from .routine import SINGULAR_TOLERANCE, WARNINGS
 from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
                           gram_partial_sums, limb_wrenches, posture_values)
@@ -34,7 +38,8 @@ class Solution:
     branch_joints: (n, dof, 2) each limb's joint in its branch 0 and 1 (the same twice for
     one-branch limbs), mm or rad; ``joints`` spreads them over the postures.
     warnings: (n, postures) WARN_* codes.
-    radicands: (n, dof) normalised radicand D per limb (+inf for legs).
+    radicands: (n, dof) normalised radicand D per limb (+inf for legs); for a machine with task
+    coordinates at most the constraints' D (kingen.kinematics.parasitic), -inf off the manifold.
     finite: (n,) whether the T6 was finite.
     """
 
@@ -198,8 +203,12 @@ def _limb_solutions(robot, t6):
     overflow (n, dof)) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
     finite or the limb's value overflows (see the module docstring)."""
     count = t6.shape[0]
+    finite = np.all(np.isfinite(t6[:, :, :3].reshape(count, 12)), axis=1)
+    constraint = None
+    if robot.task:  # the machine's pose for the task coordinates; off the manifold or unsolvable: unreachable
+        parasitic = solve_parasitic(robot, t6)
+        t6, constraint = parasitic.t6, np.where(parasitic.off, -np.inf, parasitic.radicand)
     rows = _t6_rows(t6)
-    finite = np.all(np.isfinite(rows.reshape(12, count)), axis=0)
     if not np.all(finite):
         rows[:, :, ~finite] = 0.0
     points = _points_from_rows(rows, [limb.platform_point for limb in robot.limbs])
@@ -211,6 +220,8 @@ def _limb_solutions(robot, t6):
         branch_joints[:, index, :] = limb_solution.values
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
+    if constraint is not None:
+        np.fmin(radicands, constraint[:, None], out=radicands)
     overflow = ~(np.isfinite(branch_joints[..., 0]) & np.isfinite(branch_joints[..., 1]))  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
     return points, branch_joints, radicands, finite, overflow
