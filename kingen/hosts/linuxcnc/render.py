@@ -55,6 +55,9 @@ def robot_problem(robot):
     """Why this host cannot drive ``robot``, or None."""
     if module_name(robot) in STOCK_MODULES:
         return f"name: the module name '{module_name(robot)}' is LinuxCNC's own module's"
+    if robot.task:
+        return (f"task: the LinuxCNC module does not solve parasitic motion yet (task coordinates "
+                f"{', '.join(robot.task)}); verify {robot.name} with the DELMIA host")
     if robot.dof != 6 and not translating(robot):
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
