@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from kingen.conventions import rotation_from_rpy, t6_from_pose
+from kingen.kinematics.forward import free_mask, newton
 from kingen.kinematics.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
@@ -145,3 +146,16 @@ def test_bad_declarations_are_refused_on_one_line(old, new, words, tmp_path):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"kingen: error: {path}:") and words in lines[0], result.stderr
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_forward_kinematics_solves_the_parasitic_coordinates(name):
+    robot = load_robot(name)
+    poses = np.array([independent_pose(robot, *task) for task in TASKS[name]])
+    joints = np.array([independent_joints(robot, pose) for pose in poses])
+    target = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+    start = target + np.array([3.0, -3.0, 5.0, np.radians(2.0), np.radians(-2.0), np.radians(1.0)])
+    found, residual = newton(robot, start, joints, free_mask(robot))
+    assert np.max(residual) < 1e-9
+    assert np.max(np.abs(found[:, :3] - target[:, :3])) < 1e-9
+    assert np.max(np.abs(found[:, 3:] - target[:, 3:])) < 1e-11

@@ -3,7 +3,7 @@ and benchmarks: uniform in home +/- range (mm, degrees; docs/explanation/convent
 PCG64 generator, so that a seed names the same poses bit for bit whatever the chunking. A
 machine with task coordinates (kingen.kinematics.parasitic) has its drawn poses moved onto its
 manifold (x, y and yaw the machine's), but for one in OFF_MANIFOLD_EVERY, left as drawn, whose
-answer is the off-manifold warning."""
+answer is the off-manifold warning (where its routine reads x, y and yaw: ``parasitic_given``)."""
 
 import numpy as np
 
@@ -26,7 +26,8 @@ class PoseStream:
         """The next ``count`` poses (count, 6)."""
         poses = self._home + self._generator.uniform(-1.0, 1.0, size=(count, 6)) * self._half_widths
         if self._robot.task:
-            kept = (np.arange(self._drawn, self._drawn + count) % OFF_MANIFOLD_EVERY) == OFF_MANIFOLD_EVERY - 1
+            kept = ((np.arange(self._drawn, self._drawn + count) % OFF_MANIFOLD_EVERY) == OFF_MANIFOLD_EVERY - 1) \
+                & self._robot.parasitic_given
             poses = np.where(kept[:, None], poses, on_manifold(self._robot, poses))
         self._drawn += count
         return poses

@@ -15,8 +15,9 @@ real solution reports the value at the clamped radicand (closest approach), so
 values are always finite. Non-finite T6: all postures unreachable, all joints 0. A limb
 whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0. A machine with task
 coordinates (kingen.robot.constraints) is solved at the pose its constraints give for the T6's
-z, roll and pitch (kingen.kinematics.parasitic): a T6 off that manifold, or one whose task
-coordinates no pose has, is unreachable with the joints of that pose.
+z, roll and pitch (kingen.kinematics.parasitic): a T6 off that manifold (for a routine that
+reads x, y and yaw: ``parasitic_given``), or one whose task coordinates no pose has, is
+unreachable with the joints of that pose.
 """
 
 import functools
@@ -207,7 +208,7 @@ def _limb_solutions(robot, t6):
     constraint = None
     if robot.task:  # the machine's pose for the task coordinates; off the manifold or unsolvable: unreachable
         parasitic = solve_parasitic(robot, t6)
-        t6, constraint = parasitic.t6, np.where(parasitic.off, -np.inf, parasitic.radicand)
+        t6, constraint = parasitic.t6, np.where(parasitic.off & robot.parasitic_given, -np.inf, parasitic.radicand)
     rows = _t6_rows(t6)
     if not np.all(finite):
         rows[:, :, ~finite] = 0.0

@@ -50,10 +50,14 @@ def constraint_table(robot):
                            pseudo_inverse=np.linalg.solve(matrix.T @ matrix, matrix.T))
 
 
-def check_task(limbs, task, locate):
-    """Raise a located error unless the constraining limbs and ``task`` (the robot file's task
-    coordinates, or ()) make a machine kingen solves: three limbs, each constraining the platform,
-    task z, roll and pitch, and planes whose x and y components fix x and y."""
+def check_coordinates(robot, locate):
+    """Raise a located error unless the robot's forward coordinates are one per limb (the task's,
+    when it has task coordinates) and its constraining limbs and task coordinates make a machine
+    kingen solves: three limbs, each constraining the platform, task z, roll and pitch, and
+    planes whose x and y components fix x and y."""
+    free, task, limbs = robot.forward_free, robot.task, robot.limbs
+    if free and (len(set(free)) != len(free) or len(free) != robot.dof or task and set(free) != set(task)):
+        raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb (the task's)")
     planes = constrained_limbs(limbs)
     if not task:
         if planes:

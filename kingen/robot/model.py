@@ -23,7 +23,7 @@ from .design_schema import Optimize
 from ..errors import KingenError
 from ..runtime.file_gate import refuse_special_file
 from .layouts import Layout
-from .constraints import check_task
+from .constraints import check_coordinates
 from .located import Locator, diagnostic
 from .limbs import MODELS
 from ..runtime.resources import robots_dir
@@ -160,6 +160,9 @@ class Robot:
     """The pose coordinates forward kinematics solves for; empty: all six."""
     task: tuple = ()
     """A constrained machine's task coordinates (kingen.robot.constraints); empty: none."""
+    parasitic_given: bool = True
+    """Whether its routine reads a T6's x, y and yaw (then a T6 off the machine's manifold is
+    unreachable); False: a host that reads the task coordinates only (LinuxCNC)."""
     lines: tuple = ()
     """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
 
@@ -341,11 +344,8 @@ def robot_from_data(data, path, lines=None, raw=None):
         raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "
                                       "computes in")
     _check_golden(robot, locate)
-    check_task(limbs, robot.task, locate)
+    check_coordinates(robot, locate)
     _check_postures(robot, document, locate)
-    free = robot.forward_free
-    if free and (len(set(free)) != len(free) or len(free) != robot.dof or robot.task and set(free) != set(robot.task)):
-        raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb (the task's)")
     if robot.direct_index_min is not None and not robot.has_direct_index:
         raise locate.error(["singularity", "direct_index_min"],
                            f"the direct index needs six force lines; this robot has {robot.dof} limbs")
