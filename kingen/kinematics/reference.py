@@ -222,7 +222,7 @@ def _limb_solutions(robot, t6):
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
     if constraint is not None:
-        np.fmin(radicands, constraint[:, None], out=radicands)
+        np.minimum(radicands, constraint[:, None], out=radicands)  # a NaN of either stays: unreachable
     overflow = ~(np.isfinite(branch_joints[..., 0]) & np.isfinite(branch_joints[..., 1]))  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
     return points, branch_joints, radicands, finite, overflow
