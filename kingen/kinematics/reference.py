@@ -39,8 +39,7 @@ class Solution:
     branch_joints: (n, dof, 2) each limb's joint in its branch 0 and 1 (the same twice for
     one-branch limbs), mm or rad; ``joints`` spreads them over the postures.
     warnings: (n, postures) WARN_* codes.
-    radicands: (n, dof) normalised radicand D per limb (+inf for legs); for a machine with task
-    coordinates at most the constraints' D (kingen.kinematics.parasitic), -inf off the manifold.
+    radicands: (n, dof) normalised radicand D per limb (+inf for legs).
     finite: (n,) whether the T6 was finite.
     """
 
@@ -49,6 +48,10 @@ class Solution:
     radicands: np.ndarray
     finite: np.ndarray
     posture_branches: tuple
+    constraint: np.ndarray = None
+    """(n,) a machine with task coordinates: the normalised radicand D of its parasitic yaw
+    (kingen.kinematics.parasitic), -inf off the manifold where its routine reads x, y and yaw;
+    None for other robots. Its warnings count it as a limb's."""
     """Per posture, the branch each limb takes (kingen.kinematics.singularity.branch_table as tuples)."""
     points: np.ndarray = None
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
@@ -184,7 +187,7 @@ def certificate_settles(robot, t6):
         return False
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
     with np.errstate(all="ignore"):
-        points, branch_joints, _, _, _ = _limb_solutions(robot.calibrated(), t6)
+        points, branch_joints, _, _, _, _ = _limb_solutions(robot.calibrated(), t6)
         return _settling_probe(robot, _force_lines(robot, points, branch_joints)[1]) is not None
 
 
@@ -193,7 +196,7 @@ def limb_solution(robot, t6):
     warnings (about ten times cheaper on CEART): a Solution whose ``warnings`` and
     ``direct_index`` are None, and whose ``finite`` is also False where a limb's value overflows."""
     with np.errstate(all="ignore"):
-        points, branch_joints, radicands, finite, overflow = _limb_solutions(
+        points, branch_joints, radicands, finite, overflow, _ = _limb_solutions(
             robot, np.asarray(t6, dtype=float).reshape(-1, 4, 4))
     return Solution(branch_joints=branch_joints, warnings=None, radicands=radicands, finite=finite & ~np.any(overflow, axis=1),
                     posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points)
@@ -201,7 +204,7 @@ def limb_solution(robot, t6):
 
 def _limb_solutions(robot, t6):
     """(points (n, dof, 3), branch_joints (n, dof, 2), radicands (n, dof), finite (n,),
-    overflow (n, dof)) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
+    overflow (n, dof), constraint (n,) or None: Solution.constraint) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
     finite or the limb's value overflows (see the module docstring)."""
     count = t6.shape[0]
     finite = np.all(np.isfinite(t6[:, :, :3].reshape(count, 12)), axis=1)
@@ -221,16 +224,14 @@ def _limb_solutions(robot, t6):
         branch_joints[:, index, :] = limb_solution.values
         if limb_solution.radicand is not None:
             radicands[:, index] = limb_solution.radicand
-    if constraint is not None:
-        np.minimum(radicands, constraint[:, None], out=radicands)  # a NaN of either stays: unreachable
     overflow = ~(np.isfinite(branch_joints[..., 0]) & np.isfinite(branch_joints[..., 1]))  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
-    return points, branch_joints, radicands, finite, overflow
+    return points, branch_joints, radicands, finite, overflow, constraint
 
 
 def _solve(robot, t6, indices):
     count = t6.shape[0]
-    points, branch_joints, radicands, finite, overflow = _limb_solutions(robot, t6)
+    points, branch_joints, radicands, finite, overflow, constraint = _limb_solutions(robot, t6)
 
     lower, upper = robot.travel_limits()
     limited = np.isfinite(lower) | np.isfinite(upper)
@@ -241,6 +242,9 @@ def _solve(robot, t6, indices):
         outside = np.zeros((count, robot.postures), dtype=bool)
     unreachable = np.any(~(radicands >= -SINGULAR_TOLERANCE) | overflow, axis=1)
     singular = np.any(np.abs(radicands) <= SINGULAR_TOLERANCE, axis=1)
+    if constraint is not None:  # no pose has these task coordinates, or the T6 is off the manifold
+        unreachable |= ~(constraint >= -SINGULAR_TOLERANCE)
+        singular |= np.abs(constraint) <= SINGULAR_TOLERANCE
 
     unreachable = unreachable[:, None] | ~finite[:, None]
     singular = np.broadcast_to(singular[:, None], outside.shape)
@@ -255,6 +259,6 @@ def _solve(robot, t6, indices):
     for flags, code in ((outside, "WARN_JOINT_LIMITS_EXCEEDED"), (singular, "WARN_SINGULAR_SOLUTION"),
                         (unreachable, "WARN_UNREACHABLE")):  # each later one wins
         np.copyto(warnings, WARNINGS[code], where=flags)
-    return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands,
+    return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands, constraint=constraint,
                     finite=finite, posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points,
                     direct_index=index)
