@@ -84,7 +84,10 @@ def test_a_routine_that_never_gives_a_warning_fails_warnings(name, kind, plugin)
     robot, routine = plugin(name)
     report = verify(robot, routine, VerifyOptions(samples=300))
     assert report.passed, [(check.name, check.detail) for check in report.failures]
-    assert report.boundary_poses["boundaries_found"][kind] > 0
+    # A constrained machine of legs is unreachable only off its manifold: its sample's off-manifold
+    # poses (one in eight) give the warning, with no boundary on the manifold to find.
+    off_manifold_only = robot.task and kind == "WARN_UNREACHABLE" and not any(limb.has_radicand for limb in robot.limbs)
+    assert off_manifold_only or report.boundary_poses["boundaries_found"][kind] > 0
     broken = verify(robot, WithoutWarning(routine, WARNINGS[kind]), VerifyOptions(samples=300))
     warnings = next(check for check in broken.checks if check.name == "warnings")
     assert not warnings.passed and not warnings.detail.startswith("0 mismatches"), warnings.detail

@@ -29,7 +29,8 @@ from kingen.verify.checks.golden import check_golden
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
 import golden_cranks  # noqa: E402
 
-SOURCES = ("thesis", "Table", "LinuxCNC", "Independent 6-RUS inverse", "Derived by hand")
+SOURCES = ("thesis", "Table", "LinuxCNC", "Independent 6-RUS inverse", "Derived by hand",
+           "Independent computation (tests/test_hybrid.py)")
 
 
 @pytest.mark.parametrize("name", shipped_robots())

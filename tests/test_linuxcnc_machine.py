@@ -22,6 +22,7 @@ from kingen.conventions import t6_from_pose
 from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.package import render_package
 from kingen.robot.model import load_robot
+from kingen.kinematics.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 
 DRIVER = Path(__file__).parent / "linuxcnc" / "driver.py"
@@ -61,8 +62,11 @@ TOOL_TABLE = sim.tbl
 CASES = {
     "linuxcnc_hexapod": {"moves": [[0.5, 0.3, 21, 2, -1, 3], [-0.4, 0.2, 19.5, -3, 2, -1]], "jog": 0.05},
     "linear_delta": {"moves": [[10, -5, 20], [-30, 25, 5]], "jog": 1.0},
+    # z, A, B commanded; X, Y, C the machine's for them (the module reads z, A, B only)
+    "prs_head": {"moves": [[0, 0, -370, 12, -7, 0], [0, 0, -430, -9, 6, 0]], "jog": 2.0},
 }
-"""Per robot: MDI moves (the machine's coordinates, in its units and degrees) and a joint-0 jog."""
+"""Per robot: MDI moves (the machine's coordinates, in its units and degrees) and a joint-0 jog;
+a machine with task coordinates is sent its parasitic X, Y, C for them."""
 
 
 def missing():
@@ -100,7 +104,7 @@ def machine_ini(robot, folder, kins_ini, units):
                  f"HOME_LATCH_VEL = 0\nHOME_OFFSET = {body.split('HOME = ')[1].splitlines()[0]}\n"
                  if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")
-    coordinates = "X Y Z A B C" if robot.dof == 6 else "X Y Z"
+    coordinates = "X Y Z A B C" if robot.dof == 6 or robot.task else "X Y Z"
     axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -1000\nMAX_LIMIT = 1000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
                    for axis in coordinates.split())
     (folder / "sim.tbl").write_text("")
@@ -108,6 +112,11 @@ def machine_ini(robot, folder, kins_ini, units):
         name=robot.name, driver=DRIVER, home=home, coordinates=coordinates,
         units=units, velocity=10 if units == "inch" else 100, axes=axes, kins="\n".join(joints)))
     return folder / "machine.ini"
+
+
+def machine_moves(robot, moves):
+    """The moves as sent: a machine with task coordinates gets its parasitic X, Y, C for them."""
+    return on_manifold(robot, np.array(moves, dtype=float)).tolist() if robot.task else moves
 
 
 def run_machine(name, tmp_path):
@@ -124,7 +133,7 @@ def run_machine(name, tmp_path):
     fifo.chmod(0o777)
     result = tmp_path / "result.json"
     environment = {**os.environ, "RTAPI_UID": "65534", "RTAPI_FIFO_PATH": str(fifo / "rtapi_fifo"),
-                   "KINGEN_RESULT": str(result), "KINGEN_MOVES": json.dumps(CASES[name]["moves"]),
+                   "KINGEN_RESULT": str(result), "KINGEN_MOVES": json.dumps(machine_moves(robot, CASES[name]["moves"])),
                    "KINGEN_JOG": str(CASES[name]["jog"]), "KINGEN_MODULE": built.routine}
     with open("/tmp/kingen-linuxcnc-test.lock", "w") as lock:  # one LinuxCNC at a time on a machine
         fcntl.flock(lock, fcntl.LOCK_EX)
@@ -146,7 +155,7 @@ def pose_in_mm(robot, world):
     scale = 25.4 if robot.length_unit == "inch" else 1.0
     pose = np.zeros(6)
     pose[:3] = np.array(world[:3]) * scale
-    if robot.dof == 6:
+    if robot.dof == 6 or robot.task:
         pose[3:] = world[3:6]
     return pose
 

@@ -6,6 +6,7 @@ import re
 import numpy as np
 import pytest
 
+from kingen.robot.limbs.base import axis_words
 from kingen.conventions import t6_from_pose
 from kingen.hosts.delmia.package import render_package
 from kingen.hosts.linuxcnc.package import render_package as render_linuxcnc
@@ -89,10 +90,10 @@ def test_branch_words_hold_for_the_reference_at_the_verification_home(name):
             assert words[index][farther].startswith("knee out") and words[index][1 - farther].startswith("knee in")
         elif limb.model == "rail":
             carriage = np.asarray(limb.rail_point) + limb.carriage_offset + (joints + limb.origin)[:, None] * limb.direction
-            axis = int(np.argmax(np.abs(limb.direction)))
-            above = int(carriage[1, axis] > point[axis])  # the branch whose carriage lies on the + side
-            assert f"on the +{'XYZ'[axis]} side" in words[index][above]
-            assert f"on the -{'XYZ'[axis]} side" in words[index][1 - above]
+            direction = np.asarray(limb.direction)
+            above = int((carriage[1] - point) @ direction > 0)  # the branch whose carriage lies on the +u side
+            assert f"on the {axis_words(direction)} side" in words[index][above]
+            assert f"on the {axis_words(-direction)} side" in words[index][1 - above]
     text = sheet(name)
     for index, limb in enumerate(robot.limbs):
         if words[index]:

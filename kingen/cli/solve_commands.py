@@ -98,6 +98,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     width = None if wide else output_width()
     print_table(rows if width is None or max(map(len, table_lines(rows))) <= width else compact_rows, width)
     say(f"routine returned {calls.returned[0]}")
+    if model.task:
+        say_fitted(_manifold_note(model, matrix), width)
     say_fitted(_indices_note(model), width)
     if switch is not None:
         _predict_switch(model, matrix[0], expected, switch, scale, units, width)
@@ -157,12 +159,25 @@ def _index_text(value):
     return "unreachable" if not math.isfinite(value) else f"{value:.6g}"
 
 
+def _manifold_note(model, matrix):
+    """Where a machine with task coordinates is for the T6 (1, 4, 4)'s z, roll and pitch, and
+    whether the T6 asks for that pose (docs/how-to/hybrid.md)."""
+    from ..conventions import pose_from_t6
+    from ..kinematics.parasitic import solve_parasitic
+
+    machine = solve_parasitic(model, matrix)
+    where = " ".join(f"{value:.9f}" for value in pose_from_t6(machine.t6)[0])
+    asked = ("off its manifold: the routine answers WARN_UNREACHABLE with that pose's joints" if machine.off[0]
+             else "on its manifold") if model.parasitic_given else "read for z, A, B only (this host solves x, y, C)"
+    return f"the machine's pose for this z, roll, pitch: x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}"
+
+
 def _indices_note(model):
     """What the index columns mean for this robot, in one line."""
     inverse = "min inverse index: the smallest normalised radicand D over the limbs (1 - 1/Inv_I; 0 at a limb singularity)"
     if not model.has_direct_index:
         return (f"direct index: not available ({model.dof} limbs: the constraints that complete the platform "
-                f"are not modelled); {inverse}")
+                f"are {'not modelled' if not model.task else 'not in the index'}); {inverse}")
     threshold = (f"below {model.direct_index_min:g} mm the routine answers WARN_SINGULAR_SOLUTION"
                  if model.direct_index_min is not None else "no threshold set (singularity: direct_index_min)")
     return f"direct index: 0 at a direct (platform) singularity; {threshold}; {inverse}"

@@ -15,9 +15,11 @@ import textwrap
 from ..defaults import VERSION
 from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
-from ..robot.limbs import MODELS, c_double, partial_path
+from ..robot.limbs import MODELS, c_double, c_vector, partial_path
 from ..robot.schema import calibration_index
+from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, home_yaw
 from ..kinematics.singularity import PACKED, partial_sum_split
+from ..robot.constraints import constraint_table
 
 
 def _partial_source(name):
@@ -134,6 +136,20 @@ def joint_sum(robot):
             for index, bit in enumerate(robot.branch_bits)]
 
 
+def constraint_view(robot):
+    """The constraint table of a machine with task coordinates as C text (templates/routine_helpers.c.j2,
+    ``parasitic``), or None."""
+    if not robot.task:
+        return None
+    table = constraint_table(robot)
+    home_cos, home_sin = home_yaw(robot)
+    return {"axes": [c_vector(row) for row in table.axes], "points": [c_vector(row) for row in table.points],
+            "offsets": c_vector(table.offsets), "null": c_vector(table.null),
+            "inverse": [c_vector(row) for row in table.pseudo_inverse], "home_cos": c_double(home_cos),
+            "home_sin": c_double(home_sin), "tolerance_mm": c_double(MANIFOLD_TOLERANCE_MM),
+            "tolerance_rad": c_double(MANIFOLD_TOLERANCE_RAD)}
+
+
 def robot_view(robot, host):
     """What every host's routine template substitutes about the robot, already formatted as C:
     names (the routine's and library's as ``host`` names them), joints, limb model tables,
@@ -169,7 +185,8 @@ def robot_view(robot, host):
         "joints": joints,
         "any_limits": any(limb.travel is not None for limb in robot.limbs),
         "any_revolute": any(limb.joint_type.wraps for limb in robot.limbs),
-        "has_radicand": any(limb.has_radicand for limb in robot.limbs),
+        "has_radicand": any(limb.has_radicand for limb in robot.limbs) or bool(robot.task),
+        "constraint": constraint_view(robot),
         "models": _model_tables(robot),
         "direct_index": robot.direct_index_min is not None,
         "jacobian": False,

@@ -11,7 +11,9 @@ finite differences. How every assembly mode is found, and said:
   make (:mod:`kingen.kinematics.sgp`: all complex solutions, the real ones polished by Newton);
 - a translating platform with three limbs: in closed form (three spheres: at most two poses);
 - otherwise not exhaustively: Newton from seeded starts over a stated region (``search``
-  times the verification region around home), which the output names.
+  times the verification region around home), which the output names. A machine with task
+  coordinates (kingen.robot.constraints) is solved for them with every iterate on its manifold:
+  x, y and yaw in closed form (kingen.kinematics.parasitic), the derivative along the manifold.
 
 An exhaustive method counts isolated solutions only: on a geometry with a continuum of them
 (coincident joints, congruent planar platforms) its paths end elsewhere or nowhere. So its
@@ -29,6 +31,7 @@ import numpy as np
 
 from ..conventions import matrix_from_pose, t6_from_matrix
 from ..runtime.text import counted
+from .parasitic import on_manifold, task_twists
 from .reference import platform_points_in_base
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -117,19 +120,30 @@ def newton(robot, starts, joints, free):
     """Newton-Raphson from every start (n, 6) towards the joints (n, dof): the converged
     poses (n, 6) and their largest residuals (n,). ``free`` (6,) bool: the coordinates solved
     for; the others keep the start's values."""
-    poses = np.array(starts, dtype=float)
+    poses = _on_manifold(robot, np.array(starts, dtype=float))
     with np.errstate(all="ignore"):
         for _ in range(ITERATIONS):
             residual, wrenches = closure(robot, poses, joints)
-            matrix = closure_derivative(wrenches, poses, free)
+            matrix = (wrenches @ task_twists(robot, t6_of(poses)) if robot.task
+                      else closure_derivative(wrenches, poses, free))
             step = _least_squares(matrix, -residual)
             step = np.where(np.isfinite(step), step, 0.0)
             step = _limited(step, robot.size_mm, free)
             poses[:, free] += step
+            poses = _on_manifold(robot, poses)
             if np.all(np.abs(step) <= CONVERGED * np.array([robot.size_mm] * 3 + [1.0] * 3)[free]):
                 break
         residual, _ = closure(robot, poses, joints)
     return poses, np.where(np.all(np.isfinite(residual), axis=1), np.max(np.abs(residual), axis=1), np.inf)
+
+
+def _on_manifold(robot, poses):
+    """Poses (n, 6) (mm, radians) of a machine with task coordinates with x, y and yaw its own
+    for their z, roll and pitch (kingen.kinematics.parasitic); other robots' as they are."""
+    if not robot.task:
+        return poses
+    moved = on_manifold(robot, np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
+    return np.concatenate([moved[:, :3], np.radians(moved[:, 3:])], axis=1)
 
 
 def _least_squares(matrix, right):

@@ -1,8 +1,13 @@
 """The seeded poses of a robot's verification region, drawn the same way by verify, snapshots
 and benchmarks: uniform in home +/- range (mm, degrees; docs/explanation/conventions.md), from one
-PCG64 generator, so that a seed names the same poses bit for bit whatever the chunking."""
+PCG64 generator, so that a seed names the same poses bit for bit whatever the chunking. A
+machine with task coordinates (kingen.kinematics.parasitic) has its drawn poses moved onto its
+manifold (x, y and yaw the machine's), but for one in OFF_MANIFOLD_EVERY, left as drawn, whose
+answer is the off-manifold warning (where its routine reads x, y and yaw: ``parasitic_given``)."""
 
 import numpy as np
+
+from .parasitic import OFF_MANIFOLD_EVERY, on_manifold
 
 
 class PoseStream:
@@ -15,14 +20,22 @@ class PoseStream:
         region = robot.verification
         self._home, self._half_widths = np.asarray(region.home), np.asarray(region.range)
         self._generator = np.random.default_rng(seed)
+        self._robot, self._drawn = robot, 0
 
     def draw(self, count):
         """The next ``count`` poses (count, 6)."""
-        return self._home + self._generator.uniform(-1.0, 1.0, size=(count, 6)) * self._half_widths
+        poses = self._home + self._generator.uniform(-1.0, 1.0, size=(count, 6)) * self._half_widths
+        if self._robot.task:
+            kept = ((np.arange(self._drawn, self._drawn + count) % OFF_MANIFOLD_EVERY) == OFF_MANIFOLD_EVERY - 1) \
+                & self._robot.parasitic_given
+            poses = np.where(kept[:, None], poses, on_manifold(self._robot, poses))
+        self._drawn += count
+        return poses
 
     def skip(self, count):
         """Move past the next ``count`` poses without drawing them."""
         self._generator.bit_generator.advance(6 * count)
+        self._drawn += count
 
 
 def chunk_bounds(count, chunk):

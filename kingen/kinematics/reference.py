@@ -13,7 +13,11 @@ of zero or the posture's direct index is at most the robot's ``direct_index_min`
 unreachable wins over singular, singular over joint limits. A limb without a
 real solution reports the value at the clamped radicand (closest approach), so
 values are always finite. Non-finite T6: all postures unreachable, all joints 0. A limb
-whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0.
+whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0. A machine with task
+coordinates (kingen.robot.constraints) is solved at the pose its constraints give for the T6's
+z, roll and pitch (kingen.kinematics.parasitic): a T6 off that manifold (for a routine that
+reads x, y and yaw: ``parasitic_given``), or one whose task coordinates no pose has, is
+unreachable with the joints of that pose.
 """
 
 import functools
@@ -22,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .certificate import certified_above
+from .parasitic import solve_parasitic
 from .routine import SINGULAR_TOLERANCE, WARNINGS
 from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
                           gram_partial_sums, limb_wrenches, posture_values)
@@ -43,6 +48,10 @@ class Solution:
     radicands: np.ndarray
     finite: np.ndarray
     posture_branches: tuple
+    constraint: np.ndarray = None
+    """(n,) a machine with task coordinates: the normalised radicand D of its parasitic yaw
+    (kingen.kinematics.parasitic), -inf off the manifold where its routine reads x, y and yaw;
+    None for other robots. Its warnings count it as a limb's."""
     """Per posture, the branch each limb takes (kingen.kinematics.singularity.branch_table as tuples)."""
     points: np.ndarray = None
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
@@ -178,7 +187,7 @@ def certificate_settles(robot, t6):
         return False
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
     with np.errstate(all="ignore"):
-        points, branch_joints, _, _, _ = _limb_solutions(robot.calibrated(), t6)
+        points, branch_joints, _, _, _, _ = _limb_solutions(robot.calibrated(), t6)
         return _settling_probe(robot, _force_lines(robot, points, branch_joints)[1]) is not None
 
 
@@ -187,7 +196,7 @@ def limb_solution(robot, t6):
     warnings (about ten times cheaper on CEART): a Solution whose ``warnings`` and
     ``direct_index`` are None, and whose ``finite`` is also False where a limb's value overflows."""
     with np.errstate(all="ignore"):
-        points, branch_joints, radicands, finite, overflow = _limb_solutions(
+        points, branch_joints, radicands, finite, overflow, _ = _limb_solutions(
             robot, np.asarray(t6, dtype=float).reshape(-1, 4, 4))
     return Solution(branch_joints=branch_joints, warnings=None, radicands=radicands, finite=finite & ~np.any(overflow, axis=1),
                     posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points)
@@ -195,11 +204,15 @@ def limb_solution(robot, t6):
 
 def _limb_solutions(robot, t6):
     """(points (n, dof, 3), branch_joints (n, dof, 2), radicands (n, dof), finite (n,),
-    overflow (n, dof)) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
+    overflow (n, dof), constraint (n,) or None: Solution.constraint) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
     finite or the limb's value overflows (see the module docstring)."""
     count = t6.shape[0]
+    finite = np.all(np.isfinite(t6[:, :, :3].reshape(count, 12)), axis=1)
+    constraint = None
+    if robot.task:  # the machine's pose for the task coordinates; off the manifold or unsolvable: unreachable
+        parasitic = solve_parasitic(robot, t6)
+        t6, constraint = parasitic.t6, np.where(parasitic.off & robot.parasitic_given, -np.inf, parasitic.radicand)
     rows = _t6_rows(t6)
-    finite = np.all(np.isfinite(rows.reshape(12, count)), axis=0)
     if not np.all(finite):
         rows[:, :, ~finite] = 0.0
     points = _points_from_rows(rows, [limb.platform_point for limb in robot.limbs])
@@ -213,12 +226,12 @@ def _limb_solutions(robot, t6):
             radicands[:, index] = limb_solution.radicand
     overflow = ~(np.isfinite(branch_joints[..., 0]) & np.isfinite(branch_joints[..., 1]))  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
-    return points, branch_joints, radicands, finite, overflow
+    return points, branch_joints, radicands, finite, overflow, constraint
 
 
 def _solve(robot, t6, indices):
     count = t6.shape[0]
-    points, branch_joints, radicands, finite, overflow = _limb_solutions(robot, t6)
+    points, branch_joints, radicands, finite, overflow, constraint = _limb_solutions(robot, t6)
 
     lower, upper = robot.travel_limits()
     limited = np.isfinite(lower) | np.isfinite(upper)
@@ -229,6 +242,9 @@ def _solve(robot, t6, indices):
         outside = np.zeros((count, robot.postures), dtype=bool)
     unreachable = np.any(~(radicands >= -SINGULAR_TOLERANCE) | overflow, axis=1)
     singular = np.any(np.abs(radicands) <= SINGULAR_TOLERANCE, axis=1)
+    if constraint is not None:  # no pose has these task coordinates, or the T6 is off the manifold
+        unreachable |= ~(constraint >= -SINGULAR_TOLERANCE)
+        singular |= np.abs(constraint) <= SINGULAR_TOLERANCE
 
     unreachable = unreachable[:, None] | ~finite[:, None]
     singular = np.broadcast_to(singular[:, None], outside.shape)
@@ -243,6 +259,6 @@ def _solve(robot, t6, indices):
     for flags, code in ((outside, "WARN_JOINT_LIMITS_EXCEEDED"), (singular, "WARN_SINGULAR_SOLUTION"),
                         (unreachable, "WARN_UNREACHABLE")):  # each later one wins
         np.copyto(warnings, WARNINGS[code], where=flags)
-    return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands,
+    return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands, constraint=constraint,
                     finite=finite, posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points,
                     direct_index=index)

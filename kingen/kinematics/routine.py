@@ -38,7 +38,7 @@ def warnings_to_exercise(robot, vocabulary=None):
     if any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
            for limb in robot.limbs):  # a revolute travel of a full turn or more is never exceeded
         kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
-    if any(limb.has_radicand for limb in robot.limbs):
+    if any(limb.has_radicand for limb in robot.limbs) or (robot.task and robot.parasitic_given):  # off the manifold
         kinds.append("WARN_UNREACHABLE")
     if any(limb.has_radicand for limb in robot.limbs) or robot.direct_index_min is not None:
         kinds.append("WARN_SINGULAR_SOLUTION")

@@ -23,6 +23,7 @@ from .design_schema import Optimize
 from ..errors import KingenError
 from ..runtime.file_gate import refuse_special_file
 from .layouts import Layout
+from .constraints import check_coordinates
 from .located import Locator, diagnostic
 from .limbs import MODELS
 from ..runtime.resources import robots_dir
@@ -121,6 +122,8 @@ def _schema_over(models):
             [], description="Published pose-to-joints pairs every routine must reproduce.")
         singularity: Optional[Singularity] = Field(None, description="When a pose counts as a direct singularity.")
         forward: Optional[Forward] = Field(None, description="The pose coordinates forward kinematics solves for.")
+        task: Optional[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]]] = Field(
+            None, description="A lower-mobility machine's task coordinates, [z, roll, pitch]: x, y, yaw follow.")
         working_posture: Annotated[int, Field(ge=0)] = Field(
             0, description="The posture a host with one answer per pose (LinuxCNC) uses.")
         collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")
@@ -155,6 +158,11 @@ class Robot:
     """{leg_radius, rod_radius, crank_radius} (mm) given in the robot file, or None."""
     forward_free: tuple = ()
     """The pose coordinates forward kinematics solves for; empty: all six."""
+    task: tuple = ()
+    """A constrained machine's task coordinates (kingen.robot.constraints); empty: none."""
+    parasitic_given: bool = True
+    """Whether its routine reads a T6's x, y and yaw (then a T6 off the machine's manifold is
+    unreachable); False: a host that reads the task coordinates only (LinuxCNC)."""
     lines: tuple = ()
     """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
 
@@ -324,7 +332,8 @@ def robot_from_data(data, path, lines=None, raw=None):
         verification=document.verification,
         golden=tuple(document.golden),
         direct_index_min=document.singularity.direct_index_min if document.singularity else None,
-        forward_free=tuple(document.forward.free) if document.forward else (),
+        forward_free=tuple(document.forward.free) if document.forward else tuple(document.task or ()),
+        task=tuple(document.task or ()),
         working_posture=document.working_posture,
         working_posture_given="working_posture" in document.model_fields_set,
         collision=document.collision.model_dump(exclude_none=True) if document.collision else None,
@@ -335,10 +344,8 @@ def robot_from_data(data, path, lines=None, raw=None):
         raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "
                                       "computes in")
     _check_golden(robot, locate)
+    check_coordinates(robot, locate)
     _check_postures(robot, document, locate)
-    free = robot.forward_free
-    if free and (len(set(free)) != len(free) or len(free) != robot.dof):
-        raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb")
     if robot.direct_index_min is not None and not robot.has_direct_index:
         raise locate.error(["singularity", "direct_index_min"],
                            f"the direct index needs six force lines; this robot has {robot.dof} limbs")

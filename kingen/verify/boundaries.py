@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from ..conventions import t6_from_pose
+from ..kinematics.parasitic import on_manifold
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS, warnings_to_exercise
 from .descent import descend
@@ -123,6 +124,8 @@ def _boundaries(robot, origins, directions, kinds):
     all of them (each pose is solved on its own, so batching changes no pose)."""
     def warnings_at(fractions, rays):
         poses = origins[rays] + fractions[:, None] * directions[rays]
+        if robot.task:  # a constrained machine's boundaries lie on its manifold
+            poses = on_manifold(robot, poses)
         return solve(robot, t6_from_pose(poses)), poses
 
     rays_count = len(directions)

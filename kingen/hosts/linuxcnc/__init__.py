@@ -35,7 +35,8 @@ class LinuxcncHost(Host):
 
     def as_seen(self, robot):
         """The robot at its working posture; a translating platform without rotations (LinuxCNC's
-        A B C pass through to other joints), so verify draws its poses without them."""
+        A B C pass through to other joints), so verify draws its poses without them; a machine
+        with task coordinates whose x, y and yaw are not read (the module solves them)."""
         from ...robot.one_posture import at_posture
         from .render import check_robot, translating
 
@@ -46,6 +47,8 @@ class LinuxcncHost(Host):
             still = region.model_copy(update={"home": [*region.home[:3], 0.0, 0.0, 0.0],
                                               "range": [*region.range[:3], 0.0, 0.0, 0.0]})
             seen = replace(seen, verification=still)
+        if robot.task:  # the module reads the task coordinates only: x, y, C are the machine's
+            seen = replace(seen, parasitic_given=False)
         return seen
 
     def out_dir(self, robot):

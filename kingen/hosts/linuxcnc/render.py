@@ -51,11 +51,19 @@ def translating(robot):
     return tuple(robot.forward_free) == TRANSLATION or set(robot.forward_free) == set(TRANSLATION)
 
 
+def free_indices(robot):
+    """The pose coordinates (0 x .. 5 yaw) the forward solves for: x y z for a translating
+    platform, a constrained machine's task coordinates (its x, y, yaw follow), else all six."""
+    names = ("x", "y", "z", "roll", "pitch", "yaw")
+    free = robot.task or (TRANSLATION if translating(robot) else names)
+    return [names.index(name) for name in names if name in free]
+
+
 def robot_problem(robot):
     """Why this host cannot drive ``robot``, or None."""
     if module_name(robot) in STOCK_MODULES:
         return f"name: the module name '{module_name(robot)}' is LinuxCNC's own module's"
-    if robot.dof != 6 and not translating(robot):
+    if robot.dof != 6 and not translating(robot) and not robot.task:
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
     names = [f"{module_name(robot)}.{name}" for name in (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot)))]
@@ -124,7 +132,8 @@ def view_model(robot, units="mm"):
                                                                 ("posture", robot.working_posture))),
         "unit_name": units,
         "translating": translating(robot),
-        "free_count": 3 if translating(robot) else 6,
+        "free_count": 3 if translating(robot) or robot.task else 6,
+        "free_indices": free_indices(robot),
         "closed_form": translating(robot) and robot.dof == 3 and robot.models == ("rail",),
         "working_posture": robot.working_posture,
         "branch_words": words,

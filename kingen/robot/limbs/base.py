@@ -155,6 +155,12 @@ class LimbModel(Strict):
         (f . v) / transmission. Zero at the limb's own (inverse) singularity."""
         return np.sum(direction * self.base_side_velocity(joint), axis=-1) + self.link_length_rate
 
+    def constraint_plane(self):
+        """(axis a (3,), point c (3,)), base frame, mm: the plane a.(x - c) = 0 a revolute joint
+        whose axis is fixed in the base keeps the platform point in (kingen.robot.constraints),
+        or None: the limb does not constrain the platform."""
+        return None
+
     def c_row(self):
         """This limb's table row for the partial: {column: C text} (numbers via c_double)."""
         raise NotImplementedError

@@ -4,12 +4,12 @@ q = |R t + p - b| - L0 (mm). One branch, always reachable (docs/explanation/conv
 L0 = 0 the joint is the leg's absolute length.
 """
 
-from typing import Literal
+from typing import Literal, Optional
 
 import numpy as np
 
 from ...conventions import PRISMATIC
-from ..schema import ReferenceLength, Vec3
+from ..schema import ReferenceLength, UnitVec3, Vec3
 from .base import LimbModel, LimbSolution, c_double, c_vector
 
 
@@ -20,6 +20,10 @@ class Leg(LimbModel):
     base_point: Vec3
     reference_length: ReferenceLength
     """mm; 0: the joint is the leg's absolute length (as LinuxCNC's genhexkins reports it)."""
+    revolute_axis: Optional[UnitVec3] = None
+    """The axis (unit, base frame) of a revolute joint at the base point, fixed in the base (an
+    R-P-S leg): the leg then turns only in the plane through base_point normal to it, and the
+    platform point stays in that plane. Absent: a spherical or universal joint (S-P-S, U-P-S)."""
 
     joint_type = PRISMATIC
     calibratable = {"reference_length": "mm"}
@@ -42,6 +46,11 @@ class Leg(LimbModel):
 
     def passive_length(self, joint):
         return self.reference_length + np.asarray(joint)
+
+    def constraint_plane(self):
+        if self.revolute_axis is None:
+            return None
+        return np.asarray(self.revolute_axis, dtype=float), np.asarray(self.base_point, dtype=float)
 
     def c_row(self):
         return {"base_point": c_vector(self.base_point), "platform_point": c_vector(self.platform_point),

@@ -5,11 +5,13 @@ With w = R n + p - s - d: q = u.w -/+ sqrt(l^2 - |w|^2 + (u.w)^2) - origin (mm),
 the minus sign; D = radicand / l^2 = cos^2 of the link-to-rail angle (docs/explanation/conventions.md, 'Rail').
 """
 
-from typing import Literal
+from typing import Literal, Optional
 
 import numpy as np
 
 from ...conventions import PRISMATIC
+from pydantic import model_validator
+
 from ..schema import Coordinate, Length, UnitVec3, Vec3
 from .base import LimbSolution, TwoBranchModel, axis_words, c_double, c_vector, components_last
 
@@ -24,6 +26,11 @@ class Rail(TwoBranchModel):
     link_length: Length
     origin: Coordinate = 0.0
     """Carriage position reported as 0 (mm along the direction from rail_point): q -= origin."""
+    revolute_axis: Optional[UnitVec3] = None
+    """The axis (unit, base frame) of a revolute joint between carriage and link, fixed in the
+    carriage, perpendicular to the rail (a P-R-S limb): the link then turns only in the plane
+    through rail_point + carriage_offset normal to it, and the platform point stays in that plane.
+    Absent: a spherical or universal joint (P-S-S), no constraint."""
 
     joint_type = PRISMATIC
     joint_words = ("the carriage's position along its rail, 0 at the origin's distance from the rail point "
@@ -43,6 +50,18 @@ class Rail(TwoBranchModel):
         root = np.sqrt(np.where(radicand > 0.0, radicand, 0.0))
         return LimbSolution(values=np.stack([along - root, along + root], axis=-1) - self.origin,
                             radicand=radicand / link_squared)
+
+    @model_validator(mode="after")
+    def _axis_across_rail(self):
+        if self.revolute_axis is not None and abs(np.dot(self.revolute_axis, self.direction)) > 1e-9:
+            raise ValueError("revolute_axis must be perpendicular to the rail's direction (the carriage "
+                             "moves in the plane the joint keeps its link in)")
+        return self
+
+    def constraint_plane(self):
+        if self.revolute_axis is None:
+            return None
+        return np.asarray(self.revolute_axis, dtype=float), np.add(self.rail_point, self.carriage_offset)
 
     def base_side_point(self, platform_point, joint):
         start = np.asarray(self.rail_point) + np.asarray(self.carriage_offset)

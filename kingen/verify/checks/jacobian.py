@@ -3,6 +3,7 @@ of the limbs' constraint geometry (:mod:`kingen.kinematics.singularity`), on reg
 
 import numpy as np
 
+from ...kinematics.parasitic import task_rows, task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import WARNINGS
 from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
@@ -48,6 +49,9 @@ def jacobian_check(robot, plugin, options, t6):
     center = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
     analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
+    if robot.task:  # a constrained machine answers a twist with its task coordinates' motion on its manifold
+        on_manifold = task_twists(calibrated, t6) @ task_rows(t6)
+        analytic = np.einsum("npkj,nji->npki", analytic, on_manifold)
 
     def joints_of(moved):
         plugin.reset_host()

@@ -5,6 +5,7 @@ import numpy as np
 
 from ...conventions import pose_from_t6
 from ...kinematics.forward import closure_derivative, free_mask, newton, t6_of
+from ...kinematics.parasitic import task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
@@ -82,8 +83,9 @@ def pose_conditioning(robot, wrenches, poses, free):
     solves with, rotations per mm of arc at the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
     where the free coordinates are not all determined; non-finite counts as 0."""
     scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
-    with np.errstate(all="ignore"):
-        matrix = closure_derivative(wrenches, poses, free) * scale
+    with np.errstate(all="ignore"):  # a constrained machine's joints move along its manifold
+        matrix = (wrenches @ task_twists(robot, t6_of(poses)) if robot.task
+                  else closure_derivative(wrenches, poses, free)) * scale
     finite = np.all(np.isfinite(matrix), axis=(1, 2))
     matrix = np.where(finite[:, None, None], matrix, 0.0)
     return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)

@@ -13,14 +13,15 @@ class Refusal(VerifyCheck, name="inverse refusal", needs="routine", item="interf
         home = np.array(robot.verification.home, dtype=float)
         cases = ["x = NaN", "x = inf"]
         can_miss = any(limb.has_radicand for limb in robot.limbs)
+        axis = 2 if robot.task else 0  # a constrained machine's module reads z, not x
         if can_miss:
-            cases.append(f"x + {100 * robot.size_mm:g} mm (out of every limb's reach)")
+            cases.append(f"{'xyz'[axis]} + {100 * robot.size_mm:g} mm (out of every limb's reach)")
         world = np.zeros((len(cases), 9))
         world[:, :3] = home[:3] / module.scale
         world[:, 3:6] = home[3:]
         world[0, 0], world[1, 0] = np.nan, np.inf
         if can_miss:
-            world[2, 0] += 100.0 * robot.size_mm / module.scale
+            world[2, axis] += 100.0 * robot.size_mm / module.scale
         _, returns, _ = module.inverse(world)
         accepted = [case for case, code in zip(cases, returns) if code == 0]
         detail = (f"returns 0 for {', '.join(accepted)}" if accepted else

@@ -1,0 +1,132 @@
+"""Parasitic motion of a constrained machine, solved in closed form (docs/how-to/hybrid.md).
+
+The platform points C_i of the three constraining limbs stay in their planes a_i.C_i = d_i
+(kingen.robot.constraints). Given the task coordinates z, roll and pitch of a T6 (mm), write
+R = Rz(yaw) Q with Q = Ry(pitch) Rx(roll) = Rz(-yaw_T6) R_T6 and v_i = Q n_i; then plane i is
+linear in x, y, cos(yaw) = c and sin(yaw) = s:
+
+    a_ix x + a_iy y + A_i c + B_i s = r_i,  A_i = a_ix v_ix + a_iy v_iy,  B_i = a_iy v_ix - a_ix v_iy,
+    r_i = d_i - a_iz (v_iz + z).
+
+With w the left null vector of the planes' (x, y) columns, alpha c + beta s = gamma
+(alpha = w.A, beta = w.B, gamma = w.r), so (c, s) = (gamma (alpha, beta) +/- sqrt(rho^2 - gamma^2)
+(-beta, alpha)) / rho^2 (rho^2 = alpha^2 + beta^2), the sign whose yaw is nearer the
+verification home's; then (x, y) = (N^T N)^-1 N^T (r - A c - B s). D = (rho^2 - gamma^2) / rho^2
+is the normalised radicand: below zero no pose has these task coordinates (unreachable), near
+zero the two yaw branches meet (a constraint singularity). The generated C does the same
+operations in the same order (templates/routine_helpers.c.j2, ``parasitic``).
+
+A T6 whose x, y or yaw differ from the solved ones by more than MANIFOLD_TOLERANCE_MM or
+MANIFOLD_TOLERANCE_RAD asks for a pose the machine cannot take: it is *off the manifold*.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..conventions import pose_from_t6, t6_from_pose
+from ..robot.constraints import TASK, constraint_table
+
+MANIFOLD_TOLERANCE_MM = 1e-6
+MANIFOLD_TOLERANCE_RAD = 1e-8
+"""How far a T6's x and y (mm) and yaw (rad) may be from the machine's before the routine calls the pose off the manifold."""
+OFF_MANIFOLD_EVERY = 8
+"""verify leaves one drawn pose in this many as drawn (off the manifold), to exercise the warning."""
+
+
+@dataclass(frozen=True)
+class Parasitic:
+    """Over n T6: ``t6`` (n, 4, 4) each with its x, y and yaw replaced by the machine's (the task
+    coordinates kept), ``radicand`` (n,) D, ``off`` (n,) bool: the T6 was off the manifold."""
+
+    t6: np.ndarray
+    radicand: np.ndarray
+    off: np.ndarray
+
+
+def home_yaw(robot):
+    """(cos, sin) of the verification home's yaw: the yaw branch the machine is assembled in."""
+    yaw = np.radians(robot.verification.home[5])
+    return np.cos(yaw), np.sin(yaw)
+
+
+def solve_parasitic(robot, t6):
+    """The machine's pose for each T6 (n, 4, 4), mm: see the module docstring. Non-finite T6
+    give non-finite results (the caller's finite test catches them)."""
+    table = constraint_table(robot)
+    t6 = np.asarray(t6, dtype=float)
+    rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
+    yaw = np.arctan2(t6[:, 0, 1], t6[:, 0, 0])
+    c0, s0 = np.cos(yaw), np.sin(yaw)
+    tilt = np.stack([c0[:, None] * rotation[:, 0] + s0[:, None] * rotation[:, 1],
+                     c0[:, None] * rotation[:, 1] - s0[:, None] * rotation[:, 0], rotation[:, 2]], axis=1)
+    v = np.einsum("nij,kj->nki", tilt, table.points)  # (n, 3 limbs, 3)
+    ax, ay, az = table.axes[:, 0], table.axes[:, 1], table.axes[:, 2]
+    a = ax * v[..., 0] + ay * v[..., 1]
+    b = ay * v[..., 0] - ax * v[..., 1]
+    r = table.offsets - az * (v[..., 2] + t6[:, 3, 2, None])
+    alpha, beta, gamma = a @ table.null, b @ table.null, r @ table.null
+    rho2 = alpha * alpha + beta * beta
+    radicand = (rho2 - gamma * gamma) / rho2
+    root = np.sqrt(np.where(radicand > 0.0, rho2 - gamma * gamma, 0.0))
+    hc, hs = home_yaw(robot)
+    candidates = [((gamma * alpha - sign * root * beta) / rho2, (gamma * beta + sign * root * alpha) / rho2)
+                  for sign in (-1.0, 1.0)]
+    nearer = candidates[1][0] * hc + candidates[1][1] * hs > candidates[0][0] * hc + candidates[0][1] * hs
+    c = np.where(nearer, candidates[1][0], candidates[0][0])
+    s = np.where(nearer, candidates[1][1], candidates[0][1])
+    rest = r - a * c[:, None] - b * s[:, None]
+    x, y = rest @ table.pseudo_inverse[0], rest @ table.pseudo_inverse[1]
+    fixed = t6.copy()
+    fixed[:, :3, 0] = c[:, None] * tilt[:, 0] - s[:, None] * tilt[:, 1]
+    fixed[:, :3, 1] = s[:, None] * tilt[:, 0] + c[:, None] * tilt[:, 1]
+    fixed[:, :3, 2] = tilt[:, 2]
+    fixed[:, 3, 0], fixed[:, 3, 1] = x, y
+    turn = np.arctan2(s * c0 - c * s0, c * c0 + s * s0)
+    off = ~((np.abs(x - t6[:, 3, 0]) <= MANIFOLD_TOLERANCE_MM) & (np.abs(y - t6[:, 3, 1]) <= MANIFOLD_TOLERANCE_MM)
+            & (np.abs(turn) <= MANIFOLD_TOLERANCE_RAD))
+    return Parasitic(t6=fixed, radicand=radicand, off=off)
+
+
+def on_manifold(robot, poses):
+    """Poses (n, 6) (mm, degrees) with x, y and yaw replaced by the machine's for their task
+    coordinates (those without a solution keep their closest approach)."""
+    with np.errstate(all="ignore"):
+        return pose_from_t6(solve_parasitic(robot, t6_from_pose(poses)).t6)
+
+
+def task_twists(robot, t6):
+    """(n, 6, 3) the platform twist [v; omega] (v: the velocity of the point at the base origin,
+    mm; omega rad) per unit rate of each task coordinate z, roll, pitch, moving on the manifold,
+    at T6 (n, 4, 4) on it: the solution t of G t = 0 (each plane's row [a_i, C_i x a_i]) and
+    S t = e_k (S: task_rows)."""
+    table = constraint_table(robot)
+    t6 = np.asarray(t6, dtype=float)
+    points = np.einsum("nji,kj->nki", t6[:, :3, :3], table.points) + t6[:, 3, None, :3]
+    rows = np.zeros((len(t6), 6, 6))
+    rows[:, :3, :3] = table.axes
+    rows[:, :3, 3:] = np.cross(points, table.axes)
+    rows[:, 3:] = task_rows(t6)
+    right = np.zeros((len(t6), 6, len(TASK)))
+    right[:, 3:, :] = np.eye(len(TASK))
+    return np.linalg.solve(rows, right)
+
+
+def task_rows(t6):
+    """(n, 3, 6) the rates of z, roll and pitch per unit twist at T6 (n, 4, 4): z' = v_z +
+    (omega x p)_z = v_z + omega.(p x e_z); roll' and pitch' from omega = E (roll', pitch', yaw'),
+    E's columns Rz Ry e_x, Rz e_y, e_z."""
+    t6 = np.asarray(t6, dtype=float)
+    count = len(t6)
+    _, pitch, yaw = np.radians(pose_from_t6(t6)[:, 3:]).T
+    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+    euler = np.zeros((count, 3, 3))
+    euler[:, :, 0] = np.stack([cy * cp, sy * cp, -sp], -1)
+    euler[:, :, 1] = np.stack([-sy, cy, np.zeros(count)], -1)
+    euler[:, 2, 2] = 1.0
+    rates = np.linalg.inv(euler)
+    rows = np.zeros((count, 3, 6))
+    rows[:, 0, 2] = 1.0
+    rows[:, 0, 3:] = np.cross(t6[:, 3, :3], [0.0, 0.0, 1.0])
+    rows[:, 1, 3:], rows[:, 2, 3:] = rates[:, 0], rates[:, 1]
+    return rows
