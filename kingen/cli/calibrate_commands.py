@@ -19,7 +19,7 @@ IDENTIFY = click.option("--identify", "spec", default="all", show_default=True, 
 
 
 class _CalibrateGroup(click.Group):
-    """``calibrate ROBOT ...`` runs the hidden ``run`` command; ``calibrate plan ...`` plans."""
+    """``calibrate ROBOT ...`` runs the ``run`` command (the word may be left out); ``calibrate plan ...`` plans."""
 
     def parse_args(self, ctx, args):
         if args and args[0] not in self.commands and args[0] not in ("--help", "-h"):
@@ -43,7 +43,7 @@ def calibrate():
     kingen calibrate plan ROBOT --poses N: the poses to measure."""
 
 
-@calibrate.command(hidden=True)
+@calibrate.command()
 @ROBOT
 @click.option("--measurements", "measurements_path", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="The measurement CSV.")
@@ -56,7 +56,7 @@ def calibrate():
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Also write calibration.json to this file.")
 def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_path):
-    """Calibrate ROBOT from measurements (see kingen calibrate --help)."""
+    """Calibrate ROBOT from measurements: what kingen calibrate ROBOT runs (the word run may be left out)."""
     from ..calibrate import report
     from ..calibrate.identification import identify, validation_problem
     from ..calibrate.measurements import read_measurements
