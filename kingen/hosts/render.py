@@ -172,6 +172,7 @@ def robot_view(robot, host):
         "has_radicand": any(limb.has_radicand for limb in robot.limbs),
         "models": _model_tables(robot),
         "direct_index": robot.direct_index_min is not None,
+        "direct_test": robot.direct_index_min is not None,
         "jacobian": False,
         "low_bits": partial_sum_split(robot)[0],
         "split_sums": bool(partial_sum_split(robot)[1]),
