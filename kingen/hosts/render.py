@@ -171,6 +171,7 @@ def robot_view(robot, host):
         "any_revolute": any(limb.joint_type.wraps for limb in robot.limbs),
         "has_radicand": any(limb.has_radicand for limb in robot.limbs),
         "models": _model_tables(robot),
+        "limb_part": "all",
         "direct_index": robot.direct_index_min is not None,
         "direct_test": robot.direct_index_min is not None,
         "jacobian": False,
