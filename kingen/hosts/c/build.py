@@ -6,9 +6,7 @@ import tempfile
 from pathlib import Path
 
 from ...defaults import DEFAULT_TIMEOUT
-from ...errors import KingenError
-from ...runtime.compiler import CompileError, compile_c
-from ...runtime.file_gate import refuse_special_file
+from ...runtime.compiler import CompileError, compile_c, compile_given_source
 from ...runtime.files import default_out_dir, write_atomic
 from ..base import BuildResult
 from .render import file_names, prefix, render
@@ -31,11 +29,11 @@ def write_source(robot, out_dir):
 
 def build_library(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
     """Render ``robot`` into ``out_dir`` (default build/<name>/c) and compile the shared library
-    there, the library replaced only once it compiled."""
+    ``kingen_<name>.so`` there, the library replaced only once it compiled."""
     out_dir = Path(out_dir or default_dir(robot))
     files = render(robot)
     source = out_dir / file_names(robot)[1]
-    library = out_dir / f"lib{prefix(robot)}.so"
+    library = out_dir / f"{prefix(robot)}.so"
     with tempfile.TemporaryDirectory(prefix="kingen-build-") as scratch:
         for name, text in files.items():
             (Path(scratch) / name).write_text(text)
@@ -53,13 +51,8 @@ def build_library(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
 def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
     """Compile a hand-written library source (its header beside it) as a shared library;
     warnings allowed. Returns the library's path."""
-    source = Path(source)
-    refuse_special_file(source)
-    if not source.is_file():
-        raise KingenError(f"{source}: no such C source")
-    library = Path(out_dir) / f"lib{source.stem}.so"
-    compile_c([source], library, ["-std=c99", "-O2", "-fPIC", "-shared", f"-I{source.parent}"], timeout=timeout)
-    return library
+    return compile_given_source(source, out_dir, ["-std=c99", "-O2", "-fPIC", "-shared", f"-I{Path(source).parent}"],
+                                timeout=timeout)
 
 
 __all__ = ["CompileError", "build_library", "build_source", "default_dir", "write_source"]

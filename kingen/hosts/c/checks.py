@@ -5,14 +5,15 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these two).
   pose's regular posture and started a servo cycle away (0.01 mm, 0.01 degree along random
   directions of the free coordinates) and far away (10 mm, 5 degrees), returns that pose
   within the value bound or what the posture's conditioning explains; near starts must all
-  return it, far ones may fail but never return another pose.
+  return it, far ones may fail or return another assembly mode (a pose the reference gives these
+  joints, within a thousand times the value bounds) but never a pose without these joints.
 - ``c jacobian``: the library's analytic Jacobian against kingen's
   (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample.
 """
 
 import numpy as np
 
-from ...conventions import pose_from_t6
+from ...conventions import matrix_from_t6, pose_from_t6, wrap_difference
 from ...kinematics.forward import free_mask, t6_of
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
@@ -23,7 +24,6 @@ from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSM
 from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
-from .loader import poses_of
 
 FORWARD_POSES = 500
 SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
@@ -56,18 +56,40 @@ def regular_pairs(robot, t6):
             wrenches[pose_index, posture], transmissions[pose_index, posture])
 
 
+def _same_joints(robot, t6, posture, joints):
+    """(n,) whether the reference gives ``joints`` (n, dof) at ``t6`` (n, 4, 4) in ``posture`` (n,),
+    within the value bounds: the pose is one the forward may return (an assembly mode)."""
+    finite = np.all(np.isfinite(t6), axis=(1, 2))
+    solved = solve(robot, np.where(finite[:, None, None], t6, np.eye(4)))
+    values = solved.joints[np.arange(len(t6)), :, posture]
+    difference = np.abs(np.where(robot.revolute, wrap_difference(values - joints), values - joints))
+    bound = np.where(robot.revolute, VALUE_TOLERANCE_RAD, report_tolerance_mm(robot)) * 1e3
+    return finite & np.all(difference <= bound, axis=1)
+
+
 def _directions(generator, count):
     direction = generator.normal(size=(count, 3))
     return direction / np.linalg.norm(direction, axis=1, keepdims=True)
 
 
-class Forward(VerifyCheck, name="forward", needs="compared poses"):
+class OnRegularPairs(VerifyCheck):
+    """A check judging the library on one regular posture per sampled pose (the first
+    ``poses`` of the sample, :func:`regular_pairs`): ``judge(context, t6, pairs)``."""
+
+    poses = FORWARD_POSES
+
     def run(self, context):
+        t6 = context.tally.first[0][:self.poses]
+        pairs = regular_pairs(context.robot, t6)
+        if not len(pairs[0]):
+            return [not_exercised(self.name, f"no regular, reachable posture among the {len(t6)} sampled poses")]
+        return [self.judge(context, t6, pairs)]
+
+
+class Forward(OnRegularPairs, name="forward", needs="compared poses"):
+    def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
-        t6 = context.tally.first[0][:FORWARD_POSES]
-        pose_index, posture, joints, conditioning, _, _ = regular_pairs(robot, t6)
-        if not len(pose_index):
-            return [not_exercised("forward", f"no regular, reachable posture among the {len(t6)} sampled poses")]
+        pose_index, posture, joints, conditioning, _, _ = pairs
         sampled = pose_from_t6(t6[pose_index])
         start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)
         free = free_mask(robot)
@@ -79,35 +101,37 @@ class Forward(VerifyCheck, name="forward", needs="compared poses"):
             offset = np.concatenate([_directions(generator, len(start)) * distance_mm,
                                      np.radians(_directions(generator, len(start)) * distance_deg)], axis=1)
             offset[:, ~free] = 0.0
-            found, iterations, returns = library.forward(joints, posture, poses_of(t6_of(start + offset)))
+            found, iterations, returns = library.forward(joints, posture, matrix_from_t6(t6_of(start + offset)).reshape(-1, 16))
             found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)
             position = np.max(np.abs(found_t6[:, 3, :3] - t6[pose_index, 3, :3]), axis=1)
             rotation = np.max(np.abs(found_t6[:, :3, :3] - t6[pose_index, :3, :3]), axis=(1, 2))
             converged = returns == 0
             right = converged & (position <= allowed_mm) & (rotation <= allowed_rad)
             wrong, failed = converged & ~right, ~converged
+            other_mode = wrong & _same_joints(robot, found_t6, posture, joints)
+            if label != "a servo cycle away":  # a far start may lie nearer another assembly mode
+                wrong &= ~other_mode
             codes, counts = np.unique(returns[failed], return_counts=True)
             steps = iterations[converged]
             parts.append(f"{label}: {int(right.sum())} of {len(start)} returned the pose, {int(failed.sum())} failed"
                          f" ({', '.join(f'{n} x {c}' for c, n in zip(codes, counts)) or 'none'}), {int(wrong.sum())}"
-                         f" returned another pose" + (f"; Newton steps mean {steps.mean():.2f}, max {steps.max()}"
-                                                      if len(steps) else ""))
+                         f" returned a wrong pose, {int(other_mode.sum())} another assembly mode (a pose with these "
+                         f"joints)" + (f"; Newton steps mean {steps.mean():.2f}, max {steps.max()}" if len(steps) else ""))
             passed = passed and not np.any(wrong) and (label != "a servo cycle away" or not np.any(failed))
-        return [Check("forward", passed, f"{'; '.join(parts)} (bounds {report_tolerance_mm(robot):.3g} mm, "
-                                         f"{VALUE_TOLERANCE_RAD:g} rad, or what the posture's conditioning explains; "
-                                         f"{len(start)} regular postures of {len(t6)} poses)", judged=2 * len(start))]
+        return Check("forward", passed, f"{'; '.join(parts)} (bounds {report_tolerance_mm(robot):.3g} mm, "
+                                        f"{VALUE_TOLERANCE_RAD:g} rad, or what the posture's conditioning explains; "
+                                        f"{len(start)} regular postures of {len(t6)} poses)", judged=2 * len(start))
 
 
-class CJacobian(VerifyCheck, name="c jacobian", needs="compared poses"):
-    def run(self, context):
+class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
+    poses = JACOBIAN_PAIRS
+
+    def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
-        t6 = context.tally.first[0][:JACOBIAN_PAIRS]
-        pose_index, posture, _, _, wrenches, transmissions = regular_pairs(robot, t6)
-        if not len(pose_index):
-            return [not_exercised("c jacobian", f"no regular, reachable posture among the {len(t6)} sampled poses")]
+        pose_index, posture, _, _, wrenches, transmissions = pairs
         expected = jacobian(wrenches, transmissions)
         units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
-        poses, worst, warned = poses_of(t6[pose_index]), 0.0, 0
+        poses, worst, warned = matrix_from_t6(t6[pose_index]).reshape(-1, 16), 0.0, 0
         for number, (pose, k) in enumerate(zip(poses, posture)):
             rows, warning = library.jacobian(pose, int(k))
             warned += warning != WARNINGS["WARN_GOOD_SOLUTION"]
@@ -116,10 +140,10 @@ class CJacobian(VerifyCheck, name="c jacobian", needs="compared poses"):
                             / np.max(np.abs(expected[number]) * units, axis=1))
             worst = max(worst, float(np.max(np.where(np.isfinite(relative), relative, np.inf))))
         passed = worst <= C_JACOBIAN_TOLERANCE and not warned
-        return [Check("c jacobian", passed, f"the library's Jacobian against kingen's on {len(poses)} regular postures "
-                                            f"of {len(t6)} poses: max relative difference {worst:.3g} (at most "
-                                            f"{C_JACOBIAN_TOLERANCE:g}); {warned} answered another warning than good",
-                      judged=len(poses))]
+        return Check("c jacobian", passed, f"the library's Jacobian against kingen's on {len(poses)} regular postures "
+                                           f"of {len(t6)} poses: max relative difference {worst:.3g} (at most "
+                                           f"{C_JACOBIAN_TOLERANCE:g}); {warned} answered another warning than good",
+                     judged=len(poses))
 
 
 CHECKS = (Definition(), Values(), Warnings(), Closure(), Jacobian(), CJacobian(), RoundTrip(), Forward(),

@@ -11,12 +11,14 @@ from pathlib import Path
 import cffi
 import numpy as np
 
+from ...conventions import matrix_from_t6
 from ...errors import KingenError, PluginDefect
 from ...kinematics.routine import Calls
 from ...runtime.compiler import compile_c, compiler_command
 from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, digest, write_atomic
 from ...defaults import DEFAULT_TIMEOUT, VERSION
+from .checks import CHECKS
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
 ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "default_geometry")
@@ -49,7 +51,7 @@ def batch_driver(timeout=DEFAULT_TIMEOUT):
 
 def poses_of(t6):
     """Row-major homogeneous poses (n, 16) of kingen's T6 (n, 4, 4)."""
-    return np.ascontiguousarray(np.swapaxes(np.asarray(t6, dtype=float).reshape(-1, 4, 4), 1, 2).reshape(-1, 16))
+    return np.ascontiguousarray(matrix_from_t6(np.asarray(t6, dtype=float).reshape(-1, 4, 4)).reshape(-1, 16))
 
 
 class Library:
@@ -59,9 +61,9 @@ class Library:
 
     summarises_branches = False
 
-    def __init__(self, library, routine, robot):
-        from .checks import CHECKS
+    checks = CHECKS
 
+    def __init__(self, library, routine, robot):
         path = Path(library).resolve()
         refuse_special_file(path)
         if not path.is_file():
@@ -87,7 +89,7 @@ class Library:
             except (AttributeError, KeyError):
                 raise PluginDefect(f"the library does not export {routine}_{name}") from None
         self.geometry = self.ffi.cast("void *", self.functions["default_geometry"])
-        self.routine, self.robot, self.checks = routine, robot, CHECKS
+        self.routine, self.robot = routine, robot
         self.dof, self.postures = robot.dof, robot.postures
         self.driver = batch_driver()
 

@@ -6,11 +6,10 @@ geometry, the solver in the source). Pure."""
 
 from pathlib import Path
 
-from ...errors import KingenError
 from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...robot.limbs import c_double
-from ..render import robot_view, template
+from ..render import refuse, robot_view, template
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -42,10 +41,7 @@ def robot_problem(robot):
 
 
 def check_robot(robot):
-    problem = robot_problem(robot)
-    if problem is not None:
-        field, _, text = problem.partition(": ")
-        raise KingenError(f"{robot.path}:{robot.line_of(field)}: {field}: {text}")
+    refuse(robot, robot_problem(robot))
 
 
 def view_model(robot):
@@ -83,5 +79,5 @@ def render(robot):
     """{header name: text, source name: text}."""
     view = view_model(robot)
     header, source = file_names(robot)
-    return {header: template("kingen.h.j2", TEMPLATES).render(**view),
-            source: template("kingen.c.j2", TEMPLATES).render(**view)}
+    return {header: template("header.c.j2", TEMPLATES).render(**view),
+            source: template("source.c.j2", TEMPLATES).render(**view)}
