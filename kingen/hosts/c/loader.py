@@ -28,6 +28,8 @@ void kingen_c_inverse_batch(void *function, const void *geometry, int count, con
                             int joint_stride, int *warnings, int warning_stride, int *returns);
 void kingen_c_forward_batch(void *function, const void *geometry, int count, const double *joints, int dof,
                             const int *postures, const double *seeds, double *poses, int *iterations, int *returns);
+void kingen_c_timed_batch(void *function, const void *geometry, int calls, int pool_count, const double *poses,
+                          double *joints, int *warnings, double *ns);
 """)
 _driver = None
 
@@ -155,9 +157,35 @@ class Library:
 
         def run():
             self.driver.kingen_c_inverse_batch(*arguments)
-            return poses, joints, returns
+            return poses, joints, warnings, returns  # the buffers live as long as the runner
 
         return run
+
+    def each_runner(self, t6):
+        """A function calling the inverse once per T6 through cffi, as a Python caller would."""
+        poses = poses_of(t6)
+        joints, warnings = np.empty(self.dof * self.postures), np.empty(self.postures, dtype=np.intc)
+        pointers = [self.ffi.from_buffer("double[]", pose) for pose in poses]
+        inverse, geometry = self.functions["inverse"], self.geometry
+        joints_pointer, warnings_pointer = self.ffi.from_buffer("double[]", joints), self.ffi.from_buffer("int[]", warnings)
+
+        def run():
+            for pose in pointers:
+                inverse(geometry, pose, joints_pointer, warnings_pointer)
+            return poses, joints
+
+        return run
+
+    def call_times(self, t6, calls):
+        """Nanoseconds (calls,) of each of ``calls`` inverse calls over the poses ``t6`` taken in
+        turn, each call timed singly on the monotonic clock from C."""
+        poses = poses_of(t6)
+        joints, warnings = np.empty(self.dof * self.postures), np.empty(self.postures, dtype=np.intc)
+        ns = np.empty(calls)
+        self.driver.kingen_c_timed_batch(self._function("inverse"), self._geometry(), calls, len(poses),
+                                         self._pointer("double *", poses), self._pointer("double *", joints),
+                                         self._pointer("int *", warnings), self._pointer("double *", ns))
+        return ns
 
     def call(self, t6, link_lengths=None, link_offsets=None):
         """The inverse on every T6 (n, 4, 4), mm, as Calls. The library takes a calibrated
