@@ -84,7 +84,7 @@ def forward(robots, poses_count, folder):
         machine = np.zeros((len(poses), 16))
         machine[:, :robot.dof] = joints / module.joint_scale()
         emc = np.zeros((len(poses), 9))
-        emc[:, :6] = seeds
+        emc[:, :3], emc[:, 3:6] = seeds[:, :3] / module.scale, seeds[:, 3:]
         homogeneous = matrix_from_t6(t6_from_pose(seeds)).reshape(-1, 16)
         postures = np.full(len(poses), robot.working_posture if robot.working_posture_given else 0)
         linuxcnc_returns = module.forward(machine, emc)[1]

@@ -67,6 +67,9 @@ def view_model(robot):
         "digits": digits or "none (one posture)",
         "revolute": [int(limb.joint_type.wraps) for limb in robot.limbs],
         "free_count": int(free.sum()),
+        "free_angles": bool(free[3:].any()),
+        "closed_form": tuple(free) == (True, True, True, False, False, False) and robot.models == ("rail",)
+        and robot.dof == 3,
         "free_columns": [index for index, name in enumerate(COORDINATES) if free[index]],
         "free_names": " ".join(name for index, name in enumerate(COORDINATES) if free[index]),
         "fixed_names": " ".join(name for index, name in enumerate(COORDINATES) if not free[index]) or "none",
