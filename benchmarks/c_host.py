@@ -1,12 +1,13 @@
 """The C host's library against the other hosts' routines, printed as Markdown tables (for the
 closing notes and docs/how-to/own-controller.md). Figures are printed, never asserted.
 
-    python benchmarks/c_host.py [--calls N] [--robots tau,ceart,...] [--forward-poses N] [--no-package]
+    python benchmarks/c_host.py [--calls N] [--single-calls N] [--robots tau,ceart,...] [--forward-poses N]
+                                [--no-package]
 
 1. Inverse: the C library's kingen_<name>_inverse against DELMIA's kin_<name> for the same
    robot, both through their host's C batch driver on the same poses, timed in turns
    (kingen.verify.bench.compare: ns per call, median of the rounds); goal C <= 1.15 x DELMIA.
-   Beside it, each C call timed singly: median and worst over the calls.
+   Beside it, each C call timed singly (--single-calls, a million by default): median and worst.
 2. Forward: kingen_<name>_forward against LinuxCNC's module's kinematicsForward (kingen's own
    module for the robot) from the reference's joints of regular poses at the working posture,
    seeded a servo cycle away (0.01 mm, 0.01 degree), both from C over the batch; best of 5,
@@ -44,7 +45,7 @@ def loaded(host_name, robot, folder):
     return seen, host.load(built.library, built.routine, seen)
 
 
-def inverse(robots, calls, folder):
+def inverse(robots, calls, single_calls, folder):
     print("| robot | postures | DELMIA ns/call | C ns/call | C / DELMIA | C single call median | worst |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     for name in robots:
@@ -52,10 +53,10 @@ def inverse(robots, calls, folder):
         _, delmia = loaded("delmia", robot, folder)
         _, library = loaded("c", robot, folder)
         timings = compare(robot, {"delmia": delmia, "c": library}, calls=calls)
-        single = library.call_times(t6_from_pose(sample_poses(robot, 20000, 0)), calls)
+        single = library.call_times(t6_from_pose(sample_poses(robot, 20000, 0)), single_calls)
         ratio = timings["c"]["median"] / timings["delmia"]["median"]
         print(f"| {name} | {robot.postures} | {timings['delmia']['median']:.1f} | {timings['c']['median']:.1f} | "
-              f"{ratio:.3f} | {statistics.median(single):.0f} ns | {max(single):.0f} ns ({calls:,} calls) |")
+              f"{ratio:.3f} | {statistics.median(single):.0f} ns | {max(single):.0f} ns ({single_calls:,} calls) |")
 
 
 def _best_ns(function, count, repeats=5):
@@ -121,13 +122,14 @@ def package(name, folder):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=200000)
+    parser.add_argument("--single-calls", type=int, default=1000000)
     parser.add_argument("--forward-poses", type=int, default=2000)
     parser.add_argument("--robots", default=",".join(ROBOTS))
     parser.add_argument("--no-package", action="store_true")
     arguments = parser.parse_args()
     robots = arguments.robots.split(",")
     with tempfile.TemporaryDirectory() as folder:
-        inverse(robots, arguments.calls, folder)
+        inverse(robots, arguments.calls, arguments.single_calls, folder)
         forward(robots, arguments.forward_poses, folder)
         if not arguments.no_package:
             package(robots[0], folder)
