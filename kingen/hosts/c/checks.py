@@ -1,5 +1,5 @@
 """The C host's own verify checks, and ``CHECKS``: every check a C host library gets, in
-report order (the shared ones of :mod:`kingen.verify.checks` and these two).
+report order (the shared ones of :mod:`kingen.verify.checks` and these three).
 
 - ``forward``: the library's forward kinematics, given the reference's joints of a sampled
   pose's regular posture and started a servo cycle away (0.01 mm, 0.01 degree along random
@@ -9,6 +9,8 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these two).
   joints, within a thousand times the value bounds) but never a pose without these joints.
 - ``c jacobian``: the library's analytic Jacobian against kingen's
   (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample.
+- ``c direct index``: for six-limb robots, the library's direct index against kingen's
+  (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
 """
 
 import numpy as np
@@ -17,7 +19,7 @@ from ...conventions import matrix_from_t6, pose_from_t6, wrap_difference
 from ...kinematics.forward import free_mask, t6_of
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
-from ...kinematics.singularity import jacobian, posture_wrenches
+from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)
 from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
@@ -32,6 +34,11 @@ SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
 JACOBIAN_PAIRS = 200
 C_JACOBIAN_TOLERANCE = 1e-9
 """Relative to the largest entry of the joint's row (rotations as mm of arc at the robot's size)."""
+C_DIRECT_INDEX_TOLERANCE = 1e-9
+DIRECT_INDEX_FLOOR = 1e-6
+"""The library's direct index (an eigenvalue in closed form) against kingen's (LAPACK's), relative
+to the index, or to this fraction of the robot's size where the index is smaller: the closed
+form's error is about eps times the largest eigenvalue, which a small index magnifies."""
 
 
 def regular_pairs(robot, t6):
@@ -146,6 +153,30 @@ class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
                      judged=len(poses))
 
 
-CHECKS = (Definition(), Values(), Warnings(), Closure(), Jacobian(), CJacobian(), RoundTrip(), Forward(),
-          Determinism(), Machine(), Golden(), Snapshot())
+class CDirectIndex(OnRegularPairs, name="c direct index", needs="compared poses"):
+    poses = JACOBIAN_PAIRS
+
+    def run(self, context):
+        if context.robot.dof != 6:
+            return [not_exercised(self.name, f"the direct index is defined for six force lines; "
+                                             f"{context.robot.name} has {context.robot.dof} limbs")]
+        return super().run(context)
+
+    def judge(self, context, t6, pairs):
+        robot, library = context.robot, context.routine
+        pose_index, posture, _, _, wrenches, _ = pairs
+        expected = direct_index(np.einsum("mdi,mdj->mij", wrenches, wrenches))
+        found = np.array([library.direct_index(pose, int(k))[0] for pose, k in
+                          zip(matrix_from_t6(t6[pose_index]).reshape(-1, 16), posture)])
+        scale = np.maximum(expected, DIRECT_INDEX_FLOOR * robot.size_mm)
+        worst = float(np.max(np.abs(found - expected) / scale))
+        return Check(self.name, worst <= C_DIRECT_INDEX_TOLERANCE,
+                     f"the library's direct index against kingen's (LAPACK's eigenvalue) on {len(found)} regular "
+                     f"postures of {len(t6)} poses: max relative difference {worst:.3g} (at most "
+                     f"{C_DIRECT_INDEX_TOLERANCE:g}; indices {float(expected.min()):.4g} to {float(expected.max()):.4g} mm)",
+                     judged=len(found))
+
+
+CHECKS = (Definition(), Values(), Warnings(), Closure(), Jacobian(), CJacobian(), CDirectIndex(), RoundTrip(),
+          Forward(), Determinism(), Machine(), Golden(), Snapshot())
 """Every check a C host library gets, in report order."""

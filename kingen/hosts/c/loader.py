@@ -22,6 +22,7 @@ from .checks import CHECKS
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
 ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "default_geometry")
+"""What the header declares for every robot (``<routine>_<name>``); six-limb robots add ``direct_index``."""
 _batch_ffi = cffi.FFI()
 _batch_ffi.cdef("""
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,
@@ -77,6 +78,7 @@ class Library:
         int {routine}_forward(const void *geometry, const double *joints, int posture, const double *seed,
                               double *pose, int *iterations);
         int {routine}_jacobian(const void *geometry, const double *pose, int posture, double *jacobian);
+        int {routine}_direct_index(const void *geometry, const double *pose, int posture, double *index);
         extern double {routine}_default_geometry;
         """)
         try:
@@ -84,7 +86,7 @@ class Library:
         except OSError as error:
             raise PluginDefect(f"the library cannot be loaded: {str(error).split('.  Additionally')[0]}") from None
         self.functions = {}
-        for name in ENTRY_POINTS:
+        for name in (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ())):
             try:
                 self.functions[name] = (self.ffi.addressof(self.library, f"{routine}_{name}") if name == "default_geometry"
                                         else getattr(self.library, f"{routine}_{name}"))
@@ -137,6 +139,13 @@ class Library:
         warning = self.functions["jacobian"](self.geometry, self.ffi.from_buffer("double[]", pose), posture,
                                              self.ffi.from_buffer("double[]", rows))
         return rows, warning
+
+    def direct_index(self, pose, posture):
+        """(direct index mm, warning) of one row-major pose (16,) and posture (six-limb robots)."""
+        pose = np.ascontiguousarray(pose, dtype=float)
+        index = self.ffi.new("double *")
+        warning = self.functions["direct_index"](self.geometry, self.ffi.from_buffer("double[]", pose), posture, index)
+        return index[0], warning
 
     def _function(self, name):
         return _batch_ffi.cast("void *", int(self.ffi.cast("uintptr_t", self.functions[name])))

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
+from ...kinematics.singularity import TRANSLATION_SINGULAR
 from ...robot.limbs import c_double
 from ..render import refuse, robot_view, template
 from . import CHost
@@ -73,6 +74,7 @@ def view_model(robot):
         "free_columns": [index for index, name in enumerate(COORDINATES) if free[index]],
         "free_names": " ".join(name for index, name in enumerate(COORDINATES) if free[index]),
         "fixed_names": " ".join(name for index, name in enumerate(COORDINATES) if not free[index]) or "none",
+        "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": c_double(TOLERANCE),
     }
