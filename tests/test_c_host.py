@@ -4,6 +4,7 @@ as C99 with gcc and clang and as C++17; a hand-written library with the same hea
 verified with --plugin, and a wrong one fails; calibration fields are refused, the struct is
 the library's calibration."""
 
+import json
 import subprocess
 from pathlib import Path
 
@@ -103,3 +104,14 @@ def test_a_library_without_the_header_functions_is_a_defect(tmp_path, capsys):
     result = Ran(capsys, "verify", Path(ROBOTS[0].parent, "tau.yaml"), "--host", "c", "--source", source, "-o", tmp_path)
     assert result.exit_code != 0
     assert "does not export kingen_tau_inverse_posture" in result.output
+
+
+def test_bench_states_the_median_and_the_worst_call(tmp_path, capsys):
+    """The figures' presence and consistency, never their size: the worst call is at least the median."""
+    json_path = tmp_path / "bench.json"
+    result = Ran(capsys, "bench", Path(ROBOTS[0].parent, "tau.yaml"), "--host", "c", "--calls", "2000",
+                 "-o", tmp_path, "--json", json_path)
+    assert result.exit_code == 0, result.output
+    assert "each call timed singly:" in result.output and "worst of 2,000 calls" in result.output
+    figures = json.loads(json_path.read_text())
+    assert figures["single_calls"] == 2000 and 0.0 < figures["median_call_ns"] <= figures["worst_call_ns"]
