@@ -155,14 +155,16 @@ class Library:
 
     def batch_runner(self, t6):
         """A function running the inverse over ``t6`` (n, 4, 4) from C into buffers made here once:
-        the library's own time, for benchmarks."""
+        the library's own time, for benchmarks. Every call writes the same joints[][] and
+        warnings[] (strides 0), as a controller's calls do and as DELMIA's batch runner does, so
+        the figure is the library's, not that of streaming n outputs through memory."""
         poses = poses_of(t6)
         count = len(poses)
-        joints = np.empty((count, self.dof, self.postures))
-        warnings, returns = np.empty((count, self.postures), dtype=np.intc), np.empty(count, dtype=np.intc)
+        joints = np.empty((self.dof, self.postures))
+        warnings, returns = np.empty(self.postures, dtype=np.intc), np.empty(count, dtype=np.intc)
         arguments = (self._function("inverse"), self._geometry(), count, self._pointer("double *", poses),
-                     self._pointer("double *", joints), self.dof * self.postures, self._pointer("int *", warnings),
-                     self.postures, self._pointer("int *", returns))
+                     self._pointer("double *", joints), 0, self._pointer("int *", warnings), 0,
+                     self._pointer("int *", returns))
 
         def run():
             self.driver.kingen_c_inverse_batch(*arguments)
