@@ -2,7 +2,7 @@
 closing notes and docs/how-to/own-controller.md). Figures are printed, never asserted.
 
     python benchmarks/c_host.py [--calls N] [--single-calls N] [--robots tau,ceart,...] [--forward-poses N]
-                                [--no-package]
+                                [--no-package] [--callgrind]
 
 1. Inverse: the C library's kingen_<name>_inverse against DELMIA's kin_<name> for the same
    robot, both through their host's C batch driver on the same poses, timed in turns
@@ -14,6 +14,9 @@ closing notes and docs/how-to/own-controller.md). Figures are printed, never ass
    ns per call; goal C <= 1.5 x LinuxCNC. Robots LinuxCNC drives only.
 3. Package: `kingen package ROBOT --host c`, then cmake configure, build and run of the example
    (wall seconds of each), when cmake is installed.
+4. With --callgrind (valgrind installed): instructions per inverse call, C against DELMIA, counted
+   by callgrind over COUNTED_CALLS calls (inclusive, the routine's function): a figure that
+   the machine's load cannot move, where wall time on a shared machine can.
 """
 
 import argparse
@@ -35,6 +38,7 @@ from kingen.kinematics.poses import sample_poses
 from kingen.robot.model import load_robot
 from kingen.verify.bench import compare
 
+COUNTED_CALLS = 2000
 ROBOTS = ("tau", "linear_delta", "rotary_delta", "hexapod", "linuxcnc_hexapod", "ceart", "iwf", "exechon")
 
 
@@ -119,6 +123,33 @@ def package(name, folder):
     print(f"| total | {total:.2f} |\n\nThe example printed:\n\n```\n{done.stdout}```")
 
 
+def count_one(host_name, name):
+    """One batch of COUNTED_CALLS inverse calls (run under callgrind by instructions())."""
+    robot = load_robot(name)
+    with tempfile.TemporaryDirectory() as folder:
+        _, routine = loaded(host_name, robot, folder)
+        routine.batch_runner(t6_from_pose(sample_poses(robot, COUNTED_CALLS, 0)))()
+
+
+def instructions(robots):
+    if shutil.which("valgrind") is None:
+        print("\nvalgrind is not installed: instructions were not counted")
+        return
+    print("\n| robot | DELMIA instructions/call | C instructions/call | C / DELMIA |\n| --- | --- | --- | --- |")
+    for name in robots:
+        counts = {}
+        for host_name, function in (("delmia", f"kin_{name}"), ("c", f"kingen_{name}_inverse")):
+            with tempfile.TemporaryDirectory() as folder:
+                out = Path(folder) / "callgrind.out"
+                subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable,
+                                __file__, "--count-one", host_name, name], capture_output=True, check=True)
+                report = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)],
+                                        capture_output=True, text=True, check=True).stdout
+            line = next(line for line in report.splitlines() if f":{function} [" in line)
+            counts[host_name] = int(line.split()[0].replace(",", "")) / COUNTED_CALLS
+        print(f"| {name} | {counts['delmia']:.0f} | {counts['c']:.0f} | {counts['c'] / counts['delmia']:.3f} |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=200000)
@@ -126,13 +157,20 @@ def main():
     parser.add_argument("--forward-poses", type=int, default=2000)
     parser.add_argument("--robots", default=",".join(ROBOTS))
     parser.add_argument("--no-package", action="store_true")
+    parser.add_argument("--callgrind", action="store_true", help="also count instructions per inverse call")
+    parser.add_argument("--count-one", nargs=2, metavar=("HOST", "ROBOT"), help=argparse.SUPPRESS)
     arguments = parser.parse_args()
+    if arguments.count_one:
+        count_one(*arguments.count_one)
+        return
     robots = arguments.robots.split(",")
     with tempfile.TemporaryDirectory() as folder:
         inverse(robots, arguments.calls, arguments.single_calls, folder)
         forward(robots, arguments.forward_poses, folder)
         if not arguments.no_package:
             package(robots[0], folder)
+    if arguments.callgrind:
+        instructions(robots)
 
 
 if __name__ == "__main__":
