@@ -159,6 +159,9 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
     say(f"bench {model.name} ({routine}, {counted(model.postures, 'posture')}, {counted(figures['calls'], 'call')})")
     say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
     say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
+    if "worst_call_ns" in figures:
+        say(f"  each call timed singly:     {figures['median_call_ns']:10.1f} ns median, "
+            f"{figures['worst_call_ns']:.1f} ns worst of {figures['single_calls']:,} calls")
     say(f"  numpy reference:            {figures['reference_poses_per_second']:10,.0f} poses/s")
     say(f"  verify (everything):        {figures['verify_poses_per_second']:10,.0f} poses/s "
          f"({processes_text(figures['verify_processes'])})")

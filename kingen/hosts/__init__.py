@@ -3,7 +3,8 @@ through :mod:`kingen.robot.limbs`.
 
 ``HOSTS`` maps each ``--host`` name to a :class:`~kingen.hosts.base.Host` instance.
 ``register`` adds one at run time (tests do, with a toy host); ``get_host`` is how every
-command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``) and LinuxCNC (``linuxcnc``) are built in.
+command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``), LinuxCNC (``linuxcnc``) and a portable C library (``c``) are
+built in.
 """
 
 from ..defaults import DEFAULT_HOST
@@ -11,6 +12,7 @@ from ..errors import KingenError
 from ..robot.model import NAME_CHECKS
 from .base import BuildResult, Host, LoadedRoutine
 from .delmia import DelmiaHost
+from .c import CHost
 from .linuxcnc import LinuxcncHost
 
 HOSTS = {}
@@ -46,6 +48,7 @@ def name_problems(robot_name):
 
 register(DelmiaHost())
 register(LinuxcncHost())
+register(CHost())
 
 __all__ = ["BuildResult", "DEFAULT_HOST", "HOSTS", "Host", "LoadedRoutine", "get_host", "name_problems",
            "register", "unregister"]

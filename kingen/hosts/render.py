@@ -13,6 +13,7 @@ import math
 import textwrap
 
 from ..defaults import VERSION
+from ..errors import KingenError
 from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, c_vector, partial_path
@@ -36,6 +37,14 @@ def template(name, folder=None):
     templates/, with the limb models' partials from the registry
     (:func:`kingen.runtime.templates.template`)."""
     return templates.template(name, folder, _partial_source)
+
+
+def refuse(robot, problem):
+    """Raise a problem ('field: text', a host's robot_problem) as the robot file's located
+    KingenError; nothing when ``problem`` is None."""
+    if problem is not None:
+        field, _, text = problem.partition(": ")
+        raise KingenError(f"{robot.path}:{robot.line_of(field)}: {field}: {text}")
 
 
 def calibration_line(robot, host, joint, parameter, field, built_in):
@@ -188,7 +197,9 @@ def robot_view(robot, host):
         "has_radicand": any(limb.has_radicand for limb in robot.limbs) or bool(robot.task),
         "constraint": constraint_view(robot),
         "models": _model_tables(robot),
+        "limb_part": "all",
         "direct_index": robot.direct_index_min is not None,
+        "direct_test": robot.direct_index_min is not None,
         "jacobian": False,
         "low_bits": partial_sum_split(robot)[0],
         "split_sums": bool(partial_sum_split(robot)[1]),

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from ..defaults import DEFAULT_TIMEOUT
 from ..errors import KingenError
+from .file_gate import refuse_special_file
 from .files import umask
 
 
@@ -155,3 +156,15 @@ def first_diagnostic(stderr, status=1):
     if status < 0:
         return f"the compiler was killed by signal {signal.Signals(-status).name}"
     return f"the compiler failed without a message (exit status {status})"
+
+
+def compile_given_source(source, out_dir, flags, timeout=DEFAULT_TIMEOUT):
+    """Compile a user's C source (a regular file, else KingenError) into ``out_dir`` as
+    ``<stem>.so`` with ``flags``; the library's path."""
+    source = Path(source)
+    refuse_special_file(source)
+    if not source.is_file():
+        raise KingenError(f"{source}: no such C source")
+    library = Path(out_dir) / f"{source.stem}.so"
+    compile_c([source], library, list(flags), timeout=timeout)
+    return library

@@ -3,7 +3,8 @@ cffi call per pose, and the reference's and verify's poses per second. Figures a
 printed, never asserted: speed targets live here, not in unit tests.
 
 The routine is timed through the runners its host's loaded routine offers
-(``batch_runner`` and ``each_runner``, as DELMIA's plugin does).
+(``batch_runner`` and ``each_runner``, as DELMIA's plugin does), and, where it offers
+``call_times(t6, calls)`` (each call timed singly), the median and the worst call.
 
 Memory is bounded whatever the call count: the routine is timed over a pool of at most
 ``POOL_POSES`` distinct poses, passed over repeatedly until ``calls`` calls are made."""
@@ -64,6 +65,9 @@ class Figures(TypedDict):
     verify_processes: int
     verify_passed: bool
     against_floor: NotRequired[AgainstFloor]
+    single_calls: NotRequired[int]
+    median_call_ns: NotRequired[float]
+    worst_call_ns: NotRequired[float]
 
 
 def _best_seconds(function, repeats, passes=1, tick=None):
@@ -89,11 +93,16 @@ def benchmark(robot, plugin, calls=200000, seed=0, repeats=3, tick=None):
     with captured_output():
         batch = _best_seconds(plugin.batch_runner(t6), repeats, passes, tick)
         single = _best_seconds(plugin.each_runner(few), repeats, 1, tick)
+        single_calls = plugin.call_times(t6, pool * passes) if hasattr(plugin, "call_times") else None
     reference = _best_seconds(lambda: solve(robot, t6), repeats, 1, tick)
     verified = min(calls, VERIFY_LIMIT)
     options = VerifyOptions(samples=verified, seed=seed, processes=None)
     report = verify(robot, plugin, options, progress=tick and (lambda _: tick()))
+    timed = {} if single_calls is None else {"single_calls": len(single_calls),
+                                             "median_call_ns": float(statistics.median(single_calls)),
+                                             "worst_call_ns": float(max(single_calls))}
     return {
+        **timed,
         "robot": robot.name,
         "routine": plugin.routine,
         "postures": robot.postures,

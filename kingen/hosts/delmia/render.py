@@ -35,6 +35,9 @@ def view_model(robot):
         "singular_tolerance": c_double(abi.SINGULAR_TOLERANCE),
         "get_kin_config": abi.GET_KIN_CONFIG,
         "routine_prototype": abi.routine_prototype(dialog.routine_name(robot.name), "NUM_SOLUTIONS"),
+        "entry_check": "kin_check_definition(NUM_DOFS, NUM_SOLUTIONS)",
+        "limb_tables": "kingen_",
+        "calibration_arguments": "link_lengths, link_offsets",
     }
 
 

@@ -8,10 +8,9 @@ import tempfile
 from pathlib import Path
 
 from ...defaults import VERSION
-from ...runtime.compiler import CompileError, compile_c, compiler_command
+from ...runtime.compiler import CompileError, compile_c, compile_given_source, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
 from ...errors import KingenError
-from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
 from ..base import BuildResult
 from .render import harness_source, module_name, render, source_name
@@ -94,14 +93,8 @@ def build_module(robot, out_dir=None, units="mm", timeout=DEFAULT_TIMEOUT):
 def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
     """Compile a hand-written module source (a stock module's, say) as LinuxCNC's build would;
     warnings allowed. Returns the module's path."""
-    source = Path(source)
-    refuse_special_file(source)
-    if not source.is_file():
-        raise KingenError(f"{source}: no such C source")
-    library = Path(out_dir) / f"{source.stem}.so"
     flags = [flag for flag in MODULE_FLAGS if flag not in ("-Werror", "-Wall", "-Wextra")]
-    compile_c([source], library, [*flags, f"-I{linuxcnc_headers()}"], timeout=timeout)
-    return library
+    return compile_given_source(source, out_dir, [*flags, f"-I{linuxcnc_headers()}"], timeout=timeout)
 
 
 def write_source(robot, out_dir, units="mm"):

@@ -5,10 +5,9 @@ partials (with their force lines and transmissions, for the forward Jacobian). P
 import math
 from pathlib import Path
 
-from ...errors import KingenError
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
-from ..render import build_info, gram_lines, robot_view, schur_test_lines, template
+from ..render import refuse, build_info, gram_lines, robot_view, schur_test_lines, template
 from . import LinuxcncHost
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...units import LENGTH_UNITS, robot_in_units
@@ -78,10 +77,7 @@ def robot_problem(robot):
 
 
 def check_robot(robot):
-    problem = robot_problem(robot)
-    if problem is not None:
-        field, _, text = problem.partition(": ")
-        raise KingenError(f"{robot.path}:{robot.line_of(field)}: {field}: {text}")
+    refuse(robot, robot_problem(robot))
 
 
 def _parameters(robot):

@@ -1,0 +1,182 @@
+"""The C host's own verify checks, and ``CHECKS``: every check a C host library gets, in
+report order (the shared ones of :mod:`kingen.verify.checks` and these three).
+
+- ``forward``: the library's forward kinematics, given the reference's joints of a sampled
+  pose's regular posture and started a servo cycle away (0.01 mm, 0.01 degree along random
+  directions of the free coordinates) and far away (10 mm, 5 degrees), returns that pose
+  within the value bound or what the posture's conditioning explains; near starts must all
+  return it, far ones may fail or return another assembly mode (a pose the reference gives these
+  joints, within a thousand times the value bounds) but never a pose without these joints.
+- ``c jacobian``: the library's analytic Jacobian against kingen's
+  (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample.
+- ``c direct index``: for six-limb robots, the library's direct index against kingen's
+  (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
+"""
+
+import numpy as np
+
+from ...conventions import matrix_from_t6, pose_from_t6, wrap_difference
+from ...kinematics.forward import free_mask, t6_of
+from ...kinematics.reference import solve
+from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
+from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
+                              Values, VerifyCheck, Warnings)
+from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
+from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
+from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
+from ...verify.report import not_exercised
+
+FORWARD_POSES = 500
+SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
+"""Start distances: mm along a random direction of x y z, degrees along one of roll pitch yaw
+(the free coordinates only)."""
+JACOBIAN_PAIRS = 200
+C_JACOBIAN_TOLERANCE = 1e-9
+"""Relative to the largest entry of the joint's row (rotations as mm of arc at the robot's size)."""
+C_DIRECT_INDEX_TOLERANCE = 1e-9
+DIRECT_INDEX_FLOOR = 1e-6
+"""The library's direct index (an eigenvalue in closed form) against kingen's (LAPACK's), relative
+to the index, or to this fraction of the robot's size where the index is smaller: the closed
+form's error is about eps times the largest eigenvalue, which a small index magnifies."""
+
+
+def regular_pairs(robot, t6):
+    """(pose index, posture, reference joints (m, dof), conditioning (m,), wrench rows (m, dof, 6),
+    transmissions (m, dof)) of one regular posture per pose of ``t6`` where it has one:
+    reachable, good, away from limb singularities and well conditioned for the forward."""
+    expected = solve(robot, t6)
+    wrenches, transmissions = posture_wrenches(robot, expected.points, expected.joints)
+    good = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
+            & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
+            & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
+    pose_index = np.nonzero(np.any(good, axis=1))[0]
+    # One posture per pose, taken round the postures so that each takes part.
+    posture = np.array([np.nonzero(good[index])[0][index % np.count_nonzero(good[index])] for index in pose_index],
+                       dtype=int)
+    sampled = pose_from_t6(t6[pose_index])
+    start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)
+    conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free_mask(robot))
+    keep = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    pose_index, posture = pose_index[keep], posture[keep]
+    return (pose_index, posture, expected.joints[pose_index, :, posture], conditioning[keep],
+            wrenches[pose_index, posture], transmissions[pose_index, posture])
+
+
+def _same_joints(robot, t6, posture, joints):
+    """(n,) whether the reference gives ``joints`` (n, dof) at ``t6`` (n, 4, 4) in ``posture`` (n,),
+    within the value bounds: the pose is one the forward may return (an assembly mode)."""
+    finite = np.all(np.isfinite(t6), axis=(1, 2))
+    solved = solve(robot, np.where(finite[:, None, None], t6, np.eye(4)))
+    values = solved.joints[np.arange(len(t6)), :, posture]
+    difference = np.abs(np.where(robot.revolute, wrap_difference(values - joints), values - joints))
+    bound = np.where(robot.revolute, VALUE_TOLERANCE_RAD, report_tolerance_mm(robot)) * 1e3
+    return finite & np.all(difference <= bound, axis=1)
+
+
+def _directions(generator, count):
+    direction = generator.normal(size=(count, 3))
+    return direction / np.linalg.norm(direction, axis=1, keepdims=True)
+
+
+class OnRegularPairs(VerifyCheck):
+    """A check judging the library on one regular posture per sampled pose (the first
+    ``poses`` of the sample, :func:`regular_pairs`): ``judge(context, t6, pairs)``."""
+
+    poses = FORWARD_POSES
+
+    def run(self, context):
+        t6 = context.tally.first[0][:self.poses]
+        pairs = regular_pairs(context.robot, t6)
+        if not len(pairs[0]):
+            return [not_exercised(self.name, f"no regular, reachable posture among the {len(t6)} sampled poses")]
+        return [self.judge(context, t6, pairs)]
+
+
+class Forward(OnRegularPairs, name="forward", needs="compared poses"):
+    def judge(self, context, t6, pairs):
+        robot, library = context.robot, context.routine
+        pose_index, posture, joints, conditioning, _, _ = pairs
+        sampled = pose_from_t6(t6[pose_index])
+        start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)
+        free = free_mask(robot)
+        allowed_mm = np.maximum(report_tolerance_mm(robot), 2.0 * CONDITIONING_FACTOR * robot.size_mm / conditioning)
+        allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, allowed_mm / robot.size_mm)
+        generator = np.random.default_rng(context.options.seed)
+        passed, parts = True, []
+        for label, (distance_mm, distance_deg) in SEEDS.items():
+            offset = np.concatenate([_directions(generator, len(start)) * distance_mm,
+                                     np.radians(_directions(generator, len(start)) * distance_deg)], axis=1)
+            offset[:, ~free] = 0.0
+            found, iterations, returns = library.forward(joints, posture, matrix_from_t6(t6_of(start + offset)).reshape(-1, 16))
+            found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)
+            position = np.max(np.abs(found_t6[:, 3, :3] - t6[pose_index, 3, :3]), axis=1)
+            rotation = np.max(np.abs(found_t6[:, :3, :3] - t6[pose_index, :3, :3]), axis=(1, 2))
+            converged = returns == 0
+            right = converged & (position <= allowed_mm) & (rotation <= allowed_rad)
+            wrong, failed = converged & ~right, ~converged
+            other_mode = wrong & _same_joints(robot, found_t6, posture, joints)
+            if label != "a servo cycle away":  # a far start may lie nearer another assembly mode
+                wrong &= ~other_mode
+            codes, counts = np.unique(returns[failed], return_counts=True)
+            steps = iterations[converged]
+            parts.append(f"{label}: {int(right.sum())} of {len(start)} returned the pose, {int(failed.sum())} failed"
+                         f" ({', '.join(f'{n} x {c}' for c, n in zip(codes, counts)) or 'none'}), {int(wrong.sum())}"
+                         f" returned a wrong pose, {int(other_mode.sum())} another assembly mode (a pose with these "
+                         f"joints)" + (f"; Newton steps mean {steps.mean():.2f}, max {steps.max()}" if len(steps) else ""))
+            passed = passed and not np.any(wrong) and (label != "a servo cycle away" or not np.any(failed))
+        return Check("forward", passed, f"{'; '.join(parts)} (bounds {report_tolerance_mm(robot):.3g} mm, "
+                                        f"{VALUE_TOLERANCE_RAD:g} rad, or what the posture's conditioning explains; "
+                                        f"{len(start)} regular postures of {len(t6)} poses)", judged=2 * len(start))
+
+
+class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
+    poses = JACOBIAN_PAIRS
+
+    def judge(self, context, t6, pairs):
+        robot, library = context.robot, context.routine
+        pose_index, posture, _, _, wrenches, transmissions = pairs
+        expected = jacobian(wrenches, transmissions)
+        units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
+        poses, worst, warned = matrix_from_t6(t6[pose_index]).reshape(-1, 16), 0.0, 0
+        for number, (pose, k) in enumerate(zip(poses, posture)):
+            rows, warning = library.jacobian(pose, int(k))
+            warned += warning != WARNINGS["WARN_GOOD_SOLUTION"]
+            with np.errstate(all="ignore"):
+                relative = (np.max(np.abs(rows - expected[number]) * units, axis=1)
+                            / np.max(np.abs(expected[number]) * units, axis=1))
+            worst = max(worst, float(np.max(np.where(np.isfinite(relative), relative, np.inf))))
+        passed = worst <= C_JACOBIAN_TOLERANCE and not warned
+        return Check("c jacobian", passed, f"the library's Jacobian against kingen's on {len(poses)} regular postures "
+                                           f"of {len(t6)} poses: max relative difference {worst:.3g} (at most "
+                                           f"{C_JACOBIAN_TOLERANCE:g}); {warned} answered another warning than good",
+                     judged=len(poses))
+
+
+class CDirectIndex(OnRegularPairs, name="c direct index", needs="compared poses"):
+    poses = JACOBIAN_PAIRS
+
+    def run(self, context):
+        if context.robot.dof != 6:
+            return [not_exercised(self.name, f"the direct index is defined for six force lines; "
+                                             f"{context.robot.name} has {context.robot.dof} limbs")]
+        return super().run(context)
+
+    def judge(self, context, t6, pairs):
+        robot, library = context.robot, context.routine
+        pose_index, posture, _, _, wrenches, _ = pairs
+        expected = direct_index(np.einsum("mdi,mdj->mij", wrenches, wrenches))
+        found = np.array([library.direct_index(pose, int(k))[0] for pose, k in
+                          zip(matrix_from_t6(t6[pose_index]).reshape(-1, 16), posture)])
+        scale = np.maximum(expected, DIRECT_INDEX_FLOOR * robot.size_mm)
+        worst = float(np.max(np.abs(found - expected) / scale))
+        return Check(self.name, worst <= C_DIRECT_INDEX_TOLERANCE,
+                     f"the library's direct index against kingen's (LAPACK's eigenvalue) on {len(found)} regular "
+                     f"postures of {len(t6)} poses: max relative difference {worst:.3g} (at most "
+                     f"{C_DIRECT_INDEX_TOLERANCE:g}; indices {float(expected.min()):.4g} to {float(expected.max()):.4g} mm)",
+                     judged=len(found))
+
+
+CHECKS = (Definition(), Values(), Warnings(), Closure(), Jacobian(), CJacobian(), CDirectIndex(), RoundTrip(),
+          Forward(), Determinism(), Machine(), Golden(), Snapshot())
+"""Every check a C host library gets, in report order."""

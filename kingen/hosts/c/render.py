@@ -1,0 +1,92 @@
+"""Rendering the C host's library: robot -> ``kingen_<name>.h`` and ``kingen_<name>.c``, from
+this host's templates, the shared view-model (:func:`kingen.hosts.render.robot_view`), the
+routine of all postures every host shares (``templates/postures_*.c.j2``) and the limb
+models' partials in their three parts (the struct in the header, the rows in the default
+geometry, the solver in the source). Pure."""
+
+from pathlib import Path
+
+from ...kinematics.forward import COORDINATES, free_mask
+from ...kinematics.routine import SINGULAR_TOLERANCE
+from ...kinematics.singularity import TRANSLATION_SINGULAR
+from ...robot.limbs import c_double
+from ..render import refuse, robot_view, template
+from . import CHost
+
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+HOST = CHost()
+"""The host the shared view-model asks for the library's names."""
+MAX_ITERATIONS = 20
+"""Newton's steps at most in the forward kinematics."""
+TOLERANCE = 1e-10
+"""Newton stops when a step is at most this long (mm and radians)."""
+
+
+def prefix(robot):
+    """Every public name of the library starts with this: kingen_<name>."""
+    return f"kingen_{robot.name}"
+
+
+def file_names(robot):
+    """(header, source) file names."""
+    return f"{prefix(robot)}.h", f"{prefix(robot)}.c"
+
+
+def robot_problem(robot):
+    """Why this host cannot build ``robot`` (a machine with task coordinates; one whose forward
+    it cannot solve), or None."""
+    if robot.task:
+        return ("task: the C library does not yet take a machine with task coordinates (its parasitic motion "
+                "is solved by the delmia and linuxcnc hosts)")
+    free = free_mask(robot)
+    if int(free.sum()) != robot.dof:
+        return (f"forward: the C library's forward solves for as many pose coordinates as the robot has limbs; "
+                f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free) or 'all six'}")
+    return None
+
+
+def check_robot(robot):
+    refuse(robot, robot_problem(robot))
+
+
+def view_model(robot):
+    """What the header and source substitute: the shared view with the force lines and
+    transmissions every limb computes (the Jacobian and the forward need them), the limbs'
+    rows read from the geometry passed in, and the forward's settings."""
+    check_robot(robot)
+    view = robot_view(robot, HOST)
+    free = free_mask(robot)
+    joints = [{**joint, "unit": "radians" if limb.joint_type.wraps else "mm"}
+              for joint, limb in zip(view["joints"], robot.limbs)]
+    digits = ", ".join(f"{joint['name']} {joint['bit']}" for joint in joints if joint["bit"] >= 0)
+    return {
+        **view,
+        "joints": joints,
+        "prefix": prefix(robot),
+        "direct_index": True,
+        "jacobian": True,
+        "limb_tables": "geometry->",
+        "calibration_arguments": "0, 0",
+        "entry_check": None,
+        "singular_tolerance": c_double(SINGULAR_TOLERANCE),
+        "digits": digits or "none (one posture)",
+        "revolute": [int(limb.joint_type.wraps) for limb in robot.limbs],
+        "free_count": int(free.sum()),
+        "free_angles": bool(free[3:].any()),
+        "closed_form": tuple(free) == (True, True, True, False, False, False) and robot.models == ("rail",)
+        and robot.dof == 3,
+        "free_columns": [index for index, name in enumerate(COORDINATES) if free[index]],
+        "free_names": " ".join(name for index, name in enumerate(COORDINATES) if free[index]),
+        "fixed_names": " ".join(name for index, name in enumerate(COORDINATES) if not free[index]) or "none",
+        "translation_singular": c_double(TRANSLATION_SINGULAR),
+        "max_iterations": MAX_ITERATIONS,
+        "tolerance": c_double(TOLERANCE),
+    }
+
+
+def render(robot):
+    """{header name: text, source name: text}."""
+    view = view_model(robot)
+    header, source = file_names(robot)
+    return {header: template("header.c.j2", TEMPLATES).render(**view),
+            source: template("source.c.j2", TEMPLATES).render(**view)}
