@@ -8,8 +8,9 @@ clear of each other. Each candidate's rows of the identification Jacobian (at th
 parameters) are weighted by the standard deviation the measurement noise gives its residuals;
 poses are then added one at a time: first each the one that most increases log det of the
 information matrix J^T W J over the identifiable parameters (D-optimal, until it is regular
-and a few poses beyond), then each the one that most decreases the limb parameters' summed
-variance (A-optimal, the deviations a plan is judged by). The predicted standard deviations are sqrt(diag((J^T W J)^-1)).
+and a few poses beyond), then each the one that most decreases the sum of the logarithms of
+the limb parameters' variances (their geometric mean: each deviation counts by its ratio, so
+the typical one falls, by which a plan is judged). The predicted standard deviations are sqrt(diag((J^T W J)^-1)).
 """
 
 from dataclasses import dataclass
@@ -118,8 +119,8 @@ def greedy(weighted, count, limbs=None):
     """Indices of ``count`` candidates chosen one at a time from the weighted blocks (n, rows,
     parameters): first, each the one that most increases log det of the information matrix
     (D-optimal) until D_OPTIMAL_EXTRA more poses than its rank needs are chosen; then each the
-    one that most decreases the summed variance of the parameters ``limbs`` (a mask over the
-    columns; None: all) (A-optimal): the deviations the plan is judged by."""
+    one that most decreases the sum of the logarithms of the variances of the parameters
+    ``limbs`` (a mask over the columns; None: all): the typical deviation the plan is judged by."""
     count = min(count, len(weighted))
     rows, parameters = weighted.shape[1], weighted.shape[2]
     limbs = np.ones(parameters, dtype=bool) if limbs is None else limbs
@@ -135,7 +136,9 @@ def greedy(weighted, count, limbs=None):
         if len(chosen) < d_optimal:
             gain = np.linalg.slogdet(growth)[1]
         else:
-            gain = np.einsum("nij,nij->n", np.linalg.solve(growth, projected)[:, :, limbs], projected[:, :, limbs])
+            variance = np.diag(inverse)[limbs]
+            reduction = np.einsum("nij,nij->nj", np.linalg.solve(growth, projected)[:, :, limbs], projected[:, :, limbs])
+            gain = -np.sum(np.log(np.maximum(variance - reduction, 1e-300 * variance)), axis=1)
         gain[~available] = -np.inf
         best = int(np.argmax(gain))
         chosen.append(best)

@@ -140,7 +140,7 @@ def _say_outcome(name, outcome, fit):
 @click.option("-o", "--output", "output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="The poses' CSV [default: build/<name>/calibrate/poses.csv].")
 def plan(robot, count, noise_mm, noise_deg, measure, spec, output):
-    """Choose N poses to measure for calibrating ROBOT: greedy D- then A-optimal among 5,000 seeded
+    """Choose N poses to measure for calibrating ROBOT: greedy D-optimal, then the limb parameters' variances' product, among 5,000 seeded
     poses of the verification region that the reference finds reachable, within travel and
     away from singularities (and collisions, with collision radii). Writes them as a CSV in
     calibrate's layout (nominal joints; the measured columns hold the nominal pose: replace
