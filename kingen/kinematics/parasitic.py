@@ -103,6 +103,25 @@ def _solve_axes(robot, t6):
     return Parasitic(t6=fixed, radicand=radicand, off=off)
 
 
+def constraint_residuals(robot, t6):
+    """(n, 3) mm: each constraint equation's residual at the machine's pose for each T6 (n, 4, 4)
+    (solve_parasitic), computed forward from the constraints' own statement: a_i.(C_i - c_i) for
+    revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in the platform; and
+    (n,) the radicand D (where D < 0 no pose closes them)."""
+    machine = solve_parasitic(robot, t6)
+    rotation, position = np.swapaxes(machine.t6[:, :3, :3], 1, 2), machine.t6[:, 3, :3]
+    residuals = []
+    for limb in robot.limbs:
+        if family(robot) == "axes":
+            axis, base, point = limb.platform_constraint()
+            residuals.append(np.sum((rotation @ axis) * (base - position), -1) - np.dot(axis, point))
+        else:
+            axis, point = limb.constraint_plane()
+            platform = rotation @ np.asarray(limb.platform_point, dtype=float) + position
+            residuals.append((platform - point) @ axis)
+    return np.stack(residuals, axis=1), machine.radicand
+
+
 def on_manifold(robot, poses):
     """Poses (n, 6) (mm, degrees) with x, y and yaw replaced by the machine's for their task
     coordinates (those without a solution keep their closest approach)."""
