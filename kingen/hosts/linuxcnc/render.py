@@ -49,7 +49,7 @@ def source_name(robot):
 def translating(robot):
     """Whether the platform only translates (forward.free is x, y, z, no task coordinates: an
     Exechon-type machine's rotation follows its position): A B C pass through."""
-    return not robot.task and tuple(robot.forward_free) == TRANSLATION or set(robot.forward_free) == set(TRANSLATION)
+    return not robot.task and (tuple(robot.forward_free) == TRANSLATION or set(robot.forward_free) == set(TRANSLATION))
 
 
 WORLD_AXES = ("X", "Y", "Z", "A", "B", "C")
