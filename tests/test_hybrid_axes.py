@@ -156,3 +156,14 @@ def test_calibrate_refuses_a_constrained_machine_on_one_line(name, args, tmp_pat
     assert len(lines) == 1 and lines[0].startswith("kingen: error: ") and f"{name}.yaml:" in lines[0]
     assert "task: calibrate draws and fits poses in six free coordinates" in lines[0]
     assert sorted(path.name for path in tmp_path.iterdir()) == ["measured.csv"]  # nothing written
+
+
+def test_analyze_sweeps_the_task_coordinates_with_the_parasitic_rotation_following():
+    from kingen.design.analysis import analyze
+
+    result = analyze(load_robot(NAME))
+    assert result["available"]["tilt_limits"] == "not analysed: the platform's tilt is parasitic (task: x, y, z)"
+    # the sweeps along x and y leave the home orientation: drawn as given they would be off the manifold
+    for axis in ("x", "y"):
+        assert [entry["cause"] for entry in result["sweeps"][axis]] == ["none"] * len(result["sweeps"][axis])
+    assert "xy" in result["slices"] and "xz" in result["slices"]
