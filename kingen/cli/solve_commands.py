@@ -164,6 +164,7 @@ def _manifold_note(model, matrix):
     whether the T6 asks for that pose (docs/how-to/hybrid.md)."""
     from ..conventions import pose_from_t6
     from ..kinematics.parasitic import solve_parasitic
+    from ..kinematics.routine import SINGULAR_TOLERANCE
 
     machine = solve_parasitic(model, matrix)
     where = " ".join(f"{value:.9f}" for value in pose_from_t6(machine.t6)[0])
@@ -172,8 +173,10 @@ def _manifold_note(model, matrix):
     solved = ", ".join(world[name] for name in world if name not in model.task)
     asked = ("off its manifold: the routine answers WARN_UNREACHABLE with that pose's joints" if machine.off[0]
              else "on its manifold") if model.parasitic_given else f"read for {read} only (this host solves {solved})"
-    return (f"the machine's pose for this {', '.join(name for name in world if name in model.task)}: "
-            f"x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}")
+    task = ", ".join(name for name in world if name in model.task)
+    if not machine.radicand[0] >= -SINGULAR_TOLERANCE:
+        return f"no pose of the machine has this {task} (the constraint's radicand is {machine.radicand[0]:.6g})"
+    return f"the machine's pose for this {task}: x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}"
 
 
 def _indices_note(model):
