@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-MACHINES = ("prs_head", "rps_table")
+MACHINES = ("prs_head", "rps_table", "exechon_constrained")
 BASELINE = "hexapod"
 HOSTS = ("delmia", "linuxcnc")
 

@@ -131,7 +131,7 @@ def test_generated_routine_equals_the_reference(name, host, tmp_path):
 
 
 BAD = [
-    ("task: [z, roll, pitch]\n", "task: [x, y, z]\n", "task: kingen solves the parasitic x, y, yaw"),
+    ("task: [z, roll, pitch]\n", "task: [z, roll, yaw]\n", "task: kingen solves the parasitic x, y, yaw"),
     ("task: [z, roll, pitch]\n", "", "revolute_axis: a revolute axis constrains the platform"),
     ("revolute_axis: [-1, 0, 0]", "revolute_axis: [0, 0, 1]", "revolute_axis must be perpendicular"),
 ]

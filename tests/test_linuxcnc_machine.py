@@ -64,6 +64,8 @@ CASES = {
     "linear_delta": {"moves": [[10, -5, 20], [-30, 25, 5]], "jog": 1.0},
     # z, A, B commanded; X, Y, C the machine's for them (the module reads z, A, B only)
     "prs_head": {"moves": [[0, 0, -370, 12, -7, 0], [0, 0, -430, -9, 6, 0]], "jog": 2.0},
+    # X, Y, Z commanded; A, B, C the machine's for them (the module reads X, Y, Z only)
+    "exechon_constrained": {"moves": [[80, -60, -1150, 0, 0, 0], [-120, 150, -1300, 0, 0, 0]], "jog": 2.0},
 }
 """Per robot: MDI moves (the machine's coordinates, in its units and degrees) and a joint-0 jog;
 a machine with task coordinates is sent its parasitic X, Y, C for them."""
@@ -105,7 +107,7 @@ def machine_ini(robot, folder, kins_ini, units):
                  if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")
     coordinates = "X Y Z A B C" if robot.dof == 6 or robot.task else "X Y Z"
-    axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -1000\nMAX_LIMIT = 1000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
+    axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -5000\nMAX_LIMIT = 5000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
                    for axis in coordinates.split())
     (folder / "sim.tbl").write_text("")
     (folder / "machine.ini").write_text(MACHINE.format(

@@ -73,7 +73,7 @@ def test_analytic_jacobian_matches_finite_differences_of_the_reference(name):
     wrenches, transmissions = posture_wrenches(robot, expected.points, expected.joints)
     analytic = jacobian(wrenches, transmissions)
     if robot.task:
-        analytic = np.einsum("nkpj,nji->nkpi", analytic, task_twists(robot, t6) @ task_rows(t6))
+        analytic = np.einsum("nkpj,nji->nkpi", analytic, task_twists(robot, t6) @ task_rows(t6, robot.task))
     numeric = np.swapaxes(finite_difference_jacobian(lambda moved: solve(robot, moved).joints, t6, 1e-3, 1e-6,
                                                      robot.revolute), 1, 2)
     regular = ((expected.warnings != UNREACHABLE)[:, :, None] & (np.abs(transmissions) > 0.05)

@@ -78,6 +78,10 @@ class Parameters:
     (6,) and the target's ``target`` (6,) or (3,) (mm, degrees)."""
 
     def __init__(self, robot, measure, frame=(0.0,) * 6, target=None):
+        if robot.task:
+            raise KingenError(f"{robot.path}:{robot.line_of('task')}: task: calibrate draws and fits poses in six free "
+                              f"coordinates and does not model the constraints of a machine with task coordinates "
+                              f"(its other coordinates are parasitic): not supported")
         self.robot, self.measure = robot, measure
         self.lever = robot.size_mm
         entries = []

@@ -160,16 +160,23 @@ def _index_text(value):
 
 
 def _manifold_note(model, matrix):
-    """Where a machine with task coordinates is for the T6 (1, 4, 4)'s z, roll and pitch, and
+    """Where a machine with task coordinates is for the T6 (1, 4, 4)'s task coordinates, and
     whether the T6 asks for that pose (docs/how-to/hybrid.md)."""
     from ..conventions import pose_from_t6
     from ..kinematics.parasitic import solve_parasitic
+    from ..kinematics.routine import SINGULAR_TOLERANCE
 
     machine = solve_parasitic(model, matrix)
     where = " ".join(f"{value:.9f}" for value in pose_from_t6(machine.t6)[0])
+    world = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), ("X", "Y", "Z", "A", "B", "C")))
+    read = ", ".join(world[name] for name in world if name in model.task)
+    solved = ", ".join(world[name] for name in world if name not in model.task)
     asked = ("off its manifold: the routine answers WARN_UNREACHABLE with that pose's joints" if machine.off[0]
-             else "on its manifold") if model.parasitic_given else "read for z, A, B only (this host solves x, y, C)"
-    return f"the machine's pose for this z, roll, pitch: x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}"
+             else "on its manifold") if model.parasitic_given else f"read for {read} only (this host solves {solved})"
+    task = ", ".join(name for name in world if name in model.task)
+    if not machine.radicand[0] >= -SINGULAR_TOLERANCE:
+        return f"no pose of the machine has this {task} (the constraint's radicand is {machine.radicand[0]:.6g})"
+    return f"the machine's pose for this {task}: x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}"
 
 
 def _indices_note(model):

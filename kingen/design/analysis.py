@@ -21,6 +21,7 @@ from ..kinematics.collision import MODELS, clearances
 from ..conventions import matrix_from_pose, rpy_from_rotation, t6_from_matrix
 from ..kinematics.forward import COORDINATES, closure_derivative, unit_wrenches
 from ..kinematics.home import SINGULAR, singular_index_mm
+from ..kinematics.parasitic import solve_parasitic, task_twists
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
@@ -99,6 +100,9 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
     not configured or not applicable), joints (n, dof), singular (n,) bool (SINGULAR).
     ``home``: the posture's Home (computed when not given) for the crossing rules."""
     home = home_values(robot, posture, settings) if home is None else home
+    if robot.task:  # a constrained machine over its task coordinates: the pose it takes for them
+        with np.errstate(all="ignore"):
+            t6 = solve_parasitic(robot, t6).t6
     plain = replace(robot, direct_index_min=None)
     expected = solve(plain, t6)
     joints = expected.joints[:, :, posture]
@@ -137,6 +141,8 @@ def _det_sign(robot, t6, points, joints):
     free = free_coordinates(robot)
     if len(free) == 6:
         square = wrenches
+    elif robot.task:  # along the manifold: the task coordinates' rates
+        square = wrenches @ task_twists(robot, t6)
     else:
         poses = np.concatenate([t6[:, 3, :3], rpy_from_rotation(np.swapaxes(t6[:, :3, :3], 1, 2))], axis=1)
         square = closure_derivative(wrenches, poses, free)
@@ -337,12 +343,15 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
     free = [COORDINATES[axis] for axis in free_coordinates(robot)]
     available = {
         "direct_index": "available" if robot.has_direct_index else
-        f"not available: {robot.dof} limbs (the constraints that complete the platform are not modelled)",
+        f"not available: {robot.dof} limbs (the constraints that complete the platform are "
+        f"{'not in the index' if robot.task else 'not modelled'})",
         "direct_singularity": "available" if robot.direct_index_min is not None else
         "crossings only: no singularity: {direct_index_min} in the robot file",
         "collision": "available" if robot.collision is not None else
         "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file",
-        "tilt_limits": "available" if limits else f"not analysed: the platform cannot tilt (free: {', '.join(free)})",
+        "tilt_limits": "available" if limits else
+        f"not analysed: the platform's tilt is parasitic (task: {', '.join(free)})" if robot.task else
+        f"not analysed: the platform cannot tilt (free: {', '.join(free)})",
         "slices": "available" if sliced else
         f"not analysed: fewer than two free position coordinates (free: {', '.join(free)})",
     }

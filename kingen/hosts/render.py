@@ -20,7 +20,8 @@ from ..robot.limbs import MODELS, c_double, c_vector, partial_path
 from ..robot.schema import calibration_index
 from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, home_yaw
 from ..kinematics.singularity import PACKED, partial_sum_split
-from ..robot.constraints import constraint_table
+from ..kinematics.parasitic_axes import home_axes
+from ..robot.constraints import axes_table, constraint_table, family
 
 
 def _partial_source(name):
@@ -150,13 +151,27 @@ def constraint_view(robot):
     ``parasitic``), or None."""
     if not robot.task:
         return None
+    if family(robot) == "axes":
+        return axes_view(robot)
     table = constraint_table(robot)
     home_cos, home_sin = home_yaw(robot)
-    return {"axes": [c_vector(row) for row in table.axes], "points": [c_vector(row) for row in table.points],
+    return {"family": "planes", "axes": [c_vector(row) for row in table.axes], "points": [c_vector(row) for row in table.points],
             "offsets": c_vector(table.offsets), "null": c_vector(table.null),
             "inverse": [c_vector(row) for row in table.pseudo_inverse], "home_cos": c_double(home_cos),
             "home_sin": c_double(home_sin), "tolerance_mm": c_double(MANIFOLD_TOLERANCE_MM),
             "tolerance_rad": c_double(MANIFOLD_TOLERANCE_RAD)}
+
+
+def axes_view(robot):
+    """constraint_view of a machine whose revolute axes are fixed in the platform
+    (templates/routine_helpers.c.j2, ``parasitic_axes``)."""
+    table = axes_table(robot)
+    home_v, home_u = home_axes(robot, table)
+    return {"family": "axes", "base": c_vector(table.base), "third_base": c_vector(table.third_base),
+            "difference": c_vector(table.difference), "pair_difference": c_double(table.pair_rhs[0]),
+            "pair_rhs": c_double(table.pair_rhs[1]), "third_rhs": c_double(table.third_rhs),
+            "cosine": c_double(table.cosine), "home_v": c_vector(home_v), "home_u": c_vector(home_u),
+            "frame": [c_vector(row) for row in table.frame], "tolerance_rad": c_double(MANIFOLD_TOLERANCE_RAD)}
 
 
 def robot_view(robot, host):

@@ -193,7 +193,7 @@ def assemblies(robot, joints, near, search=SEARCH):
     near = np.asarray(near, dtype=float)
     free = free_mask(robot)
     exhaustive = True
-    if robot.dof == 3 and list(free) == [True, True, True, False, False, False]:
+    if robot.dof == 3 and list(free) == [True, True, True, False, False, False] and not robot.task:
         candidates = _translation_closed_form(robot, joints, near)
         method = "exhaustive: closed form (the platform point on three spheres: at most 2 poses)"
     elif sgp.applies(robot, free):

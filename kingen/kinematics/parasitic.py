@@ -25,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import pose_from_t6, t6_from_pose
-from ..robot.constraints import TASK, constraint_table
+from ..robot.constraints import TASK, constraint_table, family
+from .parasitic_axes import axes_wrenches, solve_axes
 
 MANIFOLD_TOLERANCE_MM = 1e-6
 MANIFOLD_TOLERANCE_RAD = 1e-8
@@ -51,8 +52,11 @@ def home_yaw(robot):
 
 
 def solve_parasitic(robot, t6):
-    """The machine's pose for each T6 (n, 4, 4), mm: see the module docstring. Non-finite T6
-    give non-finite results (the caller's finite test catches them)."""
+    """The machine's pose for each T6 (n, 4, 4), mm: see the module docstring (an Exechon-type
+    machine's: kingen.kinematics.parasitic_axes, its T6's position kept). Non-finite T6 give
+    non-finite results (the caller's finite test catches them)."""
+    if family(robot) == "axes":
+        return _solve_axes(robot, t6)
     table = constraint_table(robot)
     t6 = np.asarray(t6, dtype=float)
     rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
@@ -88,6 +92,36 @@ def solve_parasitic(robot, t6):
     return Parasitic(t6=fixed, radicand=radicand, off=off)
 
 
+def _solve_axes(robot, t6):
+    """solve_parasitic for the 'axes' family: the rotation replaced, off where any entry of it
+    moved by more than MANIFOLD_TOLERANCE_RAD."""
+    t6 = np.asarray(t6, dtype=float)
+    rotation, radicand = solve_axes(robot, t6)
+    fixed = t6.copy()
+    fixed[:, :3, :3] = np.swapaxes(rotation, 1, 2)
+    off = ~(np.max(np.abs(fixed[:, :3, :3] - t6[:, :3, :3]), axis=(1, 2)) <= MANIFOLD_TOLERANCE_RAD)
+    return Parasitic(t6=fixed, radicand=radicand, off=off)
+
+
+def constraint_residuals(robot, t6):
+    """(n, 3) mm: each constraint equation's residual at the machine's pose for each T6 (n, 4, 4)
+    (solve_parasitic), computed forward from the constraints' own statement: a_i.(C_i - c_i) for
+    revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in the platform; and
+    (n,) the radicand D (where D < 0 no pose closes them)."""
+    machine = solve_parasitic(robot, t6)
+    rotation, position = np.swapaxes(machine.t6[:, :3, :3], 1, 2), machine.t6[:, 3, :3]
+    residuals = []
+    for limb in robot.limbs:
+        if family(robot) == "axes":
+            axis, base, point = limb.platform_constraint()
+            residuals.append(np.sum((rotation @ axis) * (base - position), -1) - np.dot(axis, point))
+        else:
+            axis, point = limb.constraint_plane()
+            platform = rotation @ np.asarray(limb.platform_point, dtype=float) + position
+            residuals.append((platform - point) @ axis)
+    return np.stack(residuals, axis=1), machine.radicand
+
+
 def on_manifold(robot, poses):
     """Poses (n, 6) (mm, degrees) with x, y and yaw replaced by the machine's for their task
     coordinates (those without a solution keep their closest approach)."""
@@ -97,25 +131,29 @@ def on_manifold(robot, poses):
 
 def task_twists(robot, t6):
     """(n, 6, 3) the platform twist [v; omega] (v: the velocity of the point at the base origin,
-    mm; omega rad) per unit rate of each task coordinate z, roll, pitch, moving on the manifold,
-    at T6 (n, 4, 4) on it: the solution t of G t = 0 (each plane's row [a_i, C_i x a_i]) and
-    S t = e_k (S: task_rows)."""
-    table = constraint_table(robot)
+    mm; omega rad) per unit rate of each task coordinate (robot.task), moving on the manifold,
+    at T6 (n, 4, 4) on it: the solution t of G t = 0 (each plane's row [a_i, C_i x a_i], or each
+    platform axis's, kingen.kinematics.parasitic_axes) and S t = e_k (S: task_rows)."""
     t6 = np.asarray(t6, dtype=float)
-    points = np.einsum("nji,kj->nki", t6[:, :3, :3], table.points) + t6[:, 3, None, :3]
     rows = np.zeros((len(t6), 6, 6))
-    rows[:, :3, :3] = table.axes
-    rows[:, :3, 3:] = np.cross(points, table.axes)
-    rows[:, 3:] = task_rows(t6)
+    if family(robot) == "axes":
+        rows[:, :3] = axes_wrenches(robot, t6)
+    else:
+        table = constraint_table(robot)
+        points = np.einsum("nji,kj->nki", t6[:, :3, :3], table.points) + t6[:, 3, None, :3]
+        rows[:, :3, :3] = table.axes
+        rows[:, :3, 3:] = np.cross(points, table.axes)
+    rows[:, 3:] = task_rows(t6, robot.task)
     right = np.zeros((len(t6), 6, len(TASK)))
     right[:, 3:, :] = np.eye(len(TASK))
     return np.linalg.solve(rows, right)
 
 
-def task_rows(t6):
-    """(n, 3, 6) the rates of z, roll and pitch per unit twist at T6 (n, 4, 4): z' = v_z +
-    (omega x p)_z = v_z + omega.(p x e_z); roll' and pitch' from omega = E (roll', pitch', yaw'),
-    E's columns Rz Ry e_x, Rz e_y, e_z."""
+def task_rows(t6, task=TASK):
+    """(n, 3, 6) the rates of the task coordinates per unit twist at T6 (n, 4, 4), in the
+    order x, y, z, roll, pitch, yaw: x' = v_x + (omega x p)_x = v_x + omega.(p x e_x) (so
+    for y, z); roll' and pitch' from omega = E (roll', pitch', yaw'), E's columns Rz Ry e_x,
+    Rz e_y, e_z."""
     t6 = np.asarray(t6, dtype=float)
     count = len(t6)
     _, pitch, yaw = np.radians(pose_from_t6(t6)[:, 3:]).T
@@ -125,8 +163,10 @@ def task_rows(t6):
     euler[:, :, 1] = np.stack([-sy, cy, np.zeros(count)], -1)
     euler[:, 2, 2] = 1.0
     rates = np.linalg.inv(euler)
-    rows = np.zeros((count, 3, 6))
-    rows[:, 0, 2] = 1.0
-    rows[:, 0, 3:] = np.cross(t6[:, 3, :3], [0.0, 0.0, 1.0])
-    rows[:, 1, 3:], rows[:, 2, 3:] = rates[:, 0], rates[:, 1]
-    return rows
+    rows = np.zeros((count, 6, 6))
+    for axis in range(3):
+        rows[:, axis, axis] = 1.0
+        rows[:, axis, 3:] = np.cross(t6[:, 3, :3], np.eye(3)[axis])
+    rows[:, 3:, 3:] = rates
+    names = ("x", "y", "z", "roll", "pitch", "yaw")
+    return rows[:, [index for index, name in enumerate(names) if name in task]]

@@ -123,7 +123,8 @@ def _schema_over(models):
         singularity: Optional[Singularity] = Field(None, description="When a pose counts as a direct singularity.")
         forward: Optional[Forward] = Field(None, description="The pose coordinates forward kinematics solves for.")
         task: Optional[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]]] = Field(
-            None, description="A lower-mobility machine's task coordinates, [z, roll, pitch]: x, y, yaw follow.")
+            None, description="A lower-mobility machine's task coordinates: [z, roll, pitch] (x, y, yaw follow) or "
+                  "[x, y, z] (roll, pitch, yaw follow).")
         working_posture: Annotated[int, Field(ge=0)] = Field(
             0, description="The posture a host with one answer per pose (LinuxCNC) uses.")
         collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")

@@ -8,6 +8,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..conventions import joint_errors
+from ..kinematics.parasitic import constraint_residuals
 from ..kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
 from ..kinematics.singularity import branch_table, branch_values, posture_values, representative_postures
 from .options import CONDITIONING_FACTOR
@@ -84,6 +85,10 @@ class Tally:
     aborted: int = 0
     closure_worst: float = 0.0
     closure_checked: int = 0
+    constraint_worst: float = 0.0
+    constraint_checked: int = 0
+    """A machine with task coordinates: the largest |constraint residual| (mm) at the machine's
+    pose of the poses that have one, and how many poses were judged."""
     posture_counts: np.ndarray = None
     """(4, postures): right, wrong, unreachable wrongly, missed."""
     posture_worst: list = None
@@ -112,10 +117,11 @@ class Tally:
         """Add the totals of a later chunk (its ``first`` counts only when none is kept yet)."""
         self.warning_counts = self.warning_counts + other.warning_counts
         for name in ("returns_wrong", "reachable_poses", "aborted", "closure_checked", "faulty_calls",
-                     "direct_index_below"):
+                     "direct_index_below", "constraint_checked"):
             setattr(self, name, getattr(self, name) + getattr(other, name))
         self.fault_bits |= other.fault_bits
         self.closure_worst = max(self.closure_worst, other.closure_worst)
+        self.constraint_worst = max(self.constraint_worst, other.constraint_worst)
         self.posture_counts += other.posture_counts
         self.posture_worst = [np.maximum(mine, theirs) for mine, theirs in zip(self.posture_worst, other.posture_worst)]
         if self.first is None:
@@ -161,6 +167,13 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected, keep_first=T
     closure_worst, closure_checked = closure_error(tally.calibrated, expected, calls.solutions)
     tally.closure_worst = max(tally.closure_worst, closure_worst)
     tally.closure_checked += closure_checked
+    if robot.task:
+        with np.errstate(all="ignore"):
+            residuals, radicand = constraint_residuals(tally.calibrated, t6)
+        judged = radicand > SINGULAR_TOLERANCE
+        tally.constraint_checked += int(np.count_nonzero(judged))
+        worst = np.where(np.isfinite(residuals), np.abs(residuals), np.inf)[judged]
+        tally.constraint_worst = max(tally.constraint_worst, float(worst.max()) if worst.size else 0.0)
     if keep_first and tally.first is None:
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],

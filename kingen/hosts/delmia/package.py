@@ -81,6 +81,7 @@ def sheet_view(robot, target):
                      for name, meaning in WARNING_MEANINGS.items() if name in can_give],
         "limb_bands": any(limb.has_radicand for limb in robot.limbs),
         "direct_index_available": robot.has_direct_index,
+        "task": list(robot.task),
         "working_posture": robot.working_posture,
         "direct_index_min": robot.direct_index_min,
         "compiler_defines": " ".join(f"-D{define}" for define in WINDOWS_DEFINES),

@@ -46,13 +46,18 @@ def source_name(robot):
 
 
 def translating(robot):
-    """Whether the platform only translates (forward.free is x, y, z): A B C pass through."""
-    return tuple(robot.forward_free) == TRANSLATION or set(robot.forward_free) == set(TRANSLATION)
+    """Whether the platform only translates (forward.free is x, y, z, no task coordinates: an
+    Exechon-type machine's rotation follows its position): A B C pass through."""
+    return not robot.task and (tuple(robot.forward_free) == TRANSLATION or set(robot.forward_free) == set(TRANSLATION))
+
+
+WORLD_AXES = ("X", "Y", "Z", "A", "B", "C")
+"""LinuxCNC's world coordinates, in pose order (A B C: roll, pitch, yaw)."""
 
 
 def free_indices(robot):
     """The pose coordinates (0 x .. 5 yaw) the forward solves for: x y z for a translating
-    platform, a constrained machine's task coordinates (its x, y, yaw follow), else all six."""
+    platform, a constrained machine's task coordinates (its parasitic ones follow), else all six."""
     names = ("x", "y", "z", "roll", "pitch", "yaw")
     free = robot.task or (TRANSLATION if translating(robot) else names)
     return [names.index(name) for name in names if name in free]
@@ -130,6 +135,8 @@ def view_model(robot, units="mm"):
         "translating": translating(robot),
         "free_count": 3 if translating(robot) or robot.task else 6,
         "free_indices": free_indices(robot),
+        "parasitic_indices": [index for index in range(6) if index not in free_indices(robot)],
+        "task_words": ", ".join(WORLD_AXES[index] for index in free_indices(robot)),
         "closed_form": translating(robot) and robot.dof == 3 and robot.models == ("rail",),
         "working_posture": robot.working_posture,
         "branch_words": words,

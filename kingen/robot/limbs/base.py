@@ -161,6 +161,12 @@ class LimbModel(Strict):
         or None: the limb does not constrain the platform."""
         return None
 
+    def platform_constraint(self):
+        """(axis e (3,) unit, platform frame; base point b (3,), base frame, mm; platform point n
+        (3,), platform frame, mm): a revolute joint at the platform point whose axis is fixed in
+        the platform keeps (R e).(b - p) = e.n (kingen.robot.constraints), or None."""
+        return None
+
     def c_row(self):
         """This limb's table row for the partial: {column: C text} (numbers via c_double)."""
         raise NotImplementedError

@@ -24,6 +24,11 @@ class Leg(LimbModel):
     """The axis (unit, base frame) of a revolute joint at the base point, fixed in the base (an
     R-P-S leg): the leg then turns only in the plane through base_point normal to it, and the
     platform point stays in that plane. Absent: a spherical or universal joint (S-P-S, U-P-S)."""
+    platform_revolute_axis: Optional[UnitVec3] = None
+    """The axis (unit, platform frame) of a revolute joint at the platform point, fixed in the
+    platform (an S-P-R or U-P-R leg, the Exechon's): the leg stays perpendicular to it, so the
+    base point stays in the plane through the platform point normal to it. Absent: a spherical
+    joint at the platform."""
 
     joint_type = PRISMATIC
     calibratable = {"reference_length": "mm"}
@@ -51,6 +56,12 @@ class Leg(LimbModel):
         if self.revolute_axis is None:
             return None
         return np.asarray(self.revolute_axis, dtype=float), np.asarray(self.base_point, dtype=float)
+
+    def platform_constraint(self):
+        if self.platform_revolute_axis is None:
+            return None
+        return (np.asarray(self.platform_revolute_axis, dtype=float), np.asarray(self.base_point, dtype=float),
+                np.asarray(self.platform_point, dtype=float))
 
     def c_row(self):
         return {"base_point": c_vector(self.base_point), "platform_point": c_vector(self.platform_point),

@@ -7,14 +7,32 @@ from .base import Check, VerifyCheck
 
 CLOSURE_TOLERANCE = 1e-9
 """Relative to the passive link's length."""
+CONSTRAINT_TOLERANCE_MM = 1e-9
+"""A machine with task coordinates: the largest constraint residual at its pose (mm)."""
 
 
 class Closure(VerifyCheck, name="closure", needs="compared poses", item="closure"):
     def run(self, context):
         tally = context.tally
+        constraints = constraint_checks(context.robot, tally)
         if not tally.closure_checked:
-            return [not_exercised("closure", "no limb of a reachable posture was outside its singular band")]
+            return [not_exercised("closure", "no limb of a reachable posture was outside its singular band"),
+                    *constraints]
         return [Check("closure", tally.closure_worst <= CLOSURE_TOLERANCE,
                       f"each limb's joint of each branch put back into the limb geometry: worst relative "
                       f"residual {tally.closure_worst:.3g} over {tally.closure_checked} joints "
-                      f"(at most {CLOSURE_TOLERANCE:g} of the link length)", judged=tally.closure_checked)]
+                      f"(at most {CLOSURE_TOLERANCE:g} of the link length)", judged=tally.closure_checked),
+                *constraints]
+
+
+def constraint_checks(robot, tally):
+    """[] for a robot without task coordinates; else the check that its constraint equations
+    close at the machine's pose the reference solves every pose at (those that have one)."""
+    if not robot.task:
+        return []
+    if not tally.constraint_checked:
+        return [not_exercised("constraints", "no sampled pose's task coordinates had a machine pose")]
+    return [Check("constraints", tally.constraint_worst <= CONSTRAINT_TOLERANCE_MM,
+                  f"each constraint equation at the machine's pose for the task coordinates: worst residual "
+                  f"{tally.constraint_worst:.3g} mm over {tally.constraint_checked} poses (at most "
+                  f"{CONSTRAINT_TOLERANCE_MM:g} mm)", judged=tally.constraint_checked)]

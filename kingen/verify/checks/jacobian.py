@@ -50,7 +50,7 @@ def jacobian_check(robot, plugin, options, t6):
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
     analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
     if robot.task:  # a constrained machine answers a twist with its task coordinates' motion on its manifold
-        on_manifold = task_twists(calibrated, t6) @ task_rows(t6)
+        on_manifold = task_twists(calibrated, t6) @ task_rows(t6, robot.task)
         analytic = np.einsum("npkj,nji->npki", analytic, on_manifold)
 
     def joints_of(moved):

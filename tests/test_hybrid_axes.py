@@ -1,0 +1,169 @@
+"""The Exechon with its joints' constraints (robots/exechon_constrained.yaml): revolute axes
+fixed in the platform, task coordinates x, y, z, the parasitic roll, pitch and yaw in closed
+form; checked against an independent computation (Newton on the three constraint equations,
+written here), the thesis's home and its observed tilt, the constraints closed at every answered
+pose, the off-manifold answer, the generated routine against the reference on both hosts, forward
+kinematics and bad declarations."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from kingen.conventions import rotation_from_rpy, t6_from_pose
+from kingen.kinematics.forward import free_mask, newton
+from kingen.kinematics.parasitic import constraint_residuals, on_manifold
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import WARNINGS
+from kingen.robot.model import load_robot
+
+NAME = "exechon_constrained"
+TASKS = [(0.0, 50.0, -1250.0), (100.0, 50.0, -1250.0), (80.0, -60.0, -1150.0), (-120.0, 150.0, -1400.0),
+         (140.0, 190.0, -1070.0)]
+UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
+
+
+def independent_pose(robot, x, y, z):
+    """roll, pitch, yaw (degrees) with every leg normal to its platform revolute axis,
+    (R e).(b - p) = e.n: Newton on the three equations with a central-difference Jacobian, from 0."""
+    constraints = [limb.platform_constraint() for limb in robot.limbs]
+
+    def residual(angles):
+        rotation = rotation_from_rpy(*np.radians(angles))
+        return np.array([(rotation @ axis) @ (base - [x, y, z]) - axis @ point for axis, base, point in constraints])
+
+    angles = np.zeros(3)
+    for _ in range(50):
+        jacobian = np.column_stack([(residual(angles + step) - residual(angles - step)) / 2e-6
+                                    for step in np.eye(3) * 1e-6])
+        move = np.linalg.solve(jacobian, -residual(angles))
+        angles += move
+        if np.max(np.abs(move)) < 1e-13:
+            break
+    assert np.max(np.abs(residual(angles))) < 1e-10
+    return np.array([x, y, z, *angles])
+
+
+def independent_joints(robot, pose):
+    """Each leg's length at ``pose`` less its reference length (mm)."""
+    rotation = rotation_from_rpy(*np.radians(pose[3:]))
+    return np.array([np.linalg.norm(rotation @ limb.platform_point + pose[:3] - limb.base_point)
+                     - limb.reference_length for limb in robot.limbs])
+
+
+def test_parasitic_rotation_and_joints_match_an_independent_newton():
+    robot = load_robot(NAME)
+    poses = np.array([independent_pose(robot, *task) for task in TASKS])
+    asked = poses.copy()
+    asked[:, 3:] = 0.0  # the task coordinates alone
+    assert np.max(np.abs(on_manifold(robot, asked) - poses)) < 1e-9
+    solution = solve(robot, t6_from_pose(poses))
+    assert not np.any(solution.warnings == UNREACHABLE)
+    expected = np.array([independent_joints(robot, pose) for pose in poses])
+    assert np.max(np.abs(solution.joints[:, :, 0] - expected)) < 1e-9
+
+
+def test_golden_values_are_the_published_home_and_the_independent_computation():
+    robot = load_robot(NAME)
+    assert robot.golden[0].joints == [0, 0, 0] and "Table 3" in robot.golden[0].source
+    for entry in robot.golden:
+        pose = independent_pose(robot, *entry.pose[:3])
+        assert np.max(np.abs(pose[3:] - entry.pose[3:])) < 1e-8
+        assert np.max(np.abs(independent_joints(robot, pose) - entry.joints)) <= entry.tolerance
+
+
+def test_the_thesis_pure_x_move_is_off_the_manifold_and_tilts_the_platform():
+    """The thesis asked its DELMIA Exechon for (100, 50, -1250, 0, 0, 0) and saw it taken to
+    'the nearest point' with a 4-degree tilt: the machine's pose there pitches by 4.57 degrees."""
+    robot = load_robot(NAME)
+    asked = np.array([[100.0, 50.0, -1250.0, 0.0, 0.0, 0.0]])
+    assert np.all(solve(robot, t6_from_pose(asked)).warnings == UNREACHABLE)
+    machine = on_manifold(robot, asked)[0]
+    assert 4.0 < -machine[4] < 5.0 and abs(machine[3]) < 1e-12 and abs(machine[5]) < 1e-12
+
+
+def test_constraints_close_at_every_answered_pose_and_off_the_manifold_is_unreachable():
+    robot = load_robot(NAME)
+    rng = np.random.default_rng(11)
+    region = robot.verification
+    drawn = np.asarray(region.home) + rng.uniform(-1, 1, (400, 6)) * np.asarray(region.range)
+    moved = on_manifold(robot, drawn)
+    residuals, radicand = constraint_residuals(robot, t6_from_pose(np.concatenate([drawn, moved])))
+    assert np.all(radicand > 0.5) and np.max(np.abs(residuals)) < 1e-9
+    off = solve(robot, t6_from_pose(drawn))
+    on = solve(robot, t6_from_pose(moved))
+    assert np.all(off.warnings == UNREACHABLE)
+    assert np.count_nonzero(on.warnings != UNREACHABLE) == len(moved)
+    # the joints answered off the manifold are the machine's for the same position
+    assert np.max(np.abs(off.joints - on.joints)) < 1e-9
+
+
+@pytest.mark.parametrize("host", ["delmia", "linuxcnc"])
+def test_generated_routine_equals_the_reference(host, tmp_path):
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", NAME, "--host", host, "--samples", "2000",
+                             "--out-dir", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    checks = ("values", "warnings", "closure", "constraints", "jacobian", "round trip", "golden[0]", "golden[2]")
+    for check in checks + (("forward",) if host == "linuxcnc" else ()):
+        assert any(line.strip().startswith(f"ok     {check}") for line in result.stdout.splitlines()), check
+
+
+def test_forward_kinematics_solves_the_parasitic_rotation():
+    robot = load_robot(NAME)
+    poses = np.array([independent_pose(robot, *task) for task in TASKS])
+    joints = np.array([independent_joints(robot, pose) for pose in poses])
+    target = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+    start = target + np.array([20.0, -20.0, 30.0, 0.0, 0.0, 0.0])
+    found, residual = newton(robot, start, joints, free_mask(robot))
+    assert np.max(residual) < 1e-9
+    assert np.max(np.abs(found - target)) < 1e-9
+
+
+BAD = [
+    ("task: [x, y, z]\n", "", "platform_revolute_axis: a platform revolute axis constrains the platform"),
+    ("platform_revolute_axis: [1, 0, 0]", "platform_revolute_axis: [1, 0, 0], revolute_axis: [1, 0, 0]",
+     "revolute_axis: task: [x, y, z] takes revolute axes fixed in the platform"),
+    ("platform_revolute_axis: [1, 0, 0]", "platform_revolute_axis: [0, 1, 0]",
+     "platform_revolute_axis: kingen solves two limbs sharing one platform revolute axis"),
+]
+
+
+@pytest.mark.parametrize("old, new, words", BAD)
+def test_bad_declarations_are_refused_on_one_line(old, new, words, tmp_path):
+    text = open(f"robots/{NAME}.yaml").read()
+    assert old in text
+    path = tmp_path / "bad.yaml"
+    path.write_text(text.replace(old, new, 1))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", str(path)], capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"kingen: error: {path}:") and words in lines[0], result.stderr
+
+
+@pytest.mark.parametrize("args", [["plan", "{name}", "--poses", "20", "-o", "{out}/plan.csv"],
+                                  ["{name}", "--measurements", "{out}/measured.csv", "-o", "{out}/cal"]])
+@pytest.mark.parametrize("name", ["prs_head", "rps_table", NAME])
+def test_calibrate_refuses_a_constrained_machine_on_one_line(name, args, tmp_path):
+    """calibrate draws and fits poses in six free coordinates: off a constrained machine's manifold."""
+    (tmp_path / "measured.csv").write_text("q1,q2,q3,x,y,z,roll,pitch,yaw\n")
+    command = [word.format(name=name, out=tmp_path) for word in args]
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "calibrate", *command], capture_output=True,
+                            text=True, timeout=60)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("kingen: error: ") and f"{name}.yaml:" in lines[0]
+    assert "task: calibrate draws and fits poses in six free coordinates" in lines[0]
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["measured.csv"]  # nothing written
+
+
+def test_analyze_sweeps_the_task_coordinates_with_the_parasitic_rotation_following():
+    from kingen.design.analysis import analyze
+
+    result = analyze(load_robot(NAME))
+    assert result["available"]["tilt_limits"] == "not analysed: the platform's tilt is parasitic (task: x, y, z)"
+    # the sweeps along x and y leave the home orientation: drawn as given they would be off the manifold
+    for axis in ("x", "y"):
+        assert [entry["cause"] for entry in result["sweeps"][axis]] == ["none"] * len(result["sweeps"][axis])
+    assert "xy" in result["slices"] and "xz" in result["slices"]
