@@ -185,9 +185,11 @@ def markdown(figures):
                              [*steps, ["total", f"{sum(seconds for _, seconds in built['steps']):.2f}"]]))
         blocks.append(f"```\n{built['failed']}```" if "failed" in built else
                       f"The example printed:\n\n```\n{built['example']}```")
-    if isinstance(figures.get("instructions"), str):
+    if figures.get("instructions") is None:
+        blocks.append("Instructions per call were not counted in this run (`--callgrind` counts them with valgrind).")
+    elif isinstance(figures["instructions"], str):
         blocks.append(f"Instructions were not counted: {figures['instructions']}.")
-    elif figures.get("instructions") is not None:
+    else:
         blocks.append(f"Instructions per inverse call, counted by callgrind over {COUNTED_CALLS:,} calls "
                       "(inclusive, the routine's function): a figure the machine's load cannot move.")
         blocks.append(_table(["robot", "DELMIA instructions/call", "C instructions/call", "C / DELMIA"],
