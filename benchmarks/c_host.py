@@ -166,7 +166,7 @@ def markdown(figures):
                       "C single call median", "worst"],
                      [[row["robot"], str(row["postures"]), f"{row['delmia']['median']:.1f}", f"{row['c']['median']:.1f}",
                        f"{row['c']['median'] / row['delmia']['median']:.3f}", f"{row['c']['min'] / row['delmia']['min']:.3f}",
-                       f"{row['single_median']:.0f} ns", f"{row['single_worst']:.0f} ns"] for row in figures["inverse"]]),
+                       f"{row['single_median']:,.0f} ns", f"{row['single_worst']:,.0f} ns"] for row in figures["inverse"]]),
               f"Forward: from the reference's joints of up to {figures['forward_poses']:,} regular poses at the working "
               "posture, seeded a servo cycle away (0.01 mm, 0.01 degree); best of 5, ns per call.",
               _table(["robot", "poses", "LinuxCNC ns/call", "C ns/call", "C / LinuxCNC", "LinuxCNC failed", "C failed"],

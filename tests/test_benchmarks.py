@@ -115,7 +115,7 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
         assert f"`python benchmarks/{name}.py --small`, run on 2000-01-02 in 12 s; machine: machine of {name}." in text
     assert "| after | 6.98 | 23.70 |" in text and f"{100 * (1 - 6.98 / 1226):.2f} %" in text
     assert "least 75 %, median 100 %; parameters at 95 % or more: 40 of 42" in text
-    assert f"| tau | 8 | 50.0 | 52.5 | {52.5 / 50:.3f} | {44 / 40:.3f} | 70 ns | 1402 ns |" in text
+    assert f"| tau | 8 | 50.0 | 52.5 | {52.5 / 50:.3f} | {44 / 40:.3f} | 70 ns | 1,402 ns |" in text
     assert f"| tau | 84 | 400 | 300 | {300 / 400:.3f} | 0 | 1 |" in text
     assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
     assert f"| delmia | prs_head | 333.6 | {333.6 / 231.1:.2f} |" in text
