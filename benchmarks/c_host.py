@@ -40,6 +40,10 @@ from kingen.kinematics.poses import sample_poses
 from kingen.robot.model import load_robot
 from kingen.verify.bench import compare
 
+ABOUT = ("The C host's library (`--host c`) against the DELMIA routine and the LinuxCNC module of the same robot, "
+         "and its CMake package's build ([Your own controller](how-to/own-controller.md)). Goals: inverse "
+         "C <= 1.15 x DELMIA, forward C <= 1.5 x LinuxCNC.")
+"""What the section measures, for the performance page (links relative to docs/)."""
 COUNTED_CALLS = 2000
 ROBOTS = ("tau", "linear_delta", "rotary_delta", "hexapod", "linuxcnc_hexapod", "ceart", "iwf", "exechon")
 

@@ -36,6 +36,10 @@ from kingen.conventions import t6_from_pose
 from kingen.kinematics.reference import solve
 from kingen.robot.model import load_robot
 
+ABOUT = ("`kingen calibrate` on synthetic measurements of a perturbed robot, from 6-D poses and from positions "
+         "([Calibrate a robot](how-to/calibrate.md)); the tests check the same against measurements made with the "
+         "legs' closure written independently of kingen.")
+"""What the section measures, for the performance page (links relative to docs/)."""
 NOISE_MM, NOISE_RAD, JOINT_STEP = 0.01, 20e-6, 0.001
 FRAME = [150.0, -80.0, 40.0, 2.0, -3.0, 25.0]
 

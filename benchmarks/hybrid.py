@@ -18,6 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+ABOUT = ("The call cost of a lower-mobility machine's routine (parasitic x, y and yaw in closed form, then the "
+         "limbs) against the hexapod's, for each host ([Lower-mobility machines](how-to/hybrid.md)). Goal: at most 3 "
+         "times the hexapod's.")
+"""What the section measures, for the performance page (links relative to docs/)."""
 MACHINES = ("prs_head", "rps_table")
 BASELINE = "hexapod"
 HOSTS = ("delmia", "linuxcnc")

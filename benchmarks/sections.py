@@ -2,8 +2,9 @@
 concern and hands its figures to run.py as plain data.
 
 A section's script takes ``--json FILE`` besides its own settings (it writes its figures there
-as JSON, and prints the same figures as Markdown) and defines ``markdown(figures)``: the
-Markdown of those figures, without a heading. Adding a section is one row of SECTIONS; run.py
+as JSON, and prints the same figures as Markdown) and defines ``markdown(figures)``, the
+Markdown of those figures without a heading, and ``ABOUT``, a paragraph saying what it
+measures (links relative to docs/). Adding a section is one row of SECTIONS; run.py
 runs it, keeps its figures in benchmarks/results/performance.json under ``sections`` and
 renders it after the page's fixed text, with the command, machine, date and time behind it.
 """
@@ -22,19 +23,10 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 SECTIONS = {
-    # name: (script in benchmarks/, its arguments, the page's heading, what it measures; the page links the how-to)
-    "calibrate": ("calibrate.py", ["--runs", "100"], "Calibration",
-                  "`kingen calibrate` on synthetic measurements of a perturbed robot, from 6-D poses and from "
-                  "positions ([Calibrate a robot](how-to/calibrate.md)); the tests check the same against "
-                  "measurements made with the legs' closure written independently of kingen."),
-    "c_host": ("c_host.py", [], "The C host",
-               "The C host's library (`--host c`) against the DELMIA routine and the LinuxCNC module of the "
-               "same robot, and its CMake package's build ([Your own controller](how-to/own-controller.md)). "
-               "Goals: inverse C <= 1.15 x DELMIA, forward C <= 1.5 x LinuxCNC."),
-    "hybrid": ("hybrid.py", ["--calls", "200000", "--rounds", "5"], "Constrained machines",
-               "The call cost of a lower-mobility machine's routine (parasitic x, y and yaw in closed form, "
-               "then the limbs) against the hexapod's, for each host ([Lower-mobility machines](how-to/hybrid.md)). "
-               "Goal: at most 3 times the hexapod's."),
+    # name: (script in benchmarks/, its arguments, the page's heading)
+    "calibrate": ("calibrate.py", ["--runs", "100"], "Calibration"),
+    "c_host": ("c_host.py", [], "The C host"),
+    "hybrid": ("hybrid.py", ["--calls", "200000", "--rounds", "5"], "Constrained machines"),
 }
 
 
@@ -49,7 +41,7 @@ def machine():
 
 def measure(name):
     """Run section ``name``'s script; its figures with the command, machine, date and wall seconds."""
-    script, arguments, _, _ = SECTIONS[name]
+    script, arguments, _ = SECTIONS[name]
     with tempfile.TemporaryDirectory() as scratch:
         path = Path(scratch) / f"{name}.json"
         started = time.perf_counter()
@@ -62,23 +54,24 @@ def measure(name):
             "machine": machine(), "seconds": seconds, "figures": figures}
 
 
-def _markdown_of(script):
-    """The ``markdown`` function of a section's script (loaded from its file, under a name of its own)."""
+def _script(script):
+    """A section's script as a module (loaded from its file, under a name of its own): its ABOUT and markdown."""
     spec = importlib.util.spec_from_file_location(f"benchmarks_{Path(script).stem}", HERE / script)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.markdown
+    return module
 
 
 def render(saved):
     """Every section of SECTIONS, in order, from its saved run (or a line saying it was not run)."""
     blocks = []
-    for name, (script, _, title, about) in SECTIONS.items():
-        blocks += [f"## {title}", about]
+    for name, (script, _, title) in SECTIONS.items():
+        module = _script(script)
+        blocks += [f"## {title}", module.ABOUT]
         run = saved.get(name)
         if run is None:
             blocks.append(f"Not measured yet: `python benchmarks/run.py --only {name}`.")
             continue
         blocks.append(f"`{run['command']}`, run on {run['date']} in {run['seconds']:.0f} s; machine: {run['machine']}.")
-        blocks.append(_markdown_of(script)(run["figures"]).rstrip("\n"))
+        blocks.append(module.markdown(run["figures"]).rstrip("\n"))
     return "\n\n".join(blocks) + "\n"

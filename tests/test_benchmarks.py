@@ -1,6 +1,7 @@
 """The hand-written floors of benchmarks/ honour the contract the generated routines do
-(so comparing them is fair), and `kingen bench --floor` reports the comparison. Speeds
-are printed by benchmarks/run.py, never asserted here."""
+(so comparing them is fair), and `kingen bench --floor` reports the comparison; run.py renders
+every section of the performance page from saved figures. Speeds are printed by
+benchmarks/run.py, never asserted here."""
 
 import json
 import os
@@ -110,7 +111,7 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
                            "--page", str(page)], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(root)})
     assert done.returncode == 0, done.stderr
     text = page.read_text()
-    for name, (_, _, title, _) in SECTIONS.items():
+    for name, (_, _, title) in SECTIONS.items():
         assert f"\n## {title}\n" in text
         assert f"`python benchmarks/{name}.py --small`, run on 2000-01-02 in 12 s; machine: machine of {name}." in text
     assert "| after | 6.98 | 23.70 |" in text and f"{100 * (1 - 6.98 / 1226):.2f} %" in text
@@ -120,3 +121,14 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
     assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
     assert f"| delmia | prs_head | 333.6 | {333.6 / 231.1:.2f} |" in text
     assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
+
+
+def test_only_refuses_an_unknown_section_and_measures_nothing(tmp_path):
+    root = Path(__file__).resolve().parent.parent
+    figures, page = tmp_path / "figures.json", tmp_path / "performance.md"
+    done = subprocess.run([sys.executable, str(root / "benchmarks" / "run.py"), "--only", "hybrid,nosuch",
+                           "--figures", str(figures), "--page", str(page)], capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(root)})
+    assert done.returncode == 2
+    assert "--only: no section nosuch (sections: core, " in done.stderr.splitlines()[-1]
+    assert not figures.exists() and not page.exists()
