@@ -1,7 +1,8 @@
-"""Calibration's goals, measured and printed as Markdown for docs/how-to/calibrate.md and the
-closing notes.
+"""Calibration's goals, measured and printed as Markdown, and with --json written as plain data
+for benchmarks/run.py (the performance page's section).
 
     python benchmarks/calibrate.py [--runs 100] [--part hexapod|montecarlo|planning|positions|speed|all]
+                                   [--json FILE]
 
 - hexapod: the 42 limb parameters perturbed by up to 1 mm, the measuring frame unknown
   (25 degrees and 150 mm off), 6-D measurements with noise 10 um and 20 urad per coordinate,
@@ -19,8 +20,10 @@ closing notes.
 """
 
 import argparse
+import json
 import math
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -33,6 +36,10 @@ from kingen.conventions import t6_from_pose
 from kingen.kinematics.reference import solve
 from kingen.robot.model import load_robot
 
+ABOUT = ("`kingen calibrate` on synthetic measurements of a perturbed robot, from 6-D poses and from positions "
+         "([Calibrate a robot](how-to/calibrate.md)); the tests check the same against measurements made with the "
+         "legs' closure written independently of kingen.")
+"""What the section measures, for the performance page (links relative to docs/)."""
 NOISE_MM, NOISE_RAD, JOINT_STEP = 0.01, 20e-6, 0.001
 FRAME = [150.0, -80.0, 40.0, 2.0, -3.0, 25.0]
 
@@ -94,18 +101,13 @@ def hexapod_case(seed=1):
 def hexapod():
     parameters, truth, poses, held, _, _ = hexapod_case()
     fit = identify(parameters, measure(parameters, truth, poses, np.random.default_rng(7)), parameters.selected("all"))
-    before = held_out_error(parameters, fit.before, held)
-    after = held_out_error(parameters, fit.values, held)
-    print("## Hexapod, 6-D measurements\n")
-    print(f"42 limb parameters perturbed by up to 1 mm, measuring frame {FRAME} (mm, deg) unknown, noise "
-          f"{NOISE_MM * 1000:g} um / {NOISE_RAD * 1e6:g} urad, joints read to {JOINT_STEP * 1000:g} um, "
-          f"30 planned poses, 200 held-out poses (exact measurements).\n")
-    print("| | position RMS (um) | orientation RMS (urad) |\n| --- | --- | --- |")
-    for label, (position, angle) in (("before (nominal, frame fitted)", before), ("after", after)):
-        print(f"| {label} | {position * 1000:.2f} | {math.radians(angle) * 1e6:.2f} |")
-    print(f"\nreduction {100 * (1 - after[0] / before[0]):.2f} %; converged {fit.converged}, "
-          f"{int(fit.chosen.sum())} identified, condition number {fit.indices['condition_number']:.4g}, "
-          f"{fit.seconds:.2f} s\n")
+    (before, before_angle), (after, after_angle) = (held_out_error(parameters, values, held)
+                                                    for values in (fit.before, fit.values))
+    return {"poses": len(poses), "held_out": 200, "before_um": before * 1000,
+            "before_urad": math.radians(before_angle) * 1e6, "after_um": after * 1000,
+            "after_urad": math.radians(after_angle) * 1e6, "converged": bool(fit.converged),
+            "identified": int(fit.chosen.sum()), "condition_number": float(fit.indices["condition_number"]),
+            "seconds": fit.seconds}
 
 
 def montecarlo(runs):
@@ -119,34 +121,28 @@ def montecarlo(runs):
         chosen = fit.chosen & gauge.chosen
         inside.append(np.where(chosen, np.abs(fit.values - gauge.values) <= 3.0 * fit.std, True))
     coverage = np.mean(inside, axis=0)[gauge.chosen]
-    print("## Honest deviations (Monte-Carlo)\n")
-    print(f"{runs} noise draws on the same 30 planned poses ({time.perf_counter() - started:.0f} s): the share of "
-          f"runs in which each of the {int(gauge.chosen.sum())} identifiable parameters lies within 3 stated "
-          f"standard deviations of the truth (in the identified gauge): least {coverage.min() * 100:.0f} %, median "
-          f"{np.median(coverage) * 100:.0f} %; parameters at 95 % or more: {int(np.sum(coverage >= 0.95))} of "
-          f"{len(coverage)}\n")
+    return {"runs": runs, "poses": len(poses), "seconds": time.perf_counter() - started,
+            "identifiable": int(gauge.chosen.sum()), "least": float(coverage.min()),
+            "median": float(np.median(coverage)), "at_95": int(np.sum(coverage >= 0.95))}
 
 
 def planning(draws=5):
     parameters, _, _, _, found, rows = hexapod_case()
     limbs = plan.limb_columns(found, parameters)
     chosen_std = plan.predicted(found, rows, parameters)[0][found.chosen][limbs]
-    print("## Planning pays\n")
-    print(f"Predicted standard deviations (noise {NOISE_MM * 1000:g} um, {NOISE_RAD * 1e6:g} urad) of the "
-          f"{len(chosen_std)} identifiable limb parameters: 30 planned poses (median {np.median(chosen_std) * 1000:.1f} "
-          f"um) against 30 random reachable poses, {draws} draws:\n")
-    print("| draw | random median (um) | ratio of medians | median of ratios |\n| --- | --- | --- | --- |")
+    figures = {"poses": len(rows), "parameters": len(chosen_std), "planned_median_um": float(np.median(chosen_std)) * 1000,
+               "draws": []}
     for draw in range(draws):
         random = np.random.default_rng(draw).choice(len(found.poses), len(rows), replace=False)
         random_std = plan.predicted(found, random, parameters)[0][found.chosen][limbs]
-        print(f"| {draw} | {np.median(random_std) * 1000:.1f} | {np.median(random_std) / np.median(chosen_std):.2f} | "
-              f"{np.median(random_std / chosen_std):.2f} |")
-    print()
+        figures["draws"].append({"random_median_um": float(np.median(random_std)) * 1000,
+                                 "ratio_of_medians": float(np.median(random_std) / np.median(chosen_std)),
+                                 "median_of_ratios": float(np.median(random_std / chosen_std))})
+    return figures
 
 
 def positions():
-    print("## Positions only\n")
-    print("| robot | perturbed | before RMS (um) | after RMS (um) | held-out poses |\n| --- | --- | --- | --- | --- |")
+    rows = []
     for name, scale_of, words in (
             ("rus_optimized", lambda entry: {"zero_offset": 0.1, "rod_length": 1.0}.get(entry.field, 0.0),
              "crank zeros 0.1 deg, rods 1 mm"),
@@ -156,43 +152,102 @@ def positions():
         rng = np.random.default_rng(4)
         truth = truth_values(parameters, rng, scale_of)
         truth[parameters.groups == "target"] = [10.0, -20.0, 20.0]
-        found, rows = planned(parameters)
-        fit = identify(parameters, measure(parameters, truth, found.poses[rows], rng), parameters.selected("all"))
+        found, chosen = planned(parameters)
+        fit = identify(parameters, measure(parameters, truth, found.poses[chosen], rng), parameters.selected("all"))
         held = measure(parameters, truth, reachable_poses(parameters.robot, 200, 99), rng, noisy=False)
-        before = held_out_error(parameters, fit.before, held)[0]
-        after = held_out_error(parameters, fit.values, held)[0]
-        print(f"| {name} | {words} | {before * 1000:.1f} | {after * 1000:.2f} | 200 |")
-    print()
+        rows.append({"robot": name, "perturbed": words, "poses": len(chosen), "held_out": 200,
+                     "before_um": held_out_error(parameters, fit.before, held)[0] * 1000,
+                     "after_um": held_out_error(parameters, fit.values, held)[0] * 1000})
+    return rows
 
 
-def speed():
+def speed(repeats=3):
     parameters, truth, _, _, _, _ = hexapod_case()
     poses = region_poses(parameters.robot, 50, 5)
     data = measure(parameters, truth, poses, np.random.default_rng(2))
     times = []
-    for _ in range(3):
+    for _ in range(repeats):
         started = time.perf_counter()
         identify(parameters, data, parameters.selected("all"))
         times.append(time.perf_counter() - started)
     started = time.perf_counter()
     planned(parameters)
-    planning_time = time.perf_counter() - started
-    print("## Speed\n")
-    print(f"one identification of the hexapod from 50 poses: {min(times):.2f} s (best of 3); planning 30 of "
-          f"5,000 candidates: {planning_time:.2f} s\n")
+    return {"poses": len(poses), "repeats": repeats, "identify_s": min(times),
+            "planning_s": time.perf_counter() - started}
+
+
+def _hexapod_markdown(part):
+    lines = [f"42 limb parameters perturbed by up to 1 mm, measuring frame {FRAME} (mm, deg) unknown, noise "
+             f"{NOISE_MM * 1000:g} um / {NOISE_RAD * 1e6:g} urad, joints read to {JOINT_STEP * 1000:g} um, "
+             f"{part['poses']} planned poses, {part['held_out']} held-out poses (exact measurements).", "",
+             "| | position RMS (um) | orientation RMS (urad) |", "| --- | --- | --- |",
+             f"| before (nominal, frame fitted) | {part['before_um']:.2f} | {part['before_urad']:.2f} |",
+             f"| after | {part['after_um']:.2f} | {part['after_urad']:.2f} |", "",
+             f"Reduction {100 * (1 - part['after_um'] / part['before_um']):.2f} %; converged {part['converged']}, "
+             f"{part['identified']} identified, condition number {part['condition_number']:.4g}, "
+             f"{part['seconds']:.2f} s."]
+    return "Hexapod, 6-D measurements", lines
+
+
+def _montecarlo_markdown(part):
+    return "Honest deviations (Monte-Carlo)", [
+        f"{part['runs']} noise draws on the same {part['poses']} planned poses ({part['seconds']:.0f} s): the share "
+        f"of runs in which each of the {part['identifiable']} identifiable parameters lies within 3 stated standard "
+        f"deviations of the truth (in the identified gauge): least {part['least'] * 100:.0f} %, median "
+        f"{part['median'] * 100:.0f} %; parameters at 95 % or more: {part['at_95']} of {part['identifiable']}."]
+
+
+def _planning_markdown(part):
+    return "Planning pays", [
+        f"Predicted standard deviations (noise {NOISE_MM * 1000:g} um, {NOISE_RAD * 1e6:g} urad) of the "
+        f"{part['parameters']} identifiable limb parameters: {part['poses']} planned poses (median "
+        f"{part['planned_median_um']:.1f} um) against {part['poses']} random reachable poses, "
+        f"{len(part['draws'])} draws:", "",
+        "| draw | random median (um) | ratio of medians | median of ratios |", "| --- | --- | --- | --- |",
+        *(f"| {number} | {draw['random_median_um']:.1f} | {draw['ratio_of_medians']:.2f} | "
+          f"{draw['median_of_ratios']:.2f} |" for number, draw in enumerate(part["draws"]))]
+
+
+def _positions_markdown(part):
+    return "Positions only", [
+        f"A reflector at an unknown point, positions only (noise {NOISE_MM * 1000:g} um).", "",
+        "| robot | perturbed | planned poses | before RMS (um) | after RMS (um) | held-out poses |",
+        "| --- | --- | --- | --- | --- | --- |",
+        *(f"| {row['robot']} | {row['perturbed']} | {row['poses']} | {row['before_um']:.1f} | {row['after_um']:.2f} "
+          f"| {row['held_out']} |" for row in part)]
+
+
+def _speed_markdown(part):
+    return "Speed", [f"One identification of the hexapod from {part['poses']} poses: {part['identify_s']:.2f} s "
+                     f"(best of {part['repeats']}); planning 30 of 5,000 candidates: {part['planning_s']:.2f} s."]
+
+
+MARKDOWN = {"hexapod": _hexapod_markdown, "montecarlo": _montecarlo_markdown, "planning": _planning_markdown,
+            "positions": _positions_markdown, "speed": _speed_markdown}
+
+
+def markdown(figures):
+    """The measured parts as Markdown, one ### heading each."""
+    blocks = []
+    for name, render in MARKDOWN.items():
+        if name in figures:
+            title, lines = render(figures[name])
+            blocks.append("\n".join([f"### {title}", "", *lines]))
+    return "\n\n".join(blocks) + "\n"
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=100)
-    parser.add_argument("--part", choices=["hexapod", "montecarlo", "planning", "positions", "speed", "all"],
-                        default="all")
+    parser.add_argument("--part", choices=[*MARKDOWN, "all"], default="all")
+    parser.add_argument("--json", type=Path, help="Also write the figures to this file as JSON.")
     arguments = parser.parse_args()
     parts = {"hexapod": hexapod, "montecarlo": lambda: montecarlo(arguments.runs), "planning": planning,
              "positions": positions, "speed": speed}
-    for name, part in parts.items():
-        if arguments.part in (name, "all"):
-            part()
+    figures = {name: part() for name, part in parts.items() if arguments.part in (name, "all")}
+    print(markdown(figures))
+    if arguments.json:
+        arguments.json.write_text(json.dumps(figures, indent=1) + "\n")
 
 
 if __name__ == "__main__":

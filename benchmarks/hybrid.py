@@ -1,8 +1,9 @@
 """The call cost of a constrained machine's routine (parasitic x, y, yaw solved in closed form,
 then the limbs) against the hexapod's, in kingen's batch driver, for each host; printed as a
-Markdown table (docs/how-to/hybrid.md). The issue's goal: at most 3 times the hexapod's.
+Markdown table, and with --json written as plain data for benchmarks/run.py (the performance
+page's section). The issue's goal: at most 3 times the hexapod's.
 
-    python benchmarks/hybrid.py [--calls N] [--rounds N]
+    python benchmarks/hybrid.py [--calls N] [--rounds N] [--json FILE]
 
 Each figure is the median of ``rounds`` runs of ``kingen bench ROBOT --host HOST --calls N``
 (its batch_ns_per_call: the routine called from C over N poses of the verification region).
@@ -17,6 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
+ABOUT = ("The call cost of a lower-mobility machine's routine (its parasitic coordinates in closed form, then the "
+         "limbs) against the hexapod's, for each host ([Lower-mobility machines](how-to/hybrid.md)). Goal: at most 3 "
+         "times the hexapod's.")
+"""What the section measures, for the performance page (links relative to docs/)."""
 MACHINES = ("prs_head", "rps_table", "exechon_constrained")
 BASELINE = "hexapod"
 HOSTS = ("delmia", "linuxcnc")
@@ -30,20 +35,39 @@ def batch_ns(robot, host, calls, scratch):
     return json.loads(path.read_text())["batch_ns_per_call"]
 
 
+def measure(calls, rounds):
+    """The figures as plain data: per host, each robot's median ns per call over the rounds."""
+    rows = []
+    with tempfile.TemporaryDirectory() as scratch:
+        for host in HOSTS:
+            for robot in (BASELINE, *MACHINES):
+                rows.append({"host": host, "robot": robot,
+                             "ns": float(np.median([batch_ns(robot, host, calls, scratch) for _ in range(rounds)]))})
+                print(rows[-1], file=sys.stderr, flush=True)
+    return {"calls": calls, "rounds": rounds, "baseline": BASELINE, "rows": rows}
+
+
+def markdown(figures):
+    """The figures as a Markdown table, each robot against the baseline of its host."""
+    baseline = {row["host"]: row["ns"] for row in figures["rows"] if row["robot"] == figures["baseline"]}
+    lines = [f"Median of {figures['rounds']} runs of `kingen bench ROBOT --host HOST --calls {figures['calls']}` "
+             "(the routine called from kingen's C batch driver over the verification region's poses).", "",
+             f"| host | robot | ns per call | against the {figures['baseline']} |", "| --- | --- | --- | --- |"]
+    lines += [f"| {row['host']} | {row['robot']} | {row['ns']:.1f} | {row['ns'] / baseline[row['host']]:.2f} |"
+              for row in figures["rows"]]
+    return "\n".join(lines) + "\n"
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=200000)
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--json", type=Path, help="Also write the figures to this file as JSON.")
     options = parser.parse_args()
-    print("| host | robot | ns per call (median) | against the hexapod |")
-    print("| --- | --- | --- | --- |")
-    with tempfile.TemporaryDirectory() as scratch:
-        for host in HOSTS:
-            figures = {robot: float(np.median([batch_ns(robot, host, options.calls, scratch)
-                                               for _ in range(options.rounds)]))
-                       for robot in (BASELINE, *MACHINES)}
-            for robot, value in figures.items():
-                print(f"| {host} | {robot} | {value:.1f} | {value / figures[BASELINE]:.2f} |", flush=True)
+    figures = measure(options.calls, options.rounds)
+    print(markdown(figures))
+    if options.json:
+        options.json.write_text(json.dumps(figures, indent=1) + "\n")
 
 
 if __name__ == "__main__":

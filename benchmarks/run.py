@@ -1,12 +1,15 @@
-"""Speed figures of kingen: writes the documentation's performance page, docs/performance.md, whole.
+"""Speed and accuracy figures of kingen: writes the documentation's performance page, docs/performance.md, whole.
 
     python benchmarks/run.py [--calls N] [--verify-samples N] [--memory-samples N] [--robots ceart,hexapod,...]
-                             [--pytest-runs N] [--page PATH] [--figures PATH]
+                             [--pytest-runs N] [--page PATH] [--figures PATH] [--only NAME[,NAME]]
     python benchmarks/run.py --render-only      (the page again from the saved figures)
 
 The run's figures (machine, date, tables) go to benchmarks/results/performance.json, and the
 page is rendered from them and from the fixed text below (PAGE), so docs/performance.md is the
-one place where run dates and figures are: edit the text here, never the page.
+one place where run dates and figures are: edit the text here, never the page. The page has
+sections: ``core`` (1 to 4 below) and those of benchmarks/sections.py (SECTIONS: a script each,
+run with its arguments, its figures rendered by its own ``markdown``); ``--only`` measures the
+sections named and keeps the others' saved figures.
 
 1. Each hand-written floor (benchmarks/floors/<robot>.c) must pass `kingen verify --source`.
 2. `kingen bench <robot> --floor ...` times the generated routine against its floor in
@@ -15,27 +18,26 @@ one place where run dates and figures are: edit the text here, never the page.
    children; with --memory-samples, the first robot once more with that many poses), and
    the start-up of `kingen --version` and of a command that reads a robot (`kingen render`).
 4. `pytest --kingen` on a copy of every shipped robot file (the pytest plugin, as a CI job
-   runs it): wall time cold (a new, empty kingen cache each run) and warm (the cache one
-   untimed run filled), in one process and with `-n 2` (when pytest-xdist is installed),
-   the four taken in turns, ``--pytest-runs`` rounds (0: skipped).
+   runs it, benchmarks/pytest_times.py): wall time cold (a new, empty kingen cache each run)
+   and warm (the cache one untimed run filled), in one process and with `-n 2` (when
+   pytest-xdist is installed), the four taken in turns, ``--pytest-runs`` rounds (0: skipped).
 
 Figures are written, never asserted: the machine they ran on is written with them.
 """
 
 import argparse
 import datetime
-import importlib.util
 import json
 import os
-import platform
-import re
-import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+import pytest_times
+import sections
 
 HERE = Path(__file__).resolve().parent
 FLOORS = HERE / "floors"
@@ -66,49 +68,11 @@ def run(arguments):
     return process.returncode, output, seconds, usage.ru_maxrss / 1024.0
 
 
-def pytest_plugin_times(scratch, rounds):
-    """{(cache, workers): [wall seconds]} and the item count of ``pytest --kingen`` on a copy of
-    the shipped robot files, cold (a new empty cache per run) and warm (the cache one untimed
-    run filled), serial and with ``-n 2`` (only when pytest-xdist is installed), taken in turns."""
-    folder = Path(scratch) / "plugin"
-    shutil.copytree(ROBOTS, folder / "robots")
-    # The folder named twice: once for --kingen, once as what pytest collects (nothing else).
-    command = [sys.executable, "-m", "pytest", "--kingen", "robots", "robots", "-q", "-p", "no:cacheprovider"]
-    variants = [("cold", ()), ("warm", ())]
-    if importlib.util.find_spec("xdist") is not None:
-        variants += [("cold", ("-n", "2")), ("warm", ("-n", "2"))]
-    warm_cache = folder / "warm-cache"
-    times, items = {}, None
-    for number in range(rounds + 1):  # run 0 fills the warm cache and is not counted
-        for cache, workers in variants:
-            cache_folder = warm_cache if cache == "warm" else Path(tempfile.mkdtemp(dir=folder))
-            start = time.perf_counter()
-            result = subprocess.run([*command, *workers], cwd=folder, capture_output=True, text=True,
-                                    env={**os.environ, "KINGEN_CACHE": str(cache_folder)})
-            seconds = time.perf_counter() - start
-            if cache == "cold":
-                shutil.rmtree(cache_folder)
-            if result.returncode != 0:
-                raise SystemExit(f"pytest --kingen failed (exit {result.returncode}):\n{result.stdout[-2000:]}")
-            items = int(re.search(r"(\d+) passed", result.stdout).group(1))
-            if number:
-                times.setdefault((cache, workers), []).append(seconds)
-    return times, items
-
-
-def machine():
-    model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                  if line.startswith("model name")), platform.processor())
-    compiler = subprocess.run([os.environ.get("CC", "cc"), "--version"], capture_output=True, text=True).stdout
-    return (f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}; "
-            f"{compiler.splitlines()[0] if compiler else 'cc'}; Python {platform.python_version()}")
-
-
 def measure(options):
     """Run every benchmark; the figures as plain data (what the page is rendered from)."""
     robots = options.robots.split(",")
     started = time.perf_counter()
-    figures = {"date": datetime.date.today().isoformat(), "machine": machine(), "calls": options.calls,
+    figures = {"date": datetime.date.today().isoformat(), "machine": sections.machine(), "calls": options.calls,
                "floors": [], "verify": [], "startup": [], "pytest": None}
     with tempfile.TemporaryDirectory() as scratch:
         for robot in robots:
@@ -137,7 +101,7 @@ def measure(options):
             figures["startup"].append({"command": f"kingen {' '.join(arguments[:2])}",
                                        "seconds": statistics.median(starts)})
         if options.pytest_runs:
-            times, items = pytest_plugin_times(scratch, options.pytest_runs)
+            times, items = pytest_times.pytest_plugin_times(scratch, options.pytest_runs)
             rows = [{"workers": " ".join(workers) or "one process",
                      "cold": [min(times["cold", workers]), statistics.median(times["cold", workers])],
                      "warm": [min(times["warm", workers]), statistics.median(times["warm", workers])]}
@@ -187,7 +151,8 @@ def render(figures):
               for row in plugin["rows"])])
     return PAGE.format(date=figures["date"], machine=figures["machine"], seconds=figures["seconds"],
                        calls=figures["calls"], floor_table="\n".join(floors), worst=worst,
-                       verify_table="\n".join(verify), pytest_table=pytest or "(not run)")
+                       verify_table="\n".join(verify), pytest_table=pytest or "(not run)",
+                       sections=sections.render(figures.get("sections", {})))
 
 
 def main():
@@ -204,11 +169,24 @@ def main():
                         help="Where the run's figures are saved as JSON (default benchmarks/results/performance.json).")
     parser.add_argument("--render-only", action="store_true",
                         help="Measure nothing: write the page again from the saved figures.")
+    parser.add_argument("--only", metavar="NAME[,NAME]",
+                        help=f"Measure only these sections ({', '.join(['core', *sections.SECTIONS])}), "
+                             "keeping the others' saved figures.")
     options = parser.parse_args()
-    if options.render_only:
-        figures = json.loads(options.figures.read_text())
-    else:
-        figures = measure(options)
+    names = options.only.split(",") if options.only else ["core", *sections.SECTIONS]
+    unknown = sorted(set(names) - {"core", *sections.SECTIONS})
+    if unknown:
+        parser.error(f"--only: no section {', '.join(unknown)} (sections: core, {', '.join(sections.SECTIONS)})")
+    keep = options.render_only or options.only
+    figures = json.loads(options.figures.read_text()) if keep and options.figures.exists() else {}
+    if "core" not in names and "floors" not in figures:
+        parser.error(f"no saved figures in {options.figures}: measure the core section too (--only core,...)")
+    if not options.render_only:
+        if "core" in names:
+            figures.update(measure(options))
+        for name in names:
+            if name in sections.SECTIONS:
+                figures.setdefault("sections", {})[name] = sections.measure(name)
         options.figures.parent.mkdir(parents=True, exist_ok=True)
         options.figures.write_text(json.dumps(figures, indent=1) + "\n")
     options.page.write_text(render(figures))
@@ -221,17 +199,20 @@ PAGE = """\
 
 # Performance
 
-How fast the generated routines are, measured against hand-written ones, and what `kingen
-verify` and the pytest plugin cost in time and memory. `python benchmarks/run.py` writes this
-page from one run of it: the figures below are that run's, on the machine named with them
-(`--robots`, `--calls`, `--verify-samples` and `--pytest-runs` choose what it measures; the
-figures themselves are kept in `benchmarks/results/performance.json`). No test asserts a
-speed. The machine is shared, so its speed drifts between runs: read the ratios, which move
-much less than the absolute figures.
+How fast the generated routines are, measured against hand-written ones, what `kingen
+verify` and the pytest plugin cost in time and memory, and what calibration, the C host and
+the constrained machines achieve. `python benchmarks/run.py` writes this page: the figures
+below are its runs', on the machine named with them (`--robots`, `--calls`,
+`--verify-samples` and `--pytest-runs` choose what it measures, `--only calibrate,hybrid`
+measures some sections again and keeps the others'; the figures themselves are kept in
+`benchmarks/results/performance.json`). No test asserts a speed. The machine is shared, so
+its speed drifts between runs: read the ratios, which move much less than the absolute
+figures.
 
 ## The run
 
-Machine: {machine}. Run on {date}; {seconds:.0f} s in all.
+Machine: {machine}. Run on {date}; {seconds:.0f} s in all, for the figures from here to the
+pytest plugin's (`--only core`); each section after it names its own run.
 
 ## The generated routine against a hand-written floor
 
@@ -406,7 +387,8 @@ cold, with more poses (`--kingen-samples`) or with more robots; on a machine who
 core is busy it is slower (with another job on the machine: warm 2.7 s in one process, 4.2 s
 with `-n 2`). Keep the cache between CI jobs (`~/.cache/kingen`, or `$KINGEN_CACHE`) to save
 the builds.
-"""
+
+{sections}"""
 
 
 if __name__ == "__main__":

@@ -1,8 +1,12 @@
 """The hand-written floors of benchmarks/ honour the contract the generated routines do
-(so comparing them is fair), and `kingen bench --floor` reports the comparison. Speeds
-are printed by benchmarks/run.py, never asserted here."""
+(so comparing them is fair), and `kingen bench --floor` reports the comparison; run.py renders
+every section of the performance page from saved figures. Speeds are printed by
+benchmarks/run.py, never asserted here."""
 
 import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -59,3 +63,72 @@ def test_a_bad_floor_is_one_line_and_no_figures(text, code, message, capsys, tmp
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not figures.exists()
+
+
+SECTION_FIGURES = {
+    "calibrate": {
+        "hexapod": {"poses": 30, "held_out": 200, "before_um": 1226.0, "before_urad": 3100.0, "after_um": 6.98,
+                    "after_urad": 23.7, "converged": True, "identified": 42, "condition_number": 812.5, "seconds": 0.4},
+        "montecarlo": {"runs": 4, "poses": 30, "seconds": 2.0, "identifiable": 42, "least": 0.75, "median": 1.0,
+                       "at_95": 40},
+        "planning": {"poses": 30, "parameters": 36, "planned_median_um": 3.1,
+                     "draws": [{"random_median_um": 6.2, "ratio_of_medians": 2.0, "median_of_ratios": 1.94}]},
+        "positions": [{"robot": "tau", "perturbed": "link lengths 1 mm", "poses": 30, "held_out": 200,
+                       "before_um": 940.0, "after_um": 6.9}],
+        "speed": {"poses": 50, "repeats": 3, "identify_s": 0.3, "planning_s": 2.6}},
+    "c_host": {
+        "calls": 2000, "single_calls": 3000, "forward_poses": 100,
+        "inverse": [{"robot": "tau", "postures": 8, "delmia": {"min": 40.0, "median": 50.0},
+                     "c": {"min": 44.0, "median": 52.5}, "single_median": 70.0, "single_worst": 1402.0}],
+        "forward": [{"robot": "tau", "poses": 84, "linuxcnc": 400.0, "c": 300.0, "linuxcnc_failed": 0, "c_failed": 1}],
+        "package": {"robot": "tau", "steps": [["kingen package", 2.0], ["cmake configure", 0.5]],
+                    "failed": "cmake configure failed:\nno compiler\n"},
+        "instructions": [{"robot": "tau", "delmia": 800.0, "c": 760.0}]},
+    "hybrid": {"calls": 2000, "rounds": 3, "baseline": "hexapod",
+               "rows": [{"host": "delmia", "robot": "hexapod", "ns": 231.1},
+                        {"host": "delmia", "robot": "prs_head", "ns": 333.6}]},
+}
+"""Small figures of every section of benchmarks/sections.py, in the shapes their scripts write."""
+
+
+def test_render_only_renders_every_section_from_saved_figures(tmp_path):
+    """run.py --render-only writes the page from a figures file alone: every section's heading,
+    the command, date and machine behind it, and its figures as its script renders them."""
+    root = Path(__file__).resolve().parent.parent
+    sys.path.insert(0, str(root / "benchmarks"))
+    try:
+        from sections import SECTIONS
+    finally:
+        sys.path.remove(str(root / "benchmarks"))
+    assert set(SECTION_FIGURES) == set(SECTIONS)
+    saved = json.loads((root / "benchmarks" / "results" / "performance.json").read_text())
+    core = {key: saved[key] for key in ("date", "machine", "calls", "floors", "verify", "startup", "pytest", "seconds")}
+    runs = {name: {"command": f"python benchmarks/{name}.py --small", "date": "2000-01-02", "machine": f"machine of {name}",
+                   "seconds": 12.0, "figures": figures} for name, figures in SECTION_FIGURES.items()}
+    figures, page = tmp_path / "figures.json", tmp_path / "performance.md"
+    figures.write_text(json.dumps({**core, "sections": runs}))
+    done = subprocess.run([sys.executable, str(root / "benchmarks" / "run.py"), "--render-only", "--figures", str(figures),
+                           "--page", str(page)], capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(root)})
+    assert done.returncode == 0, done.stderr
+    text = page.read_text()
+    for name, (_, _, title) in SECTIONS.items():
+        assert f"\n## {title}\n" in text
+        assert f"`python benchmarks/{name}.py --small`, run on 2000-01-02 in 12 s; machine: machine of {name}." in text
+    assert "| after | 6.98 | 23.70 |" in text and f"{100 * (1 - 6.98 / 1226):.2f} %" in text
+    assert "least 75 %, median 100 %; parameters at 95 % or more: 40 of 42" in text
+    assert f"| tau | 8 | 50.0 | 52.5 | {52.5 / 50:.3f} | {44 / 40:.3f} | 70 ns | 1,402 ns |" in text
+    assert f"| tau | 84 | 400 | 300 | {300 / 400:.3f} | 0 | 1 |" in text
+    assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
+    assert f"| delmia | prs_head | 333.6 | {333.6 / 231.1:.2f} |" in text
+    assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
+
+
+def test_only_refuses_an_unknown_section_and_measures_nothing(tmp_path):
+    root = Path(__file__).resolve().parent.parent
+    figures, page = tmp_path / "figures.json", tmp_path / "performance.md"
+    done = subprocess.run([sys.executable, str(root / "benchmarks" / "run.py"), "--only", "hybrid,nosuch",
+                           "--figures", str(figures), "--page", str(page)], capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(root)})
+    assert done.returncode == 2
+    assert "--only: no section nosuch (sections: core, " in done.stderr.splitlines()[-1]
+    assert not figures.exists() and not page.exists()
