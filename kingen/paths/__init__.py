@@ -2,7 +2,7 @@
 checked along its whole path on a robot: reach, joint travel, singular bands, the direct
 index, assembly-mode changes, joint speeds and accelerations (``kingen check-path``).
 
-Modules: :mod:`.program` (moves from a CSV; :mod:`.interpreter` and the canon script
+Modules: :mod:`.moves` (what a program is made of), :mod:`.program` (moves from a CSV; :mod:`.interpreter` and the canon script
 :mod:`.linuxcnc_canon` for G-code), :mod:`.sampling` (the path between the points),
 :mod:`.limits` (robot file and LinuxCNC .ini), :mod:`.evaluation` (the decision quantities),
 :mod:`.refinement` (samples between samples), :mod:`.timing` (trapezoidal exact-stop timing),

@@ -16,7 +16,8 @@ import numpy as np
 from .evaluation import Evaluator
 from .findings import Findings
 from .limits import limits_for
-from .program import program_moves, source_lines
+from .interpreter import gcode_moves
+from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
 from .sampling import lengths, poses_and_t6, sample_count
 from .timing import joint_rates, profile
@@ -135,6 +136,13 @@ class _Checker:
             self.sink(move, batch, rates)
         if self.progress is not None:
             self.progress(self.findings)
+
+
+def program_moves(path, start):
+    """The moves of the program at ``path``: a G-code file through LinuxCNC's interpreter, the
+    machine at pose ``start`` (mm, degrees) when it begins; any other file as a CSV of poses
+    (which starts at its first row)."""
+    return gcode_moves(path, start) if is_gcode(path) else csv_moves(path)
 
 
 def check_program(robot, program, settings=Settings(), sink=None, progress=None):

@@ -17,7 +17,8 @@ import numpy as np
 
 from ..errors import KingenError, located
 from ..runtime.file_gate import refuse_special_file
-from .program import Arc, Move
+from .moves import Arc, Move
+from .program import source_lines
 
 MM_PER_INCH = 25.4
 INCH_PROGRAM = 200
@@ -26,6 +27,8 @@ LINUXCNC_PYTHON = "/usr/bin/python3"
 """The Python that has LinuxCNC's ``gcode`` module (Debian's linuxcnc-uspace installs it for
 the system's Python); ``KINGEN_LINUXCNC_PYTHON`` names another."""
 CANON = Path(__file__).with_name("linuxcnc_canon.py")
+RS274 = "/usr/bin/rs274"
+RS274_SECONDS = 60.0
 PLANE_AXES = {1: (0, 1, 2), 2: (1, 2, 0), 3: (2, 0, 1)}
 """LinuxCNC's plane (G17 XY, G19 YZ, G18 XZ): the x, y, z indices of its first and second
 axis and of its normal."""
@@ -76,7 +79,7 @@ def _moves(lines, path, errors, position):
         if fields[0] == "D":
             return
         if fields[0] == "E":
-            raise located(path, int(fields[1]), "G-code", " ".join(fields[2:]))
+            raise located(path, refused_line(path, int(fields[1])), "G-code", " ".join(fields[2:]))
         move = _move(fields, position)
         if move is not None and move.line > 0:
             yield move
@@ -85,6 +88,26 @@ def _moves(lines, path, errors, position):
     errors.seek(0)
     said = " ".join(errors.read().decode("utf-8", "replace").split()[-40:])
     raise KingenError(f"{path}: LinuxCNC's interpreter stopped without finishing the program: {said or 'no message'}")
+
+
+def refused_line(path, sequence):
+    """The line the interpreter refused, from its last sequence number: that line's (refused
+    while executing the block) or one past it (refused while reading it). ``rs274``, the same
+    interpreter standalone, prints the refused block's text after its message, which tells
+    the two apart; without it, the line before."""
+    candidates = [number for number in (sequence - 1, sequence) if number >= 1] or [1]
+    try:
+        printed = subprocess.run([RS274, "-g", os.path.abspath(path)], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                 text=True, errors="replace", timeout=RS274_SECONDS, stdin=subprocess.DEVNULL).stdout
+    except (OSError, subprocess.TimeoutExpired):
+        return candidates[0]
+    said = {_squeezed(text) for text in printed.splitlines()}
+    texts = source_lines(path, candidates)
+    return next((number for number in candidates if _squeezed(texts.get(number, "")) in said), candidates[0])
+
+
+def _squeezed(text):
+    return "".join(text.split()).lower() or None
 
 
 def _move(fields, start):

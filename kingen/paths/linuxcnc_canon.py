@@ -11,7 +11,7 @@ rotation applied as AXIS applies them (rs274.interpret.Translated), in LinuxCNC'
 units (inches, degrees); feed as the interpreter hands it (inches/min); units the program's
 (1 inch, 2 mm, 3 cm) when the move was made. The end, after the last move:
 
-    E <line> <message>      the interpreter refused the program at that line
+    E <sequence> <message>  the interpreter refused the program: its last sequence number
     D                       the program was read to its end
 """
 
@@ -86,7 +86,7 @@ def main(program, start):
         canon = Canon(parameters)
         result, sequence = gcode.parse(program, canon, "", start)
     if result > gcode.MIN_ERROR:
-        print("E", max(sequence - 1, 1), " ".join(gcode.strerror(result).split()))
+        print("E", sequence, " ".join(gcode.strerror(result).split()))
     else:
         print("D")
 

@@ -1,5 +1,5 @@
-"""A program as a stream of moves: what ``check-path`` reads from a CSV of poses or, through
-LinuxCNC's interpreter (:mod:`.gcode`), from a G-code file.
+"""A program as a stream of moves: what ``check-path`` reads from a CSV of poses (a G-code file
+goes through LinuxCNC's interpreter, :mod:`.interpreter`), and the text of a program's lines.
 
 Every pose is x, y, z in mm and roll, pitch, yaw (LinuxCNC's A, B, C) in degrees, in the
 robot's base frame. Moves are produced one at a time, so a program of any length is read
@@ -8,47 +8,17 @@ in constant memory.
 
 import csv
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import located
 from ..runtime.file_gate import refuse_special_file
+from .moves import Move
 
 GCODE_SUFFIXES = (".ngc", ".nc", ".gcode")
 POSE_COLUMNS = ("x", "y", "z", "roll", "pitch", "yaw")
 TIMING_COLUMNS = ("t", "feed")
-
-
-@dataclass(frozen=True)
-class Arc:
-    """A circular (or helical) move in one plane: ``axes`` the indices (first, second, normal)
-    of x, y, z in that plane (LinuxCNC's first and second axis, the plane's normal), ``center``
-    the centre's (first, second) coordinates in mm, ``rotation`` LinuxCNC's: its sign the
-    sense (positive counter-clockwise seen from the normal's tip), |rotation| - 1 extra full turns."""
-
-    axes: tuple
-    center: tuple
-    rotation: int
-
-
-@dataclass(frozen=True)
-class Move:
-    """One programmed motion from ``start`` to ``end`` (6 floats each, mm and degrees).
-
-    line: the G-code line (1-based) or CSV row's line in the file; kind: "feed", "rapid",
-    "arc" (G-code) or "row" (CSV). feed: mm/min along the xyz path (deg/min for a move that
-    only turns), None when the program gives none (a rapid, a CSV without feed). duration: s
-    (a CSV with ``t``), else None."""
-
-    line: int
-    kind: str
-    start: np.ndarray
-    end: np.ndarray
-    feed: float = None
-    duration: float = None
-    arc: Arc = None
 
 
 def is_gcode(path):
@@ -127,17 +97,6 @@ def csv_moves(path):
             previous, previous_time = pose, value
         if previous is None:
             raise located(path, None, None, "no poses in the program")
-
-
-def program_moves(path, start):
-    """The moves of the program at ``path``: a G-code file through LinuxCNC's interpreter
-    (:func:`kingen.paths.interpreter.gcode_moves`), the machine at pose ``start`` (mm,
-    degrees) when it begins; any other file as a CSV of poses (which starts at its first row)."""
-    if is_gcode(path):
-        from .interpreter import gcode_moves
-
-        return gcode_moves(path, start)
-    return csv_moves(path)
 
 
 def source_lines(path, numbers):

@@ -143,5 +143,5 @@ def csv_rows(move, batch, rates, display_scale):
     columns = np.column_stack([np.full(len(batch.u), move.line), batch.u, batch.poses, batch.joints * display_scale,
                                rates[:, 0] * display_scale, rates[:, 1] * display_scale, batch.radicand,
                                batch.direct_index if batch.direct_index is not None else np.full(len(batch.u), np.nan)])
-    text = "\n".join(",".join("" if not np.isfinite(value) else f"{value:.10g}" for value in row) for row in columns)
+    text = "\n".join(",".join("" if not np.isfinite(value) else f"{value:.15g}" for value in row) for row in columns)
     return text + "\n" if text else ""
