@@ -55,22 +55,20 @@ print(json.dumps({"samples": outcome.findings.samples, "seconds": seconds, "prob
 
 def speed_program(robot, samples, path):
     """A CSV of straight 100 mm moves (and up to 2 degrees of turn) around the robot's home,
-    within a third of its verification range, ``samples`` samples in all at chord 0.1 mm."""
+    within a third of its verification range (or 100 mm), until ``samples`` regular samples
+    at chord 0.1 mm."""
     home, reach = np.array(robot.verification.home), np.array(robot.verification.range) / 3.0
-    moves = max(1, round(samples / (MOVE_MM / 0.1)))
     generator = np.random.default_rng(7)
-    rows, pose = [], home.copy()
-    rows.append(pose.copy())
-    for _ in range(moves):
+    rows, pose, count = [home.copy()], home.copy(), 0
+    while count < samples:
         direction = generator.normal(size=3)
         direction /= np.linalg.norm(direction)
         target = pose.copy()
         target[:3] += MOVE_MM * direction
-        if np.any(np.abs(target[:3] - home[:3]) > reach[:3]):
-            target[:3] = pose[:3] - MOVE_MM * direction
         if np.any(np.abs(target[:3] - home[:3]) > np.maximum(reach[:3], MOVE_MM)):
-            target[:3] = home[:3] + MOVE_MM * direction
+            target[:3] = home[:3] + 0.5 * MOVE_MM * direction
         target[3:] = home[3:] + generator.uniform(-1.0, 1.0, 3) * np.minimum(reach[3:], 2.0)
+        count += math.ceil(max(np.linalg.norm(target[:3] - pose[:3]), np.max(np.abs(target[3:] - pose[3:]))) / 0.1)
         rows.append(target)
         pose = target
     path.write_text("x,y,z,roll,pitch,yaw\n" + "\n".join(",".join(f"{v:.9f}" for v in row) for row in rows) + "\n")

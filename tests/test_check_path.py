@@ -209,3 +209,28 @@ def test_an_ini_without_the_robots_joints_is_bad_input(tmp_path, capsys):
     code, out, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini)
     assert code == 2 and out == ""
     assert err == f"kingen: error: {ini}: [JOINT_5]: missing: the robot has 6 joints (JOINT_0 .. JOINT_5)\n"
+
+
+def test_speed_limits_in_an_inch_robot_file_judge_as_the_same_limits_in_an_ini(tmp_path, capsys):
+    document = yaml.safe_load((ROBOTS / "linuxcnc_hexapod.yaml").read_text())
+    limit = 5.0  # mm/s
+    for limb in document["limbs"]:
+        limb["max_speed"] = limit / INCH
+    robot = tmp_path / "limited.yaml"
+    robot.write_text(yaml.safe_dump(document))
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(velocity=limit / INCH, acceleration=1e9))
+    program = tmp_path / "fast.csv"
+    program.write_text("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,600\n0,0,540,0,0,0,600\n")
+    problems = []
+    for extra in (["--ini", ini], []):
+        code, _, err = run(capsys, "check-path", robot if not extra else "linuxcnc_hexapod", program,
+                           "--json", tmp_path / "r.json", *extra)
+        assert code == 1 and err == ""
+        problems.append([(p["kind"], p["joint"], p["value"], p["limit"])
+                         for p in json.loads((tmp_path / "r.json").read_text())["problems"]])
+    assert [row[:2] for row in problems[0]] == [row[:2] for row in problems[1]]
+    assert {kind for kind, *_ in problems[0]} == {"joint speed"}
+    for (_, _, with_ini, ini_limit), (_, _, with_file, file_limit) in zip(*problems):
+        # the .ini's path acceleration (1000 in/s^2) slows only the last 0.002 mm of the move
+        assert with_ini == pytest.approx(with_file, rel=1e-3) and ini_limit == pytest.approx(file_limit) == limit
