@@ -234,3 +234,33 @@ def test_speed_limits_in_an_inch_robot_file_judge_as_the_same_limits_in_an_ini(t
     for (_, _, with_ini, ini_limit), (_, _, with_file, file_limit) in zip(*problems):
         # the .ini's path acceleration (1000 in/s^2) slows only the last 0.002 mm of the move
         assert with_ini == pytest.approx(with_file, rel=1e-3) and ini_limit == pytest.approx(file_limit) == limit
+
+
+def test_delmia_turns_the_orientation_about_one_axis_at_a_uniform_rate(tmp_path, capsys):
+    from scipy.spatial.transform import Rotation
+
+    program = tmp_path / "turn.csv"
+    program.write_text("0,0,508,0,0,0\n0,0,508,20,0,20\n")
+    angles = {}
+    for host in ("delmia", "linuxcnc"):
+        samples = tmp_path / f"{host}.csv"
+        code, _, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--host", host, "--csv", samples)
+        assert (code, err) == (0, "")
+        rows = np.genfromtxt(samples, delimiter=",", names=True)
+        rotations = Rotation.from_euler("xyz", np.column_stack([rows["roll"], rows["pitch"], rows["yaw"]]), degrees=True)
+        turned = (rotations[0].inv() * rotations).magnitude()
+        angles[host] = (rows["u"], turned, rows)
+    u, turned, rows = angles["delmia"]
+    assert np.max(np.abs(turned - u * turned[-1])) < 1e-9  # uniform about one axis
+    u, turned, rows = angles["linuxcnc"]
+    assert np.max(np.abs(rows["roll"] - 20 * u)) < 1e-9 and np.max(np.abs(rows["yaw"] - 20 * u)) < 1e-9
+    assert np.max(np.abs(turned - u * turned[-1])) > 1e-4  # A, B, C linear: not uniform about one axis
+
+
+def test_a_program_without_a_move_exercises_nothing(tmp_path, capsys):
+    program = tmp_path / "still.csv"
+    program.write_text("0,0,508,0,0,0\n0,0,508,0,0,0\n")
+    code, out, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--json", tmp_path / "r.json")
+    document = json.loads((tmp_path / "r.json").read_text())
+    assert code == 0 and err == ""
+    assert set(document["checks"].values()) == {"not exercised: the program has no move"}

@@ -87,6 +87,9 @@ def _moves(lines, path, errors, position):
             position = move.end
     errors.seek(0)
     said = " ".join(errors.read().decode("utf-8", "replace").split()[-40:])
+    if "No module named 'gcode'" in said or "No module named 'rs274'" in said:
+        raise KingenError(f"{path}: reading G-code needs LinuxCNC's interpreter, and {interpreter_python()} has no "
+                          f"'gcode' module (Debian's linuxcnc-uspace; KINGEN_LINUXCNC_PYTHON names its Python)")
     raise KingenError(f"{path}: LinuxCNC's interpreter stopped without finishing the program: {said or 'no message'}")
 
 

@@ -92,6 +92,9 @@ def csv_moves(path):
                 if timing == "t" and value <= previous_time:
                     raise located(path, line, "t", f"{value:g} s does not come after the previous row's "
                                                    f"{previous_time:g} s")
+                if np.array_equal(pose, previous):  # no motion (a dwell when timed)
+                    previous, previous_time = pose, value
+                    continue
                 yield Move(line, "row", previous, pose, feed=value if timing == "feed" else None,
                            duration=value - previous_time if timing == "t" else None)
             previous, previous_time = pose, value

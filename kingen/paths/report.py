@@ -28,6 +28,8 @@ def checks(outcome):
         else "the robot has no six force lines",
         "assembly change": "the robot has no six force lines",
     }
+    if findings.samples == 0:
+        return {kind: "not exercised: the program has no move" for kind in list(reasons) + list(SPEED_KINDS)}
     kinds = evaluator.kinds()
     for kind in reasons:
         verdicts[kind] = ("failed" if kind in failed else "passed") if kind in kinds else f"not exercised: {reasons[kind]}"
@@ -48,7 +50,8 @@ def checks(outcome):
 
 
 def runs(outcome):
-    """Whether the program runs within every limit that was judged."""
+    """Whether the program runs within every limit that was judged (a program without a move
+    runs)."""
     return not outcome.findings.worst
 
 
