@@ -264,3 +264,39 @@ def test_a_program_without_a_move_exercises_nothing(tmp_path, capsys):
     document = json.loads((tmp_path / "r.json").read_text())
     assert code == 0 and err == ""
     assert set(document["checks"].values()) == {"not exercised: the program has no move"}
+
+
+def test_the_html_report_in_a_real_browser(tmp_path, capsys):
+    """The page's figure loads in Chromium, and a screenshot of it is not blank."""
+    import subprocess
+
+    import matplotlib.image
+
+    from tests.conftest import require_tool
+
+    require_tool("chromium", "chromium")
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,600\n20,10,520,2,0,0,600\n0,0,560,0,0,0,600\n")
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(maximum=31.0, velocity=0.3))
+    page = tmp_path / "report.html"
+    code, _, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini, "--html", page)
+    assert code == 1 and err == ""
+    chromium = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.read_text().replace("</body>", """<script>
+window.addEventListener("load", function () {
+  var loaded = Array.prototype.filter.call(document.images, function (i) { return i.complete && i.naturalWidth > 0; });
+  document.body.setAttribute("data-images", document.images.length + "/" + loaded.length);
+});
+</script></body>"""))
+    dom = subprocess.run([*chromium, f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=5000",
+                          "--dump-dom", probe.as_uri()], capture_output=True, text=True, timeout=120)
+    assert 'data-images="1/1"' in dom.stdout
+    assert "joint speed" in dom.stdout and "travel" in dom.stdout
+    shot = tmp_path / "report.png"
+    subprocess.run([*chromium, f"--user-data-dir={tmp_path / 'profile2'}", f"--screenshot={shot}", "--hide-scrollbars",
+                    "--window-size=1200,1600", page.as_uri()], capture_output=True, timeout=120)
+    pixels = matplotlib.image.imread(shot)
+    assert pixels.shape[:2] == (1600, 1200) and float(pixels[..., :3].std()) > 0.05
