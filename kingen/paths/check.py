@@ -26,6 +26,9 @@ CHUNK = 20000
 """Regular samples solved at once."""
 DEFAULT_CHORD = 0.1
 """mm and degrees between regular samples."""
+RATE_ROUNDING = 1e-9
+"""A joint speed or acceleration above its limit by at most this fraction of it is rounding
+(a joint that follows the path one to one, at the path's own limit), not a problem."""
 
 
 @dataclass(frozen=True)
@@ -118,7 +121,7 @@ class _Checker:
             for joint in np.flatnonzero(np.isfinite(limits)):
                 size = np.abs(rates[:, joint])
                 row = int(np.argmax(size))
-                if size[row] <= limits[joint]:
+                if size[row] <= limits[joint] * (1.0 + RATE_ROUNDING):
                     continue
                 override = float(limits[joint] / size[row]) if kind == "joint speed" else None
                 self.findings.add(index, self.findings.place(

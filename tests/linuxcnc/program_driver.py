@@ -1,10 +1,10 @@
 #!/usr/bin/python3
 """A headless LinuxCNC display for tests/test_check_path_machine.py: LinuxCNC starts it as its
-[DISPLAY] program. It homes, runs the G-code program $KINGEN_PROGRAM in AUTO mode, and every
-10 ms records the time, the line motion is executing, the world position and the joint positions; it
-keeps every message of LinuxCNC's error channel, and writes everything as JSON to
-$KINGEN_RESULT when the program ends or stops; then it exits, and LinuxCNC shuts down. Runs
-under Debian's /usr/bin/python3 (the linuxcnc module)."""
+[DISPLAY] program. It homes, then runs each G-code program of $KINGEN_PROGRAMS (a JSON list of
+paths; each ends where it started) in AUTO mode, every 10 ms recording the time, the line
+motion is executing, the world and the joint positions, and keeping every message of
+LinuxCNC's error channel; it writes everything as JSON to $KINGEN_RESULT, then exits, and
+LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
 
 import json
 import os
@@ -12,7 +12,7 @@ import time
 
 import linuxcnc
 
-result = {"log": [], "errors": [], "samples": [], "finished": False}
+result = {"log": [], "programs": []}
 status, command, errors = linuxcnc.stat(), linuxcnc.command(), linuxcnc.error_channel()
 
 
@@ -26,6 +26,38 @@ def wait(condition, what, timeout=30.0):
     raise TimeoutError(f"no {what} in {timeout:g} s")
 
 
+def run(program):
+    """Run one program from the machine's current position: what happened."""
+    run = {"errors": [], "samples": []}
+    command.mode(linuxcnc.MODE_AUTO)
+    command.wait_complete()
+    command.program_open(program)
+    command.wait_complete()
+    command.auto(linuxcnc.AUTO_RUN, 0)
+    started = time.time()
+    while time.time() - started < 120:
+        status.poll()
+        run["samples"].append({"time": time.time(), "line": status.motion_line,
+                               "world": list(status.actual_position[:6]),
+                               "joints": list(status.joint_actual_position[:status.joints])})
+        message = errors.poll()
+        if message:
+            run["errors"].append({"kind": message[0], "text": message[1]})
+        if time.time() - started > 0.5 and status.interp_state == linuxcnc.INTERP_IDLE and status.queue == 0:
+            break
+        time.sleep(0.01)
+    time.sleep(0.2)
+    while True:
+        message = errors.poll()
+        if not message:
+            break
+        run["errors"].append({"kind": message[0], "text": message[1]})
+    run["finished"] = not run["errors"]
+    command.abort()
+    command.wait_complete()
+    return run
+
+
 try:
     wait(lambda: True, "status")
     command.state(linuxcnc.STATE_ESTOP_RESET)
@@ -35,29 +67,8 @@ try:
     command.wait_complete()
     command.home(-1)
     wait(lambda: all(status.homed[:status.joints]), "homing")
-    command.mode(linuxcnc.MODE_AUTO)
-    command.wait_complete()
-    command.program_open(os.environ["KINGEN_PROGRAM"])
-    command.wait_complete()
-    command.auto(linuxcnc.AUTO_RUN, 0)
-    started = time.time()
-    while time.time() - started < 120:
-        status.poll()
-        result["samples"].append({"time": time.time(), "line": status.motion_line, "world": list(status.actual_position[:6]),
-                                  "joints": list(status.joint_actual_position[:status.joints])})
-        message = errors.poll()
-        if message:
-            result["errors"].append({"kind": message[0], "text": message[1], "line": status.motion_line})
-        if time.time() - started > 0.5 and status.interp_state == linuxcnc.INTERP_IDLE and status.queue == 0:
-            break
-        time.sleep(0.01)
-    time.sleep(0.2)
-    message = errors.poll()
-    if message:
-        result["errors"].append({"kind": message[0], "text": message[1], "line": status.motion_line})
-    status.poll()
-    result["finished"] = not result["errors"]
-    result["last_line"] = status.motion_line
+    for program in json.loads(os.environ["KINGEN_PROGRAMS"]):
+        result["programs"].append(run(program))
 except Exception as error:
     result["log"].append(repr(error))
 finally:
