@@ -208,7 +208,9 @@ def test_an_ini_without_the_robots_joints_is_bad_input(tmp_path, capsys):
     program.write_text("0,0,508,0,0,0\n1,0,508,0,0,0\n")
     code, out, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini)
     assert code == 2 and out == ""
-    assert err == f"kingen: error: {ini}: [JOINT_5]: missing: the robot has 6 joints (JOINT_0 .. JOINT_5)\n"
+    lines = len(ini.read_text().splitlines())
+    assert err == (f"kingen: error: {ini}:{lines}: [JOINT_5]: missing (the file ends here): the robot has 6 joints "
+                   f"(JOINT_0 .. JOINT_5)\n")
 
 
 def test_speed_limits_in_an_inch_robot_file_judge_as_the_same_limits_in_an_ini(tmp_path, capsys):

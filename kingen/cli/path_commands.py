@@ -43,8 +43,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
     every limit judged, 1 when not, 2 bad input."""
     from ..paths.check import Settings, check_program
-    from ..paths.report import csv_header, csv_rows, problem_rows, report_json, runs, verdict_line
-    from ..runtime.files import atomic_file, write_atomic
+    from ..paths.report import problem_rows, report_json, runs, verdict_line
+    from ..runtime.files import write_atomic
 
     model = load_model(robot)
     if posture is not None and posture >= model.postures:
@@ -55,14 +55,7 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
             raise KingenError(f"{given}: no such file")
     settings = Settings(host=host_name, posture=posture, chord=chord, ini=ini)
     with contextlib.ExitStack() as stack:
-        sink = None
-        if csv_path is not None:
-            stream = stack.enter_context(atomic_file(csv_path))
-            stream.write(csv_header(model).encode())
-            scale = _display_scale(model)
-
-            def sink(move, batch, rates):
-                stream.write(csv_rows(move, batch, rates, scale).encode())
+        sink = _csv_sink(stack, csv_path, model) if csv_path is not None else None
         progress = stack.enter_context(_progress())
         outcome = check_program(model, program, settings, sink=sink, progress=progress)
     document = report_json(outcome)
@@ -82,11 +75,21 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     return 0 if runs(outcome) else EXIT_FAILED
 
 
-def _display_scale(model):
-    """Per joint: internal units to the robot file's (mm, degrees)."""
+def _csv_sink(stack, csv_path, model):
+    """A sink that streams every sample to ``csv_path`` (written whole when ``stack`` closes
+    normally, not at all otherwise), its header written."""
     import numpy as np
 
-    return np.where(model.revolute, 180.0 / np.pi, 1.0)
+    from ..paths.report import csv_header, csv_rows
+    from ..runtime.files import atomic_file
+
+    stream = stack.enter_context(atomic_file(csv_path))
+    stream.write(csv_header(model).encode())
+    scale = np.where(model.revolute, 180.0 / np.pi, 1.0)
+
+    def sink(move, batch, rates):
+        stream.write(csv_rows(move, batch, rates, scale).encode())
+    return sink
 
 
 def _plain(data):

@@ -90,8 +90,8 @@ def ini_limits(robot, path):
     unit = INI_UNITS[unit_word]
     missing = [index for index in range(robot.dof) if not parser.has_section(f"JOINT_{index}")]
     if missing:
-        raise located(path, None, f"[JOINT_{missing[0]}]", f"missing: the robot has {robot.dof} joints "
-                                                           f"(JOINT_0 .. JOINT_{robot.dof - 1})")
+        raise located(path, len(lines), f"[JOINT_{missing[0]}]", f"missing (the file ends here): the robot has "
+                                                                 f"{robot.dof} joints (JOINT_0 .. JOINT_{robot.dof - 1})")
     scale = np.where(robot.revolute, np.pi / 180.0, unit)
     values = {}
     for key in ("MIN_LIMIT", "MAX_LIMIT", "MAX_VELOCITY", "MAX_ACCELERATION"):
