@@ -87,8 +87,8 @@ def _csv_sink(stack, csv_path, model):
     stream.write(csv_header(model).encode())
     scale = np.where(model.revolute, 180.0 / np.pi, 1.0)
 
-    def sink(move, batch, rates):
-        stream.write(csv_rows(move, batch, rates, scale).encode())
+    def sink(lines, batch, rates):
+        stream.write(csv_rows(lines, batch, rates, scale).encode())
     return sink
 
 

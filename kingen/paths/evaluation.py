@@ -9,8 +9,8 @@ Decision quantities (one column each), internal units:
   limb's normalised radicand, tol kingen.kinematics.routine.SINGULAR_TOLERANCE), as the
   routine's warnings decide them;
 - ``direct index``: the direct index minus the robot's ``direct_index_min`` (mm);
-- ``assembly change``: det of the six unit force lines times the sign it had at the
-  program's first pose (mm^3): its sign changes where the platform changes assembly mode.
+- ``assembly change``: det of the six unit force lines (mm^3), which the caller signs by its
+  sign at the move's start: its sign changes where the platform changes assembly mode.
 """
 
 from dataclasses import dataclass
@@ -33,32 +33,32 @@ class Quantity:
     upper: bool = False
 
 
+FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index")
+
+
 @dataclass
 class Batch:
-    """Poses (n, 6) mm and degrees at parameters u (n,) of a move; joints (n, dof) mm or rad;
-    margins (n, quantities); radicand (n,) the smallest limb radicand (inf: none);
-    direct_index (n,) mm or None."""
+    """Samples of pieces of moves: piece (n,) which piece each is of, u (n,) its parameter on its
+    move, poses (n, 6) mm and degrees; joints (n, dof) mm or rad; margins (n, quantities);
+    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none)."""
 
+    piece: np.ndarray
     u: np.ndarray
     poses: np.ndarray
     joints: np.ndarray
     margins: np.ndarray
     radicand: np.ndarray
-    direct_index: np.ndarray = None
+    direct_index: np.ndarray
 
     def take(self, order):
-        """This batch's samples in ``order`` (an index array)."""
-        return Batch(self.u[order], self.poses[order], self.joints[order], self.margins[order], self.radicand[order],
-                     None if self.direct_index is None else self.direct_index[order])
+        """This batch's samples in ``order`` (an index array or a boolean mask)."""
+        return Batch(*(getattr(self, name)[order] for name in FIELDS))
 
     @staticmethod
     def joined(first, second):
-        """Both batches' samples, sorted by u."""
-        parts = [first, second]
-        joined = Batch(*(np.concatenate([getattr(part, name) for part in parts])
-                         for name in ("u", "poses", "joints", "margins", "radicand")),
-                       None if first.direct_index is None else np.concatenate([p.direct_index for p in parts]))
-        return joined.take(np.argsort(joined.u, kind="stable"))
+        """Both batches' samples, sorted by piece, then u."""
+        joined = Batch(*(np.concatenate([getattr(first, name), getattr(second, name)]) for name in FIELDS))
+        return joined.take(np.lexsort((joined.u, joined.piece)))
 
 
 class Evaluator:
@@ -70,7 +70,6 @@ class Evaluator:
         self.limits = limits
         self.six_lines = self.robot.has_direct_index
         self.threshold = robot.direct_index_min
-        self.assembly_sign = None
         columns = []
         for joint in range(self.robot.dof):
             if np.isfinite(limits.upper[joint]):
@@ -90,13 +89,14 @@ class Evaluator:
         """The checks these quantities judge, in report order."""
         return tuple(dict.fromkeys(quantity.kind for quantity in self.quantities))
 
-    def evaluate(self, u, poses, t6):
-        """The Batch at parameters ``u`` with poses (n, 6) and their T6 (n, 4, 4)."""
+    def evaluate(self, piece, u, poses, t6):
+        """The Batch of pieces ``piece`` at parameters ``u`` with poses (n, 6) and their T6 (n, 4, 4)."""
         solution = solve(self.robot, t6, indices=self.six_lines)
         joints = solution.branch_joints[:, :, 0]
         margins = np.empty((len(u), len(self.quantities)))
         radicands = solution.radicands
         determinant = self._determinant(solution) if self.six_lines else None
+        index = solution.direct_index[:, 0] if solution.direct_index is not None else np.full(len(u), np.nan)
         for column, quantity in enumerate(self.quantities):
             joint = quantity.joint
             if quantity.kind == "travel":
@@ -110,16 +110,18 @@ class Evaluator:
                 margins[:, column] = np.nan_to_num(solution.direct_index[:, 0] - self.threshold, nan=-np.inf)
             else:
                 margins[:, column] = determinant
-        index = solution.direct_index[:, 0] if solution.direct_index is not None else None
-        return Batch(np.asarray(u, dtype=float), poses, joints, margins, np.min(radicands, axis=1), index)
+        return Batch(np.asarray(piece), np.asarray(u, dtype=float), poses, joints, margins, np.min(radicands, axis=1),
+                     index)
 
     def _determinant(self, solution):
-        """det of the six unit force lines (n,), signed by the program's first pose's sign."""
+        """det of the six unit force lines (n,), mm^3."""
         wrenches, _ = limb_wrenches(self.robot, solution.points, solution.branch_joints, with_transmissions=False)
-        determinant = np.linalg.det(np.ascontiguousarray(wrenches[:, :, 0, :]))
-        if self.assembly_sign is None and len(determinant):
-            self.assembly_sign = 1.0 if determinant[0] >= 0 else -1.0
-        return determinant * self.assembly_sign
+        return np.linalg.det(np.ascontiguousarray(wrenches[:, :, 0, :]))
+
+    def assembly_column(self):
+        """The column of the determinant in the margins, or None."""
+        return next((column for column, quantity in enumerate(self.quantities)
+                     if quantity.kind == "assembly change"), None)
 
     def limit_of(self, quantity):
         """The limit the quantity's value is judged against, in internal units."""

@@ -96,31 +96,34 @@ class Findings:
         if place.key() not in self.worst or place.margin < self.worst[place.key()].margin:
             self.worst[place.key()] = place
 
-    def update_peaks(self, line, joints, speeds=None, accelerations=None):
-        """Each joint's travel used from ``joints`` (n, dof; internal units) and, when given, its
-        largest |speed| and |acceleration| (n, dof), reached on program line ``line``."""
+    def update_peaks(self, joints, lines, speeds, accelerations):
+        """Each joint's travel used from ``joints`` (m, dof; internal units) and its largest
+        |speed| and |acceleration| (n, dof; NaN where not timed) at samples on program ``lines`` (n,)."""
         scale = self.display_scale
-        low, high = np.min(joints, axis=0) * scale, np.max(joints, axis=0) * scale
+        if len(joints):
+            low, high = np.min(joints, axis=0) * scale, np.max(joints, axis=0) * scale
         for index, peak in enumerate(self.peaks):
-            peak.low, peak.high = min(peak.low, low[index]), max(peak.high, high[index])
-            if speeds is not None:
-                speed = float(np.max(np.abs(speeds[:, index]))) * scale[index]
-                if speed > peak.speed:
-                    peak.speed, peak.speed_line = speed, line
-                acceleration = float(np.max(np.abs(accelerations[:, index]))) * scale[index]
-                if acceleration > peak.acceleration:
-                    peak.acceleration, peak.acceleration_line = acceleration, line
+            if len(joints):
+                peak.low, peak.high = min(peak.low, low[index]), max(peak.high, high[index])
+            for rates, name in ((speeds, "speed"), (accelerations, "acceleration")):
+                size = np.abs(rates[:, index])
+                if not np.any(np.isfinite(size)):
+                    continue
+                row = int(np.nanargmax(size))
+                if size[row] * scale[index] > getattr(peak, name):
+                    setattr(peak, name, float(size[row] * scale[index]))
+                    setattr(peak, f"{name}_line", int(lines[row]))
 
-    def record_trace(self, line, joints, speeds, accelerations, radicand, direct_index):
-        """Every trace_stride-th sample of a chunk for the figures (display units); when the
-        trace is full it keeps every other point and the stride doubles."""
+    def record_trace(self, lines, joints, speeds, accelerations, radicand, direct_index):
+        """Every trace_stride-th sample of a batch (on program ``lines`` (n,)) for the figures
+        (display units); when the trace is full it keeps every other point and the stride doubles."""
         count = len(joints)
         take = (self.samples + np.arange(count)) % self.trace_stride == 0
         scale = self.display_scale
-        columns = {"sample": self.samples + np.flatnonzero(take), "line": np.full(int(np.sum(take)), line),
+        columns = {"sample": self.samples + np.flatnonzero(take), "line": np.asarray(lines)[take],
                    "joints": joints[take] * scale, "speeds": np.abs(speeds[take]) * scale,
                    "accelerations": np.abs(accelerations[take]) * scale, "radicand": radicand[take],
-                   "direct_index": direct_index[take] if direct_index is not None else np.full(int(np.sum(take)), np.nan)}
+                   "direct_index": direct_index[take]}
         for name, values in columns.items():
             self.trace[name].append(np.asarray(values))
         self.samples += count

@@ -141,10 +141,10 @@ def csv_header(robot):
                     + ["radicand", "direct_index"]) + "\n"
 
 
-def csv_rows(move, batch, rates, display_scale):
-    """The CSV lines of a batch of samples (display units; NaN written empty)."""
-    columns = np.column_stack([np.full(len(batch.u), move.line), batch.u, batch.poses, batch.joints * display_scale,
+def csv_rows(lines, batch, rates, display_scale):
+    """The CSV lines of a batch of samples on program ``lines`` (n,) (display units; NaN written empty)."""
+    columns = np.column_stack([lines, batch.u, batch.poses, batch.joints * display_scale,
                                rates[:, 0] * display_scale, rates[:, 1] * display_scale, batch.radicand,
-                               batch.direct_index if batch.direct_index is not None else np.full(len(batch.u), np.nan)])
+                               batch.direct_index])
     text = "\n".join(",".join("" if not np.isfinite(value) else f"{value:.15g}" for value in row) for row in columns)
     return text + "\n" if text else ""

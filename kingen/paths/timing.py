@@ -29,17 +29,17 @@ class Profile:
     speed: float
     acceleration: float = None
 
-    def at(self, s):
-        """(ds/dt, d2s/dt2) at path coordinates ``s`` (n,)."""
-        if self.acceleration is None:
-            return np.full(len(s), self.speed), np.zeros(len(s))
-        a = self.acceleration
-        rising = np.sqrt(2.0 * a * np.clip(s, 0.0, None))
-        falling = np.sqrt(2.0 * a * np.clip(self.length - s, 0.0, None))
-        speed = np.minimum(self.speed, np.minimum(rising, falling))
-        acceleration = np.where(rising < np.minimum(self.speed, falling), a,
-                                np.where(falling < np.minimum(self.speed, rising), -a, 0.0))
-        return speed, acceleration
+
+def path_rates(s, length, speed, acceleration):
+    """(ds/dt, d2s/dt2) at path coordinates ``s`` of moves of ``length``, top ``speed`` and path
+    ``acceleration`` (arrays alike; NaN acceleration: none, the move taken at ``speed``)."""
+    timed = np.isfinite(acceleration)
+    a = np.where(timed, acceleration, 1.0)
+    rising = np.where(timed, np.sqrt(2.0 * a * np.clip(s, 0.0, None)), np.inf)
+    falling = np.where(timed, np.sqrt(2.0 * a * np.clip(length - s, 0.0, None)), np.inf)
+    rate = np.minimum(speed, np.minimum(rising, falling))
+    change = np.where(rising < np.minimum(speed, falling), a, np.where(falling < np.minimum(speed, rising), -a, 0.0))
+    return rate, np.where(timed, change, 0.0)
 
 
 def profile(move, limits):
@@ -65,15 +65,28 @@ def profile(move, limits):
     return Profile(length, speed, None if turning_only else limits.path_acceleration)
 
 
-def joint_rates(joints, s, revolute, move_profile):
+def _along(values, s, same):
+    """d values / ds (n, dof) by finite differences within runs of samples (``same`` (n - 1,):
+    whether samples i and i + 1 are of one run): central inside a run, one-sided at its ends,
+    0 for a run of one sample."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        forward = np.diff(values, axis=0) / np.diff(s)[:, None]
+    forward[~same] = np.nan
+    ahead = np.vstack([forward, np.full((1, values.shape[1]), np.nan)])
+    behind = np.vstack([np.full((1, values.shape[1]), np.nan), forward])
+    both = 0.5 * (ahead + behind)
+    return np.where(np.isnan(both), np.where(np.isnan(ahead), np.nan_to_num(behind), ahead), both)
+
+
+def joint_rates(joints, s, run, revolute, length, speed, acceleration):
     """(speeds, accelerations) (n, dof) of the joints (n, dof; mm or rad) sampled at path
-    coordinates ``s`` (n,), by finite differences along the path (revolute joints unwrapped)
-    and the chain rule: dq/dt = q' ds/dt, d2q/dt2 = q'' (ds/dt)^2 + q' d2s/dt2 (zeros for a
-    single sample)."""
+    coordinates ``s`` (n,), equally spaced within each run of samples of one move (``run``
+    (n,): which), revolute joints unwrapped: by finite differences along the path and the
+    chain rule, dq/dt = q' ds/dt, d2q/dt2 = q'' (ds/dt)^2 + q' d2s/dt2, with each sample's
+    move's ``length``, top ``speed`` and path ``acceleration`` (n,; see path_rates)."""
     joints = np.where(revolute, np.unwrap(joints, axis=0), joints) if np.any(revolute) else joints
-    if len(s) < 2:
-        return np.zeros_like(joints), np.zeros_like(joints)
-    first = np.gradient(joints, s, axis=0)
-    second = np.gradient(first, s, axis=0) if len(s) > 2 else np.zeros_like(first)
-    speed, acceleration = move_profile.at(s)
-    return first * speed[:, None], second * (speed ** 2)[:, None] + first * acceleration[:, None]
+    same = run[1:] == run[:-1]
+    first = _along(joints, s, same)
+    second = _along(first, s, same)
+    rate, change = path_rates(s, length, speed, acceleration)
+    return first * rate[:, None], second * (rate ** 2)[:, None] + first * change[:, None]
