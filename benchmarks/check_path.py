@@ -6,7 +6,8 @@ closing notes).
 1. Speed and memory: a CSV program of straight moves 100 mm long around the robot's home,
    N samples in all at the default chord (0.1 mm), on the hexapod and on CEART, each checked
    in a fresh process: samples per second, the process's peak resident memory, and the same
-   for a program ten times shorter (memory flat: the peak does not grow with the program).
+   for a program ten times shorter (memory flat: the peak does not grow with the program);
+   and a program of N/10 moves of 0.1 mm (a CAM program's short segments).
 2. Nothing missed between samples: seeded straight moves (1 to 40 mm around home) along
    which the quantity judged is least inside the move, each given a limit that the path
    crosses only between two regular samples, by half of what the nearest regular sample
@@ -48,7 +49,7 @@ robot = load_robot(sys.argv[1])
 started = time.perf_counter()
 outcome = check_program(robot, sys.argv[2])
 seconds = time.perf_counter() - started
-print(json.dumps({"samples": outcome.findings.samples, "seconds": seconds, "problems": len(outcome.findings.worst),
+print(json.dumps({"samples": outcome.findings.samples, "moves": outcome.findings.moves, "seconds": seconds, "problems": len(outcome.findings.worst),
                   "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 """
 
@@ -74,9 +75,22 @@ def speed_program(robot, samples, path):
     path.write_text("x,y,z,roll,pitch,yaw\n" + "\n".join(",".join(f"{v:.9f}" for v in row) for row in rows) + "\n")
 
 
+def short_moves_program(robot, moves, path):
+    """A CSV of ``moves`` moves of 0.1 mm or less along a helix around the robot's home (radius
+    30 mm, 1 mm a turn), at 1200 mm/min: a CAM program's short segments, one sample each."""
+    home = np.array(robot.verification.home)
+    turn = np.linspace(0.0, moves * 0.1 / 30.0, moves + 1)
+    rows = np.column_stack([home[0] + 30.0 * np.cos(turn), home[1] + 30.0 * np.sin(turn),
+                            home[2] + turn / (2.0 * np.pi), np.tile(home[3:], (moves + 1, 1)),
+                            np.full(moves + 1, 1200.0)])
+    path.write_text("x,y,z,roll,pitch,yaw,feed\n" + "\n".join(",".join(f"{v:.9f}" for v in row) for row in rows)
+                    + "\n")
+
+
 def speed(names, samples):
-    print("| robot | samples | seconds | samples/s | peak memory | same program / 10: samples, peak memory |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print("| robot | samples | seconds | samples/s | peak memory | same program / 10: samples, peak memory | "
+          "moves of 0.1 mm: moves, seconds |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     with tempfile.TemporaryDirectory() as folder:
         for name in names:
             robot = load_robot(name)
@@ -87,9 +101,15 @@ def speed(names, samples):
                 printed = subprocess.run([sys.executable, "-c", CHILD, name, str(program)], capture_output=True,
                                          text=True, check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": ""})
                 figures.append(json.loads(printed.stdout))
-            big, small = figures
+            short = Path(folder) / f"{name}-short.csv"
+            short_moves_program(robot, samples // 10, short)
+            printed = subprocess.run([sys.executable, "-c", CHILD, name, str(short)], capture_output=True,
+                                     text=True, check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": ""})
+            figures.append(json.loads(printed.stdout))
+            big, small, moves = figures
             print(f"| {name} | {big['samples']} | {big['seconds']:.1f} | {big['samples'] / big['seconds']:,.0f} | "
-                  f"{big['peak_mb']:.0f} MB | {small['samples']}, {small['peak_mb']:.0f} MB |")
+                  f"{big['peak_mb']:.0f} MB | {small['samples']}, {small['peak_mb']:.0f} MB | "
+                  f"{moves['moves']} in {moves['seconds']:.1f} s |")
 
 
 def least_along(values, start, end):
