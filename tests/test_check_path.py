@@ -302,3 +302,17 @@ window.addEventListener("load", function () {
                     "--window-size=1200,1600", page.as_uri()], capture_output=True, timeout=120)
     pixels = matplotlib.image.imread(shot)
     assert pixels.shape[:2] == (1600, 1200) and float(pixels[..., :3].std()) > 0.05
+
+
+def test_csv_times_give_the_speed_that_reaches_each_row_on_time(tmp_path, capsys):
+    """Rows 2 s apart, 32 mm up along z: 16 mm/s of the path, each strut at 16 z / L mm/s
+    (largest at the top, z = 540 mm)."""
+    program = tmp_path / "timed.csv"
+    program.write_text("x,y,z,roll,pitch,yaw,t\n0,0,508,0,0,0,0\n0,0,540,0,0,0,2\n")
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(velocity=5.0 / INCH, acceleration=1e9))
+    code, _, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini, "--json", tmp_path / "r.json")
+    assert code == 1 and err == ""
+    problems = json.loads((tmp_path / "r.json").read_text())["problems"]
+    needed = 16.0 * 540.0 / strut_lengths([[0, 0, 540.0, 0, 0, 0]])[0]
+    assert sorted(p["value"] for p in problems) == pytest.approx(sorted(needed), rel=1e-6)

@@ -66,16 +66,19 @@ def profile(move, limits):
 
 
 def _along(values, s, same):
-    """d values / ds (n, dof) by finite differences within runs of samples (``same`` (n - 1,):
-    whether samples i and i + 1 are of one run): central inside a run, one-sided at its ends,
-    0 for a run of one sample."""
+    """d values / ds (n, dof) by finite differences within runs of equally spaced samples
+    (``same`` (n - 1,): whether samples i and i + 1 are of one run), of second order: central
+    inside a run, one-sided over three samples at its ends (over two in a run of two), 0 for a
+    run of one sample."""
     with np.errstate(invalid="ignore", divide="ignore"):
         forward = np.diff(values, axis=0) / np.diff(s)[:, None]
     forward[~same] = np.nan
-    ahead = np.vstack([forward, np.full((1, values.shape[1]), np.nan)])
-    behind = np.vstack([np.full((1, values.shape[1]), np.nan), forward])
-    both = 0.5 * (ahead + behind)
-    return np.where(np.isnan(both), np.where(np.isnan(ahead), np.nan_to_num(behind), ahead), both)
+    gap = np.full((1, values.shape[1]), np.nan)
+    ahead, behind = np.vstack([forward, gap]), np.vstack([gap, forward])
+    ahead2, behind2 = np.vstack([ahead[1:], gap]), np.vstack([gap, behind[:-1]])
+    start = np.where(np.isnan(ahead2), ahead, 1.5 * ahead - 0.5 * ahead2)
+    end = np.where(np.isnan(behind2), behind, 1.5 * behind - 0.5 * behind2)
+    return np.where(np.isnan(behind), np.nan_to_num(start), np.where(np.isnan(ahead), end, 0.5 * (ahead + behind)))
 
 
 def joint_rates(joints, s, run, revolute, length, speed, acceleration):
