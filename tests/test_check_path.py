@@ -13,7 +13,7 @@ import yaml
 
 from kingen.cli import main
 from kingen.conventions import matrix_from_pose
-from tests.conftest import skip_or_fail
+from conftest import require_tool, skip_or_fail
 
 ROBOTS = Path(__file__).resolve().parent.parent / "robots"
 INCH = 25.4
@@ -274,7 +274,6 @@ def test_the_html_report_in_a_real_browser(tmp_path, capsys):
 
     import matplotlib.image
 
-    from tests.conftest import require_tool
 
     require_tool("chromium", "chromium")
     program = tmp_path / "p.csv"
