@@ -315,3 +315,16 @@ def test_csv_times_give_the_speed_that_reaches_each_row_on_time(tmp_path, capsys
     problems = json.loads((tmp_path / "r.json").read_text())["problems"]
     needed = 16.0 * 540.0 / strut_lengths([[0, 0, 540.0, 0, 0, 0]])[0]
     assert sorted(p["value"] for p in problems) == pytest.approx(sorted(needed), rel=1e-6)
+
+
+def test_passing_the_base_plane_is_an_assembly_change_where_the_struts_lie_flat(tmp_path, capsys):
+    """At z = 0 every strut lies in the base plane: the six force lines cannot resist a vertical
+    force, their determinant is 0, and it changes sign as the platform passes through."""
+    program = tmp_path / "through.csv"
+    program.write_text("0,0,100,0,0,0\n0,0,-100.05,0,0,0\n")
+    code, _, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--json", tmp_path / "r.json")
+    assert code == 1 and err == ""
+    document = json.loads((tmp_path / "r.json").read_text())
+    assert [(p["kind"], p["line"]) for p in document["problems"]] == [("assembly change", 2)]
+    first = next(p for p in document["first"] if p["kind"] == "assembly change")
+    assert abs(first["pose"][2]) < 1e-9

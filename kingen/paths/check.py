@@ -64,7 +64,7 @@ class Piece:
     """Regular samples ``begin`` .. ``end`` of a move cut into ``count`` intervals (the samples
     ``low`` .. ``high`` around them are solved too, for the finite differences); ``index`` the
     move's place in the program, ``timing`` its Profile (None: not timed), ``length`` its path
-    length (mm or degrees), ``sign`` the sign of the force lines' determinant at its start."""
+    length (mm or degrees)."""
 
     index: int
     move: object
@@ -73,7 +73,6 @@ class Piece:
     end: int
     timing: object
     length: float
-    sign: float = 1.0
 
     @property
     def low(self):
@@ -111,15 +110,22 @@ class _Checker:
             if self.samples >= CHUNK:
                 self.flush()
 
+    def _tabulate(self):
+        """The gathered pieces' moves as arrays, for evaluate: which are straight lines in the
+        host's interpolation, their start and end poses, their assembly signs."""
+        host = self.settings.host
+        self.simple = np.array([p.straight and (host == "linuxcnc" or np.array_equal(p.move.start[3:], p.move.end[3:]))
+                                for p in self.pieces])
+        self.starts = np.array([p.move.start for p in self.pieces])
+        self.ends = np.array([p.move.end for p in self.pieces])
+        self.signs = np.ones(len(self.pieces))
+
     def evaluate(self, piece, u):
         """The Batch of pieces ``piece`` (indices into self.pieces) at their moves' parameters ``u``."""
         poses, t6 = np.empty((len(u), 6)), np.empty((len(u), 4, 4))
-        simple = np.array([p.straight and (self.settings.host == "linuxcnc" or np.array_equal(p.move.start[3:],
-                                                                                             p.move.end[3:]))
-                           for p in self.pieces])[piece]
+        simple = self.simple[piece]
         if np.any(simple):
-            starts = np.array([p.move.start for p in self.pieces])[piece[simple]]
-            ends = np.array([p.move.end for p in self.pieces])[piece[simple]]
+            starts, ends = self.starts[piece[simple]], self.ends[piece[simple]]
             poses[simple] = starts + u[simple, None] * (ends - starts)
             t6[simple] = t6_from_pose(poses[simple])
         for number in np.unique(piece[~simple]):
@@ -128,7 +134,7 @@ class _Checker:
         batch = self.evaluator.evaluate(piece, u, poses, t6)
         column = self.evaluator.assembly_column()
         if column is not None:
-            batch.margins[:, column] *= np.array([p.sign for p in self.pieces])[piece]
+            batch.margins[:, column] *= self.signs[piece]
         return batch
 
     def flush(self):
@@ -138,6 +144,7 @@ class _Checker:
         pieces = self.pieces
         grid_piece = np.concatenate([np.full(p.high - p.low + 1, number) for number, p in enumerate(pieces)])
         grid_u = np.concatenate([np.arange(p.low, p.high + 1) / p.count for p in pieces])
+        self._tabulate()
         self._sign_starts()
         grid = self.evaluate(grid_piece, grid_u)
         starts = np.concatenate([[0], np.cumsum([p.high - p.low + 1 for p in pieces])])
@@ -172,8 +179,8 @@ class _Checker:
         determinant = self.evaluate(firsts, np.zeros(len(firsts))).margins[:, column] if len(firsts) else []
         signs = dict(zip(firsts.tolist(), determinant))
         for number, piece in enumerate(self.pieces):
-            piece.sign = (1.0 if signs[number] >= 0 else -1.0) if number in signs else self.move_sign
-            self.move_sign = piece.sign
+            self.signs[number] = (1.0 if signs[number] >= 0 else -1.0) if number in signs else self.move_sign
+            self.move_sign = self.signs[number]
 
     def _rates(self, grid):
         """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed)."""
