@@ -14,13 +14,14 @@ def _scaled(value, scale):
 
 
 def scaled_limbs(limbs, scale):
-    """``limbs`` with every length field (:attr:`LimbModel.length_fields`) and the travel of
-    prismatic joints multiplied by ``scale``."""
+    """``limbs`` with every length field (:attr:`LimbModel.length_fields`) and the travel, top
+    speed and top acceleration of prismatic joints multiplied by ``scale``."""
     converted = []
     for limb in limbs:
         update = {name: _scaled(getattr(limb, name), scale) for name in limb.length_fields}
-        if limb.travel is not None and not limb.joint_type.wraps:
-            update["travel"] = _scaled(limb.travel, scale)
+        if not limb.joint_type.wraps:
+            update.update({name: _scaled(getattr(limb, name), scale) for name in ("travel", "max_speed", "max_acceleration")
+                           if getattr(limb, name) is not None})
         converted.append(limb.model_copy(update=update))
     return converted
 

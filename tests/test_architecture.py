@@ -84,6 +84,7 @@ LAYERS = (
     ("verify", ("kingen.verify",)),
     ("hosts", ("kingen.hosts",)),
     ("design", ("kingen.design", "kingen.calibrate")),
+    ("paths", ("kingen.paths",)),
     ("interface", ("kingen.cli", "kingen.pytest_plugin", "kingen")),
 )
 """kingen's layers, lowest first (docs/developer/architecture.md): a module may import its own layer's

@@ -53,6 +53,8 @@ Length = Annotated[float, Field(ge=MIN_LENGTH_MM, le=MAX_MM)]
 ReferenceLength = Annotated[float, Field(ge=0, le=MAX_MM)]
 """A leg's length at joint value 0 (mm): 0 makes the joint the leg's absolute length."""
 Travel = Annotated[list[Coordinate], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
+PositiveRate = Annotated[float, Field(gt=0, le=MAX_MM)]
+"""A joint's top speed or acceleration: mm/s or degrees/s (per s for an acceleration), above 0."""
 CalibrationField = Annotated[str, Field(pattern=r"^(length|offset)[1-6]$")]
 """A calibration field, read by the routine at run time: length1..length6 (link_lengths[0..5]),
 offset1..offset6 (link_offsets[0..5]). A host names them in its own words

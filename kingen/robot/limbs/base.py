@@ -16,7 +16,7 @@ from pydantic import field_validator
 
 from ...conventions import PRISMATIC, JointType
 from ...runtime.resources import templates_dir
-from ..schema import CalibrationField, Identifier, Strict, Travel, Vec3
+from ..schema import CalibrationField, Identifier, PositiveRate, Strict, Travel, Vec3
 
 
 @dataclass(frozen=True)
@@ -61,6 +61,11 @@ class LimbModel(Strict):
     """Where the limb's passive link meets the platform (mm, platform frame): every model has one."""
     travel: Optional[Travel] = None
     """[lower, upper] in mm (prismatic) or degrees (revolute); absent: no limits."""
+    max_speed: Optional[PositiveRate] = None
+    """The joint's drive's top speed, mm/s (prismatic) or degrees/s (revolute); absent: not limited
+    (``kingen check-path`` judges the speeds a program needs against it)."""
+    max_acceleration: Optional[PositiveRate] = None
+    """The joint's drive's top acceleration, mm/s^2 or degrees/s^2; absent: not limited."""
     calibrate: dict[str, CalibrationField] = {}
     """Parameter -> calibration field read at run time; a zero field keeps the built-in value."""
 

@@ -1,0 +1,119 @@
+"""The command that checks a program before the machine runs it: check-path (a G-code file read
+by LinuxCNC's own interpreter, or a CSV of poses, along its whole path)."""
+
+import contextlib
+import json
+import sys
+from pathlib import Path
+
+import click
+
+from ..errors import KingenError
+from .common import EXIT_FAILED, ROBOT, FiniteRange, _output_file, cli, finite, load_model, print_table, say
+
+
+@cli.command("check-path")
+@ROBOT
+@click.argument("program", metavar="PROGRAM", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--host", "host_name", type=click.Choice(["linuxcnc", "delmia"]), default="linuxcnc",
+              show_default=True, help="Whose interpolation to follow between the points: linuxcnc (X Y Z A B C "
+                                      "linear together), delmia (the orientation about one fixed axis).")
+@click.option("--posture", type=click.IntRange(min=0), default=None,
+              help="The posture the machine runs in [default: the robot file's working_posture].")
+@click.option("--chord", type=FiniteRange(min=1e-4, max=1000.0), default=0.1, show_default=True, metavar="MM",
+              help="Largest distance between regular samples, mm (and degrees of orientation).")
+@click.option("--ini", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="A LinuxCNC .ini: its [JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION and "
+                   "[TRAJ] speed and acceleration are judged too.")
+@click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write the report as JSON to this file.")
+@click.option("--html", "html_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write an HTML page with the joints along the program to this file.")
+@click.option("--csv", "csv_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=_output_file, help="Write every sample (pose, joints, speeds, accelerations) to this CSV file.")
+def check_path(robot, program, host_name, posture, chord, ini, json_path, html_path, csv_path):
+    """Will PROGRAM run on ROBOT? PROGRAM is a G-code file (.ngc, .nc, .gcode), read by LinuxCNC's
+    own interpreter, or a CSV of poses (x, y, z, roll, pitch, yaw in mm and degrees; optional t
+    in s or feed in mm/min). The path between the points is sampled at most --chord apart and
+    refined until no boundary can hide between two samples; each sample is checked for reach,
+    joint travel, the limb singular band, the direct index, a change of assembly mode, and the
+    joint speed and acceleration its feed asks for (each move timed from rest to rest: blending
+    is not modelled).
+
+    Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
+    every limit judged, 1 when not, 2 bad input."""
+    from ..paths.check import Settings, check_program
+    from ..paths.report import problem_rows, report_json, runs, verdict_line
+    from ..runtime.files import write_atomic
+
+    model = load_model(robot)
+    if posture is not None and posture >= model.postures:
+        raise click.BadParameter(f"{posture}: {model.name} has postures 0 .. {model.postures - 1}",
+                                 param_hint="'--posture'")
+    for given in (program, ini):
+        if given is not None and not given.is_file():
+            raise KingenError(f"{given}: no such file")
+    settings = Settings(host=host_name, posture=posture, chord=chord, ini=ini)
+    with contextlib.ExitStack() as stack:
+        sink = _csv_sink(stack, csv_path, model) if csv_path is not None else None
+        progress = stack.enter_context(_progress())
+        outcome = check_program(model, program, settings, sink=sink, progress=progress)
+    document = report_json(outcome)
+    if json_path is not None:
+        write_atomic(json_path, json.dumps(finite(_plain(document)), indent=1, allow_nan=False) + "\n")
+    if html_path is not None:
+        from ..paths.page import page_html
+
+        write_atomic(html_path, page_html(outcome, document))
+    say(verdict_line(outcome))
+    rows = problem_rows(outcome)
+    if len(rows) > 1:
+        print_table(rows)
+    for kind, verdict in document["checks"].items():
+        if verdict.startswith("not exercised"):
+            say(f"  {kind}: {verdict}")
+    return 0 if runs(outcome) else EXIT_FAILED
+
+
+def _csv_sink(stack, csv_path, model):
+    """A sink that streams every sample to ``csv_path`` (written whole when ``stack`` closes
+    normally, not at all otherwise), its header written."""
+    import numpy as np
+
+    from ..paths.report import csv_header, csv_rows
+    from ..runtime.files import atomic_file
+
+    stream = stack.enter_context(atomic_file(csv_path))
+    stream.write(csv_header(model).encode())
+    scale = np.where(model.revolute, 180.0 / np.pi, 1.0)
+
+    def sink(lines, batch, rates):
+        stream.write(csv_rows(lines, batch, rates, scale).encode())
+    return sink
+
+
+def _plain(data):
+    """``data`` with numpy scalars as Python numbers (for JSON)."""
+    if isinstance(data, dict):
+        return {key: _plain(value) for key, value in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [_plain(value) for value in data]
+    if hasattr(data, "item"):
+        return data.item()
+    return data
+
+
+@contextlib.contextmanager
+def _progress():
+    """On a terminal, a line counting the moves and samples checked; a no-op otherwise."""
+    if sys.stderr is None or not sys.stderr.isatty():
+        yield None
+        return
+
+    def show(findings):
+        click.echo(f"\rchecking: {findings.moves} moves, {findings.samples} samples", nl=False, err=True)
+
+    try:
+        yield show
+    finally:
+        click.echo("\r\033[K", nl=False, err=True)

@@ -1,0 +1,221 @@
+"""The check of a whole program: its moves read one at a time and cut into pieces of at most
+CHUNK regular samples (at most ``chord`` mm and degrees apart); pieces are gathered into
+batches of about CHUNK samples (many short moves share one), each batch sampled, refined and
+bisected between its samples (:mod:`.refinement`), solved at once by the numpy reference,
+judged (:mod:`.judging`), and forgotten: memory does not grow with the program.
+
+Joint speeds and accelerations are judged at the regular samples (finite differences along
+the path, :mod:`.timing`); the boundaries of travel, reach, the singular bands, the direct
+index and the assembly mode at every sample, refined ones included.
+"""
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..conventions import t6_from_pose
+from .evaluation import Evaluator
+from .findings import Findings
+from .interpreter import gcode_moves
+from .judging import judge_margins, judge_rates, record
+from .limits import limits_for
+from .program import csv_moves, is_gcode, source_lines
+from .refinement import refined
+from .sampling import lengths, poses_and_t6, sample_count
+from .timing import joint_rates, profile
+
+CHUNK = 20000
+"""Regular samples solved at once (a move longer than that is cut into pieces)."""
+DEFAULT_CHORD = 0.1
+"""mm and degrees between regular samples."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    """What a check is run with: the host whose interpolation is followed ('linuxcnc' or
+    'delmia'), the posture (None: the robot's working posture), the chord (mm and degrees),
+    the LinuxCNC .ini (None: the robot file's limits only)."""
+
+    host: str = "linuxcnc"
+    posture: int = None
+    chord: float = DEFAULT_CHORD
+    ini: object = None
+
+
+@dataclass
+class Outcome:
+    """A finished check: the robot, program, settings, limits, the evaluator (its checks), the
+    findings, the source text of every line named, the seconds it took."""
+
+    robot: object
+    program: str
+    settings: Settings
+    posture: int
+    limits: object
+    evaluator: object
+    findings: Findings
+    sources: dict
+    seconds: float
+
+
+@dataclass
+class Piece:
+    """Regular samples ``begin`` .. ``end`` of a move cut into ``count`` intervals (the samples
+    ``low`` .. ``high`` around them are solved too, for the finite differences); ``index`` the
+    move's place in the program, ``timing`` its Profile (None: not timed), ``length`` its path
+    length (mm or degrees)."""
+
+    index: int
+    move: object
+    count: int
+    begin: int
+    end: int
+    timing: object
+    length: float
+
+    @property
+    def low(self):
+        return max(0, self.begin - 1)
+
+    @property
+    def high(self):
+        return min(self.count, self.end + 1)
+
+    @property
+    def straight(self):
+        return self.move.arc is None
+
+
+class _Checker:
+    def __init__(self, robot, settings, sink, progress):
+        self.robot, self.settings, self.sink, self.progress = robot, settings, sink, progress
+        self.posture = robot.working_posture if settings.posture is None else settings.posture
+        self.limits = limits_for(robot, settings.ini)
+        self.evaluator = Evaluator(robot, self.posture, self.limits)
+        self.findings = Findings(robot.joint_names, np.where(robot.revolute, 180.0 / np.pi, 1.0))
+        self.pieces, self.samples, self.move_sign = [], 0, 1.0
+
+    def add(self, index, move):
+        """Cut a move into pieces and check them when a batch is full."""
+        count = sample_count(move, self.settings.chord)
+        timing = profile(move, self.limits)
+        self.findings.moves += 1
+        self.findings.timed_moves += timing is not None
+        length = timing.length if timing is not None else max(lengths(move))
+        for begin in range(0, count, CHUNK):
+            end = min(count, begin + CHUNK)
+            self.pieces.append(Piece(index, move, count, begin, end, timing, length))
+            self.samples += end - begin + 3
+            if self.samples >= CHUNK:
+                self.flush()
+
+    def _tabulate(self):
+        """The gathered pieces' moves as arrays, for evaluate: which are straight lines in the
+        host's interpolation, their start and end poses, their assembly signs."""
+        host = self.settings.host
+        self.simple = np.array([p.straight and (host == "linuxcnc" or np.array_equal(p.move.start[3:], p.move.end[3:]))
+                                for p in self.pieces])
+        self.starts = np.array([p.move.start for p in self.pieces])
+        self.ends = np.array([p.move.end for p in self.pieces])
+        self.signs = np.ones(len(self.pieces))
+
+    def evaluate(self, piece, u):
+        """The Batch of pieces ``piece`` (indices into self.pieces) at their moves' parameters ``u``."""
+        poses, t6 = np.empty((len(u), 6)), np.empty((len(u), 4, 4))
+        simple = self.simple[piece]
+        if np.any(simple):
+            starts, ends = self.starts[piece[simple]], self.ends[piece[simple]]
+            poses[simple] = starts + u[simple, None] * (ends - starts)
+            t6[simple] = t6_from_pose(poses[simple])
+        for number in np.unique(piece[~simple]):
+            rows = np.flatnonzero(piece == number)
+            poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.settings.host)
+        batch = self.evaluator.evaluate(piece, u, poses, t6)
+        column = self.evaluator.assembly_column()
+        if column is not None:
+            batch.margins[:, column] *= self.signs[piece]
+        return batch
+
+    def flush(self):
+        """Check the gathered pieces as one batch."""
+        if not self.pieces:
+            return
+        pieces = self.pieces
+        grid_piece = np.concatenate([np.full(p.high - p.low + 1, number) for number, p in enumerate(pieces)])
+        grid_u = np.concatenate([np.arange(p.low, p.high + 1) / p.count for p in pieces])
+        self._tabulate()
+        self._sign_starts()
+        grid = self.evaluate(grid_piece, grid_u)
+        starts = np.concatenate([[0], np.cumsum([p.high - p.low + 1 for p in pieces])])
+        regions, owned = [], []
+        for number, piece in enumerate(pieces):
+            first = starts[number] - piece.low
+            regions.append(np.arange(first + piece.begin, first + piece.end + 1))
+            owned.append(np.arange(first + piece.begin + (piece.index > 0 and piece.begin == 0),
+                                   first + piece.end + (piece.end == piece.count)))
+        speeds, accelerations = self._rates(grid)
+        batch, _ = refined(grid.take(np.concatenate(regions)), self.evaluate)
+        ends = np.array([p.end / p.count if p.end < p.count else np.inf for p in pieces])[batch.piece]
+        keep = batch.u < ends
+        keep &= ~((batch.u == 0.0) & np.array([p.index > 0 and p.begin == 0 for p in pieces])[batch.piece])
+        batch = batch.take(keep)
+        owned = np.concatenate(owned)
+        lines = np.array([p.move.line for p in pieces])
+        judge_margins(self.findings, self.evaluator, batch, pieces, lines)
+        judge_rates(self.findings, self.limits, grid.take(owned), speeds[owned], accelerations[owned], pieces, lines)
+        record(self.findings, batch, grid.take(owned), speeds[owned], accelerations[owned], pieces, lines, self.sink)
+        if self.progress is not None:
+            self.progress(self.findings)
+        self.pieces, self.samples = [], 0
+
+    def _sign_starts(self):
+        """Each piece's assembly sign: the determinant's sign at its move's start, found for a
+        move's first piece and kept by its later ones (the pieces of a move come in order)."""
+        column = self.evaluator.assembly_column()
+        if column is None:
+            return
+        firsts = np.array([number for number, piece in enumerate(self.pieces) if piece.begin == 0], dtype=int)
+        determinant = self.evaluate(firsts, np.zeros(len(firsts))).margins[:, column] if len(firsts) else []
+        signs = dict(zip(firsts.tolist(), determinant))
+        for number, piece in enumerate(self.pieces):
+            self.signs[number] = (1.0 if signs[number] >= 0 else -1.0) if number in signs else self.move_sign
+            self.move_sign = self.signs[number]
+
+    def _rates(self, grid):
+        """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed)."""
+        timings = [piece.timing for piece in self.pieces]
+        timed = np.array([timing is not None for timing in timings])[grid.piece]
+        length, speed, acceleration = (np.array([np.nan if timing is None or getattr(timing, name) is None
+                                                 else getattr(timing, name) for timing in timings])[grid.piece]
+                                       for name in ("length", "speed", "acceleration"))
+        lengths_of_rows = np.array([piece.length for piece in self.pieces])[grid.piece]
+        speeds, accelerations = joint_rates(grid.joints, grid.u * lengths_of_rows, grid.piece, self.robot.revolute,
+                                            length, speed, acceleration)
+        speeds[~timed], accelerations[~timed] = np.nan, np.nan
+        return speeds, accelerations
+
+
+def program_moves(path, start):
+    """The moves of the program at ``path``: a G-code file through LinuxCNC's interpreter, the
+    machine at pose ``start`` (mm, degrees) when it begins; any other file as a CSV of poses
+    (which starts at its first row)."""
+    return gcode_moves(path, start) if is_gcode(path) else csv_moves(path)
+
+
+def check_program(robot, program, settings=Settings(), sink=None, progress=None):
+    """Check ``program`` (a G-code file or a CSV of poses, :mod:`.program`) on ``robot`` with
+    ``settings``: the Outcome. ``sink(lines, batch, rates)`` receives every sample as it is
+    judged (lines (n,) their program lines; rates (n, 2, dof): speeds and accelerations, NaN
+    off the regular samples); ``progress(findings)`` is called after each batch. KingenError on
+    bad input."""
+    started = time.perf_counter()
+    checker = _Checker(robot, settings, sink, progress)
+    for index, move in enumerate(program_moves(program, robot.verification.home)):
+        checker.add(index, move)
+    checker.flush()
+    findings = checker.findings
+    named = {place.line for place in list(findings.problems.values()) + list(findings.first.values())
+             + list(findings.worst.values())}
+    return Outcome(robot, str(program), settings, checker.posture, checker.limits, checker.evaluator, findings,
+                   source_lines(program, named), time.perf_counter() - started)

@@ -1,0 +1,143 @@
+"""The robot at a batch of poses along a move: its joints in one posture (the numpy reference,
+vectorised over the batch) and every decision quantity of the checks, signed so that a
+positive value is within its limit and 0 is the boundary.
+
+Decision quantities (one column each), internal units:
+
+- ``travel``: upper - q and q - lower per joint with a limit (mm or rad);
+- ``unreachable``: D + tol and ``limb singular``: D - tol per limb with a radicand (D the
+  limb's normalised radicand, tol kingen.kinematics.routine.SINGULAR_TOLERANCE), as the
+  routine's warnings decide them;
+- ``direct index``: the direct index minus the robot's ``direct_index_min`` (mm);
+- ``assembly change``: det of the six unit force lines (mm^3), which the caller signs by its
+  sign at the move's start: its sign changes where the platform changes assembly mode.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics.reference import solve
+from ..kinematics.routine import SINGULAR_TOLERANCE
+from ..kinematics.singularity import limb_wrenches
+from ..robot.one_posture import at_posture
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One column of the decision quantities: its check ``kind``, the joint or limb it is of
+    (None: the platform's), which side of a limit (``upper``: the value must stay below it)."""
+
+    kind: str
+    joint: int = None
+    upper: bool = False
+
+
+FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index")
+
+
+@dataclass
+class Batch:
+    """Samples of pieces of moves: piece (n,) which piece each is of, u (n,) its parameter on its
+    move, poses (n, 6) mm and degrees; joints (n, dof) mm or rad; margins (n, quantities);
+    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none)."""
+
+    piece: np.ndarray
+    u: np.ndarray
+    poses: np.ndarray
+    joints: np.ndarray
+    margins: np.ndarray
+    radicand: np.ndarray
+    direct_index: np.ndarray
+
+    def take(self, order):
+        """This batch's samples in ``order`` (an index array or a boolean mask)."""
+        return Batch(*(getattr(self, name)[order] for name in FIELDS))
+
+    @staticmethod
+    def joined(first, second):
+        """Both batches' samples, sorted by piece, then u."""
+        joined = Batch(*(np.concatenate([getattr(first, name), getattr(second, name)]) for name in FIELDS))
+        return joined.take(np.lexsort((joined.u, joined.piece)))
+
+
+class Evaluator:
+    """Solves poses for ``robot`` held at ``posture`` and forms the decision quantities against
+    ``limits`` (kingen.paths.limits.Limits)."""
+
+    def __init__(self, robot, posture, limits):
+        self.robot = at_posture(robot, posture)
+        self.limits = limits
+        self.six_lines = self.robot.has_direct_index
+        self.threshold = robot.direct_index_min
+        columns = []
+        for joint in range(self.robot.dof):
+            if np.isfinite(limits.upper[joint]):
+                columns.append(Quantity("travel", joint, True))
+            if np.isfinite(limits.lower[joint]):
+                columns.append(Quantity("travel", joint, False))
+        for joint, limb in enumerate(self.robot.limbs):
+            if limb.has_radicand:
+                columns += [Quantity("unreachable", joint), Quantity("limb singular", joint)]
+        if self.six_lines and self.threshold is not None:
+            columns.append(Quantity("direct index"))
+        if self.six_lines:
+            columns.append(Quantity("assembly change"))
+        self.quantities = tuple(columns)
+
+    def kinds(self):
+        """The checks these quantities judge, in report order."""
+        return tuple(dict.fromkeys(quantity.kind for quantity in self.quantities))
+
+    def evaluate(self, piece, u, poses, t6):
+        """The Batch of pieces ``piece`` at parameters ``u`` with poses (n, 6) and their T6 (n, 4, 4)."""
+        solution = solve(self.robot, t6, indices=self.six_lines)
+        joints = solution.branch_joints[:, :, 0]
+        margins = np.empty((len(u), len(self.quantities)))
+        radicands = solution.radicands
+        determinant = self._determinant(solution) if self.six_lines else None
+        index = solution.direct_index[:, 0] if solution.direct_index is not None else np.full(len(u), np.nan)
+        for column, quantity in enumerate(self.quantities):
+            joint = quantity.joint
+            if quantity.kind == "travel":
+                margins[:, column] = (self.limits.upper[joint] - joints[:, joint] if quantity.upper
+                                      else joints[:, joint] - self.limits.lower[joint])
+            elif quantity.kind == "unreachable":
+                margins[:, column] = radicands[:, joint] + SINGULAR_TOLERANCE
+            elif quantity.kind == "limb singular":
+                margins[:, column] = radicands[:, joint] - SINGULAR_TOLERANCE
+            elif quantity.kind == "direct index":
+                margins[:, column] = np.nan_to_num(solution.direct_index[:, 0] - self.threshold, nan=-np.inf)
+            else:
+                margins[:, column] = determinant
+        return Batch(np.asarray(piece), np.asarray(u, dtype=float), poses, joints, margins, np.min(radicands, axis=1),
+                     index)
+
+    def _determinant(self, solution):
+        """det of the six unit force lines (n,), mm^3."""
+        wrenches, _ = limb_wrenches(self.robot, solution.points, solution.branch_joints, with_transmissions=False)
+        return np.linalg.det(np.ascontiguousarray(wrenches[:, :, 0, :]))
+
+    def assembly_column(self):
+        """The column of the determinant in the margins, or None."""
+        return next((column for column, quantity in enumerate(self.quantities)
+                     if quantity.kind == "assembly change"), None)
+
+    def limit_of(self, quantity):
+        """The limit the quantity's value is judged against, in internal units."""
+        if quantity.kind == "travel":
+            return self.limits.upper[quantity.joint] if quantity.upper else self.limits.lower[quantity.joint]
+        if quantity.kind == "unreachable":
+            return -SINGULAR_TOLERANCE
+        if quantity.kind == "limb singular":
+            return SINGULAR_TOLERANCE
+        if quantity.kind == "direct index":
+            return self.threshold
+        return 0.0
+
+    def value_of(self, quantity, batch, row):
+        """The quantity's own value at a batch's sample (joint, radicand, index or determinant)."""
+        if quantity.kind == "travel":
+            return batch.joints[row, quantity.joint]
+        column = self.quantities.index(quantity)
+        return batch.margins[row, column] + self.limit_of(quantity)

@@ -1,0 +1,62 @@
+"""What a batch of samples tells the findings: the places beyond each decision quantity's
+boundary (the first and the worst of each move's piece), the joint speeds and accelerations
+beyond their limits (the worst of each piece, with the feed override at which a speed fits),
+each joint's peaks, the figures' trace, and every sample to the CSV sink."""
+
+import numpy as np
+
+RATE_ROUNDING = 1e-9
+"""A joint speed or acceleration above its limit by at most this fraction of it is rounding
+(a joint that follows the path one to one, at the path's own limit), not a problem."""
+
+
+def _by_piece(rows, pieces_of_rows):
+    """(piece, its rows) for ``rows`` sorted by piece."""
+    numbers, firsts = np.unique(pieces_of_rows, return_index=True)
+    return zip(numbers, np.split(rows, firsts[1:]))
+
+
+def judge_margins(findings, evaluator, batch, pieces, lines):
+    """The first and the worst place of each piece beyond each decision quantity's boundary."""
+    for column, quantity in enumerate(evaluator.quantities):
+        margins = batch.margins[:, column]
+        beyond = np.flatnonzero(margins <= 0.0)
+        for number, rows in _by_piece(beyond, batch.piece[beyond]):
+            for row in dict.fromkeys((rows[0], rows[np.argmin(margins[rows])])):
+                findings.add(pieces[number].index, findings.place(
+                    quantity.kind, quantity.joint, lines[number], batch.poses[row], batch.joints[row],
+                    evaluator.value_of(quantity, batch, row), evaluator.limit_of(quantity), margins[row]))
+
+
+def judge_rates(findings, limits, grid, speeds, accelerations, pieces, lines):
+    """Each piece's worst joint speed and acceleration beyond its limit (accelerations only
+    where the piece's timing has them: a path acceleration, or CSV times)."""
+    accelerated = np.array([p.timing is not None and (p.timing.acceleration is not None or p.move.duration is not None)
+                            for p in pieces])[grid.piece]
+    for kind, rates, bounds, judged in (("joint speed", speeds, limits.speed, True),
+                                        ("joint acceleration", accelerations, limits.acceleration, accelerated)):
+        size = np.abs(rates)
+        with np.errstate(invalid="ignore"):
+            beyond = (size > bounds * (1.0 + RATE_ROUNDING)) & np.reshape(judged, (-1, 1))
+        for joint in np.flatnonzero(np.any(beyond, axis=0)):
+            rows = np.flatnonzero(beyond[:, joint])
+            for number, piece_rows in _by_piece(rows, grid.piece[rows]):
+                row = piece_rows[np.argmax(size[piece_rows, joint])]
+                value, limit = size[row, joint], bounds[joint]
+                findings.add(pieces[number].index, findings.place(
+                    kind, joint, lines[number], grid.poses[row], grid.joints[row], value, limit, (limit - value) / limit,
+                    float(limit / value) if kind == "joint speed" else None))
+
+
+def record(findings, batch, grid, speeds, accelerations, pieces, lines, sink):
+    """Peaks, the trace, and every sample of ``batch`` to ``sink(lines, batch, rates)`` with the
+    grid's rates where a sample is one of the grid's (NaN elsewhere)."""
+    findings.update_peaks(batch.joints, lines[grid.piece], speeds, accelerations)
+    findings.record_trace(lines[grid.piece], grid.joints, speeds, accelerations, grid.radicand, grid.direct_index)
+    if sink is not None:
+        keys, wanted = 2.0 * grid.piece + grid.u, 2.0 * batch.piece + batch.u
+        at = np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)
+        on_grid = keys[at] == wanted
+        rates = np.full((len(batch.u), 2, speeds.shape[1]), np.nan)
+        rates[on_grid, 0], rates[on_grid, 1] = speeds[at[on_grid]], accelerations[at[on_grid]]
+        sink(lines[batch.piece], batch, rates)

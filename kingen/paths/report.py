@@ -1,0 +1,150 @@
+"""What a check reports: the verdict, the checks it judged (and those it could not), the
+problems by line, the JSON document, the CSV of every sample and the HTML page.
+
+Units: poses mm and degrees; joints, speeds and accelerations in the robot file's joint
+units (mm or degrees, per s, per s^2); radicands unitless; the direct index and the force
+lines' determinant in mm and mm^3.
+"""
+
+import numpy as np
+
+from ..runtime.text import counted, one_line
+
+BLENDING = ("each move is timed from rest to rest (exact stop, G61); blending of consecutive moves (G64) is not "
+            "modelled")
+SPEED_KINDS = ("joint speed", "joint acceleration")
+
+
+def checks(outcome):
+    """{kind: 'passed' | 'failed' | 'not exercised: why'} of every check, in report order."""
+    evaluator, limits, findings = outcome.evaluator, outcome.limits, outcome.findings
+    failed = {place.kind for place in findings.worst.values()}
+    verdicts = {}
+    reasons = {
+        "unreachable": "no limb of this robot can be out of reach (legs)",
+        "travel": "no joint has travel limits (robot file travel, .ini MIN_LIMIT/MAX_LIMIT)",
+        "limb singular": "no limb of this robot has a singular band (legs)",
+        "direct index": "the robot file gives no singularity.direct_index_min" if evaluator.six_lines
+        else "the robot has no six force lines",
+        "assembly change": "the robot has no six force lines",
+    }
+    if findings.samples == 0:
+        return {kind: "not exercised: the program has no move" for kind in list(reasons) + list(SPEED_KINDS)}
+    kinds = evaluator.kinds()
+    for kind in reasons:
+        verdicts[kind] = ("failed" if kind in failed else "passed") if kind in kinds else f"not exercised: {reasons[kind]}"
+    acceleration_timed = limits.path_acceleration is not None or any(
+        place.kind == "joint acceleration" for place in findings.worst.values())
+    for kind, bounds, timed in (("joint speed", limits.speed, findings.timed_moves > 0),
+                                ("joint acceleration", limits.acceleration, findings.timed_moves > 0
+                                 and acceleration_timed)):
+        if not np.any(np.isfinite(bounds)):
+            verdicts[kind] = (f"not exercised: no joint {kind.split()[1]} limit (robot file max_"
+                              f"{kind.split()[1]}, .ini MAX_{'VELOCITY' if kind == 'joint speed' else 'ACCELERATION'})")
+        elif not timed:
+            verdicts[kind] = ("not exercised: no move is timed (feeds and rapids need a feed or t, or an .ini)"
+                              if kind == "joint speed" else "not exercised: no path acceleration (.ini [TRAJ])")
+        else:
+            verdicts[kind] = "failed" if kind in failed else "passed"
+    return verdicts
+
+
+def runs(outcome):
+    """Whether the program runs within every limit that was judged (a program without a move
+    runs)."""
+    return not outcome.findings.worst
+
+
+def verdict_line(outcome):
+    """The one-line verdict with the counts and settings behind it."""
+    findings, settings = outcome.findings, outcome.settings
+    judged = [kind for kind, verdict in checks(outcome).items() if not verdict.startswith("not exercised")]
+    where = (f"{counted(findings.moves, 'move')}, {counted(findings.samples, 'sample')} at chord {settings.chord:g} "
+             f"mm/deg, posture {outcome.posture}, host {settings.host}")
+    if runs(outcome):
+        return f"check-path {outcome.robot.name} {outcome.program}: runs within every limit judged ({where}; " \
+               f"judged: {', '.join(judged) or 'nothing'})"
+    lines = sorted({place.line for place in outcome.findings.problems.values()})
+    return (f"check-path {outcome.robot.name} {outcome.program}: does not run: "
+            f"{counted(len(findings.problems) + findings.dropped, 'problem')} on {counted(len(lines), 'line')}, "
+            f"first at line {lines[0] if lines else '?'} ({where})")
+
+
+def _joint_units(outcome, joint, kind):
+    if joint is None:
+        return {"direct index": "mm", "assembly change": "mm^3"}.get(kind, "")
+    index = outcome.robot.joint_names.index(joint)
+    base = "deg" if outcome.robot.revolute[index] else "mm"
+    if kind in ("unreachable", "limb singular"):
+        return ""
+    return {"joint speed": f"{base}/s", "joint acceleration": f"{base}/s^2"}.get(kind, base)
+
+
+def problem_rows(outcome):
+    """The table of problems by line: header and rows of text."""
+    rows = [["line", "problem", "joint", "value", "limit", "source"]]
+    for place in outcome.findings.sorted_problems():
+        units = _joint_units(outcome, place.joint, place.kind)
+        extra = f" (fits at {place.override * 100:.0f}% feed)" if place.override is not None else ""
+        rows.append([str(place.line), place.kind, place.joint or "-", f"{place.value:.6g} {units}".strip() + extra,
+                     f"{place.limit:.6g} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
+    return rows
+
+
+def _place_json(outcome, place):
+    data = {"kind": place.kind, "line": place.line, "source": outcome.sources.get(place.line, ""),
+            "joint": place.joint, "pose": place.pose, "joints": place.joints, "value": place.value,
+            "limit": place.limit, "units": _joint_units(outcome, place.joint, place.kind)}
+    if place.override is not None:
+        data["override"] = place.override
+    return data
+
+
+def report_json(outcome):
+    """The JSON document (plain data): verdict, samples, moves, problems, first and worst place
+    of each kind, peaks per joint, checks, limits and settings."""
+    findings, limits = outcome.findings, outcome.limits
+    peaks = []
+    for index, (name, peak) in enumerate(zip(outcome.robot.joint_names, findings.peaks)):
+        scale = findings.display_scale[index]
+        peaks.append({"joint": name, "travel": [peak.low, peak.high], "speed": peak.speed,
+                      "speed_line": peak.speed_line, "acceleration": peak.acceleration,
+                      "acceleration_line": peak.acceleration_line,
+                      "travel_limits": [limits.lower[index] * scale, limits.upper[index] * scale],
+                      "speed_limit": limits.speed[index] * scale,
+                      "acceleration_limit": limits.acceleration[index] * scale})
+    return {
+        "verdict": "runs" if runs(outcome) else "does not run",
+        "robot": outcome.robot.name, "program": outcome.program,
+        "samples": findings.samples, "moves": findings.moves, "timed_moves": findings.timed_moves,
+        "checks": checks(outcome),
+        "problems": [_place_json(outcome, place) for place in findings.sorted_problems()],
+        "problems_not_listed": findings.dropped,
+        "first": [_place_json(outcome, place) for place in findings.first.values()],
+        "worst": [_place_json(outcome, place) for place in findings.worst.values()],
+        "peaks": peaks,
+        "settings": {"host": outcome.settings.host, "posture": outcome.posture, "chord": outcome.settings.chord,
+                     "ini": None if outcome.settings.ini is None else str(outcome.settings.ini),
+                     "limits_from": list(limits.sources), "path_speed_mm_s": limits.path_speed,
+                     "path_acceleration_mm_s2": limits.path_acceleration, "timing": BLENDING,
+                     "solver": "the numpy reference (kingen.kinematics.reference), in batches"},
+        "seconds": outcome.seconds,
+    }
+
+
+def csv_header(robot):
+    """The CSV's columns: the line, the move's parameter u, the pose, each joint's value, speed
+    and acceleration (empty off the regular samples), the smallest limb radicand, the direct index."""
+    names = robot.joint_names
+    return ",".join(["line", "u", "x", "y", "z", "roll", "pitch", "yaw"] + list(names)
+                    + [f"{name}_speed" for name in names] + [f"{name}_acceleration" for name in names]
+                    + ["radicand", "direct_index"]) + "\n"
+
+
+def csv_rows(lines, batch, rates, display_scale):
+    """The CSV lines of a batch of samples on program ``lines`` (n,) (display units; NaN written empty)."""
+    columns = np.column_stack([lines, batch.u, batch.poses, batch.joints * display_scale,
+                               rates[:, 0] * display_scale, rates[:, 1] * display_scale, batch.radicand,
+                               batch.direct_index])
+    text = "\n".join(",".join("" if not np.isfinite(value) else f"{value:.15g}" for value in row) for row in columns)
+    return text + "\n" if text else ""

@@ -1,0 +1,76 @@
+#!/usr/bin/python3
+"""A headless LinuxCNC display for tests/test_check_path_machine.py: LinuxCNC starts it as its
+[DISPLAY] program. It homes, then runs each G-code program of $KINGEN_PROGRAMS (a JSON list of
+paths; each ends where it started) in AUTO mode, every 10 ms recording the time, the line
+motion is executing, the world and the joint positions, and keeping every message of
+LinuxCNC's error channel; it writes everything as JSON to $KINGEN_RESULT, then exits, and
+LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
+
+import json
+import os
+import time
+
+import linuxcnc
+
+result = {"log": [], "programs": []}
+status, command, errors = linuxcnc.stat(), linuxcnc.command(), linuxcnc.error_channel()
+
+
+def wait(condition, what, timeout=30.0):
+    end = time.time() + timeout
+    while time.time() < end:
+        status.poll()
+        if condition():
+            return
+        time.sleep(0.01)
+    raise TimeoutError(f"no {what} in {timeout:g} s")
+
+
+def run(program):
+    """Run one program from the machine's current position: what happened."""
+    run = {"errors": [], "samples": []}
+    command.mode(linuxcnc.MODE_AUTO)
+    command.wait_complete()
+    command.program_open(program)
+    command.wait_complete()
+    command.auto(linuxcnc.AUTO_RUN, 0)
+    started = time.time()
+    while time.time() - started < 120:
+        status.poll()
+        run["samples"].append({"time": time.time(), "line": status.motion_line,
+                               "world": list(status.actual_position[:6]),
+                               "joints": list(status.joint_actual_position[:status.joints])})
+        message = errors.poll()
+        if message:
+            run["errors"].append({"kind": message[0], "text": message[1]})
+        if time.time() - started > 0.5 and status.interp_state == linuxcnc.INTERP_IDLE and status.queue == 0:
+            break
+        time.sleep(0.01)
+    time.sleep(0.2)
+    while True:
+        message = errors.poll()
+        if not message:
+            break
+        run["errors"].append({"kind": message[0], "text": message[1]})
+    run["finished"] = not run["errors"]
+    command.abort()
+    command.wait_complete()
+    return run
+
+
+try:
+    wait(lambda: True, "status")
+    command.state(linuxcnc.STATE_ESTOP_RESET)
+    command.state(linuxcnc.STATE_ON)
+    wait(lambda: status.task_state == linuxcnc.STATE_ON, "machine on")
+    command.mode(linuxcnc.MODE_MANUAL)
+    command.wait_complete()
+    command.home(-1)
+    wait(lambda: all(status.homed[:status.joints]), "homing")
+    for program in json.loads(os.environ["KINGEN_PROGRAMS"]):
+        result["programs"].append(run(program))
+except Exception as error:
+    result["log"].append(repr(error))
+finally:
+    with open(os.environ["KINGEN_RESULT"], "w") as stream:
+        json.dump(result, stream)
