@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import t6_from_pose
+from ..errors import KingenError
 from .evaluation import Evaluator
 from .findings import Findings
 from .interpreter import gcode_moves
@@ -208,7 +209,12 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
     ``settings``: the Outcome. ``sink(lines, batch, rates)`` receives every sample as it is
     judged (lines (n,) their program lines; rates (n, 2, dof): speeds and accelerations, NaN
     off the regular samples); ``progress(findings)`` is called after each batch. KingenError on
-    bad input."""
+    bad input, and for a machine with task coordinates (its other coordinates are parasitic:
+    check-path samples six free coordinates and does not follow its manifold)."""
+    if robot.task:
+        raise KingenError(f"{robot.path}:{robot.line_of('task')}: task: check-path samples poses in six free "
+                          "coordinates and does not follow a machine with task coordinates along its manifold (its "
+                          "other coordinates are parasitic): not supported")
     started = time.perf_counter()
     checker = _Checker(robot, settings, sink, progress)
     for index, move in enumerate(program_moves(program, robot.verification.home)):
