@@ -62,8 +62,8 @@ def passive_leg_of(document, locate):
     length = np.linalg.norm(offset)
     if not length > 0.0 or np.linalg.norm(rotation @ tube - offset / length) > ON_TUBE:
         raise locate.error(["passive_leg", "tube_axis"],
-                           "at the verification home the tube from base_point to the platform origin does not run "
-                           "along tube_axis (in the platform frame): give the home the tube's direction")
+                           "at the verification home the tube (from base_point to the platform origin) does not run "
+                           "along tube_axis (platform frame): the home must be a pose the machine takes")
     across = np.cross(axis, offset / length)
     if not np.linalg.norm(across) > ALIGNED:
         raise locate.error(["passive_leg", "first_axis"], "at the verification home the tube lies along the "
@@ -76,6 +76,9 @@ def passive_leg_of(document, locate):
 def check_tube(robot, locate):
     """Raise a located error unless a machine with a passive leg is one kingen solves: task
     x, y, z and three limbs, none with a revolute axis (each a U-P-S or S-P-S leg)."""
+    if not robot.task:
+        raise locate.error(["passive_leg"], f"a passive leg constrains the platform: declare the task coordinates "
+                                            f"(task: [{', '.join(POSITION)}])")
     if tuple(sorted(robot.task)) != tuple(sorted(POSITION)) or len(robot.task) != len(POSITION):
         raise locate.error(["task"], f"a machine with a passive_leg has the task coordinates of its platform "
                                      f"origin: give task: [{', '.join(POSITION)}]")
