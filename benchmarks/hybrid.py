@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-MACHINES = ("prs_head", "rps_table", "exechon_constrained")
+MACHINES = ("prs_head", "rps_table", "exechon_constrained", "tricept")
 BASELINE = "hexapod"
 HOSTS = ("delmia", "linuxcnc")
 
