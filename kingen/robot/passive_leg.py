@@ -36,7 +36,7 @@ class PassiveLegFile(Strict):
     """The tube's direction from c toward the platform origin, in the platform frame (unit)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PassiveLeg:
     """The tube in mm: ``base_point`` c (3,), ``first_axis`` a (3,), ``tube_axis`` t_p (3,),
     ``second_axis`` b_p (3,), platform frame; ``frame`` (3, 3) columns t_p, b_p, t_p x b_p."""
