@@ -26,7 +26,11 @@ ON_TUBE = 1e-9
 
 
 class PassiveLegFile(Strict):
-    """The robot file's ``passive_leg:`` section."""
+    """A passive constraining leg (a Tricept's central tube): a universal joint at ``base_point``,
+    a passive prismatic joint, the tube fixed to the platform and running to the platform
+    frame's origin. The robot declares task: [x, y, z] and three actuated legs; the universal
+    joint's second axis is the machine's as assembled at the verification home, which must hold
+    the tube along ``tube_axis``."""
 
     base_point: Vec3
     """The universal joint's centre c (base frame, the file's length unit)."""
