@@ -16,6 +16,8 @@ from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot
 
+from constrained import check_declaration_refused, newton_root
+
 ROBOTS = ("prs_head", "rps_table")
 TASKS = {"prs_head": [(-400.0, 0.0, 0.0), (-370.0, 12.0, -7.0), (-480.0, -14.0, 10.0), (-300.0, 5.0, 13.0)],
          "rps_table": [(500.0, 0.0, 0.0), (540.0, 15.0, 10.0), (430.0, -12.0, 18.0), (575.0, 19.0, -19.0)]}
@@ -32,14 +34,7 @@ def independent_pose(robot, z, roll, pitch):
         return np.array([axis @ (rotation @ limb.platform_point + [x, y, z] - point)
                          for limb, (axis, point) in zip(robot.limbs, planes)])
 
-    unknown = np.zeros(3)
-    for _ in range(50):
-        jacobian = np.column_stack([(residual(unknown + step) - residual(unknown - step)) / 2e-6
-                                    for step in np.eye(3) * 1e-6])
-        move = np.linalg.solve(jacobian, -residual(unknown))
-        unknown += move
-        if np.max(np.abs(move)) < 1e-13:
-            break
+    unknown = newton_root(residual, np.zeros(3))
     assert np.max(np.abs(residual(unknown))) < 1e-10
     return np.array([unknown[0], unknown[1], z, roll, pitch, unknown[2]])
 
@@ -139,15 +134,8 @@ BAD = [
 
 @pytest.mark.parametrize("old, new, words", BAD)
 def test_bad_declarations_are_refused_on_one_line(old, new, words, tmp_path):
-    text = open("robots/prs_head.yaml").read()
-    assert old in text
-    path = tmp_path / "bad.yaml"
-    path.write_text(text.replace(old, new, 1))
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", str(path)], capture_output=True,
-                            text=True, timeout=60)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"kingen: error: {path}:") and words in lines[0], result.stderr
+    check_declaration_refused("prs_head", old, new, words, tmp_path)
+
 
 
 @pytest.mark.parametrize("name", ROBOTS)

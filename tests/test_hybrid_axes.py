@@ -13,15 +13,17 @@ import pytest
 
 from kingen.conventions import rotation_from_rpy, t6_from_pose
 from kingen.kinematics.forward import free_mask, newton
-from kingen.kinematics.parasitic import constraint_residuals, on_manifold
+from kingen.kinematics.parasitic import on_manifold
 from kingen.kinematics.reference import solve
-from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot
+
+from constrained import (UNREACHABLE, check_constraints_close_and_off_the_manifold_is_unreachable,
+                         check_declaration_refused, check_routine_equals_the_reference, check_task_poses_match,
+                         newton_root)
 
 NAME = "exechon_constrained"
 TASKS = [(0.0, 50.0, -1250.0), (100.0, 50.0, -1250.0), (80.0, -60.0, -1150.0), (-120.0, 150.0, -1400.0),
          (140.0, 190.0, -1070.0)]
-UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 
 
 def independent_pose(robot, x, y, z):
@@ -33,14 +35,7 @@ def independent_pose(robot, x, y, z):
         rotation = rotation_from_rpy(*np.radians(angles))
         return np.array([(rotation @ axis) @ (base - [x, y, z]) - axis @ point for axis, base, point in constraints])
 
-    angles = np.zeros(3)
-    for _ in range(50):
-        jacobian = np.column_stack([(residual(angles + step) - residual(angles - step)) / 2e-6
-                                    for step in np.eye(3) * 1e-6])
-        move = np.linalg.solve(jacobian, -residual(angles))
-        angles += move
-        if np.max(np.abs(move)) < 1e-13:
-            break
+    angles = newton_root(residual, np.zeros(3))
     assert np.max(np.abs(residual(angles))) < 1e-10
     return np.array([x, y, z, *angles])
 
@@ -55,13 +50,7 @@ def independent_joints(robot, pose):
 def test_parasitic_rotation_and_joints_match_an_independent_newton():
     robot = load_robot(NAME)
     poses = np.array([independent_pose(robot, *task) for task in TASKS])
-    asked = poses.copy()
-    asked[:, 3:] = 0.0  # the task coordinates alone
-    assert np.max(np.abs(on_manifold(robot, asked) - poses)) < 1e-9
-    solution = solve(robot, t6_from_pose(poses))
-    assert not np.any(solution.warnings == UNREACHABLE)
-    expected = np.array([independent_joints(robot, pose) for pose in poses])
-    assert np.max(np.abs(solution.joints[:, :, 0] - expected)) < 1e-9
+    check_task_poses_match(robot, poses, independent_joints)
 
 
 def test_golden_values_are_the_published_home_and_the_independent_computation():
@@ -84,29 +73,12 @@ def test_the_thesis_pure_x_move_is_off_the_manifold_and_tilts_the_platform():
 
 
 def test_constraints_close_at_every_answered_pose_and_off_the_manifold_is_unreachable():
-    robot = load_robot(NAME)
-    rng = np.random.default_rng(11)
-    region = robot.verification
-    drawn = np.asarray(region.home) + rng.uniform(-1, 1, (400, 6)) * np.asarray(region.range)
-    moved = on_manifold(robot, drawn)
-    residuals, radicand = constraint_residuals(robot, t6_from_pose(np.concatenate([drawn, moved])))
-    assert np.all(radicand > 0.5) and np.max(np.abs(residuals)) < 1e-9
-    off = solve(robot, t6_from_pose(drawn))
-    on = solve(robot, t6_from_pose(moved))
-    assert np.all(off.warnings == UNREACHABLE)
-    assert np.count_nonzero(on.warnings != UNREACHABLE) == len(moved)
-    # the joints answered off the manifold are the machine's for the same position
-    assert np.max(np.abs(off.joints - on.joints)) < 1e-9
+    check_constraints_close_and_off_the_manifold_is_unreachable(NAME, 11)
 
 
 @pytest.mark.parametrize("host", ["delmia", "linuxcnc"])
 def test_generated_routine_equals_the_reference(host, tmp_path):
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", NAME, "--host", host, "--samples", "2000",
-                             "--out-dir", str(tmp_path)], capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stdout + result.stderr
-    checks = ("values", "warnings", "closure", "constraints", "jacobian", "round trip", "golden[0]", "golden[2]")
-    for check in checks + (("forward",) if host == "linuxcnc" else ()):
-        assert any(line.strip().startswith(f"ok     {check}") for line in result.stdout.splitlines()), check
+    check_routine_equals_the_reference(NAME, host, tmp_path)
 
 
 def test_forward_kinematics_solves_the_parasitic_rotation():
@@ -131,15 +103,8 @@ BAD = [
 
 @pytest.mark.parametrize("old, new, words", BAD)
 def test_bad_declarations_are_refused_on_one_line(old, new, words, tmp_path):
-    text = open(f"robots/{NAME}.yaml").read()
-    assert old in text
-    path = tmp_path / "bad.yaml"
-    path.write_text(text.replace(old, new, 1))
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", str(path)], capture_output=True,
-                            text=True, timeout=60)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"kingen: error: {path}:") and words in lines[0], result.stderr
+    check_declaration_refused(NAME, old, new, words, tmp_path)
+
 
 
 @pytest.mark.parametrize("args", [["plan", "{name}", "--poses", "20", "-o", "{out}/plan.csv"],

@@ -6,22 +6,20 @@ through the joint's chain, written here), the constraints closed at every answer
 off-manifold answer, the generated routine against the reference on both hosts, forward
 kinematics and bad declarations."""
 
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-from kingen.conventions import rotation_from_rpy, t6_from_pose
+from kingen.conventions import rotation_from_rpy
 from kingen.kinematics.forward import free_mask, newton
-from kingen.kinematics.parasitic import constraint_residuals, on_manifold
-from kingen.kinematics.reference import solve
-from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot
+
+from constrained import (check_constraints_close_and_off_the_manifold_is_unreachable,
+                         check_declaration_refused, check_routine_equals_the_reference, check_task_poses_match,
+                         newton_root)
 
 NAME = "tricept"
 TASKS = [(0.0, 0.0, -1100.0), (200.0, -100.0, -1000.0), (-250.0, 180.0, -1250.0), (280.0, 260.0, -950.0)]
-UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 CENTRE, FIRST, TUBE, HOME = np.zeros(3), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0]), (0.0, 0.0, -1100.0)
 """The robot file's passive_leg and verification home, restated (home rotation 0)."""
 
@@ -47,14 +45,7 @@ def independent_pose(x, y, z):
     def residual(angles):
         return across @ (rotation(angles) @ TUBE)
 
-    angles = np.zeros(2)
-    for _ in range(50):
-        jacobian = np.column_stack([(residual(angles + step) - residual(angles - step)) / 2e-6
-                                    for step in np.eye(2) * 1e-6])
-        move = np.linalg.solve(jacobian, -residual(angles))
-        angles += move
-        if np.max(np.abs(move)) < 1e-14:
-            break
+    angles = newton_root(residual, np.zeros(2), tolerance=1e-14)
     found = rotation(angles)
     assert np.max(np.abs(residual(angles))) < 1e-12 and found @ TUBE @ direction > 0
     rpy = np.array([np.arctan2(found[2, 1], found[2, 2]), -np.arcsin(found[2, 0]), np.arctan2(found[1, 0], found[0, 0])])
@@ -78,13 +69,7 @@ def test_restated_declaration_is_the_robot_file_s():
 def test_parasitic_rotation_and_joints_match_an_independent_newton():
     robot = load_robot(NAME)
     poses = np.array([independent_pose(*task) for task in TASKS])
-    asked = poses.copy()
-    asked[:, 3:] = 0.0  # the task coordinates alone
-    assert np.max(np.abs(on_manifold(robot, asked) - poses)) < 1e-9
-    solution = solve(robot, t6_from_pose(poses))
-    assert not np.any(solution.warnings == UNREACHABLE)
-    expected = np.array([independent_joints(robot, pose) for pose in poses])
-    assert np.max(np.abs(solution.joints[:, :, 0] - expected)) < 1e-9
+    check_task_poses_match(robot, poses, independent_joints)
 
 
 def test_golden_values_are_the_independent_computation():
@@ -98,29 +83,12 @@ def test_golden_values_are_the_independent_computation():
 
 
 def test_constraints_close_at_every_answered_pose_and_off_the_manifold_is_unreachable():
-    robot = load_robot(NAME)
-    rng = np.random.default_rng(7)
-    region = robot.verification
-    drawn = np.asarray(region.home) + rng.uniform(-1, 1, (400, 6)) * np.asarray(region.range)
-    moved = on_manifold(robot, drawn)
-    residuals, radicand = constraint_residuals(robot, t6_from_pose(np.concatenate([drawn, moved])))
-    assert np.all(radicand > 0.5) and np.max(np.abs(residuals)) < 1e-9
-    off = solve(robot, t6_from_pose(drawn))
-    on = solve(robot, t6_from_pose(moved))
-    assert np.all(off.warnings == UNREACHABLE)
-    assert np.count_nonzero(on.warnings != UNREACHABLE) == len(moved)
-    # the joints answered off the manifold are the machine's for the same position
-    assert np.max(np.abs(off.joints - on.joints)) < 1e-9
+    check_constraints_close_and_off_the_manifold_is_unreachable(NAME, 7)
 
 
 @pytest.mark.parametrize("host", ["delmia", "linuxcnc"])
 def test_generated_routine_equals_the_reference(host, tmp_path):
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", NAME, "--host", host, "--samples", "2000",
-                             "--out-dir", str(tmp_path)], capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stdout + result.stderr
-    checks = ("values", "warnings", "closure", "constraints", "jacobian", "round trip", "golden[0]", "golden[2]")
-    for check in checks + (("forward",) if host == "linuxcnc" else ()):
-        assert any(line.strip().startswith(f"ok     {check}") for line in result.stdout.splitlines()), check
+    check_routine_equals_the_reference(NAME, host, tmp_path)
 
 
 def test_forward_kinematics_solves_the_parasitic_rotation():
@@ -149,13 +117,4 @@ BAD = [
 
 @pytest.mark.parametrize("old, new, words", BAD)
 def test_bad_declarations_are_refused_on_one_line(old, new, words, tmp_path):
-    text = open(f"robots/{NAME}.yaml").read()
-    assert old in text
-    path = tmp_path / "bad.yaml"
-    path.write_text(text.replace(old, new, 1))
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", str(path), "--out-dir", str(tmp_path / "o")],
-                            capture_output=True, text=True, timeout=60)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"kingen: error: {path}:") and words in lines[0], result.stderr
-    assert not (tmp_path / "o").exists()
+    check_declaration_refused(NAME, old, new, words, tmp_path)
