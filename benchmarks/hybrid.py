@@ -22,7 +22,7 @@ ABOUT = ("The call cost of a lower-mobility machine's routine (its parasitic coo
          "limbs) against the hexapod's, for each host ([Lower-mobility machines](how-to/hybrid.md)). Goal: at most 3 "
          "times the hexapod's.")
 """What the section measures, for the performance page (links relative to docs/)."""
-MACHINES = ("prs_head", "rps_table", "exechon_constrained")
+MACHINES = ("prs_head", "rps_table", "exechon_constrained", "tricept")
 BASELINE = "hexapod"
 HOSTS = ("delmia", "linuxcnc")
 

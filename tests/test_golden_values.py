@@ -30,7 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
 import golden_cranks  # noqa: E402
 
 SOURCES = ("thesis", "Table", "LinuxCNC", "Independent 6-RUS inverse", "Derived by hand",
-           "Independent computation (tests/test_hybrid.py)", "Independent computation (tests/test_hybrid_axes.py)")
+           "Independent computation (tests/test_hybrid.py)", "Independent computation (tests/test_hybrid_axes.py)",
+           "Independent computation (tests/test_tricept.py)")
 
 
 @pytest.mark.parametrize("name", shipped_robots())

@@ -66,6 +66,7 @@ CASES = {
     "prs_head": {"moves": [[0, 0, -370, 12, -7, 0], [0, 0, -430, -9, 6, 0]], "jog": 2.0},
     # X, Y, Z commanded; A, B, C the machine's for them (the module reads X, Y, Z only)
     "exechon_constrained": {"moves": [[80, -60, -1150, 0, 0, 0], [-120, 150, -1300, 0, 0, 0]], "jog": 2.0},
+    "tricept": {"moves": [[200, -100, -1000, 0, 0, 0], [-250, 180, -1250, 0, 0, 0]], "jog": 2.0},
 }
 """Per robot: MDI moves (the machine's coordinates, in its units and degrees) and a joint-0 jog;
 a machine with task coordinates is sent its parasitic X, Y, C for them."""

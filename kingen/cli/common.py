@@ -280,7 +280,7 @@ def finite(data):
 
 def processes_text(count):
     """'1 process', '2 processes': how many compared verify's poses."""
-    return f"{count} process" if count == 1 else f"{count} processes"  # 'es': not text.counted
+    return counted(count, "process", "processes")
 
 
 def output_width():

@@ -153,6 +153,10 @@ def constraint_view(robot):
         return None
     if family(robot) == "axes":
         return axes_view(robot)
+    if family(robot) == "tube":
+        leg = robot.passive_leg
+        return {"family": "tube", "base": c_vector(leg.base_point), "first": c_vector(leg.first_axis),
+                "frame": [c_vector(row) for row in leg.frame], "tolerance_rad": c_double(MANIFOLD_TOLERANCE_RAD)}
     table = constraint_table(robot)
     home_cos, home_sin = home_yaw(robot)
     return {"family": "planes", "axes": [c_vector(row) for row in table.axes], "points": [c_vector(row) for row in table.points],

@@ -27,6 +27,7 @@ import numpy as np
 from ..conventions import pose_from_t6, t6_from_pose
 from ..robot.constraints import TASK, constraint_table, family
 from .parasitic_axes import axes_wrenches, solve_axes
+from .parasitic_tube import solve_tube, tube_residuals, tube_wrenches
 
 MANIFOLD_TOLERANCE_MM = 1e-6
 MANIFOLD_TOLERANCE_RAD = 1e-8
@@ -53,10 +54,11 @@ def home_yaw(robot):
 
 def solve_parasitic(robot, t6):
     """The machine's pose for each T6 (n, 4, 4), mm: see the module docstring (an Exechon-type
-    machine's: kingen.kinematics.parasitic_axes, its T6's position kept). Non-finite T6 give
+    machine's: kingen.kinematics.parasitic_axes, a Tricept-type one's: kingen.kinematics.parasitic_tube,
+    its T6's position kept). Non-finite T6 give
     non-finite results (the caller's finite test catches them)."""
-    if family(robot) == "axes":
-        return _solve_axes(robot, t6)
+    if family(robot) in ("axes", "tube"):
+        return _solve_rotation(robot, t6, solve_axes if family(robot) == "axes" else solve_tube)
     table = constraint_table(robot)
     t6 = np.asarray(t6, dtype=float)
     rotation = np.swapaxes(t6[:, :3, :3], 1, 2)
@@ -92,11 +94,11 @@ def solve_parasitic(robot, t6):
     return Parasitic(t6=fixed, radicand=radicand, off=off)
 
 
-def _solve_axes(robot, t6):
-    """solve_parasitic for the 'axes' family: the rotation replaced, off where any entry of it
-    moved by more than MANIFOLD_TOLERANCE_RAD."""
+def _solve_rotation(robot, t6, solve):
+    """solve_parasitic for the 'axes' and 'tube' families (``solve``: their rotation's closed
+    form): the rotation replaced, off where any entry of it moved by more than MANIFOLD_TOLERANCE_RAD."""
     t6 = np.asarray(t6, dtype=float)
-    rotation, radicand = solve_axes(robot, t6)
+    rotation, radicand = solve(robot, t6)
     fixed = t6.copy()
     fixed[:, :3, :3] = np.swapaxes(rotation, 1, 2)
     off = ~(np.max(np.abs(fixed[:, :3, :3] - t6[:, :3, :3]), axis=(1, 2)) <= MANIFOLD_TOLERANCE_RAD)
@@ -106,9 +108,12 @@ def _solve_axes(robot, t6):
 def constraint_residuals(robot, t6):
     """(n, 3) mm: each constraint equation's residual at the machine's pose for each T6 (n, 4, 4)
     (solve_parasitic), computed forward from the constraints' own statement: a_i.(C_i - c_i) for
-    revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in the platform; and
+    revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in the platform, the
+    tube's (kingen.kinematics.parasitic_tube.tube_residuals) for a passive leg; and
     (n,) the radicand D (where D < 0 no pose closes them)."""
     machine = solve_parasitic(robot, t6)
+    if family(robot) == "tube":
+        return tube_residuals(robot, machine.t6), machine.radicand
     rotation, position = np.swapaxes(machine.t6[:, :3, :3], 1, 2), machine.t6[:, 3, :3]
     residuals = []
     for limb in robot.limbs:
@@ -136,8 +141,8 @@ def task_twists(robot, t6):
     platform axis's, kingen.kinematics.parasitic_axes) and S t = e_k (S: task_rows)."""
     t6 = np.asarray(t6, dtype=float)
     rows = np.zeros((len(t6), 6, 6))
-    if family(robot) == "axes":
-        rows[:, :3] = axes_wrenches(robot, t6)
+    if family(robot) in ("axes", "tube"):
+        rows[:, :3] = (axes_wrenches if family(robot) == "axes" else tube_wrenches)(robot, t6)
     else:
         table = constraint_table(robot)
         points = np.einsum("nji,kj->nki", t6[:, :3, :3], table.points) + t6[:, 3, None, :3]

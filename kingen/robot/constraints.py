@@ -9,13 +9,16 @@ x, y and yaw, follow from them (parasitic motion) and are solved in closed form
 axis e fixed in the platform (S-P-R, U-P-R: ``platform_revolute_axis``) stays normal to it:
 (R e).(b - p) = e.n. Two legs sharing one such axis and a third with another (the Exechon's)
 leave the platform x, y, z of its origin as task coordinates; roll, pitch and yaw follow, in
-closed form (kingen.kinematics.parasitic_axes). This module validates the declaration and writes the
-constant tables the solution uses, for the reference and the C alike.
+closed form (kingen.kinematics.parasitic_axes). A passive leg (the Tricept's tube,
+kingen.robot.passive_leg) fixes the rotation from x, y, z too. This module validates the
+declaration and writes the constant tables the solution uses, for the reference and the C alike.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+
+from .passive_leg import check_tube
 
 TASK = ("z", "roll", "pitch")
 PARASITIC = ("x", "y", "yaw")
@@ -66,9 +69,11 @@ class AxesTable:
 
 def family(robot):
     """'planes' (revolute axes fixed in the base, task z, roll, pitch), 'axes' (fixed in the
-    platform, task x, y, z) or None: no task coordinates."""
+    platform, task x, y, z), 'tube' (a passive leg, task x, y, z) or None: no task coordinates."""
     if not robot.task:
         return None
+    if robot.passive_leg is not None:
+        return "tube"
     return "axes" if set(robot.task) == set(POSITION) else "planes"
 
 
@@ -144,6 +149,8 @@ def check_coordinates(robot, locate):
     if free and (len(set(free)) != len(free) or len(free) != robot.dof or task and set(free) != set(task)):
         raise locate.error(["forward", "free"], f"give {robot.dof} distinct pose coordinates, one per limb (the task's)")
     planes = constrained_limbs(limbs)
+    if robot.passive_leg is not None:
+        return check_tube(robot, locate)
     if task and set(task) == set(POSITION) and len(task) == len(POSITION):
         return _check_axes(robot, locate)
     if platform_axes(limbs):

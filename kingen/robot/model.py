@@ -25,6 +25,7 @@ from ..runtime.file_gate import refuse_special_file
 from .layouts import Layout
 from .constraints import check_coordinates
 from .located import Locator, diagnostic
+from .passive_leg import PassiveLegFile, passive_leg_of
 from .limbs import MODELS
 from ..runtime.resources import robots_dir
 from .reading import read_robot_file
@@ -125,6 +126,8 @@ def _schema_over(models):
         task: Optional[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]]] = Field(
             None, description="A lower-mobility machine's task coordinates: [z, roll, pitch] (x, y, yaw follow) or "
                   "[x, y, z] (roll, pitch, yaw follow).")
+        passive_leg: Optional[PassiveLegFile] = Field(None, description="A passive constraining leg (universal "
+                                                      "joint, prismatic joint, fixed to the platform): task [x, y, z].")
         working_posture: Annotated[int, Field(ge=0)] = Field(
             0, description="The posture a host with one answer per pose (LinuxCNC) uses.")
         collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")
@@ -164,6 +167,8 @@ class Robot:
     parasitic_given: bool = True
     """Whether its routine reads a T6's x, y and yaw (then a T6 off the machine's manifold is
     unreachable); False: a host that reads the task coordinates only (LinuxCNC)."""
+    passive_leg: Optional[object] = None
+    """The passive constraining leg (kingen.robot.passive_leg.PassiveLeg, mm), or None."""
     lines: tuple = ()
     """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
 
@@ -340,6 +345,7 @@ def robot_from_data(data, path, lines=None, raw=None):
         collision=document.collision.model_dump(exclude_none=True) if document.collision else None,
         length_unit=document.units,
         lines=tuple(lines.items()),
+        passive_leg=passive_leg_of(document, locate),
     )
     if robot.size_mm > MAX_MM:
         raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "
@@ -370,9 +376,7 @@ def _expand_limbs(document, locate):
             used[field] = f"{names[index]}.{parameter}"
     two_branch = sum(1 for limb in limbs if limb.branches == 2)
     if two_branch > MAX_TWO_BRANCH_LIMBS:
-        raise locate.error(
-            ["limbs"], f"{two_branch} two-branch limbs; at most {MAX_TWO_BRANCH_LIMBS} (256 postures)"
-        )
+        raise locate.error(["limbs"], f"{two_branch} two-branch limbs; at most {MAX_TWO_BRANCH_LIMBS} (256 postures)")
     return limbs
 
 
@@ -389,11 +393,7 @@ def _check_postures(robot, document, locate):
 def _check_golden(robot, locate):
     for index, golden in enumerate(robot.golden):
         if len(golden.joints) != robot.dof:
-            raise locate.error(
-                ["golden", index, "joints"], f"expected {robot.dof} joint values, got {len(golden.joints)}"
-            )
+            raise locate.error(["golden", index, "joints"], f"expected {robot.dof} joint values, got {len(golden.joints)}")
         if golden.posture >= robot.postures:
-            raise locate.error(
-                ["golden", index, "posture"],
-                f"posture {golden.posture} does not exist (the robot has {robot.postures})",
-            )
+            raise locate.error(["golden", index, "posture"],
+                               f"posture {golden.posture} does not exist (the robot has {robot.postures})")

@@ -116,6 +116,7 @@ def finalizer(kind):
     return finalize
 
 
-def counted(count, noun):
-    """'1 posture', '8 postures': a count with its noun, plural unless it is one."""
-    return f"{count} {noun}" if count == 1 else f"{count} {noun}s"
+def counted(count, noun, plural=None):
+    """'1 posture', '8 postures': a count with its noun, plural (``plural``, else the noun and
+    's') unless it is one."""
+    return f"{count} {noun}" if count == 1 else f"{count} {plural or noun + 's'}"

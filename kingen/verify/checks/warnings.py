@@ -23,7 +23,8 @@ class Warnings(VerifyCheck, name="warnings", needs="compared poses", item="warni
         found = ", ".join(f"{kind} {count}" for kind, count in boundary.get("boundaries_found", {}).items())
         vocabulary = getattr(context.routine, "warning_vocabulary", None)
         missing = [kind for kind in warnings_to_exercise(context.robot, vocabulary) if not counts[kind]]
-        detail = (f"{report.warning_mismatches} mismatches, {report.warnings_in_band} inside the tolerance band, "
+        detail = (f"{counted(report.warning_mismatches, 'mismatch', 'mismatches')}, {report.warnings_in_band} inside "
+                  "the tolerance band, "
                   f"over {judged} postures of {report.samples} sampled poses and {boundary.get('poses', 0)} poses "
                   f"beside warnings' boundaries (boundaries found along {RAYS} rays"
                   f"{', or by a descent where they met none' if boundary.get('searched') else ''}: {found or 'none sought'}); the "
