@@ -14,7 +14,7 @@ import click
 from ..defaults import DEFAULT_HOST, DEFAULT_TIMEOUT, MAX_MM, VERSION
 from ..errors import KingenError, PluginDefect
 from ..runtime.file_gate import refuse_special_file
-from ..runtime.text import printable
+from ..runtime.text import counted, printable
 
 EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
