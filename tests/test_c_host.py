@@ -27,9 +27,10 @@ ROBOTS = sorted(Path(__file__).resolve().parent.parent.glob("robots/*.yaml"))
 """Every shipped robot, the machines with task coordinates among them."""
 STRICT_C = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
 STRICT_CXX = ("-x", "c++", "-std=c++17", "-Wall", "-Wextra", "-Werror")
-COMPILED = ("tau.yaml", "rotary_delta.yaml", "hexapod.yaml", "exechon.yaml", "prs_head.yaml", "exechon_constrained.yaml")
+COMPILED = ("tau.yaml", "rotary_delta.yaml", "hexapod.yaml", "exechon.yaml", "prs_head.yaml", "exechon_constrained.yaml",
+            "tricept.yaml")
 """Robots whose library each compiler compiles: every limb model, one and many postures, a
-general set of free coordinates, both families of constraints."""
+general set of free coordinates, every family of constraints."""
 
 
 class Ran:
@@ -53,13 +54,13 @@ def test_every_shipped_robot_verifies(robot, tmp_path, capsys):
     assert {check: verdicts.get(check) for check in expected} == {check: "ok" for check in expected}
 
 
-@pytest.mark.parametrize("name, moved", [("prs_head", (0, 1.0)), ("exechon_constrained", (3, 1.0))])
+@pytest.mark.parametrize("name, moved", [("prs_head", (0, 1.0)), ("exechon_constrained", (3, 1.0)), ("tricept", (3, 1.0))])
 def test_a_constrained_machine_reads_the_whole_pose_and_its_forward_gives_the_machines(name, moved, tmp_path):
     """The verification home on the machine's manifold (kingen's parasitic solution, in numpy),
-    then moved off it (1 mm in x for the planes' family, 1 degree of roll for the axes'): the
-    library answers the reference's joints and warnings on it and WARN_UNREACHABLE for every
-    posture off it, with the same joints (the machine's pose's); its forward from these joints,
-    started at the pose off the manifold, returns the machine's pose."""
+    then moved off it (1 mm in x for the planes' family, 1 degree of roll for the axes' and the
+    tube's): the library answers the reference's joints and warnings on it and WARN_UNREACHABLE
+    for every posture off it, with the same joints (the machine's pose's); its forward from
+    these joints, started at the pose off the manifold, returns the machine's pose."""
     robot = load_robot(name)
     on = on_manifold(robot, np.array([robot.verification.home], dtype=float))
     off = on.copy()
