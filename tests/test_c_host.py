@@ -8,21 +8,29 @@ import json
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 from kingen.cli import main
+from kingen.conventions import matrix_from_pose, t6_from_pose
+from kingen.hosts.c.build import build_library
+from kingen.hosts.c.loader import Library
 from kingen.hosts.c.render import render
+from kingen.kinematics.home import judged_posture
+from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.reference import solve
+from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot
 
 from conftest import require_tool
 
-ROBOTS = sorted(path for path in Path(__file__).resolve().parent.parent.glob("robots/*.yaml")
-                if not load_robot(path).task)
-"""The shipped robots the C library takes: every one but the machines with task coordinates."""
+ROBOTS = sorted(Path(__file__).resolve().parent.parent.glob("robots/*.yaml"))
+"""Every shipped robot, the machines with task coordinates among them."""
 STRICT_C = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
 STRICT_CXX = ("-x", "c++", "-std=c++17", "-Wall", "-Wextra", "-Werror")
-COMPILED = ("tau.yaml", "rotary_delta.yaml", "hexapod.yaml", "exechon.yaml")
+COMPILED = ("tau.yaml", "rotary_delta.yaml", "hexapod.yaml", "exechon.yaml", "prs_head.yaml", "exechon_constrained.yaml",
+            "tricept.yaml")
 """Robots whose library each compiler compiles: every limb model, one and many postures, a
-general set of free coordinates."""
+general set of free coordinates, every family of constraints."""
 
 
 class Ran:
@@ -46,14 +54,30 @@ def test_every_shipped_robot_verifies(robot, tmp_path, capsys):
     assert {check: verdicts.get(check) for check in expected} == {check: "ok" for check in expected}
 
 
-@pytest.mark.parametrize("name", ["prs_head", "rps_table"])
-def test_a_machine_with_task_coordinates_is_refused_in_one_line(name, tmp_path, capsys):
-    result = Ran(capsys, "build", name, "--host", "c", "-o", tmp_path / "out")
-    assert result.exit_code == 2 and result.output.count("\n") == 1, result.output
-    assert result.output.endswith(f"{name}.yaml:{load_robot(name).line_of('task')}: task: the C library does not yet "
-                                  "take a machine with task coordinates (its parasitic motion is solved by the delmia "
-                                  "and linuxcnc hosts)\n")
-    assert not (tmp_path / "out").exists()
+@pytest.mark.parametrize("name, moved", [("prs_head", (0, 1.0)), ("exechon_constrained", (3, 1.0)), ("tricept", (3, 1.0))])
+def test_a_constrained_machine_reads_the_whole_pose_and_its_forward_gives_the_machines(name, moved, tmp_path):
+    """The verification home on the machine's manifold (kingen's parasitic solution, in numpy),
+    then moved off it (1 mm in x for the planes' family, 1 degree of roll for the axes' and the
+    tube's): the library answers the reference's joints and warnings on it and WARN_UNREACHABLE
+    for every posture off it, with the same joints (the machine's pose's); its forward from
+    these joints, started at the pose off the manifold, returns the machine's pose."""
+    robot = load_robot(name)
+    on = on_manifold(robot, np.array([robot.verification.home], dtype=float))
+    off = on.copy()
+    off[0, moved[0]] += moved[1]
+    built = build_library(robot, tmp_path)
+    library = Library(built.library, built.routine, robot)
+    poses = matrix_from_pose(np.vstack([on, off])).reshape(-1, 16)
+    joints, warnings, returns = library.inverse(poses)
+    expected = solve(robot, t6_from_pose(on))
+    assert joints[0] == pytest.approx(expected.joints[0], abs=1e-9)
+    assert list(warnings[0]) == list(expected.warnings[0])
+    assert list(warnings[1]) == [WARNINGS["WARN_UNREACHABLE"]] * robot.postures and list(returns) == [0, 1]
+    assert np.array_equal(joints[1], joints[0])
+    posture = judged_posture(robot).posture
+    found, _, returned = library.forward(joints[:1, :, posture], np.array([posture]), poses[1:])
+    assert int(returned[0]) == 0
+    assert found[0] == pytest.approx(poses[0], abs=1e-9)
 
 
 def _written(robot_file, folder):

@@ -108,6 +108,26 @@ def test_installed_it_is_found_by_find_package_and_pkg_config(package, tmp_path)
     assert found.returncode == 0 and "-lkingen_tau" in found.stdout and str(prefix / "lib" / "pkgconfig") in found.stdout
 
 
+def test_a_constrained_machines_package_builds_and_its_example_comes_back(tmp_path):
+    """The 3-PRS head (task coordinates z, roll, pitch): CMake builds the example, whose inverse
+    joints at the verification home are the reference's (its parasitic x, y, yaw solved by
+    kingen's numpy reference) and whose forward returns the whole pose (the example exits 0
+    only when every entry is within 1e-6)."""
+    require_tool("cmake", "cmake")
+    robot = load_robot("prs_head")
+    folder = tmp_path / "kingen_prs_head"
+    assert main(["package", "prs_head", "--host", "c", "-o", str(folder)]) == 0
+    assert "## Task coordinates" in (folder / "SETUP.md").read_text()
+    _run(["cmake", "-S", folder, "-B", tmp_path / "build"])
+    _run(["cmake", "--build", tmp_path / "build"])
+    printed = _run([tmp_path / "build" / "kingen_prs_head_example"])
+    posture = int(printed.split("posture ")[1].split(":")[0])
+    expected = solve(robot, t6_from_pose([robot.verification.home])).joints[0, :, posture]
+    shown = [float(line.split(":")[1]) for line in printed.splitlines() if line.strip().startswith("joint")]
+    assert shown == pytest.approx(expected, abs=1e-6)
+    assert "warning 0" in printed and "forward: returned 0" in printed
+
+
 def test_a_folder_kingen_did_not_write_is_refused(tmp_path, capsys):
     (tmp_path / "mine.txt").write_text("not kingen's")
     assert main(["package", str(ROBOT), "--host", "c", "-o", str(tmp_path)]) == 2

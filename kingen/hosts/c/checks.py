@@ -6,9 +6,13 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   directions of the free coordinates) and far away (10 mm, 5 degrees), returns that pose
   within the value bound or what the posture's conditioning explains; near starts must all
   return it, far ones may fail or return another assembly mode (a pose the reference gives these
-  joints, within a thousand times the value bounds) but never a pose without these joints.
+  joints, within a thousand times the value bounds) but never a pose without these joints. A
+  machine with task coordinates is started off in those only, and the whole pose it writes
+  (its parasitic coordinates too) is compared.
 - ``c jacobian``: the library's analytic Jacobian against kingen's
-  (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample.
+  (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample (a machine
+  with task coordinates: the limbs' rows at the machine's pose, which the regular sampled poses
+  are, those off its manifold being unreachable).
 - ``c direct index``: for six-limb robots, the library's direct index against kingen's
   (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
 """
@@ -147,7 +151,8 @@ class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
                             / np.max(np.abs(expected[number]) * units, axis=1))
             worst = max(worst, float(np.max(np.where(np.isfinite(relative), relative, np.inf))))
         passed = worst <= C_JACOBIAN_TOLERANCE and not warned
-        return Check("c jacobian", passed, f"the library's Jacobian against kingen's on {len(poses)} regular postures "
+        where = " (the limbs' rows at the machine's pose)" if robot.task else ""
+        return Check("c jacobian", passed, f"the library's Jacobian against kingen's{where} on {len(poses)} regular postures "
                                            f"of {len(t6)} poses: max relative difference {worst:.3g} (at most "
                                            f"{C_JACOBIAN_TOLERANCE:g}); {warned} answered another warning than good",
                      judged=len(poses))

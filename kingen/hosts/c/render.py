@@ -33,11 +33,7 @@ def file_names(robot):
 
 
 def robot_problem(robot):
-    """Why this host cannot build ``robot`` (a machine with task coordinates; one whose forward
-    it cannot solve), or None."""
-    if robot.task:
-        return ("task: the C library does not yet take a machine with task coordinates (its parasitic motion "
-                "is solved by the delmia and linuxcnc hosts)")
+    """Why this host cannot build ``robot`` (one whose forward it cannot solve), or None."""
     free = free_mask(robot)
     if int(free.sum()) != robot.dof:
         return (f"forward: the C library's forward solves for as many pose coordinates as the robot has limbs; "
@@ -72,7 +68,9 @@ def view_model(robot):
         "digits": digits or "none (one posture)",
         "revolute": [int(limb.joint_type.wraps) for limb in robot.limbs],
         "free_count": int(free.sum()),
-        "free_angles": bool(free[3:].any()),
+        "free_angles": bool(free[3:].any() or robot.task),
+        "task_words": ", ".join(robot.task),
+        "parasitic_indices": [index for index, name in enumerate(COORDINATES) if name not in robot.task],
         "closed_form": tuple(free) == (True, True, True, False, False, False) and robot.models == ("rail",)
         and robot.dof == 3,
         "free_columns": [index for index, name in enumerate(COORDINATES) if free[index]],
