@@ -39,14 +39,15 @@ class Quantity:
     """For a collision: which links' clearance ('rods' or 'cranks')."""
 
 
-FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index")
+FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index", "warnings")
 
 
 @dataclass
 class Batch:
     """Samples of pieces of moves: piece (n,) which piece each is of, u (n,) its parameter on its
     move, poses (n, 6) mm and degrees; joints (n, dof) mm or rad; margins (n, quantities);
-    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none)."""
+    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none);
+    warnings (n,) the reference's WARN_* code in the posture."""
 
     piece: np.ndarray
     u: np.ndarray
@@ -55,6 +56,7 @@ class Batch:
     margins: np.ndarray
     radicand: np.ndarray
     direct_index: np.ndarray
+    warnings: np.ndarray
 
     def take(self, order):
         """This batch's samples in ``order`` (an index array or a boolean mask)."""
@@ -131,7 +133,7 @@ class Evaluator:
             else:
                 margins[:, column] = determinant
         return Batch(np.asarray(piece), np.asarray(u, dtype=float), poses, joints, margins, np.min(radicands, axis=1),
-                     index)
+                     index, solution.warnings[:, 0])
 
     def _determinant(self, solution):
         """det of the six unit force lines (n,), mm^3."""
