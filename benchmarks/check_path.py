@@ -50,10 +50,14 @@ import json, resource, sys, time
 import numpy as np
 np.seterr(all="ignore")
 from kingen.robot.model import load_robot
-from kingen.paths.check import check_program
+from kingen.paths.check import Settings, check_program
 robot = load_robot(sys.argv[1])
+settings = Settings(host="delmia", routine=True, out_dir=sys.argv[4]) if sys.argv[3] == "routine" else Settings()
+if settings.routine:
+    from kingen.paths.routine import RoutineSolver
+    RoutineSolver(robot, "delmia", robot.working_posture, sys.argv[4])  # the routine built before the timing
 started = time.perf_counter()
-outcome = check_program(robot, sys.argv[2])
+outcome = check_program(robot, sys.argv[2], settings)
 seconds = time.perf_counter() - started
 print(json.dumps({"samples": outcome.findings.samples, "moves": outcome.findings.moves, "seconds": seconds, "problems": len(outcome.findings.worst),
                   "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
@@ -93,16 +97,19 @@ def short_moves_program(robot, moves, path):
                     + "\n")
 
 
-def _checked(name, program):
-    """The figures of one check of ``program`` on robot ``name`` in a fresh process."""
-    printed = subprocess.run([sys.executable, "-c", CHILD, name, str(program)], capture_output=True, text=True,
-                             check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": ""})
+def _checked(name, program, routine=None):
+    """The figures of one check of ``program`` on robot ``name`` in a fresh process; with
+    ``routine`` (a build folder) its joints from the DELMIA routine (``--routine``), built first."""
+    extra = ["routine", str(routine)] if routine is not None else ["reference", ""]
+    printed = subprocess.run([sys.executable, "-c", CHILD, name, str(program), *extra], capture_output=True, text=True,
+                             check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
     return json.loads(printed.stdout)
 
 
 def speed(names, samples):
-    """Per robot: the figures of a program of ``samples`` regular samples ("long"), of one ten
-    times shorter ("short") and of samples/10 moves of 0.1 mm ("short_moves")."""
+    """Per robot: the figures of a program of ``samples`` regular samples ("long"; and with
+    --routine, "long_routine"), of one ten times shorter ("short") and of samples/10 moves of
+    0.1 mm ("short_moves")."""
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         for name in names:
@@ -112,6 +119,8 @@ def speed(names, samples):
                 program = Path(folder) / f"{name}-{count}.csv"
                 speed_program(robot, count, program)
                 row[key] = _checked(name, program)
+                if key == "long":
+                    row["long_routine"] = _checked(name, program, Path(folder) / f"build-{name}")
             short = Path(folder) / f"{name}-short.csv"
             short_moves_program(robot, samples // 10, short)
             row["short_moves"] = _checked(name, short)
@@ -215,14 +224,17 @@ def markdown(figures):
     """The figures as Markdown: the speed and memory table and the grazing experiment's counts."""
     lines = ["Each program checked in a fresh process: straight moves of 100 mm around the robot's home at the default "
              "chord (0.1 mm); the peak is the process's resident memory; the short moves are a helix of 0.1 mm moves "
-             "at 1200 mm/min (a CAM program's segments).", "",
+             "at 1200 mm/min (a CAM program's segments); `--routine` solves the regular samples' joints by the robot's "
+             "DELMIA routine in a child process per batch besides the reference (a cross-check, not a shortcut).", "",
              "| robot | samples | seconds | samples/s | peak memory | a program ten times shorter: samples, peak memory "
-             "| moves of 0.1 mm: moves, seconds |", "| --- | --- | --- | --- | --- | --- | --- |"]
+             "| moves of 0.1 mm: moves, seconds | with `--routine` (DELMIA's): seconds |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for row in figures["speed"]:
         long, short, moves = row["long"], row["short"], row["short_moves"]
         lines.append(f"| {row['robot']} | {long['samples']} | {long['seconds']:.1f} | "
                      f"{long['samples'] / long['seconds']:,.0f} | {long['peak_mb']:.0f} MB | {short['samples']}, "
-                     f"{short['peak_mb']:.0f} MB | {moves['moves']} in {moves['seconds']:.1f} s |")
+                     f"{short['peak_mb']:.0f} MB | {moves['moves']} in {moves['seconds']:.1f} s | "
+                     f"{row['long_routine']['seconds']:.1f} |")
     counts = figures["grazing"]
     lines += ["", f"Nothing missed between samples: {figures['moves']} seeded moves (every other one a hexapod strut's "
               "lower travel limit, the others CEART's direct-index threshold, each crossed only between two regular "
