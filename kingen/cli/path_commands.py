@@ -43,9 +43,9 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     own interpreter, or a CSV of poses (x, y, z, roll, pitch, yaw in mm and degrees; optional t
     in s or feed in mm/min). The path between the points is sampled at most --chord apart and
     refined until no boundary can hide between two samples; each sample is checked for reach,
-    joint travel, the limb singular band, the direct index, a change of assembly mode, and the
-    joint speed and acceleration its feed asks for (each move timed from rest to rest: blending
-    is not modelled).
+    joint travel, the limb singular band, the direct index, a change of assembly mode, collisions
+    between links (where the robot file gives radii), and the joint speed and acceleration its
+    feed asks for (each move timed from rest to rest: blending is not modelled).
 
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
     every limit judged, 1 when not, 2 bad input."""
