@@ -1,7 +1,7 @@
-"""kingen check-path's figures, printed as Markdown (for docs/how-to/check-path.md and the
-closing notes).
+"""kingen check-path's figures, printed as Markdown, and with --json written as plain data for
+benchmarks/run.py (the performance page's section).
 
-    python benchmarks/check_path.py [--samples N] [--moves N]
+    python benchmarks/check_path.py [--samples N] [--moves N] [--json FILE]
 
 1. Speed and memory: a CSV program of straight moves 100 mm long around the robot's home,
    N samples in all at the default chord (0.1 mm), on the hexapod and on CEART, each checked
@@ -39,15 +39,25 @@ from kingen.robot.model import load_robot  # noqa: E402
 from kingen.robot.one_posture import at_posture  # noqa: E402
 
 MOVE_MM = 100.0
+ABOUT = ("How fast [check-path](how-to/check-path.md) checks a long program and whether its memory stays flat, "
+         "on the hexapod and on CEART (CEART at its working posture, with the exact direct index at every sample), "
+         "and whether a limit crossed only between two regular samples is found. Goals: a million samples of the "
+         "hexapod in at most 20 s, of CEART in at most 60 s; every graze found, nothing more at a ten times finer "
+         "chord.")
+"""What the section measures, for the performance page (links relative to docs/)."""
 CHILD = """
 import json, resource, sys, time
 import numpy as np
 np.seterr(all="ignore")
 from kingen.robot.model import load_robot
-from kingen.paths.check import check_program
+from kingen.paths.check import Settings, check_program
 robot = load_robot(sys.argv[1])
+settings = Settings(host="delmia", routine=True, out_dir=sys.argv[4]) if sys.argv[3] == "routine" else Settings()
+if settings.routine:
+    from kingen.paths.routine import RoutineSolver
+    RoutineSolver(robot, "delmia", robot.working_posture, sys.argv[4])  # the routine built before the timing
 started = time.perf_counter()
-outcome = check_program(robot, sys.argv[2])
+outcome = check_program(robot, sys.argv[2], settings)
 seconds = time.perf_counter() - started
 print(json.dumps({"samples": outcome.findings.samples, "moves": outcome.findings.moves, "seconds": seconds, "problems": len(outcome.findings.worst),
                   "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
@@ -87,29 +97,35 @@ def short_moves_program(robot, moves, path):
                     + "\n")
 
 
+def _checked(name, program, routine=None):
+    """The figures of one check of ``program`` on robot ``name`` in a fresh process; with
+    ``routine`` (a build folder) its joints from the DELMIA routine (``--routine``), built first."""
+    extra = ["routine", str(routine)] if routine is not None else ["reference", ""]
+    printed = subprocess.run([sys.executable, "-c", CHILD, name, str(program), *extra], capture_output=True, text=True,
+                             check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    return json.loads(printed.stdout)
+
+
 def speed(names, samples):
-    print("| robot | samples | seconds | samples/s | peak memory | same program / 10: samples, peak memory | "
-          "moves of 0.1 mm: moves, seconds |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    """Per robot: the figures of a program of ``samples`` regular samples ("long"; and with
+    --routine, "long_routine"), of one ten times shorter ("short") and of samples/10 moves of
+    0.1 mm ("short_moves")."""
+    rows = []
     with tempfile.TemporaryDirectory() as folder:
         for name in names:
             robot = load_robot(name)
-            figures = []
-            for count in (samples, samples // 10):
+            row = {"robot": name}
+            for key, count in (("long", samples), ("short", samples // 10)):
                 program = Path(folder) / f"{name}-{count}.csv"
                 speed_program(robot, count, program)
-                printed = subprocess.run([sys.executable, "-c", CHILD, name, str(program)], capture_output=True,
-                                         text=True, check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": ""})
-                figures.append(json.loads(printed.stdout))
+                row[key] = _checked(name, program)
+                if key == "long":
+                    row["long_routine"] = _checked(name, program, Path(folder) / f"build-{name}")
             short = Path(folder) / f"{name}-short.csv"
             short_moves_program(robot, samples // 10, short)
-            printed = subprocess.run([sys.executable, "-c", CHILD, name, str(short)], capture_output=True,
-                                     text=True, check=True, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": ""})
-            figures.append(json.loads(printed.stdout))
-            big, small, moves = figures
-            print(f"| {name} | {big['samples']} | {big['seconds']:.1f} | {big['samples'] / big['seconds']:,.0f} | "
-                  f"{big['peak_mb']:.0f} MB | {small['samples']}, {small['peak_mb']:.0f} MB | "
-                  f"{moves['moves']} in {moves['seconds']:.1f} s |")
+            row["short_moves"] = _checked(name, short)
+            rows.append(row)
+    return rows
 
 
 def least_along(values, start, end):
@@ -204,19 +220,42 @@ def _with_limit(robot, joint, limit):
     return replace(robot, limbs=tuple(limbs))
 
 
+def markdown(figures):
+    """The figures as Markdown: the speed and memory table and the grazing experiment's counts."""
+    lines = ["Each program checked in a fresh process: straight moves of 100 mm around the robot's home at the default "
+             "chord (0.1 mm); the peak is the process's resident memory; the short moves are a helix of 0.1 mm moves "
+             "at 1200 mm/min (a CAM program's segments); `--routine` solves the regular samples' joints by the robot's "
+             "DELMIA routine in a child process per batch besides the reference (a cross-check, not a shortcut).", "",
+             "| robot | samples | seconds | samples/s | peak memory | a program ten times shorter: samples, peak memory "
+             "| moves of 0.1 mm: moves, seconds | with `--routine` (DELMIA's): seconds |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for row in figures["speed"]:
+        long, short, moves = row["long"], row["short"], row["short_moves"]
+        lines.append(f"| {row['robot']} | {long['samples']} | {long['seconds']:.1f} | "
+                     f"{long['samples'] / long['seconds']:,.0f} | {long['peak_mb']:.0f} MB | {short['samples']}, "
+                     f"{short['peak_mb']:.0f} MB | {moves['moves']} in {moves['seconds']:.1f} s | "
+                     f"{row['long_routine']['seconds']:.1f} |")
+    counts = figures["grazing"]
+    lines += ["", f"Nothing missed between samples: {figures['moves']} seeded moves (every other one a hexapod strut's "
+              "lower travel limit, the others CEART's direct-index threshold, each crossed only between two regular "
+              f"samples); grazes set up: {counts['set up']}; seen by the regular samples alone: "
+              f"{counts['regular samples alone']}; found by check-path at the default chord: {counts['found']}; "
+              f"found more at a ten times finer chord: {counts['more at finer chord']}."]
+    return "\n".join(lines) + "\n"
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=1_000_000)
     parser.add_argument("--moves", type=int, default=100)
+    parser.add_argument("--json", type=Path, help="Also write the figures to this file as JSON.")
     arguments = parser.parse_args()
     np.seterr(all="ignore")
-    print("## Speed and memory\n")
-    speed(("hexapod", "ceart"), arguments.samples)
-    print("\n## Nothing missed between samples\n")
-    counts = grazing(arguments.moves)
-    print(f"{arguments.moves} seeded moves; grazes between two regular samples set up: {counts['set up']}; "
-          f"seen by the regular samples alone: {counts['regular samples alone']}; found by check-path at the "
-          f"default chord: {counts['found']}; found more at a ten times finer chord: {counts['more at finer chord']}.")
+    figures = {"samples": arguments.samples, "moves": arguments.moves,
+               "speed": speed(("hexapod", "ceart"), arguments.samples), "grazing": grazing(arguments.moves)}
+    print(markdown(figures))
+    if arguments.json:
+        arguments.json.write_text(json.dumps(figures, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -87,6 +87,13 @@ SECTION_FIGURES = {
     "hybrid": {"calls": 2000, "rounds": 3, "baseline": "hexapod",
                "rows": [{"host": "delmia", "robot": "hexapod", "ns": 231.1},
                         {"host": "delmia", "robot": "prs_head", "ns": 333.6}]},
+    "check_path": {
+        "samples": 2000, "moves": 2,
+        "speed": [{"robot": "hexapod", "long": {"samples": 2573, "moves": 3, "seconds": 0.02, "problems": 0, "peak_mb": 91.6},
+                   "short": {"samples": 1002, "moves": 1, "seconds": 0.01, "problems": 0, "peak_mb": 91.5},
+                   "short_moves": {"samples": 401, "moves": 200, "seconds": 0.3, "problems": 0, "peak_mb": 91.7},
+                   "long_routine": {"samples": 2573, "moves": 3, "seconds": 0.05, "problems": 0, "peak_mb": 95.0}}],
+        "grazing": {"set up": 2, "found": 2, "more at finer chord": 0, "regular samples alone": 0}},
 }
 """Small figures of every section of benchmarks/sections.py, in the shapes their scripts write."""
 
@@ -121,6 +128,8 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
     assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
     assert f"| delmia | prs_head | 333.6 | {333.6 / 231.1:.2f} |" in text
     assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
+    assert f"| hexapod | 2573 | 0.0 | {2573 / 0.02:,.0f} | 92 MB | 1002, 92 MB | 200 in 0.3 s | 0.1 |" in text
+    assert "grazes set up: 2; seen by the regular samples alone: 0; found by check-path at the default chord: 2" in text
 
 
 def test_only_refuses_an_unknown_section_and_measures_nothing(tmp_path):

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
-from .common import EXIT_FAILED, ROBOT, FiniteRange, _output_file, cli, finite, load_model, print_table, say
+from .common import EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model, print_table, say
 
 
 @cli.command("check-path")
@@ -31,14 +31,21 @@ from .common import EXIT_FAILED, ROBOT, FiniteRange, _output_file, cli, finite, 
               callback=_output_file, help="Write an HTML page with the joints along the program to this file.")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write every sample (pose, joints, speeds, accelerations) to this CSV file.")
-def check_path(robot, program, host_name, posture, chord, ini, json_path, html_path, csv_path):
+@click.option("--routine", "use_routine", is_flag=True, default=False,
+              help="Solve the regular samples' joints by the robot's routine compiled for --host, through the host's "
+                   "batch driver in a child process (the numpy reference still gives the singularity quantities, "
+                   "the clearances and the refined samples), and report how it agreed with the reference.")
+@OUT_DIR
+@TIMEOUT
+def check_path(robot, program, host_name, posture, chord, ini, json_path, html_path, csv_path, use_routine, out_dir,
+               timeout):
     """Will PROGRAM run on ROBOT? PROGRAM is a G-code file (.ngc, .nc, .gcode), read by LinuxCNC's
     own interpreter, or a CSV of poses (x, y, z, roll, pitch, yaw in mm and degrees; optional t
     in s or feed in mm/min). The path between the points is sampled at most --chord apart and
     refined until no boundary can hide between two samples; each sample is checked for reach,
-    joint travel, the limb singular band, the direct index, a change of assembly mode, and the
-    joint speed and acceleration its feed asks for (each move timed from rest to rest: blending
-    is not modelled).
+    joint travel, the limb singular band, the direct index, a change of assembly mode, collisions
+    between links (where the robot file gives radii), and the joint speed and acceleration its
+    feed asks for (each move timed from rest to rest: blending is not modelled).
 
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
     every limit judged, 1 when not, 2 bad input."""
@@ -53,7 +60,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     for given in (program, ini):
         if given is not None and not given.is_file():
             raise KingenError(f"{given}: no such file")
-    settings = Settings(host=host_name, posture=posture, chord=chord, ini=ini)
+    settings = Settings(host=host_name, posture=posture, chord=chord, ini=ini, routine=use_routine,
+                        out_dir=out_dir, timeout=timeout)
     with contextlib.ExitStack() as stack:
         sink = _csv_sink(stack, csv_path, model) if csv_path is not None else None
         progress = stack.enter_context(_progress())

@@ -15,7 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import t6_from_pose
+from ..defaults import DEFAULT_TIMEOUT
 from ..errors import KingenError
+from ..kinematics.routine import WARNINGS
 from .evaluation import Evaluator
 from .findings import Findings
 from .interpreter import gcode_moves
@@ -23,6 +25,7 @@ from .judging import judge_margins, judge_rates, record
 from .limits import limits_for
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
+from .routine import RoutineSolver
 from .sampling import lengths, poses_and_t6, sample_count
 from .timing import joint_rates, profile
 
@@ -36,18 +39,24 @@ DEFAULT_CHORD = 0.1
 class Settings:
     """What a check is run with: the host whose interpolation is followed ('linuxcnc' or
     'delmia'), the posture (None: the robot's working posture), the chord (mm and degrees),
-    the LinuxCNC .ini (None: the robot file's limits only)."""
+    the LinuxCNC .ini (None: the robot file's limits only), whether the regular samples' joints
+    come from the robot's routine for the host (:mod:`.routine`) rather than the reference, and
+    the routine's build folder (None: build/<name>) and timeout (s)."""
 
     host: str = "linuxcnc"
     posture: int = None
     chord: float = DEFAULT_CHORD
     ini: object = None
+    routine: bool = False
+    out_dir: object = None
+    timeout: float = DEFAULT_TIMEOUT
 
 
 @dataclass
 class Outcome:
     """A finished check: the robot, program, settings, limits, the evaluator (its checks), the
-    findings, the source text of every line named, the seconds it took."""
+    findings, the source text of every line named, the seconds it took, and (with the routine)
+    how its answers agreed with the reference's (routine.Agreement; None: not used)."""
 
     robot: object
     program: str
@@ -58,6 +67,7 @@ class Outcome:
     findings: Findings
     sources: dict
     seconds: float
+    agreement: object = None
 
 
 @dataclass
@@ -96,6 +106,8 @@ class _Checker:
         self.evaluator = Evaluator(robot, self.posture, self.limits)
         self.findings = Findings(robot.joint_names, np.where(robot.revolute, 180.0 / np.pi, 1.0))
         self.pieces, self.samples, self.move_sign = [], 0, 1.0
+        self.routine = RoutineSolver(robot, settings.host, self.posture, settings.out_dir,
+                                     settings.timeout) if settings.routine else None
 
     def add(self, index, move):
         """Cut a move into pieces and check them when a batch is full."""
@@ -148,6 +160,8 @@ class _Checker:
         self._tabulate()
         self._sign_starts()
         grid = self.evaluate(grid_piece, grid_u)
+        if self.routine is not None:
+            self._routine_joints(grid)
         starts = np.concatenate([[0], np.cumsum([p.high - p.low + 1 for p in pieces])])
         regions, owned = [], []
         for number, piece in enumerate(pieces):
@@ -169,6 +183,15 @@ class _Checker:
         if self.progress is not None:
             self.progress(self.findings)
         self.pieces, self.samples = [], 0
+
+    def _routine_joints(self, grid):
+        """The regular samples' joints and warnings from the routine, compared with the
+        reference's; out of reach (the reference's warning) the reference's joints are kept."""
+        joints, warnings = self.routine(t6_from_pose(grid.poses))
+        reachable = grid.warnings != WARNINGS["WARN_UNREACHABLE"]
+        self.routine.compare(joints, warnings, grid.joints, grid.warnings, reachable, self.findings.display_scale)
+        grid.joints = np.where(reachable[:, None], joints, grid.joints)
+        grid.warnings = warnings
 
     def _sign_starts(self):
         """Each piece's assembly sign: the determinant's sign at its move's start, found for a
@@ -224,4 +247,5 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
     named = {place.line for place in list(findings.problems.values()) + list(findings.first.values())
              + list(findings.worst.values())}
     return Outcome(robot, str(program), settings, checker.posture, checker.limits, checker.evaluator, findings,
-                   source_lines(program, named), time.perf_counter() - started)
+                   source_lines(program, named), time.perf_counter() - started,
+                   None if checker.routine is None else checker.routine.agreement)

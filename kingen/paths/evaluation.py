@@ -10,13 +10,17 @@ Decision quantities (one column each), internal units:
   routine's warnings decide them;
 - ``direct index``: the direct index minus the robot's ``direct_index_min`` (mm);
 - ``assembly change``: det of the six unit force lines (mm^3), which the caller signs by its
-  sign at the move's start: its sign changes where the platform changes assembly mode.
+  sign at the move's start: its sign changes where the platform changes assembly mode;
+- ``collision``: the least clearance (mm) between passive links, and between cranks, as
+  cylinders of the robot file's ``collision`` radii (kingen.kinematics.collision, model
+  ``segments``): below 0 the cylinders overlap. Present only where the file gives radii.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..kinematics.collision import clearances
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from ..kinematics.singularity import limb_wrenches
@@ -31,16 +35,19 @@ class Quantity:
     kind: str
     joint: int = None
     upper: bool = False
+    part: str = None
+    """For a collision: which links' clearance ('rods' or 'cranks')."""
 
 
-FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index")
+FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index", "warnings")
 
 
 @dataclass
 class Batch:
     """Samples of pieces of moves: piece (n,) which piece each is of, u (n,) its parameter on its
     move, poses (n, 6) mm and degrees; joints (n, dof) mm or rad; margins (n, quantities);
-    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none)."""
+    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none);
+    warnings (n,) the reference's WARN_* code in the posture."""
 
     piece: np.ndarray
     u: np.ndarray
@@ -49,6 +56,7 @@ class Batch:
     margins: np.ndarray
     radicand: np.ndarray
     direct_index: np.ndarray
+    warnings: np.ndarray
 
     def take(self, order):
         """This batch's samples in ``order`` (an index array or a boolean mask)."""
@@ -83,7 +91,17 @@ class Evaluator:
             columns.append(Quantity("direct index"))
         if self.six_lines:
             columns.append(Quantity("assembly change"))
+        self.collisions = self._collision_pairs()
+        columns += [Quantity("collision", part=pair) for pair in self.collisions]
         self.quantities = tuple(columns)
+
+    def _collision_pairs(self):
+        """Which clearances the robot file's radii judge: 'rods' (passive links) when it gives
+        radii and has two limbs or more, 'cranks' too when two limbs or more have actuator arms."""
+        if self.robot.collision is None or self.robot.dof < 2:
+            return ()
+        arms = sum(limb.actuator_segment(np.zeros(1)) is not None for limb in self.robot.limbs)
+        return ("rods", "cranks") if arms >= 2 else ("rods",)
 
     def kinds(self):
         """The checks these quantities judge, in report order."""
@@ -96,6 +114,8 @@ class Evaluator:
         margins = np.empty((len(u), len(self.quantities)))
         radicands = solution.radicands
         determinant = self._determinant(solution) if self.six_lines else None
+        clearance = dict(zip(("rods", "cranks"), clearances(self.robot, solution.points, joints))) \
+            if self.collisions else {}
         index = solution.direct_index[:, 0] if solution.direct_index is not None else np.full(len(u), np.nan)
         for column, quantity in enumerate(self.quantities):
             joint = quantity.joint
@@ -108,10 +128,12 @@ class Evaluator:
                 margins[:, column] = radicands[:, joint] - SINGULAR_TOLERANCE
             elif quantity.kind == "direct index":
                 margins[:, column] = np.nan_to_num(solution.direct_index[:, 0] - self.threshold, nan=-np.inf)
+            elif quantity.kind == "collision":
+                margins[:, column] = clearance[quantity.part]
             else:
                 margins[:, column] = determinant
         return Batch(np.asarray(piece), np.asarray(u, dtype=float), poses, joints, margins, np.min(radicands, axis=1),
-                     index)
+                     index, solution.warnings[:, 0])
 
     def _determinant(self, solution):
         """det of the six unit force lines (n,), mm^3."""

@@ -21,7 +21,8 @@ class Place:
     """One offending place: the check ``kind``, the joint's name (None: the platform's), the
     program line, the pose (mm, degrees), the joints (mm or degrees), the offending ``value``
     and its ``limit`` (the quantity's units), the ``margin`` (below 0: beyond the limit; the
-    smaller, the worse) and, for a joint speed, the feed override at which it would fit."""
+    smaller, the worse), for a joint speed the feed override at which it would fit, and for a
+    collision the links whose clearance it is ('rods' or 'cranks')."""
 
     kind: str
     joint: str
@@ -32,9 +33,10 @@ class Place:
     limit: float
     margin: float
     override: float = None
+    between: str = None
 
     def key(self):
-        return self.kind, self.joint
+        return self.kind, self.joint or self.between
 
 
 @dataclass
@@ -72,13 +74,13 @@ class Findings:
     def __post_init__(self):
         self.peaks = [Peak() for _ in self.joint_names]
 
-    def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None):
+    def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None, between=None):
         """A Place from internal units (joints in mm or rad) for joint index ``joint`` or None."""
         scale = self.display_scale
         shown = float(scale[joint]) if joint is not None and kind not in ("unreachable", "limb singular") else 1.0
         return Place(kind, None if joint is None else self.joint_names[joint], int(line),
                      [float(v) for v in pose], [float(v) for v in np.asarray(joints) * scale],
-                     float(value) * shown, float(limit) * shown, float(margin), override)
+                     float(value) * shown, float(limit) * shown, float(margin), override, between)
 
     def add(self, move_index, place):
         """Record ``place`` as its move's problem of its kind (the worst kept) and in the first

@@ -25,7 +25,8 @@ def judge_margins(findings, evaluator, batch, pieces, lines):
             for row in dict.fromkeys((rows[0], rows[np.argmin(margins[rows])])):
                 findings.add(pieces[number].index, findings.place(
                     quantity.kind, quantity.joint, lines[number], batch.poses[row], batch.joints[row],
-                    evaluator.value_of(quantity, batch, row), evaluator.limit_of(quantity), margins[row]))
+                    evaluator.value_of(quantity, batch, row), evaluator.limit_of(quantity), margins[row],
+                    between=quantity.part))
 
 
 def judge_rates(findings, limits, grid, speeds, accelerations, pieces, lines):

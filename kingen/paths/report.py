@@ -3,7 +3,7 @@ problems by line, the JSON document, the CSV of every sample and the HTML page.
 
 Units: poses mm and degrees; joints, speeds and accelerations in the robot file's joint
 units (mm or degrees, per s, per s^2); radicands unitless; the direct index and the force
-lines' determinant in mm and mm^3.
+lines' determinant in mm and mm^3; clearances in mm.
 """
 
 import numpy as np
@@ -27,6 +27,8 @@ def checks(outcome):
         "direct index": "the robot file gives no singularity.direct_index_min" if evaluator.six_lines
         else "the robot has no six force lines",
         "assembly change": "the robot has no six force lines",
+        "collision": "the robot file gives no collision: radii (rod_radius, leg_radius, crank_radius)"
+        if outcome.robot.collision is None else "the robot has fewer than two limbs",
     }
     if findings.samples == 0:
         return {kind: "not exercised: the program has no move" for kind in list(reasons) + list(SPEED_KINDS)}
@@ -72,7 +74,7 @@ def verdict_line(outcome):
 
 def _joint_units(outcome, joint, kind):
     if joint is None:
-        return {"direct index": "mm", "assembly change": "mm^3"}.get(kind, "")
+        return {"direct index": "mm", "assembly change": "mm^3", "collision": "mm"}.get(kind, "")
     index = outcome.robot.joint_names.index(joint)
     base = "deg" if outcome.robot.revolute[index] else "mm"
     if kind in ("unreachable", "limb singular"):
@@ -86,7 +88,7 @@ def problem_rows(outcome):
     for place in outcome.findings.sorted_problems():
         units = _joint_units(outcome, place.joint, place.kind)
         extra = f" (fits at {place.override * 100:.0f}% feed)" if place.override is not None else ""
-        rows.append([str(place.line), place.kind, place.joint or "-", f"{place.value:.6g} {units}".strip() + extra,
+        rows.append([str(place.line), place.kind, place.joint or place.between or "-", f"{place.value:.6g} {units}".strip() + extra,
                      f"{place.limit:.6g} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
     return rows
 
@@ -97,6 +99,8 @@ def _place_json(outcome, place):
             "limit": place.limit, "units": _joint_units(outcome, place.joint, place.kind)}
     if place.override is not None:
         data["override"] = place.override
+    if place.between is not None:
+        data["between"] = place.between
     return data
 
 
@@ -127,9 +131,20 @@ def report_json(outcome):
                      "ini": None if outcome.settings.ini is None else str(outcome.settings.ini),
                      "limits_from": list(limits.sources), "path_speed_mm_s": limits.path_speed,
                      "path_acceleration_mm_s2": limits.path_acceleration, "timing": BLENDING,
-                     "solver": "the numpy reference (kingen.kinematics.reference), in batches"},
+                     "solver": _solver(outcome)},
         "seconds": outcome.seconds,
     }
+
+
+def _solver(outcome):
+    """What solved the samples, and how the routine agreed with the reference where it was used."""
+    if outcome.agreement is None:
+        return "the numpy reference (kingen.kinematics.reference), in batches"
+    agreement = outcome.agreement
+    return (f"the robot's {outcome.settings.host} routine through the host's batch driver for the regular samples' "
+            f"joints ({counted(agreement.samples, 'sample')}: largest difference from the reference "
+            f"{agreement.joint_difference:.3g} mm or deg, {counted(agreement.warning_mismatches, 'warning')} differing); "
+            "the numpy reference for the decision quantities and the refined samples")
 
 
 def csv_header(robot):
