@@ -57,9 +57,10 @@ def test_help_is_multi_line_and_says_what_kingen_is(capsys, argv):
     lines = out.splitlines()
     assert lines[0] == "Usage: kingen [OPTIONS] COMMAND [ARGS]..."
     text = " ".join(out.split())
-    assert "verified inverse-kinematics routines for DELMIA V5 / IGRIP and LinuxCNC, with forward kinematics, " \
-           "analysis and design optimisation." in text
-    assert any(line.split()[:1] == ["optimize"] for line in lines)
+    assert ("verified inverse-kinematics routines for DELMIA V5 / IGRIP, LinuxCNC and your own controller (a C "
+            "library), with forward kinematics, analysis, design optimisation, calibration from measurements and path "
+            "checking.") in text
+    assert all(any(line.split()[:1] == [name] for line in lines) for name in ("optimize", "calibrate", "check-path"))
 
 
 def test_a_robot_of_one_posture_is_counted_in_the_singular(capsys, tmp_path):

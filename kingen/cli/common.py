@@ -190,8 +190,9 @@ def plugin_options(function):
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(VERSION, prog_name="kingen")
 def cli():
-    """Robot YAML -> verified inverse-kinematics routines for DELMIA V5 / IGRIP and LinuxCNC,
-    with forward kinematics, analysis and design optimisation.
+    """Robot YAML -> verified inverse-kinematics routines for DELMIA V5 / IGRIP, LinuxCNC and
+    your own controller (a C library), with forward kinematics, analysis, design optimisation,
+    calibration from measurements and path checking.
 
     ROBOT is a YAML path or the name of a shipped robot (see `kingen list`).
     """
