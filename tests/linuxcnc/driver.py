@@ -12,18 +12,9 @@ import time
 
 import linuxcnc
 
+from display import command, power_on_and_home, status, wait
+
 result = {"log": [], "moves": []}
-status, command = linuxcnc.stat(), linuxcnc.command()
-
-
-def wait(condition, what, timeout=30.0):
-    end = time.time() + timeout
-    while time.time() < end:
-        status.poll()
-        if condition():
-            return
-        time.sleep(0.02)
-    raise TimeoutError(f"no {what} in {timeout:g} s")
 
 
 def settled():
@@ -34,14 +25,7 @@ def settled():
 
 
 try:
-    wait(lambda: True, "status")
-    command.state(linuxcnc.STATE_ESTOP_RESET)
-    command.state(linuxcnc.STATE_ON)
-    wait(lambda: status.task_state == linuxcnc.STATE_ON, "machine on")
-    command.mode(linuxcnc.MODE_MANUAL)
-    command.wait_complete()
-    command.home(-1)
-    wait(lambda: all(status.homed[:status.joints]), "homing")
+    power_on_and_home()
     result["homed"] = settled()
     command.mode(linuxcnc.MODE_MDI)
     command.wait_complete()

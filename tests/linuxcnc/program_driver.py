@@ -12,18 +12,10 @@ import time
 
 import linuxcnc
 
+from display import command, power_on_and_home, status
+
 result = {"log": [], "programs": []}
-status, command, errors = linuxcnc.stat(), linuxcnc.command(), linuxcnc.error_channel()
-
-
-def wait(condition, what, timeout=30.0):
-    end = time.time() + timeout
-    while time.time() < end:
-        status.poll()
-        if condition():
-            return
-        time.sleep(0.01)
-    raise TimeoutError(f"no {what} in {timeout:g} s")
+errors = linuxcnc.error_channel()
 
 
 def run(program):
@@ -59,14 +51,7 @@ def run(program):
 
 
 try:
-    wait(lambda: True, "status")
-    command.state(linuxcnc.STATE_ESTOP_RESET)
-    command.state(linuxcnc.STATE_ON)
-    wait(lambda: status.task_state == linuxcnc.STATE_ON, "machine on")
-    command.mode(linuxcnc.MODE_MANUAL)
-    command.wait_complete()
-    command.home(-1)
-    wait(lambda: all(status.homed[:status.joints]), "homing")
+    power_on_and_home()
     for program in json.loads(os.environ["KINGEN_PROGRAMS"]):
         result["programs"].append(run(program))
 except Exception as error:
