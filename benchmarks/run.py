@@ -319,9 +319,9 @@ out and its sentinel page compared after each call); the reference 1.0 / 5.1 to 
 CEART the certificate 2.7 and its force lines 0.7); the comparison 0.4 / about 2.6 (for
 CEART the closure residuals 0.8, deciding and reading the branch columns 0.1). verify also
 compares up to 96 poses beside the warnings' boundaries, found with a few thousand reference
-solves: a fixed cost, not one per sampled pose (hexapod 0.01 s; CEART 0.07 s for the rays and
-a median 0.14 s, at most 0.9 s over seeds 0 to 99, for the descent that finds its
-direct-index threshold, which no ray meets).
+solves: a fixed cost, not one per sampled pose (hexapod 0.01 s; CEART 0.16 s, median over
+seeds 0 to 39, of which 0.07 s for the rays and the rest for the descent that finds its
+direct-index threshold, which no ray meets; at most 0.9 s over seeds 0 to 99).
 
 - **The reference** keeps the poses on the fast axis throughout: platform points are (limb,
   coordinate, pose) in memory, force lines (limb, branch, component, pose), so numpy's loops
