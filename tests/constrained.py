@@ -1,6 +1,6 @@
 """What the tests of machines with task coordinates share (tests/test_hybrid.py,
-test_hybrid_axes.py, test_tricept.py): an independent Newton solver written here, not kingen's,
-and the checks every such machine passes."""
+test_hybrid_axes.py, test_tricept.py, test_constrained_machines.py): an independent Newton
+solver written here, not kingen's, a refused declaration's check and the machine's poses'."""
 
 import subprocess
 import sys
@@ -8,10 +8,9 @@ import sys
 import numpy as np
 
 from kingen.conventions import t6_from_pose
-from kingen.kinematics.parasitic import constraint_residuals, on_manifold
+from kingen.kinematics.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
-from kingen.robot.model import load_robot
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 
@@ -29,32 +28,6 @@ def newton_root(residual, start, tolerance=1e-13, steps=50):
         if np.max(np.abs(move)) < tolerance:
             break
     return unknown
-
-
-def check_constraints_close_and_off_the_manifold_is_unreachable(name, seed):
-    """400 seeded poses of ``name``'s region: the machine's pose for each closes the constraints
-    to 1e-9; the drawn poses (off the manifold) are unreachable with the joints of the machine's
-    pose for the same task coordinates; the machine's poses are answered."""
-    robot = load_robot(name)
-    region = robot.verification
-    drawn = np.asarray(region.home) + np.random.default_rng(seed).uniform(-1, 1, (400, 6)) * np.asarray(region.range)
-    moved = on_manifold(robot, drawn)
-    residuals, radicand = constraint_residuals(robot, t6_from_pose(np.concatenate([drawn, moved])))
-    assert np.all(radicand > 0.5) and np.max(np.abs(residuals)) < 1e-9
-    off, on = solve(robot, t6_from_pose(drawn)), solve(robot, t6_from_pose(moved))
-    assert np.all(off.warnings == UNREACHABLE)
-    assert np.count_nonzero(on.warnings != UNREACHABLE) == len(moved)
-    assert np.max(np.abs(off.joints - on.joints)) < 1e-9
-
-
-def check_routine_equals_the_reference(name, host, folder):
-    """`kingen verify name --host host` passes with every check such a machine has named ok."""
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", name, "--host", host, "--samples", "2000",
-                             "--out-dir", str(folder)], capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0, result.stdout + result.stderr
-    checks = ("values", "warnings", "closure", "constraints", "jacobian", "round trip", "golden[0]", "golden[2]")
-    for check in checks + (("forward",) if host == "linuxcnc" else ()):
-        assert any(line.strip().startswith(f"ok     {check}") for line in result.stdout.splitlines()), check
 
 
 def check_declaration_refused(name, old, new, words, folder):
