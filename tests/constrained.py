@@ -8,6 +8,7 @@ import sys
 import numpy as np
 
 from kingen.conventions import t6_from_pose
+from kingen.kinematics.forward import free_mask, newton
 from kingen.kinematics.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
@@ -56,3 +57,14 @@ def check_task_poses_match(robot, poses, independent_joints):
     assert not np.any(solution.warnings == UNREACHABLE)
     expected = np.array([independent_joints(robot, pose) for pose in poses])
     assert np.max(np.abs(solution.joints[:, :, 0] - expected)) < 1e-9
+
+
+def check_forward_returns(robot, poses, joints, offset, angle_bound=1e-9):
+    """kingen's forward kinematics from ``poses`` (n, 6; mm, degrees, the test's own) moved by
+    ``offset`` (mm, radians), with the test's ``joints``, returns each pose: residual and
+    position within 1e-9, angles within ``angle_bound`` (rad)."""
+    target = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+    found, residual = newton(robot, target + offset, joints, free_mask(robot))
+    assert np.max(residual) < 1e-9
+    assert np.max(np.abs(found[:, :3] - target[:, :3])) < 1e-9
+    assert np.max(np.abs(found[:, 3:] - target[:, 3:])) < angle_bound

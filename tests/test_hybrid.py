@@ -10,13 +10,12 @@ import numpy as np
 import pytest
 
 from kingen.conventions import rotation_from_rpy, t6_from_pose
-from kingen.kinematics.forward import free_mask, newton
 from kingen.kinematics.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot
 
-from constrained import check_declaration_refused, newton_root
+from constrained import check_declaration_refused, check_forward_returns, newton_root
 
 ROBOTS = ("prs_head", "rps_table")
 TASKS = {"prs_head": [(-400.0, 0.0, 0.0), (-370.0, 12.0, -7.0), (-480.0, -14.0, 10.0), (-300.0, 5.0, 13.0)],
@@ -143,9 +142,5 @@ def test_forward_kinematics_solves_the_parasitic_coordinates(name):
     robot = load_robot(name)
     poses = np.array([independent_pose(robot, *task) for task in TASKS[name]])
     joints = np.array([independent_joints(robot, pose) for pose in poses])
-    target = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
-    start = target + np.array([3.0, -3.0, 5.0, np.radians(2.0), np.radians(-2.0), np.radians(1.0)])
-    found, residual = newton(robot, start, joints, free_mask(robot))
-    assert np.max(residual) < 1e-9
-    assert np.max(np.abs(found[:, :3] - target[:, :3])) < 1e-9
-    assert np.max(np.abs(found[:, 3:] - target[:, 3:])) < 1e-11
+    check_forward_returns(robot, poses, joints,
+                          np.array([3.0, -3.0, 5.0, np.radians(2.0), np.radians(-2.0), np.radians(1.0)]), 1e-11)
