@@ -64,12 +64,19 @@ def _fifo(tmp_path, name):
     ["bench", "{robot}", "--floor", "{fifo}"],
     ["golden", "record", "{robot}", "--source", "{fifo}", "-o", "{tmp}/snapshot.json"],
     ["verify", "{folder}"],
+    ["check-path", "hexapod", "{fifo}"],
+    ["check-path", "hexapod", "/dev/zero"],
+    ["check-path", "hexapod", "{tmp}/program.csv", "--ini", "{fifo}"],
+    ["calibrate", "hexapod", "--measurements", "{fifo}"],
+    ["calibrate", "hexapod", "--measurements", "/dev/zero"],
+    ["calibrate", "hexapod", "--measurements", "{tmp}/program.csv", "--validate", "{fifo}"],
 ])
 def test_special_input_files_are_refused_up_front(tmp_path, argv):
     robot = tmp_path / "probe.yaml"
     robot.write_text(ROBOT)
     fifo = _fifo(tmp_path, "input")
     (tmp_path / "folder.yaml").mkdir()
+    (tmp_path / "program.csv").write_text("x,y,z,roll,pitch,yaw\n")
     names = {"fifo": fifo, "robot": robot, "tmp": tmp_path, "folder": tmp_path / "folder.yaml"}
     result = run_kingen(tmp_path, *[word.format(**names) for word in argv], timeout=30)
     assert result.returncode == 2, result.stdout + result.stderr

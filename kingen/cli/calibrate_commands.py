@@ -7,7 +7,8 @@ from pathlib import Path
 
 import click
 
-from .common import EXIT_FAILED, ROBOT, FiniteRange, _out_folder, _output_file, cli, finite, load_model_and_data, say
+from .common import (EXIT_FAILED, ROBOT, FiniteRange, _out_folder, _output_file, cli, finite, load_model_and_data,
+                     refuse_special_files, say)
 
 MEASURE = click.option("--measure", type=click.Choice(["pose", "position"]), default="pose", show_default=True,
                        help="What the device measures: the target's pose (x y z roll pitch yaw) or a reflector's "
@@ -64,6 +65,7 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     from ..calibrate.parameters import Parameters
     from ..runtime.files import default_out_dir, write_atomic
 
+    refuse_special_files(measurements_path, validate_path)
     model, data, _ = load_model_and_data(robot)
     parameters = Parameters(model, measure)
     selected = parameters.selected(spec)

@@ -224,15 +224,21 @@ def in_child(job, arguments, timeout, host, decoders, on_message=None):
     return result
 
 
+def refuse_special_files(*paths):
+    """Each given file (None: not given) that is a FIFO, device or folder refused before
+    anything opens it (kingen.runtime.file_gate.refuse_special_file), in the order given."""
+    for path in paths:
+        if path is not None:
+            refuse_special_file(path)
+
+
 def routine_to_check(model, host, out_dir, library=None, source=None, routine=None, timeout=DEFAULT_TIMEOUT):
     """(library path, routine) to check: kingen's own build for ``host``, a given library, or
     a compiled hand-written source. A given file that is a FIFO, device or folder is refused
     before anything opens it."""
     if library is not None and source is not None:
         raise click.UsageError("give at most one of --plugin and --source")
-    for given in (library, source):
-        if given is not None:
-            refuse_special_file(given)
+    refuse_special_files(library, source)
     own = host.routine_name(model)
     if library is None and source is None:
         if routine is not None and routine != own:

@@ -9,7 +9,8 @@ from pathlib import Path
 import click
 
 from ..errors import KingenError
-from .common import EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model, print_table, say
+from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model,
+                     print_table, refuse_special_files, say)
 
 
 @cli.command("check-path")
@@ -57,6 +58,7 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{posture}: {model.name} has postures 0 .. {model.postures - 1}",
                                  param_hint="'--posture'")
+    refuse_special_files(program, ini)
     for given in (program, ini):
         if given is not None and not given.is_file():
             raise KingenError(f"{given}: no such file")
