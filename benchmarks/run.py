@@ -179,7 +179,9 @@ def main():
         parser.error(f"--only: no section {', '.join(unknown)} (sections: core, {', '.join(sections.SECTIONS)})")
     keep = options.render_only or options.only
     figures = json.loads(options.figures.read_text()) if keep and options.figures.exists() else {}
-    if "core" not in names and "floors" not in figures:
+    if "floors" not in figures and options.render_only:
+        parser.error(f"no saved figures in {options.figures}: measure them first (without --render-only)")
+    if "floors" not in figures and "core" not in names:
         parser.error(f"no saved figures in {options.figures}: measure the core section too (--only core,...)")
     if not options.render_only:
         if "core" in names:

@@ -141,3 +141,15 @@ def test_only_refuses_an_unknown_section_and_measures_nothing(tmp_path):
     assert done.returncode == 2
     assert "--only: no section nosuch (sections: core, " in done.stderr.splitlines()[-1]
     assert not figures.exists() and not page.exists()
+
+
+def test_render_only_without_saved_figures_says_so_and_writes_nothing(tmp_path):
+    root = Path(__file__).resolve().parent.parent
+    figures, page = tmp_path / "figures.json", tmp_path / "performance.md"
+    done = subprocess.run([sys.executable, str(root / "benchmarks" / "run.py"), "--render-only",
+                           "--figures", str(figures), "--page", str(page)], capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(root)})
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.splitlines()[-1].endswith(f"no saved figures in {figures}: measure them first (without "
+                                                 "--render-only)")
+    assert not page.exists()

@@ -2,12 +2,9 @@
 comparing processes (one per core by default), each drawing its own chunks' poses and
 sending back only a chunk's totals. The report is the same whatever the process count."""
 
-import math
 import multiprocessing
-import os
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
