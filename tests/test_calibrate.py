@@ -269,6 +269,22 @@ def test_bad_options_are_one_line(tmp_path, hexapod_case, capsys):
     assert status == 2 and "--identify: unknown group 'wheels'" in err
     status, err = bad(capsys, ["calibrate", "plan", "hexapod", "--poses", "3", "-o", str(tmp_path / "p.csv")])
     assert status == 2 and "--poses: 3 poses for 42 identifiable parameters: at least 7 are needed" in err
+    for spec in ("zero", "-all"):  # no crank on a hexapod; nothing left
+        for argv in (["calibrate", "hexapod", "--measurements", str(folder / "poses.csv")],
+                     ["calibrate", "plan", "hexapod", "--poses", "30", "-o", str(tmp_path / "p.csv")]):
+            status, err = bad(capsys, [*argv, "--identify", spec])
+            assert status == 2 and err.endswith(f"--identify: '{spec}' selects none of hexapod's parameters (its "
+                                                "groups: base, platform, length, frame, target)"), err
+
+
+def test_a_plan_of_angles_alone_states_their_deviations_in_degrees(tmp_path, capsys):
+    """--identify zero on a 6-RUS identifies the cranks' zero angles only: the plan states
+    their deviations in degrees (there is no length to state)."""
+    assert main(["calibrate", "plan", "rus_optimized", "--poses", "30", "--identify", "zero",
+                 "-o", str(tmp_path / "p.csv")]) == 0
+    out = capsys.readouterr().out
+    assert "6 identifiable parameters" in out and "parameter deviations (one std): median " in out
+    assert " mm" not in out.split("parameter deviations")[1].split("\n")[0] and "deg (crank" in out
 
 
 def test_a_robot_file_in_inches_is_measured_and_written_in_inches(tmp_path):

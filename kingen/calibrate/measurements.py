@@ -39,12 +39,6 @@ class Measurements:
         """'FILE:LINE: column' of measurement ``row`` (0-based), for errors."""
         return f"{self.path}:{self.lines[row]}: {column}"
 
-    def subset(self, rows):
-        """The measurements at ``rows`` (indices or a mask)."""
-        rows = np.arange(len(self.lines))[rows]
-        return Measurements(self.path, self.measure, self.joints[rows], self.measured[rows],
-                            tuple(self.lines[i] for i in rows), self.columns)
-
 
 def joint_columns(robot):
     """q1 .. qN for ``robot``."""

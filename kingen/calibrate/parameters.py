@@ -154,14 +154,6 @@ class Parameters:
     def _slice(self, values, group):
         return np.asarray(values, dtype=float)[self.groups == group]
 
-    def with_nominal(self, values):
-        """The same parameters with ``values`` as their nominal values (a start for a second fit)."""
-        copy = object.__new__(Parameters)
-        copy.__dict__.update(self.__dict__)
-        copy.nominal = np.asarray(values, dtype=float).copy()
-        copy.entries = tuple(replace(entry, nominal=float(value)) for entry, value in zip(self.entries, values))
-        return copy
-
     def selected(self, spec):
         """(len,) bool: the parameters --identify ``spec`` selects: comma-separated 'all', a group
         or '-group' (fix it); a spec that starts with '-group' starts from all."""
@@ -175,6 +167,9 @@ class Parameters:
                 raise KingenError(f"--identify: unknown group '{group}' (choose from all, {', '.join(GROUPS)})")
             chosen[np.ones(len(self), dtype=bool) if group == "all" else self.groups == group] = \
                 not item.startswith("-")
+        if not chosen.any():
+            raise KingenError(f"--identify: '{spec}' selects none of {self.robot.name}'s parameters (its groups: "
+                              f"{', '.join(dict.fromkeys(self.groups))})")
         return chosen
 
 

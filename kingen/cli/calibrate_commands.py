@@ -3,6 +3,7 @@ write its robot file) and ``calibrate plan`` (choose the poses to measure)."""
 
 import json
 import math
+import statistics
 from pathlib import Path
 
 import click
@@ -103,6 +104,19 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     return 0
 
 
+def _deviations_text(std, entries):
+    """'median 0.012 mm, largest 0.03 mm (leg1.reference_length)' for each unit the identified
+    parameters (finite ``std``) have: mm, then degrees."""
+    parts = []
+    for unit in ("mm", "deg"):
+        found = [(value, entry.name) for value, entry in zip(std, entries) if math.isfinite(value) and entry.unit == unit]
+        if found:
+            largest = max(found)
+            parts.append(f"median {statistics.median(value for value, _ in found):.3g} {unit}, largest {largest[0]:.3g} "
+                         f"{unit} ({largest[1]})")
+    return "; ".join(parts)
+
+
 def _check_loads(text, path):
     """The calibrated robot file's text loads as a robot (else an internal error: kingen wrote it)."""
     from ruamel.yaml import YAML
@@ -173,13 +187,10 @@ def plan(robot, count, noise_mm, noise_deg, measure, spec, output):
     poses = found.poses[rows]
     output = output or default_out_dir(model) / "calibrate" / "poses.csv"
     write_atomic(output, write_measurements(model, measure, found.joints[rows], poses[:, :6 if measure == "pose" else 3]))
-    mm = [(value, entry.name) for value, entry in zip(std, parameters.entries) if math.isfinite(value)
-          and entry.unit == "mm"]
     say(f"plan {model.name}: {count} of {len(found.poses)} candidate poses (seeded in the verification region: "
         f"reachable, within travel, away from singularities{', clear of collisions' if model.collision else ''}), "
         f"{identifiable} identifiable parameters")
     say(f"  predicted condition number {indices['condition_number']:.4g}; with noise {noise_mm:g} mm and "
-        f"{noise_deg:g} deg, parameter deviations (one std): median {np.median([v for v, _ in mm]):.3g} mm, "
-        f"largest {max(mm)[0]:.3g} mm ({max(mm)[1]})")
+        f"{noise_deg:g} deg, parameter deviations (one std): {_deviations_text(std, parameters.entries)}")
     say(str(output))
     return 0
