@@ -317,6 +317,24 @@ def test_csv_times_give_the_speed_that_reaches_each_row_on_time(tmp_path, capsys
     assert sorted(p["value"] for p in problems) == pytest.approx(sorted(needed), rel=1e-6)
 
 
+@pytest.mark.parametrize("column, rows, verdict", [
+    ("t", ("0", "2"), "passed"),
+    ("feed", ("600", "600"), "not exercised: no move's accelerations are known (a path acceleration, .ini [TRAJ], or "
+                             "CSV times)"),
+])
+def test_the_acceleration_verdict_is_of_the_moves_it_judged(tmp_path, capsys, column, rows, verdict):
+    """Without a path acceleration in the .ini, CSV times still give each move's accelerations
+    (judged: passed under a generous limit); feeds alone give none (not exercised)."""
+    program = tmp_path / "moves.csv"
+    program.write_text(f"x,y,z,roll,pitch,yaw,{column}\n0,0,508,0,0,0,{rows[0]}\n0,0,540,0,0,0,{rows[1]}\n")
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(velocity=1e6, acceleration=1e9).replace("MAX_LINEAR_ACCELERATION = 1000\n", ""))
+    code, _, _ = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini, "--json", tmp_path / "r.json")
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert code == 0 and report["checks"]["joint acceleration"] == verdict
+    assert report["accelerated_moves"] == (1 if column == "t" else 0)
+
+
 def test_passing_the_base_plane_is_an_assembly_change_where_the_struts_lie_flat(tmp_path, capsys):
     """At z = 0 every strut lies in the base plane: the six force lines cannot resist a vertical
     force, their determinant is 0, and it changes sign as the platform passes through."""

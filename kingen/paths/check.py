@@ -21,7 +21,7 @@ from ..kinematics.routine import WARNINGS
 from .evaluation import Evaluator
 from .findings import Findings
 from .interpreter import gcode_moves
-from .judging import judge_margins, judge_rates, record
+from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import limits_for
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
@@ -115,6 +115,7 @@ class _Checker:
         timing = profile(move, self.limits)
         self.findings.moves += 1
         self.findings.timed_moves += timing is not None
+        self.findings.accelerated_moves += has_accelerations(move, timing)
         length = timing.length if timing is not None else max(lengths(move))
         for begin in range(0, count, CHUNK):
             end = min(count, begin + CHUNK)

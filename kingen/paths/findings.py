@@ -67,6 +67,8 @@ class Findings:
     samples: int = 0
     moves: int = 0
     timed_moves: int = 0
+    accelerated_moves: int = 0
+    """Moves whose joint accelerations are judged (judging.has_accelerations)."""
     trace: dict = field(default_factory=lambda: {"sample": [], "line": [], "joints": [], "speeds": [],
                                                   "accelerations": [], "radicand": [], "direct_index": []})
     trace_stride: int = 1

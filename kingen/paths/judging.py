@@ -29,11 +29,16 @@ def judge_margins(findings, evaluator, batch, pieces, lines):
                     between=quantity.part))
 
 
+def has_accelerations(move, timing):
+    """Whether a move's joint accelerations are judged: it is timed (``timing``, timing.profile's)
+    with a path acceleration, or by CSV times."""
+    return timing is not None and (timing.acceleration is not None or move.duration is not None)
+
+
 def judge_rates(findings, limits, grid, speeds, accelerations, pieces, lines):
     """Each piece's worst joint speed and acceleration beyond its limit (accelerations only
     where the piece's timing has them: a path acceleration, or CSV times)."""
-    accelerated = np.array([p.timing is not None and (p.timing.acceleration is not None or p.move.duration is not None)
-                            for p in pieces])[grid.piece]
+    accelerated = np.array([has_accelerations(p.move, p.timing) for p in pieces])[grid.piece]
     for kind, rates, bounds, judged in (("joint speed", speeds, limits.speed, True),
                                         ("joint acceleration", accelerations, limits.acceleration, accelerated)):
         size = np.abs(rates)

@@ -35,17 +35,15 @@ def checks(outcome):
     kinds = evaluator.kinds()
     for kind in reasons:
         verdicts[kind] = ("failed" if kind in failed else "passed") if kind in kinds else f"not exercised: {reasons[kind]}"
-    acceleration_timed = limits.path_acceleration is not None or any(
-        place.kind == "joint acceleration" for place in findings.worst.values())
     for kind, bounds, timed in (("joint speed", limits.speed, findings.timed_moves > 0),
-                                ("joint acceleration", limits.acceleration, findings.timed_moves > 0
-                                 and acceleration_timed)):
+                                ("joint acceleration", limits.acceleration, findings.accelerated_moves > 0)):
         if not np.any(np.isfinite(bounds)):
             verdicts[kind] = (f"not exercised: no joint {kind.split()[1]} limit (robot file max_"
                               f"{kind.split()[1]}, .ini MAX_{'VELOCITY' if kind == 'joint speed' else 'ACCELERATION'})")
         elif not timed:
             verdicts[kind] = ("not exercised: no move is timed (feeds and rapids need a feed or t, or an .ini)"
-                              if kind == "joint speed" else "not exercised: no path acceleration (.ini [TRAJ])")
+                              if kind == "joint speed" else "not exercised: no move's accelerations are known (a path "
+                              "acceleration, .ini [TRAJ], or CSV times)")
         else:
             verdicts[kind] = "failed" if kind in failed else "passed"
     return verdicts
@@ -121,7 +119,7 @@ def report_json(outcome):
         "verdict": "runs" if runs(outcome) else "does not run",
         "robot": outcome.robot.name, "program": outcome.program,
         "samples": findings.samples, "moves": findings.moves, "timed_moves": findings.timed_moves,
-        "checks": checks(outcome),
+        "accelerated_moves": findings.accelerated_moves, "checks": checks(outcome),
         "problems": [_place_json(outcome, place) for place in findings.sorted_problems()],
         "problems_not_listed": findings.dropped,
         "first": [_place_json(outcome, place) for place in findings.first.values()],
