@@ -175,6 +175,8 @@ def test_a_crossing_grazed_between_two_samples_is_found_as_at_a_ten_times_finer_
     ("x,y,z,roll,pitch,yaw\n0,0,508,0,0,0\n1,two,508,0,0,0\n", ":3: y: 'two' is not a number"),
     ("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,100\n1,0,508,0,0,0,0\n", ":3: feed: 0 mm/min: a feed must be above 0"),
     ("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,100\n1,0,508,0,0,0,-5\n", ":3: feed: -5 mm/min: a feed must be above 0"),
+    ("x,y,z,roll,pitch,yaw\n0,0,508,0,0,0\n" + "1" * 200000 + ",0,508,0,0,0\n",
+     ":3: not CSV: field larger than field limit (131072)"),
 ])
 def test_a_bad_csv_is_one_line_naming_file_and_line(tmp_path, capsys, text, problem):
     program = tmp_path / "bad.csv"

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import located
-from ..runtime.file_gate import read_limited
+from ..runtime.file_gate import csv_rows, read_limited
 from ..units import LENGTH_UNITS
 from .parameters import POSE_NAMES
 
@@ -52,7 +52,7 @@ def read_measurements(path, robot, measure):
         text = text.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         raise located(path, None, None, f"not UTF-8 text (byte {error.start})") from None
-    rows = [(number, row) for number, row in _rows(path, text) if row and not row[0].lstrip().startswith("#")]
+    rows = [(number, row) for number, row in csv_rows(path, io.StringIO(text)) if row and not row[0].lstrip().startswith("#")]
     if not rows:
         raise located(path, 1, "header", "no header row (expected " + ", ".join(_expected(robot, measure)) + ")")
     header_line, header = rows[0]
@@ -76,15 +76,6 @@ def read_measurements(path, robot, measure):
 def _joint_scale(robot):
     """Per joint: internal units (mm, radians) per unit of the robot file (mm or inches, degrees)."""
     return robot.joint_scale() * np.where(robot.revolute, 1.0, LENGTH_UNITS[robot.length_unit])
-
-
-def _rows(path, text):
-    reader = csv.reader(io.StringIO(text))
-    try:
-        for row in reader:
-            yield reader.line_num, row
-    except csv.Error as error:
-        raise located(path, reader.line_num, None, f"not CSV: {error}") from None
 
 
 def _expected(robot, measure):

@@ -6,14 +6,13 @@ robot's base frame. Moves are produced one at a time, so a program of any length
 in constant memory.
 """
 
-import csv
 import math
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import located
-from ..runtime.file_gate import refuse_special_file
+from ..runtime.file_gate import csv_rows, refuse_special_file
 from .moves import Move
 
 GCODE_SUFFIXES = (".ngc", ".nc", ".gcode")
@@ -69,11 +68,9 @@ def csv_moves(path):
     on a missing or non-numeric value, a time that does not increase, a feed not above 0."""
     refuse_special_file(path)
     with open(path, newline="", encoding="utf-8", errors="replace") as stream:
-        rows = csv.reader(stream)
         pose_at, timing, timing_at = list(range(6)), None, None
         previous, previous_time, first = None, None, True
-        for row in rows:
-            line = rows.line_num
+        for line, row in csv_rows(path, stream):
             if not row or all(not cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
                 continue
             if first:

@@ -1,10 +1,12 @@
 """The file-reading gate: a file kingen is given is read only when it is a regular file,
-without blocking and within a size limit; anything else is one located KingenError.
+without blocking and within a size limit, and its CSV rows only as far as they are CSV;
+anything else is one located KingenError.
 
 A FIFO, device, socket or folder is refused from its metadata, before anything opens it
 (reading a FIFO waits for a writer forever, a device never ends).
 """
 
+import csv
 import os
 import stat
 
@@ -53,3 +55,15 @@ def read_limited(path, limit, what):
 def size_text(limit):
     """A byte limit in words: '64 MB' (MiB), '100 kB'."""
     return f"{limit >> 20} MB" if limit >= 1 << 20 else f"{limit // 1000} kB"
+
+
+def csv_rows(path, lines):
+    """(line number, cells) of each CSV row of ``lines`` (an iterable of text lines, such as an
+    open file, of the file at ``path``); what the csv module cannot read (a field over its
+    limit, a bad quote) is the located KingenError '<path>:<line>: not CSV: ...'."""
+    reader = csv.reader(lines)
+    try:
+        for row in reader:
+            yield reader.line_num, row
+    except csv.Error as error:
+        raise located(path, reader.line_num, None, f"not CSV: {error}") from None
