@@ -22,7 +22,7 @@ from ..conventions import t6_from_pose
 from ..kinematics.parasitic import on_manifold
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS, warnings_to_exercise
-from .descent import descend
+from .descent import DIRECT_INDEX, descend
 from .tally import warnings_in_band
 
 RAYS = 64
@@ -38,8 +38,6 @@ PAST = {"WARN_JOINT_LIMITS_EXCEEDED": ("WARN_JOINT_LIMITS_EXCEEDED",), "WARN_UNR
         "WARN_SINGULAR_SOLUTION": ("WARN_SINGULAR_SOLUTION", "WARN_UNREACHABLE")}
 """The warnings on the far side of each warning's boundary: the limb singular band lies between
 reachable and unreachable, so a ray that steps over it still brackets its edge."""
-DIRECT_INDEX = "direct_index_min"
-"""The boundary sought where the reference's direct index falls to the robot's threshold."""
 OFFSETS = (1e-7, 1e-6, 1e-5, 1e-4, 1e-3)
 """Distances from the boundary tried, as fractions of the ray's length, until both poses lie
 outside the tolerance band."""

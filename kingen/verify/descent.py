@@ -44,8 +44,8 @@ FIRST_STEP = 0.05
 """A step's spread at first, as a fraction of the wider region's half-widths; it grows by
 GROW after a kept step and shrinks by SHRINK after none, within STEP_RANGE."""
 GROW, SHRINK, STEP_RANGE = 1.5, 0.6, (1e-4, 0.3)
-INDEX_KIND = "direct_index_min"
-"""The boundary of the direct index's threshold (kingen.verify.boundaries.DIRECT_INDEX)."""
+DIRECT_INDEX = "direct_index_min"
+"""The boundary sought where the reference's direct index falls to the robot's threshold."""
 
 
 @dataclass(frozen=True)
@@ -78,13 +78,13 @@ def _margins(robot, kind, solution, postures=None):
     count = len(solution.finite)
     least = np.min(solution.radicands, axis=1)  # +inf for robots of legs only
     if kind == "WARN_SINGULAR_SOLUTION" and not any(limb.has_radicand for limb in robot.limbs):
-        kind = INDEX_KIND  # the threshold is that warning's only cause
+        kind = DIRECT_INDEX  # the threshold is that warning's only cause
     if kind == "WARN_UNREACHABLE":
         margin = (least + SINGULAR_TOLERANCE)[:, None]
     elif kind == "WARN_SINGULAR_SOLUTION":
         margin = np.where(least >= -SINGULAR_TOLERANCE, least - SINGULAR_TOLERANCE, np.inf)[:, None]
     else:
-        if kind == INDEX_KIND:
+        if kind == DIRECT_INDEX:
             index = (solution.direct_index if postures is None else
                      posture_direct_index(robot, solution.points, solution.branch_joints, postures)[:, None])
             margin = index - robot.direct_index_min
@@ -99,15 +99,21 @@ def _margins(robot, kind, solution, postures=None):
     return np.broadcast_to(margin, (count, robot.postures)) if postures is None else margin[:, 0]
 
 
+def _wide_half_widths(robot):
+    """(6,) the wider region's half-widths about home: half the robot's size (mm) for x, y, z,
+    WIDE_TILT_DEG for each angle; also the scale of a descent's steps."""
+    return np.r_[[0.5 * robot.size_mm] * 3, [WIDE_TILT_DEG] * 3]
+
+
 def _seeds(robot, kind, home, widths, reach, generator):
     """(poses (m, 6), postures (m,), margins (m,), region words): the seeds' valid postures on
     the boundary's good side, lowest margin first, a posture's first appearance before any
     repeat (so that the first chains try distinct postures); at most STARTS of them."""
-    wide = np.r_[[0.5 * robot.size_mm] * 3, [WIDE_TILT_DEG] * 3]
+    wide = _wide_half_widths(robot)
     half = SEEDS // 2
     seeds = home + np.concatenate([generator.uniform(-1.0, 1.0, size=(half, 6)) * widths * reach,
                                    generator.uniform(-1.0, 1.0, size=(SEEDS - half, 6)) * wide])
-    every = _margins(robot, kind, solve(robot, t6_from_pose(seeds), indices=kind == INDEX_KIND))  # (seeds, postures)
+    every = _margins(robot, kind, solve(robot, t6_from_pose(seeds), indices=kind == DIRECT_INDEX))  # (seeds, postures)
     order = [divmod(int(flat), robot.postures) for flat in np.argsort(every, axis=None, kind="stable")
              if 0.0 < every.flat[flat] < np.inf][:STARTS]
     seen = set()
@@ -126,14 +132,14 @@ def descend(robot, kind, home, widths, reach, generator):
     ``robot`` calibrated as the routine is called; none when the search did not meet it.
     A chain that has not lowered its margin for STALL steps starts again from the next seed."""
     starts, start_postures, start_margins, region = _seeds(robot, kind, home, widths, reach, generator)
-    unit = "mm" if kind == INDEX_KIND else "of the travel" if kind == "WARN_JOINT_LIMITS_EXCEEDED" else "in D"
+    unit = "mm" if kind == DIRECT_INDEX else "of the travel" if kind == "WARN_JOINT_LIMITS_EXCEEDED" else "in D"
     chains = min(CHAINS, len(starts))
     lowest = float(np.min(start_margins)) if len(starts) else np.inf
     if not chains:
         return np.zeros((0, 6)), np.zeros((0, 6)), Descent(kind, SEEDS, 0, 0, lowest, unit, region, 0)
     poses, postures, margin = starts[:chains].copy(), start_postures[:chains].copy(), start_margins[:chains].copy()
     following = chains
-    scale = np.r_[[0.5 * robot.size_mm] * 3, [WIDE_TILT_DEG] * 3]
+    scale = _wide_half_widths(robot)
     spread, stalled = np.full(chains, FIRST_STEP), np.zeros(chains, dtype=int)
     for step in range(1, DESCENT_STEPS + 1):
         candidates = poses[:, None, :] + generator.normal(size=(chains, CANDIDATES, 6)) * (spread[:, None, None] * scale)
