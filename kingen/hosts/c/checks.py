@@ -27,14 +27,11 @@ from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)
 from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
-from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
+from ...verify.checks.round_trip import FORWARD_SEEDS, ROUND_TRIP_MIN_CONDITIONING, pose_conditioning, seed_offsets
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
 
 FORWARD_POSES = 500
-SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
-"""Start distances: mm along a random direction of x y z, degrees along one of roll pitch yaw
-(the free coordinates only)."""
 JACOBIAN_PAIRS = 200
 C_JACOBIAN_TOLERANCE = 1e-9
 """Relative to the largest entry of the joint's row (rotations as mm of arc at the robot's size)."""
@@ -78,11 +75,6 @@ def _same_joints(robot, t6, posture, joints):
     return finite & np.all(difference <= bound, axis=1)
 
 
-def _directions(generator, count):
-    direction = generator.normal(size=(count, 3))
-    return direction / np.linalg.norm(direction, axis=1, keepdims=True)
-
-
 class OnRegularPairs(VerifyCheck):
     """A check judging the library on one regular posture per sampled pose (the first
     ``poses`` of the sample, :func:`regular_pairs`): ``judge(context, t6, pairs)``."""
@@ -108,10 +100,9 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
         allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, allowed_mm / robot.size_mm)
         generator = np.random.default_rng(context.options.seed)
         passed, parts = True, []
-        for label, (distance_mm, distance_deg) in SEEDS.items():
-            offset = np.concatenate([_directions(generator, len(start)) * distance_mm,
-                                     np.radians(_directions(generator, len(start)) * distance_deg)], axis=1)
-            offset[:, ~free] = 0.0
+        for label, (distance_mm, distance_deg) in FORWARD_SEEDS.items():
+            offset = seed_offsets(generator, len(start), distance_mm, distance_deg, free)
+            offset[:, 3:] = np.radians(offset[:, 3:])
             found, iterations, returns = library.forward(joints, posture, matrix_from_t6(t6_of(start + offset)).reshape(-1, 16))
             found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)
             position = np.max(np.abs(found_t6[:, 3, :3] - t6[pose_index, 3, :3]), axis=1)

@@ -95,3 +95,25 @@ class RoundTrip(VerifyCheck, name="round trip", needs="compared poses"):
     def run(self, context):
         t6 = context.tally.first[0]
         return [round_trip_check(context.robot, context.routine, context.options, t6[:ROUND_TRIP_POSES])]
+
+
+FORWARD_SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
+"""Where a host's own forward kinematics is started from, by label: mm along a random direction
+of x y z and degrees along a random direction of roll pitch yaw (the free coordinates only)."""
+
+
+def seed_offsets(generator, count, distance_mm, distance_deg, free):
+    """(count, 6) offsets of the start from each pose: ``distance_mm`` along a random unit
+    direction of x y z, then ``distance_deg`` (degrees) along one of roll pitch yaw, both drawn
+    from ``generator`` in that order; 0 for the coordinates ``free`` (6,) leaves fixed."""
+    offset = np.concatenate([_unit_directions(generator, count) * distance_mm,
+                             _unit_directions(generator, count) * distance_deg], axis=1)
+    offset[:, ~free] = 0.0
+    return offset
+
+
+def _unit_directions(generator, count):
+    """``count`` random unit 3-vectors."""
+    direction = generator.normal(size=(count, 3))
+    return direction / np.linalg.norm(direction, axis=1, keepdims=True)
+

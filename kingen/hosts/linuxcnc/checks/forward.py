@@ -15,13 +15,10 @@ from ....kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ....kinematics.singularity import posture_wrenches
 from ....verify.report import not_exercised
 from ....verify.checks.base import Check, VerifyCheck
-from ....verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, pose_conditioning
+from ....verify.checks.round_trip import FORWARD_SEEDS, ROUND_TRIP_MIN_CONDITIONING, pose_conditioning, seed_offsets
 from ....verify.options import value_tolerance_mm
 
 FORWARD_POSES = 1000
-SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
-"""Seed distances: mm along a random direction of x y z, degrees along a random direction of
-roll pitch yaw (for the free coordinates)."""
 
 
 def regular_poses(robot, poses):
@@ -55,10 +52,8 @@ class Forward(VerifyCheck, name="forward", needs="compared poses"):
         bound_mm, bound_deg = value_tolerance_mm(robot), np.degrees(VALUE_TOLERANCE_RAD)
         generator = np.random.default_rng(context.options.seed)
         passed, parts, failed_codes = True, [], set()
-        for label, (distance_mm, distance_deg) in SEEDS.items():
-            offset = np.concatenate([_directions(generator, len(poses)) * distance_mm,
-                                     _directions(generator, len(poses)) * distance_deg], axis=1)
-            offset[:, ~free] = 0.0
+        for label, (distance_mm, distance_deg) in FORWARD_SEEDS.items():
+            offset = seed_offsets(generator, len(poses), distance_mm, distance_deg, free)
             seeds = np.zeros((len(poses), 9))
             seeds[:, :3] = (poses[:, :3] + offset[:, :3]) / module.scale
             seeds[:, 3:6] = poses[:, 3:] + offset[:, 3:]
@@ -99,12 +94,6 @@ def _diagnoses(module, codes):
             f"exceeds it, a bound sized for inch machines; on a mm machine set it about 25.4 times larger "
             f"(setp {module.routine}.max-error {limit * 25.4:g})" if unit == "mm" else
             f"{module.routine}.max-error is {limit:g} {unit}: the forward gives up (-2) once the joints' error exceeds it"]
-
-
-def _directions(generator, count):
-    """``count`` random unit 3-vectors."""
-    direction = generator.normal(size=(count, 3))
-    return direction / np.linalg.norm(direction, axis=1, keepdims=True)
 
 
 def _codes(returns):
