@@ -151,3 +151,17 @@ def test_bench_states_the_median_and_the_worst_call(tmp_path, capsys):
     assert "each call timed singly:" in result.output and "worst of 2,000 calls" in result.output
     figures = json.loads(json_path.read_text())
     assert figures["single_calls"] == 2000 and 0.0 < figures["median_call_ns"] <= figures["worst_call_ns"]
+
+
+def test_a_robot_without_forward_kinematics_is_refused_in_one_line(tmp_path, capsys):
+    """Three legs and no free coordinates: the C library's forward has nothing to solve for."""
+    path = tmp_path / "legs.yaml"
+    path.write_text("name: legs\ndescription: Three legs.\nlimbs:\n"
+                    + "".join(f"  - {{model: leg, base_point: [{x}, {y}, 0], platform_point: [0, 0, 0], "
+                              f"reference_length: 100}}\n" for x, y in ((100, 0), (-50, 87), (-50, -87)))
+                    + "verification: {home: [0, 0, 120, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    result = Ran(capsys, "build", path, "--host", "c", "-o", tmp_path / "out")
+    assert result.exit_code == 2 and result.output == (
+        f"kingen: error: {path}:1: forward: the C library's forward solves for as many pose coordinates as the robot "
+        "has limbs; legs has 3 limbs and free coordinates all six\n")
+    assert not (tmp_path / "out").exists()

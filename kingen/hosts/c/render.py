@@ -34,10 +34,9 @@ def file_names(robot):
 
 def robot_problem(robot):
     """Why this host cannot build ``robot`` (one whose forward it cannot solve), or None."""
-    free = free_mask(robot)
-    if int(free.sum()) != robot.dof:
+    if not robot.has_forward:  # a robot file's free coordinates are one per limb (robot.constraints)
         return (f"forward: the C library's forward solves for as many pose coordinates as the robot has limbs; "
-                f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free) or 'all six'}")
+                f"{robot.name} has {robot.dof} limbs and free coordinates all six")
     return None
 
 
