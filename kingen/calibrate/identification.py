@@ -209,16 +209,34 @@ def region_poses(robot, count, seed):
     return poses
 
 
+def synthetic_problem(parameters, values, poses, posture):
+    """(Problem, Measurements): exact measurements of the robot of ``values`` at ``poses`` (n, 6;
+    mm, degrees) in ``posture``, and the identification problem started at those poses."""
+    joints, measured = synthesize(parameters, values, poses, posture)
+    data = Measurements("", parameters.measure, joints, measured, tuple(range(len(poses))), ())
+    return Problem(parameters, data, np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)), data
+
+
+def identifiable_columns(problem, values, parameters, selected):
+    """(order, jacobian, taken, chosen): the ``selected`` parameters in identifiability.priority's
+    order, ``problem``'s Jacobian over them at ``values``, which of them (taken, over order)
+    are identifiable, and those as a mask over all parameters (chosen)."""
+    order = [i for i in identifiability.priority(parameters) if selected[i]]
+    jacobian = problem.jacobian(values, order)
+    taken = identifiability.identifiable(jacobian, range(len(order)))
+    chosen = np.zeros(len(parameters), dtype=bool)
+    chosen[np.array(order)[taken]] = True
+    return order, jacobian, taken, chosen
+
+
 def needed_poses(parameters, values, selected):
     """(identifiable parameters, poses needed): the rank of the selected parameters' Jacobian
     on STRUCTURE_POSES seeded poses of the verification region, and the poses that many
     parameters need (each pose gives dof equations, or 3 for positions)."""
     robot = parameters.robot
     poses = region_poses(robot, STRUCTURE_POSES, seed=1)
-    joints, measured = synthesize(parameters, values, poses, robot.working_posture)
-    synthetic = Measurements("", parameters.measure, joints, measured, tuple(range(len(poses))), ())
-    start = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
-    jacobian = Problem(parameters, synthetic, start).jacobian(values, np.flatnonzero(selected))
+    problem, _ = synthetic_problem(parameters, values, poses, robot.working_posture)
+    jacobian = problem.jacobian(values, np.flatnonzero(selected))
     rank = int(np.count_nonzero(identifiability.identifiable(jacobian, range(jacobian.shape[1]))))
     per_pose = robot.dof if parameters.measure == "pose" else 3
     return rank, -(-rank // per_pose)
@@ -258,11 +276,7 @@ def identify(parameters, measurements, selected, max_evaluations=None):
         values, result = least_squares_fit(problem, values, frame_columns, max_evaluations)
         evaluations += result.nfev
     before = values.copy()
-    order = [i for i in identifiability.priority(parameters) if selected[i]]
-    jacobian = problem.jacobian(values, order)
-    taken = identifiability.identifiable(jacobian, range(len(order)))
-    chosen = np.zeros(len(parameters), dtype=bool)
-    chosen[np.array(order)[taken]] = True
+    order, _, taken, chosen = identifiable_columns(problem, values, parameters, selected)
     columns = np.flatnonzero(chosen)
     values, result = least_squares_fit(problem, values, columns, max_evaluations)
     evaluations += result.nfev

@@ -24,9 +24,9 @@ from ..kinematics.forward import closure, closure_derivative, free_mask
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from . import identifiability
-from .identification import Problem, region_poses
+from .identification import identifiable_columns, region_poses, synthetic_problem
 from .measurements import Measurements
-from .prediction import joint_residuals, synthesize
+from .prediction import joint_residuals
 
 CANDIDATES = 5000
 MARGIN = 0.01
@@ -70,17 +70,11 @@ def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed
         raise KingenError(f"{robot.path}: verification: no pose of the verification region is reachable, within "
                           "travel and away from singularities and collisions")
     values = parameters.nominal
-    joints, measured = synthesize(parameters, values, poses, posture)
-    data = Measurements("", parameters.measure, joints, measured, tuple(range(len(poses))), ())
-    problem = Problem(parameters, data, np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1))
-    order = [i for i in identifiability.priority(parameters) if selected[i]]
-    jacobian = problem.jacobian(values, order)
-    taken = identifiability.identifiable(jacobian, range(len(order)))
-    chosen = np.zeros(len(parameters), dtype=bool)
-    chosen[np.array(order)[taken]] = True
+    problem, data = synthetic_problem(parameters, values, poses, posture)
+    _, jacobian, taken, chosen = identifiable_columns(problem, values, parameters, selected)
     blocks = jacobian[:, taken].reshape(len(poses), -1, int(np.count_nonzero(taken)))
     sigma = _row_sigma(parameters, data, noise_mm, noise_deg).reshape(len(poses), -1)
-    return Candidates(poses=poses, joints=joints, weighted=blocks / sigma[..., None], blocks=blocks, chosen=chosen)
+    return Candidates(poses=poses, joints=data.joints, weighted=blocks / sigma[..., None], blocks=blocks, chosen=chosen)
 
 
 def _regular(robot, poses, joints):
