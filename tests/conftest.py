@@ -97,6 +97,13 @@ verification: {home: [50, 0, -50, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}
 two postures, both reachable; beyond x = 100 neither is."""
 
 
+THREE_LEGS = ("name: legs\ndescription: Three legs, no forward coordinates.\nlimbs:\n"
+              + "".join(f"  - {{model: leg, base_point: [{x}, {y}, 0], platform_point: [0, 0, 0], "
+                        f"reference_length: 100}}\n" for x, y in ((100, 0), (-50, 87), (-50, -87)))
+              + "verification: {home: [0, 0, 120, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+"""Three legs meeting at the platform origin and no free coordinates: no forward kinematics."""
+
+
 class ChangedCalls:
     """A loaded plugin whose outputs ``change(t6 (n, 4, 4), calls)`` alters in place after
     each call (its solutions, warnings, faults): a routine that is wrong in a chosen way.

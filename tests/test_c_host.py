@@ -156,10 +156,9 @@ def test_bench_states_the_median_and_the_worst_call(tmp_path, capsys):
 def test_a_robot_without_forward_kinematics_is_refused_in_one_line(tmp_path, capsys):
     """Three legs and no free coordinates: the C library's forward has nothing to solve for."""
     path = tmp_path / "legs.yaml"
-    path.write_text("name: legs\ndescription: Three legs.\nlimbs:\n"
-                    + "".join(f"  - {{model: leg, base_point: [{x}, {y}, 0], platform_point: [0, 0, 0], "
-                              f"reference_length: 100}}\n" for x, y in ((100, 0), (-50, 87), (-50, -87)))
-                    + "verification: {home: [0, 0, 120, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    from conftest import THREE_LEGS
+
+    path.write_text(THREE_LEGS)
     result = Ran(capsys, "build", path, "--host", "c", "-o", tmp_path / "out")
     assert result.exit_code == 2 and result.output == (
         f"kingen: error: {path}:1: forward: the C library's forward solves for as many pose coordinates as the robot "

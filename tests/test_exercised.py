@@ -35,10 +35,9 @@ def test_a_region_outside_the_workspace_fails_instead_of_passing(tmp_path, capsy
 
 def test_a_robot_without_forward_kinematics_does_not_claim_a_round_trip(tmp_path, capsys):
     path = tmp_path / "legs.yaml"
-    path.write_text("name: legs\ndescription: Three legs, no forward coordinates.\nlimbs:\n"
-                    + "".join(f"  - {{model: leg, base_point: [{x}, {y}, 0], platform_point: [0, 0, 0], "
-                              f"reference_length: 100}}\n" for x, y in ((100, 0), (-50, 87), (-50, -87)))
-                    + "verification: {home: [0, 0, 120, 0, 0, 0], range: [10, 10, 10, 0, 0, 0]}\n")
+    from conftest import THREE_LEGS
+
+    path.write_text(THREE_LEGS)
     code, out, _ = run(capsys, "verify", path, "-o", tmp_path / "b", "--samples", "500",
                        "--junit", tmp_path / "r.xml", "--json", tmp_path / "r.json")
     assert code == 0 and "  round trip: not exercised: forward kinematics needs free pose coordinates" in out
