@@ -184,6 +184,8 @@ class _Checker:
         keep = batch.u < ends
         keep &= ~((batch.u == 0.0) & np.array([p.index > 0 and p.begin == 0 for p in pieces])[batch.piece])
         batch = batch.take(keep)
+        if self.manifold is not None:
+            self.manifold.observe(batch.poses, batch.warnings != WARNINGS["WARN_UNREACHABLE"])
         owned = np.concatenate(owned)
         lines = np.array([p.move.line for p in pieces])
         judge_margins(self.findings, self.evaluator, batch, pieces, lines)

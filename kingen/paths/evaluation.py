@@ -119,7 +119,7 @@ class Evaluator:
         margins = np.empty((len(u), len(self.quantities)))
         radicands = solution.radicands
         if solution.constraint is not None:
-            radicands = np.column_stack([radicands, solution.constraint])
+            radicands = np.column_stack([radicands, np.where(np.isnan(solution.constraint), -np.inf, solution.constraint)])
         determinant = self._determinant(solution) if self.six_lines else None
         clearance = dict(zip(("rods", "cranks"), clearances(self.robot, solution.points, joints))) \
             if self.collisions else {}

@@ -41,7 +41,7 @@ def machine_poses(robot, poses):
 
 class Manifold:
     """What a check of a machine with task coordinates keeps: the parasitic coordinates' range
-    over every sample, and (for a CSV) the rows' deviations from the machine's poses."""
+    over every reachable sample, and (for a CSV) the rows' deviations from the machine's poses."""
 
     def __init__(self, robot, task_only, csv):
         self.robot, self.task_only, self.csv = robot, task_only, csv
@@ -55,15 +55,18 @@ class Manifold:
         """(line, deviations (6,) mm and degrees, 0 for the task coordinates) of the first row off."""
 
     def samples(self, poses):
-        """(poses, T6) of the machine at the task coordinates of sampled ``poses`` (n, 6); their
-        parasitic coordinates' range is kept."""
+        """(poses, T6) of the machine at the task coordinates of sampled ``poses`` (n, 6)."""
         machine, t6, _ = machine_poses(self.robot, poses)
-        if len(machine):
-            finite = machine[np.all(np.isfinite(machine), axis=1)]
-            if len(finite):
-                self.low = np.minimum(self.low, finite.min(axis=0))
-                self.high = np.maximum(self.high, finite.max(axis=0))
         return machine, t6
+
+    def observe(self, poses, reachable):
+        """Keep the parasitic coordinates' range over the machine's ``poses`` (n, 6) where
+        ``reachable`` (n,) (elsewhere no pose has the task coordinates: the closest approach
+        is no motion of the machine's)."""
+        kept = poses[reachable & np.all(np.isfinite(poses), axis=1)]
+        if len(kept):
+            self.low = np.minimum(self.low, kept.min(axis=0))
+            self.high = np.maximum(self.high, kept.max(axis=0))
 
     def _row(self, line, pose):
         """(the machine's pose for a CSV row's ``pose`` at ``line``, its deviations (6,) where it
@@ -119,7 +122,7 @@ class Manifold:
         return ", ".join(WORLD_AXES[index] for index in self.parasitic)
 
     def summary(self):
-        """Plain data for the report: what is read, the parasitic range over every sample, the
+        """Plain data for the report: what is read, the parasitic range over the reachable samples, the
         CSV rows' deviations (mm and degrees)."""
         ranges = {POSE_COLUMNS[index]: [float(self.low[index]), float(self.high[index])] if self.low[index] <= self.high[index]
                   else None for index in self.parasitic}
@@ -140,7 +143,7 @@ class Manifold:
         units = {name: "mm" if name in POSE_COLUMNS[:3] else "deg" for name in POSE_COLUMNS}
         shown = ", ".join(f"{name} {values[0]:.6g} .. {values[1]:.6g} {units[name]}" if values else f"{name} -"
                           for name, values in ranges.items())
-        said = [f"task coordinates {data['read']} read; {data['not_read']} not read: parasitic (over the path: {shown})"]
+        said = [f"task coordinates {data['read']} read; {data['not_read']} not read: parasitic (over the path's reachable samples: {shown})"]
         if self.csv and self.rows:
             worst = ", ".join(f"{name} {value:.3g} {units[name]}" for name, value in data["max_deviation"].items())
             said.append(f"rows against the machine's poses: {self.rows_off} of {self.rows} off the manifold "

@@ -111,7 +111,7 @@ def _place_json(outcome, place):
 def report_json(outcome):
     """The JSON document (plain data): verdict, samples, moves, problems, first and worst place
     of each kind, peaks per joint, checks, limits and settings; for a machine with task
-    coordinates also ``parasitic`` ({coordinate: [min, max]} over every sample, mm and degrees)
+    coordinates also ``parasitic`` ({coordinate: [min, max]} over the reachable samples, mm and degrees)
     and ``manifold`` (what is read, the CSV rows' deviations: manifold.Manifold.summary)."""
     findings, limits = outcome.findings, outcome.limits
     peaks = []
