@@ -8,7 +8,8 @@ the manifold here: its task coordinates kept, its parasitic ones the machine's, 
 sample is a pose the machine takes.
 
 A CSV of poses gives six coordinates per row; each row is compared with the machine's pose
-for its task coordinates (deviations in mm and degrees). A row off the manifold (beyond the
+for its task coordinates (deviations in mm and degrees; a row whose task coordinates no pose
+has is not compared: its samples are unreachable). A row off the manifold (beyond the
 routine's MANIFOLD_TOLERANCE_MM / _RAD, where the routine would warn) is a problem, kind
 ``off manifold``, unless the check reads the task coordinates only (``--task-only``): then
 it is a notice. Either way the path checked is the machine's, through the rows' task
@@ -70,8 +71,11 @@ class Manifold:
 
     def _row(self, line, pose):
         """(the machine's pose for a CSV row's ``pose`` at ``line``, its deviations (6,) where it
-        is off the manifold, else None); the deviations are recorded."""
+        is off the manifold, else None); the deviations are recorded. A row whose task
+        coordinates no pose has is kept as written (its samples are judged unreachable)."""
         machine, _, off = machine_poses(self.robot, pose[None])
+        if not np.all(np.isfinite(machine)):
+            return pose, None
         deviation = deviations(pose, machine[0])
         deviation[self.task] = 0.0
         self.rows += 1
