@@ -161,15 +161,18 @@ def test_task_only_on_a_robot_without_task_coordinates_is_bad_input(tmp_path, ca
     assert err == "kingen: error: Invalid value for '--task-only': ceart has no task coordinates (robot file task)\n"
 
 
-def test_the_linuxcnc_routine_agrees_with_the_reference_on_the_manifold(tmp_path):
+@pytest.mark.parametrize("host", ["linuxcnc", "delmia"])
+def test_the_routine_agrees_with_the_reference_on_the_manifold(host, tmp_path):
     needs_interpreter()
     require_tool("cc", "gcc")
-    require_linuxcnc_headers()
+    if host == "linuxcnc":
+        require_linuxcnc_headers()
     from kingen.paths.check import Settings, check_program
 
     program = tmp_path / "inside.ngc"
     program.write_text(PROGRAMS["prs_head"][0])
-    outcome = check_program(load_robot("prs_head"), program, Settings(chord=1.0, routine=True, out_dir=tmp_path / "b"))
+    outcome = check_program(load_robot("prs_head"), program,
+                            Settings(host=host, chord=1.0, routine=True, out_dir=tmp_path / "b"))
     agreement = outcome.agreement
     assert agreement.samples > 0 and agreement.warning_mismatches == 0 and agreement.joint_difference <= 1e-9
     assert not outcome.findings.worst
