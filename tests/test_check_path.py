@@ -348,22 +348,3 @@ def test_passing_the_base_plane_is_an_assembly_change_where_the_struts_lie_flat(
     assert [(p["kind"], p["line"]) for p in document["problems"]] == [("assembly change", 2)]
     first = next(p for p in document["first"] if p["kind"] == "assembly change")
     assert abs(first["pose"][2]) < 1e-9
-
-
-@pytest.mark.parametrize("name", ["prs_head", "exechon_constrained"])
-def test_a_machine_with_task_coordinates_is_refused_in_one_line(name, tmp_path, capsys):
-    """check-path samples six free coordinates: a machine whose other coordinates are parasitic
-    is refused (exit 2, one line naming its task line) rather than judged off its manifold."""
-    from kingen.cli import main
-    from kingen.robot.model import load_robot
-
-    robot = load_robot(name)
-    program = tmp_path / "path.csv"
-    program.write_text("x,y,z,roll,pitch,yaw\n" + "\n".join(",".join(str(v) for v in robot.verification.home)
-                                                            for _ in range(2)) + "\n")
-    code = main(["check-path", name, str(program), "--json", str(tmp_path / "r.json")])
-    _, err = capsys.readouterr()
-    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "r.json").exists()
-    assert err.endswith(f"{name}.yaml:{robot.line_of('task')}: task: check-path samples poses in six free coordinates "
-                        "and does not follow a machine with task coordinates along its manifold (its other coordinates "
-                        "are parasitic): not supported\n")

@@ -36,10 +36,13 @@ from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_
               help="Solve the regular samples' joints by the robot's routine compiled for --host, through the host's "
                    "batch driver in a child process (the numpy reference still gives the singularity quantities, "
                    "the clearances and the refined samples), and report how it agreed with the reference.")
+@click.option("--task-only", is_flag=True, default=False,
+              help="A machine with task coordinates, CSV program: read each row's task coordinates and let the "
+                   "parasitic ones follow (a row off the machine's manifold is a notice, not a failure).")
 @OUT_DIR
 @TIMEOUT
-def check_path(robot, program, host_name, posture, chord, ini, json_path, html_path, csv_path, use_routine, out_dir,
-               timeout):
+def check_path(robot, program, host_name, posture, chord, ini, json_path, html_path, csv_path, use_routine, task_only,
+               out_dir, timeout):
     """Will PROGRAM run on ROBOT? PROGRAM is a G-code file (.ngc, .nc, .gcode), read by LinuxCNC's
     own interpreter, or a CSV of poses (x, y, z, roll, pitch, yaw in mm and degrees; optional t
     in s or feed in mm/min). The path between the points is sampled at most --chord apart and
@@ -47,6 +50,10 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     joint travel, the limb singular band, the direct index, a change of assembly mode, collisions
     between links (where the robot file gives radii), and the joint speed and acceleration its
     feed asks for (each move timed from rest to rest: blending is not modelled).
+
+    A machine with task coordinates (robot file ``task``) is followed along its manifold: each
+    sample is the machine's pose at its task coordinates (the G-code words its LinuxCNC module
+    reads), its parasitic ones computed; a CSV row off the manifold fails unless --task-only.
 
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
     every limit judged, 1 when not, 2 bad input."""
@@ -58,12 +65,14 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{posture}: {model.name} has postures 0 .. {model.postures - 1}",
                                  param_hint="'--posture'")
+    if task_only and not model.task:
+        raise click.BadParameter(f"{model.name} has no task coordinates (robot file task)", param_hint="'--task-only'")
     refuse_special_files(program, ini)
     for given in (program, ini):
         if given is not None and not given.is_file():
             raise KingenError(f"{given}: no such file")
     settings = Settings(host=host_name, posture=posture, chord=chord, ini=ini, routine=use_routine,
-                        out_dir=out_dir, timeout=timeout)
+                        out_dir=out_dir, timeout=timeout, task_only=task_only)
     with contextlib.ExitStack() as stack:
         sink = _csv_sink(stack, csv_path, model) if csv_path is not None else None
         progress = stack.enter_context(_progress())
@@ -76,6 +85,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
 
         write_atomic(html_path, page_html(outcome, document))
     say(verdict_line(outcome))
+    for line in outcome.manifold.lines() if outcome.manifold is not None else ():
+        say(f"  {line}")
     rows = problem_rows(outcome)
     if len(rows) > 1:
         print_table(rows)

@@ -16,13 +16,13 @@ import numpy as np
 
 from ..conventions import t6_from_pose
 from ..defaults import DEFAULT_TIMEOUT
-from ..errors import KingenError
 from ..kinematics.routine import WARNINGS
 from .evaluation import Evaluator
 from .findings import Findings
 from .interpreter import gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import limits_for
+from .manifold import Manifold
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
 from .routine import RoutineSolver
@@ -40,8 +40,10 @@ class Settings:
     """What a check is run with: the host whose interpolation is followed ('linuxcnc' or
     'delmia'), the posture (None: the robot's working posture), the chord (mm and degrees),
     the LinuxCNC .ini (None: the robot file's limits only), whether the regular samples' joints
-    come from the robot's routine for the host (:mod:`.routine`) rather than the reference, and
-    the routine's build folder (None: build/<name>) and timeout (s)."""
+    come from the robot's routine for the host (:mod:`.routine`) rather than the reference,
+    the routine's build folder (None: build/<name>) and timeout (s), and for a machine with task
+    coordinates whether a CSV's rows off its manifold are read as their task coordinates
+    (a notice) rather than failed (:mod:`.manifold`)."""
 
     host: str = "linuxcnc"
     posture: int = None
@@ -50,13 +52,15 @@ class Settings:
     routine: bool = False
     out_dir: object = None
     timeout: float = DEFAULT_TIMEOUT
+    task_only: bool = False
 
 
 @dataclass
 class Outcome:
     """A finished check: the robot, program, settings, limits, the evaluator (its checks), the
     findings, the source text of every line named, the seconds it took, and (with the routine)
-    how its answers agreed with the reference's (routine.Agreement; None: not used)."""
+    how its answers agreed with the reference's (routine.Agreement; None: not used), and for a
+    machine with task coordinates its manifold.Manifold (None for other robots)."""
 
     robot: object
     program: str
@@ -68,6 +72,7 @@ class Outcome:
     sources: dict
     seconds: float
     agreement: object = None
+    manifold: object = None
 
 
 @dataclass
@@ -99,8 +104,9 @@ class Piece:
 
 
 class _Checker:
-    def __init__(self, robot, settings, sink, progress):
+    def __init__(self, robot, settings, sink, progress, csv):
         self.robot, self.settings, self.sink, self.progress = robot, settings, sink, progress
+        self.manifold = Manifold(robot, settings.task_only, csv) if robot.task else None
         self.posture = robot.working_posture if settings.posture is None else settings.posture
         self.limits = limits_for(robot, settings.ini)
         self.evaluator = Evaluator(robot, self.posture, self.limits)
@@ -145,6 +151,8 @@ class _Checker:
         for number in np.unique(piece[~simple]):
             rows = np.flatnonzero(piece == number)
             poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.settings.host)
+        if self.manifold is not None:
+            poses, t6 = self.manifold.samples(poses)
         batch = self.evaluator.evaluate(piece, u, poses, t6)
         column = self.evaluator.assembly_column()
         if column is not None:
@@ -176,6 +184,8 @@ class _Checker:
         keep = batch.u < ends
         keep &= ~((batch.u == 0.0) & np.array([p.index > 0 and p.begin == 0 for p in pieces])[batch.piece])
         batch = batch.take(keep)
+        if self.manifold is not None:
+            self.manifold.observe(batch.poses, batch.warnings != WARNINGS["WARN_UNREACHABLE"])
         owned = np.concatenate(owned)
         lines = np.array([p.move.line for p in pieces])
         judge_margins(self.findings, self.evaluator, batch, pieces, lines)
@@ -233,15 +243,15 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
     ``settings``: the Outcome. ``sink(lines, batch, rates)`` receives every sample as it is
     judged (lines (n,) their program lines; rates (n, 2, dof): speeds and accelerations, NaN
     off the regular samples); ``progress(findings)`` is called after each batch. KingenError on
-    bad input, and for a machine with task coordinates (its other coordinates are parasitic:
-    check-path samples six free coordinates and does not follow its manifold)."""
-    if robot.task:
-        raise KingenError(f"{robot.path}:{robot.line_of('task')}: task: check-path samples poses in six free "
-                          "coordinates and does not follow a machine with task coordinates along its manifold (its "
-                          "other coordinates are parasitic): not supported")
+    bad input. A machine with task coordinates is followed along its manifold (:mod:`.manifold`):
+    every sample is the machine's pose at its task coordinates."""
     started = time.perf_counter()
-    checker = _Checker(robot, settings, sink, progress)
-    for index, move in enumerate(program_moves(program, robot.verification.home)):
+    csv = not is_gcode(program)
+    checker = _Checker(robot, settings, sink, progress, csv)
+    moves = program_moves(program, robot.verification.home)
+    if checker.manifold is not None and csv:
+        moves = checker.manifold.moves(moves, checker.findings)
+    for index, move in enumerate(moves):
         checker.add(index, move)
     checker.flush()
     findings = checker.findings
@@ -249,4 +259,4 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
              + list(findings.worst.values())}
     return Outcome(robot, str(program), settings, checker.posture, checker.limits, checker.evaluator, findings,
                    source_lines(program, named), time.perf_counter() - started,
-                   None if checker.routine is None else checker.routine.agreement)
+                   None if checker.routine is None else checker.routine.agreement, checker.manifold)

@@ -7,7 +7,9 @@ Decision quantities (one column each), internal units:
 - ``travel``: upper - q and q - lower per joint with a limit (mm or rad);
 - ``unreachable``: D + tol and ``limb singular``: D - tol per limb with a radicand (D the
   limb's normalised radicand, tol kingen.kinematics.routine.SINGULAR_TOLERANCE), as the
-  routine's warnings decide them;
+  routine's warnings decide them; a machine with task coordinates has the pair for its
+  constraint's radicand too (kingen.kinematics.parasitic: below 0 no pose has the sample's
+  task coordinates), its ``part`` 'constraint';
 - ``direct index``: the direct index minus the robot's ``direct_index_min`` (mm);
 - ``assembly change``: det of the six unit force lines (mm^3), which the caller signs by its
   sign at the move's start: its sign changes where the platform changes assembly mode;
@@ -36,7 +38,8 @@ class Quantity:
     joint: int = None
     upper: bool = False
     part: str = None
-    """For a collision: which links' clearance ('rods' or 'cranks')."""
+    """For a collision: which links' clearance ('rods' or 'cranks'); 'constraint' for a
+    machine's constraint radicand."""
 
 
 FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index", "warnings")
@@ -46,7 +49,7 @@ FIELDS = ("piece", "u", "poses", "joints", "margins", "radicand", "direct_index"
 class Batch:
     """Samples of pieces of moves: piece (n,) which piece each is of, u (n,) its parameter on its
     move, poses (n, 6) mm and degrees; joints (n, dof) mm or rad; margins (n, quantities);
-    radicand (n,) the smallest limb radicand (inf: none); direct_index (n,) mm (NaN: none);
+    radicand (n,) the smallest limb (or constraint) radicand (inf: none); direct_index (n,) mm (NaN: none);
     warnings (n,) the reference's WARN_* code in the posture."""
 
     piece: np.ndarray
@@ -87,6 +90,8 @@ class Evaluator:
         for joint, limb in enumerate(self.robot.limbs):
             if limb.has_radicand:
                 columns += [Quantity("unreachable", joint), Quantity("limb singular", joint)]
+        if self.robot.task:
+            columns += [Quantity("unreachable", part="constraint"), Quantity("limb singular", part="constraint")]
         if self.six_lines and self.threshold is not None:
             columns.append(Quantity("direct index"))
         if self.six_lines:
@@ -113,6 +118,8 @@ class Evaluator:
         joints = solution.branch_joints[:, :, 0]
         margins = np.empty((len(u), len(self.quantities)))
         radicands = solution.radicands
+        if solution.constraint is not None:
+            radicands = np.column_stack([radicands, np.where(np.isnan(solution.constraint), -np.inf, solution.constraint)])
         determinant = self._determinant(solution) if self.six_lines else None
         clearance = dict(zip(("rods", "cranks"), clearances(self.robot, solution.points, joints))) \
             if self.collisions else {}
@@ -123,9 +130,9 @@ class Evaluator:
                 margins[:, column] = (self.limits.upper[joint] - joints[:, joint] if quantity.upper
                                       else joints[:, joint] - self.limits.lower[joint])
             elif quantity.kind == "unreachable":
-                margins[:, column] = radicands[:, joint] + SINGULAR_TOLERANCE
+                margins[:, column] = radicands[:, -1 if joint is None else joint] + SINGULAR_TOLERANCE
             elif quantity.kind == "limb singular":
-                margins[:, column] = radicands[:, joint] - SINGULAR_TOLERANCE
+                margins[:, column] = radicands[:, -1 if joint is None else joint] - SINGULAR_TOLERANCE
             elif quantity.kind == "direct index":
                 margins[:, column] = np.nan_to_num(solution.direct_index[:, 0] - self.threshold, nan=-np.inf)
             elif quantity.kind == "collision":

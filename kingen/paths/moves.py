@@ -26,7 +26,7 @@ class Move:
     line: the G-code line (1-based) or CSV row's line in the file; kind: "feed", "rapid",
     "arc" (G-code) or "row" (CSV). feed: mm/min along the xyz path (deg/min for a move that
     only turns), None when the program gives none (a rapid, a CSV without feed). duration: s
-    (a CSV with ``t``), else None."""
+    (a CSV with ``t``), else None. start_line: the CSV row ``start`` was read from (None for G-code)."""
 
     line: int
     kind: str
@@ -35,3 +35,4 @@ class Move:
     feed: float = None
     duration: float = None
     arc: Arc = None
+    start_line: int = None

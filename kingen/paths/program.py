@@ -69,7 +69,7 @@ def csv_moves(path):
     refuse_special_file(path)
     with open(path, newline="", encoding="utf-8", errors="replace") as stream:
         pose_at, timing, timing_at = list(range(6)), None, None
-        previous, previous_time, first = None, None, True
+        previous, previous_time, previous_line, first = None, None, None, True
         for line, row in csv_rows(path, stream):
             if not row or all(not cell.strip() for cell in row) or row[0].lstrip().startswith("#"):
                 continue
@@ -93,8 +93,8 @@ def csv_moves(path):
                     previous, previous_time = pose, value
                     continue
                 yield Move(line, "row", previous, pose, feed=value if timing == "feed" else None,
-                           duration=value - previous_time if timing == "t" else None)
-            previous, previous_time = pose, value
+                           duration=value - previous_time if timing == "t" else None, start_line=previous_line)
+            previous, previous_time, previous_line = pose, value, line
         if previous is None:
             raise located(path, None, None, "no poses in the program")
 

@@ -9,6 +9,8 @@ lines' determinant in mm and mm^3; clearances in mm.
 import numpy as np
 
 from ..runtime.text import counted, one_line
+from .manifold import OFF_MANIFOLD
+from .program import POSE_COLUMNS
 
 BLENDING = ("each move is timed from rest to rest (exact stop, G61); blending of consecutive moves (G64) is not "
             "modelled")
@@ -46,6 +48,8 @@ def checks(outcome):
                               "acceleration, .ini [TRAJ], or CSV times)")
         else:
             verdicts[kind] = "failed" if kind in failed else "passed"
+    if outcome.manifold is not None:
+        verdicts[OFF_MANIFOLD] = outcome.manifold.verdict()
     return verdicts
 
 
@@ -70,7 +74,9 @@ def verdict_line(outcome):
             f"first at line {lines[0] if lines else '?'} ({where})")
 
 
-def _joint_units(outcome, joint, kind):
+def _joint_units(outcome, joint, kind, between=None):
+    if kind == OFF_MANIFOLD:
+        return "mm" if between in POSE_COLUMNS[:3] else "deg"
     if joint is None:
         return {"direct index": "mm", "assembly change": "mm^3", "collision": "mm"}.get(kind, "")
     index = outcome.robot.joint_names.index(joint)
@@ -84,7 +90,7 @@ def problem_rows(outcome):
     """The table of problems by line: header and rows of text."""
     rows = [["line", "problem", "joint", "value", "limit", "source"]]
     for place in outcome.findings.sorted_problems():
-        units = _joint_units(outcome, place.joint, place.kind)
+        units = _joint_units(outcome, place.joint, place.kind, place.between)
         extra = f" (fits at {place.override * 100:.0f}% feed)" if place.override is not None else ""
         rows.append([str(place.line), place.kind, place.joint or place.between or "-", f"{place.value:.6g} {units}".strip() + extra,
                      f"{place.limit:.6g} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
@@ -94,7 +100,7 @@ def problem_rows(outcome):
 def _place_json(outcome, place):
     data = {"kind": place.kind, "line": place.line, "source": outcome.sources.get(place.line, ""),
             "joint": place.joint, "pose": place.pose, "joints": place.joints, "value": place.value,
-            "limit": place.limit, "units": _joint_units(outcome, place.joint, place.kind)}
+            "limit": place.limit, "units": _joint_units(outcome, place.joint, place.kind, place.between)}
     if place.override is not None:
         data["override"] = place.override
     if place.between is not None:
@@ -104,7 +110,9 @@ def _place_json(outcome, place):
 
 def report_json(outcome):
     """The JSON document (plain data): verdict, samples, moves, problems, first and worst place
-    of each kind, peaks per joint, checks, limits and settings."""
+    of each kind, peaks per joint, checks, limits and settings; for a machine with task
+    coordinates also ``parasitic`` ({coordinate: [min, max]} over the reachable samples, mm and degrees)
+    and ``manifold`` (what is read, the CSV rows' deviations: manifold.Manifold.summary)."""
     findings, limits = outcome.findings, outcome.limits
     peaks = []
     for index, (name, peak) in enumerate(zip(outcome.robot.joint_names, findings.peaks)):
@@ -115,7 +123,7 @@ def report_json(outcome):
                       "travel_limits": [limits.lower[index] * scale, limits.upper[index] * scale],
                       "speed_limit": limits.speed[index] * scale,
                       "acceleration_limit": limits.acceleration[index] * scale})
-    return {
+    document = {
         "verdict": "runs" if runs(outcome) else "does not run",
         "robot": outcome.robot.name, "program": outcome.program,
         "samples": findings.samples, "moves": findings.moves, "timed_moves": findings.timed_moves,
@@ -132,6 +140,10 @@ def report_json(outcome):
                      "solver": _solver(outcome)},
         "seconds": outcome.seconds,
     }
+    if outcome.manifold is not None:
+        document["parasitic"], document["manifold"] = outcome.manifold.summary()
+        document["settings"]["task_only"] = outcome.settings.task_only
+    return document
 
 
 def _solver(outcome):
