@@ -25,12 +25,13 @@ import numpy as np
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..errors import KingenError
 from ..kinematics.forward import assemblies, free_mask, search_region
+from ..kinematics.parasitic import on_manifold
 from ..kinematics.poses import sample_poses
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
 from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
-                         pose_radians, predicted_measurements, synthesize)
+                         pose_radians, predicted_measurements, residuals_per_pose, synthesize)
 
 STEP = 1e-4
 """Central differences' step, mm-equivalents."""
@@ -202,8 +203,12 @@ def _check_reachable(parameters, values, measurements):
 
 def region_poses(robot, count, seed):
     """``count`` seeded poses (mm, degrees) of the robot's verification region, the coordinates
-    forward kinematics does not solve for (a translating platform's angles) held at home."""
+    forward kinematics does not solve for (a translating platform's angles) held at home; a
+    machine with task coordinates at its nominal poses for the drawn task coordinates (on its
+    manifold, kingen.kinematics.parasitic.on_manifold)."""
     poses = sample_poses(robot, count, seed)
+    if robot.task:
+        return on_manifold(robot, poses)
     fixed = ~free_mask(robot)
     poses[:, fixed] = np.asarray(robot.verification.home)[fixed]
     return poses
@@ -232,14 +237,13 @@ def identifiable_columns(problem, values, parameters, selected):
 def needed_poses(parameters, values, selected):
     """(identifiable parameters, poses needed): the rank of the selected parameters' Jacobian
     on STRUCTURE_POSES seeded poses of the verification region, and the poses that many
-    parameters need (each pose gives dof equations, or 3 for positions)."""
+    parameters need (each pose gives residuals_per_pose equations)."""
     robot = parameters.robot
     poses = region_poses(robot, STRUCTURE_POSES, seed=1)
     problem, _ = synthetic_problem(parameters, values, poses, robot.working_posture)
     jacobian = problem.jacobian(values, np.flatnonzero(selected))
     rank = int(np.count_nonzero(identifiability.identifiable(jacobian, range(jacobian.shape[1]))))
-    per_pose = robot.dof if parameters.measure == "pose" else 3
-    return rank, -(-rank // per_pose)
+    return rank, -(-rank // residuals_per_pose(robot, parameters.measure))
 
 
 def least_squares_fit(problem, values, columns, max_evaluations):
@@ -296,9 +300,10 @@ def identify(parameters, measurements, selected, max_evaluations=None):
 
 def _translating(parameters, selected):
     """(selected, words): for pose measurements of a platform that does not rotate (forward
-    kinematics solves for no angle), the target's angles deselected, with the words why."""
+    kinematics solves for no angle, and no angle is parasitic), the target's angles deselected,
+    with the words why."""
     robot = parameters.robot
-    if parameters.measure != "pose" or not robot.forward_free or set(robot.forward_free) & {"roll", "pitch", "yaw"}:
+    if parameters.measure != "pose" or robot.task or not robot.forward_free or set(robot.forward_free) & {"roll", "pitch", "yaw"}:
         return selected, []
     angles = selected & (parameters.groups == "target") & np.array([entry.unit == "deg" for entry in parameters.entries])
     if not np.any(angles):
