@@ -144,3 +144,12 @@ def test_noise_free_measurements_recover_the_truth(tmp_path, name, change, poses
         assert not any(row["identifiable"] for parameter, row in identified.items() if parameter.startswith("passive"))
         for field in ("base_point", "first_axis", "tube_axis"):
             assert np.allclose(written["passive_leg"][field], data["passive_leg"][field], atol=1e-9)
+
+
+def test_too_few_poses_count_the_constraint_equations(tmp_path, capsys):
+    """Each pose of a constrained machine gives its joints and its three constraint equations."""
+    assert main(["calibrate", "plan", "prs_head", "--poses", "3", "-o", str(tmp_path / "p.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("kingen: error: --poses: 3 poses for 30 identifiable parameters: at least 5 are needed "
+                   "(6 equations per pose)")
+    assert not (tmp_path / "p.csv").exists()
