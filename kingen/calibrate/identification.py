@@ -2,7 +2,9 @@
 (scipy's ``least_squares``, Levenberg-Marquardt) on parameters scaled to mm-equivalents.
 
 Residuals: with pose measurements, each limb's joint predicted at the measured pose (the
-limbs' closure there) minus the joint read; with positions, the point forward kinematics
+limbs' closure there) minus the joint read, and for a machine with task coordinates its
+constraint equations' residuals there, each weighted by one over the deviation the measured
+pose's noise gives it (``pose_weights``); with positions, the point forward kinematics
 puts the target at for the read joints minus the measured point (mm). Steps:
 
 1. the nominal robot's forward kinematics of every read joint set, in the working posture and
@@ -31,7 +33,7 @@ from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
 from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
-                         pose_radians, predicted_measurements, residuals_per_pose, synthesize)
+                         pose_radians, predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
 
 STEP = 1e-4
 """Central differences' step, mm-equivalents."""
@@ -45,15 +47,17 @@ UNITS = {"metres": 1e-3, "inches": 1.0 / 25.4}
 class Problem:
     """The residuals and their Jacobian for Parameters ``parameters`` and Measurements
     ``measurements``; ``start`` (n, 6; mm, radians) the poses forward kinematics starts from
-    (position measurements), kept at the last solution."""
+    (position measurements), kept at the last solution; ``weights`` (m,) each pose residual's
+    weight (pose measurements; None: all 1)."""
 
-    def __init__(self, parameters, measurements, start):
+    def __init__(self, parameters, measurements, start, weights=None):
         self.parameters, self.measurements, self.start = parameters, measurements, start
+        self.weights = 1.0 if weights is None else weights
 
     def residuals(self, values, keep=True):
-        """(m,) mm-equivalents (see the module docstring)."""
+        """(m,) mm-equivalents (see the module docstring), pose residuals times their weights."""
         if self.parameters.measure == "pose":
-            return joint_residuals(self.parameters, values, self.measurements).ravel()
+            return joint_residuals(self.parameters, values, self.measurements).ravel() * self.weights
         predicted, poses, _ = predicted_measurements(self.parameters, values, self.measurements.joints, self.start)
         if keep:
             self.start = poses
@@ -273,7 +277,7 @@ def identify(parameters, measurements, selected, max_evaluations=None):
         raise KingenError(f"{measurements.path}:{measurements.lines[-1]}: poses: {len(measurements.joints)} "
                           f"measurements for {rank} identifiable parameters: at least {needed} poses are needed "
                           f"(kingen calibrate plan chooses them)")
-    problem = Problem(parameters, measurements, start)
+    problem = Problem(parameters, measurements, start, pose_weights(parameters, values, measurements))
     evaluations = 0
     frame_columns = np.flatnonzero(selected & np.isin(parameters.groups, ("frame", "target")))
     if len(frame_columns):
@@ -296,6 +300,18 @@ def identify(parameters, measurements, selected, max_evaluations=None):
                indices=identifiability.indices(final[:, taken]), unidentifiable=words,
                converged=bool(result.status > 0), message=result.message, evaluations=int(evaluations),
                seconds=time.perf_counter() - began, problem=problem)
+
+
+def pose_weights(parameters, values, measurements):
+    """(m,) each pose residual's weight, or None for positions: one over the standard deviation
+    the measured pose's noise gives it (prediction.residual_sigma at ``values``, the noise taken
+    alike in every coordinate in mm-equivalents: 1 mm, and 1 mm over the robot's size in
+    radians), so that residuals that move more with the measured pose (a steep rail's carriage)
+    count less and the deviations' pooled variance holds for every residual."""
+    if parameters.measure != "pose":
+        return None
+    sigma = residual_sigma(parameters, values, measurements, 1.0, math.degrees(1.0 / parameters.lever))
+    return 1.0 / sigma
 
 
 def _translating(parameters, selected):

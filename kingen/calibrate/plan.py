@@ -26,8 +26,7 @@ from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from . import identifiability
 from .identification import identifiable_columns, region_poses, synthetic_problem
-from .measurements import Measurements
-from .prediction import joint_residuals
+from .prediction import residual_sigma
 
 CANDIDATES = 5000
 MARGIN = 0.01
@@ -35,8 +34,6 @@ MARGIN = 0.01
 ratio of the smallest to the largest singular value of its closure Jacobian over the free
 pose coordinates (angles per robot size) must be at least this; D-optimal designs otherwise
 crowd where the joints or the pose are ill-conditioned, and the fit with them."""
-STEP_MEASURED = 1e-4
-"""Central differences' step (mm, degrees) for the residuals' derivative by the measurement."""
 
 
 @dataclass
@@ -74,7 +71,7 @@ def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed
     problem, data = synthetic_problem(parameters, values, poses, posture)
     _, jacobian, taken, chosen = identifiable_columns(problem, values, parameters, selected)
     blocks = jacobian[:, taken].reshape(len(poses), -1, int(np.count_nonzero(taken)))
-    sigma = _row_sigma(parameters, data, noise_mm, noise_deg).reshape(len(poses), -1)
+    sigma = residual_sigma(parameters, values, data, noise_mm, noise_deg).reshape(len(poses), -1)
     return Candidates(poses=poses, joints=data.joints, weighted=blocks / sigma[..., None], blocks=blocks, chosen=chosen)
 
 
@@ -90,23 +87,6 @@ def _regular(robot, poses, joints):
                   else closure_derivative(wrenches, radians, free))
     values = np.linalg.svd(derivative * scale, compute_uv=False)
     return values[:, -1] >= MARGIN * values[:, 0]
-
-
-def _row_sigma(parameters, data, noise_mm, noise_deg):
-    """(m,) the standard deviation of each residual the measurement noise gives: for positions,
-    ``noise_mm``; for poses, the joints' sensitivity to the measured pose times its noise."""
-    if parameters.measure == "position":
-        return np.full(data.measured.size, noise_mm)
-    variance = 0.0
-    for column, noise in enumerate([noise_mm] * 3 + [noise_deg] * 3):
-        shifted = []
-        for sign in (1.0, -1.0):
-            measured = data.measured.copy()
-            measured[:, column] += sign * STEP_MEASURED
-            shifted.append(joint_residuals(parameters, parameters.nominal, Measurements(
-                "", "pose", data.joints, measured, data.lines, ())).ravel())
-        variance += ((shifted[0] - shifted[1]) / (2 * STEP_MEASURED) * noise) ** 2
-    return np.sqrt(np.maximum(variance, 1e-30))
 
 
 D_OPTIMAL_EXTRA = 3
