@@ -1,7 +1,8 @@
 """Calibration's goals, measured and printed as Markdown, and with --json written as plain data
 for benchmarks/run.py (the performance page's section).
 
-    python benchmarks/calibrate.py [--runs 100] [--part hexapod|montecarlo|planning|positions|speed|all]
+    python benchmarks/calibrate.py [--runs 100]
+                                   [--part hexapod|montecarlo|planning|positions|constrained|speed|all]
                                    [--json FILE]
 
 - hexapod: the 42 limb parameters perturbed by up to 1 mm, the measuring frame unknown
@@ -16,6 +17,13 @@ for benchmarks/run.py (the performance page's section).
 - positions: a reflector at an unknown point, positions only (noise 10 um), 30 planned poses,
   200 held-out: a 6-RUS with crank zeros and rods perturbed, and the Gantry-Tau with link
   lengths, origins and platform points perturbed.
+- constrained: machines with task coordinates (prs_head, exechon_constrained), 6-D
+  measurements: limb parameters perturbed by up to 0.5 mm / 0.05 deg and the constraints' axes by
+  up to 0.05 deg, the measuring frame unknown, noise as above, 30 planned poses (on the nominal
+  manifold), 200 held-out poses on the real machine's manifold (exact measurements); the pose
+  error before and after, and how many identifiable parameters lie within 3 stated standard
+  deviations of the truth (in the identified gauge: the fit of the same poses without noise), in
+  one noise draw and as a share of CONSTRAINED_RUNS draws.
 - speed: one identification of the hexapod from 50 poses; planning 30 of 5,000 candidates.
 """
 
@@ -161,6 +169,54 @@ def positions():
     return rows
 
 
+CONSTRAINED = ("prs_head", "exechon_constrained")
+LIMB_MM, LIMB_DEG, AXIS_DEG = 0.5, 0.05, 0.05
+CONSTRAINED_RUNS = 20
+"""Noise draws on the same poses behind the constrained machines' coverage of 3 standard deviations."""
+
+
+def constrained_scale(entry):
+    """The constrained machines' perturbation bound of ``entry``: its axes', its mm, its degrees."""
+    if entry.group == "axis":
+        return AXIS_DEG
+    return LIMB_MM if entry.unit == "mm" else LIMB_DEG
+
+
+def constrained_case(name, count=30, held_out=200, seed=3):
+    """(parameters, truth, planned poses, held-out measurements) of a constrained machine."""
+    parameters = Parameters(load_robot(name), "pose")
+    rng = np.random.default_rng(seed)
+    truth = truth_values(parameters, rng, constrained_scale)
+    found, rows = planned(parameters, count)
+    held = measure(parameters, truth, reachable_poses(parameters.robot, held_out, 99), rng, noisy=False)
+    return parameters, truth, found.poses[rows], held
+
+
+def constrained():
+    rows = []
+    for name in CONSTRAINED:
+        parameters, truth, poses, held = constrained_case(name)
+        selected = parameters.selected("all")
+        gauge = identify(parameters, measure(parameters, truth, poses, None, noisy=False), selected)
+        fit = identify(parameters, measure(parameters, truth, poses, np.random.default_rng(7)), selected)
+        chosen = fit.chosen & gauge.chosen
+        inside = np.abs(fit.values - gauge.values) <= 3.0 * fit.std
+        coverage = []
+        for run in range(CONSTRAINED_RUNS):
+            draw = identify(parameters, measure(parameters, truth, poses, np.random.default_rng(200 + run)), selected)
+            coverage.append(np.where(draw.chosen, np.abs(draw.values - gauge.values) <= 3.0 * draw.std, True))
+        coverage = np.mean(coverage, axis=0)[gauge.chosen]
+        (before, before_angle), (after, after_angle) = (held_out_error(parameters, values, held)
+                                                        for values in (fit.before, fit.values))
+        rows.append({"robot": name, "parameters": len(parameters), "identified": int(fit.chosen.sum()),
+                     "poses": len(poses), "held_out": len(held.joints), "before_um": before * 1000,
+                     "before_urad": math.radians(before_angle) * 1e6, "after_um": after * 1000,
+                     "after_urad": math.radians(after_angle) * 1e6, "within_3_sigma": int(np.sum(inside[chosen])),
+                     "judged": int(chosen.sum()), "converged": bool(fit.converged), "seconds": fit.seconds,
+                     "runs": CONSTRAINED_RUNS, "least": float(coverage.min()), "median": float(np.median(coverage))})
+    return rows
+
+
 def speed(repeats=3):
     parameters, truth, _, _, _, _ = hexapod_case()
     poses = region_poses(parameters.robot, 50, 5)
@@ -217,13 +273,30 @@ def _positions_markdown(part):
           f"| {row['held_out']} |" for row in part)]
 
 
+def _constrained_markdown(part):
+    return "Machines with task coordinates", [
+        f"Limb parameters perturbed by up to {LIMB_MM:g} mm / {LIMB_DEG:g} deg, the constraints' axes by up to "
+        f"{AXIS_DEG:g} deg, measuring frame {FRAME} (mm, deg) unknown, noise {NOISE_MM * 1000:g} um / "
+        f"{NOISE_RAD * 1e6:g} urad, joints read to {JOINT_STEP * 1000:g} um; planned poses on the nominal manifold, "
+        "held-out poses on the real machine's (exact measurements). Within 3 sigma: identifiable parameters whose "
+        "identified value lies within 3 stated standard deviations of the noise-free fit's (one noise draw); over "
+        "draws: the share of further noise draws in which each does, least and median over the parameters.", "",
+        "| robot | identified / parameters | planned poses | held-out poses | before RMS (um, urad) | "
+        "after RMS (um, urad) | within 3 sigma | over draws: least, median | seconds |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        *(f"| {row['robot']} | {row['identified']} / {row['parameters']} | {row['poses']} | {row['held_out']} | "
+          f"{row['before_um']:.1f}, {row['before_urad']:.1f} | {row['after_um']:.2f}, {row['after_urad']:.2f} | "
+          f"{row['within_3_sigma']} of {row['judged']} | {row['least'] * 100:.0f} %, {row['median'] * 100:.0f} % "
+          f"({row['runs']} draws) | {row['seconds']:.1f} |" for row in part)]
+
+
 def _speed_markdown(part):
     return "Speed", [f"One identification of the hexapod from {part['poses']} poses: {part['identify_s']:.2f} s "
                      f"(best of {part['repeats']}); planning 30 of 5,000 candidates: {part['planning_s']:.2f} s."]
 
 
 MARKDOWN = {"hexapod": _hexapod_markdown, "montecarlo": _montecarlo_markdown, "planning": _planning_markdown,
-            "positions": _positions_markdown, "speed": _speed_markdown}
+            "positions": _positions_markdown, "constrained": _constrained_markdown, "speed": _speed_markdown}
 
 
 def markdown(figures):
@@ -243,7 +316,7 @@ def main():
     parser.add_argument("--json", type=Path, help="Also write the figures to this file as JSON.")
     arguments = parser.parse_args()
     parts = {"hexapod": hexapod, "montecarlo": lambda: montecarlo(arguments.runs), "planning": planning,
-             "positions": positions, "speed": speed}
+             "positions": positions, "constrained": constrained, "speed": speed}
     figures = {name: part() for name, part in parts.items() if arguments.part in (name, "all")}
     print(markdown(figures))
     if arguments.json:

@@ -75,6 +75,10 @@ SECTION_FIGURES = {
                      "draws": [{"random_median_um": 6.2, "ratio_of_medians": 2.0, "median_of_ratios": 1.94}]},
         "positions": [{"robot": "tau", "perturbed": "link lengths 1 mm", "poses": 30, "held_out": 200,
                        "before_um": 940.0, "after_um": 6.9}],
+        "constrained": [{"robot": "prs_head", "parameters": 45, "identified": 30, "poses": 30, "held_out": 200,
+                         "before_um": 165.9, "before_urad": 776.3, "after_um": 6.7, "after_urad": 21.3,
+                         "within_3_sigma": 29, "judged": 30, "converged": True, "seconds": 0.5,
+                         "runs": 2, "least": 0.5, "median": 1.0}],
         "speed": {"poses": 50, "repeats": 3, "identify_s": 0.3, "planning_s": 2.6}},
     "c_host": {
         "calls": 2000, "single_calls": 3000, "forward_poses": 100,

@@ -5,9 +5,6 @@ written here), the thesis's home and its observed tilt, the constraints closed a
 pose, the off-manifold answer, the generated routine against the reference on both hosts, forward
 kinematics and bad declarations."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -89,23 +86,6 @@ BAD = [
 @pytest.mark.parametrize("old, new, words", BAD)
 def test_bad_declarations_are_refused_on_one_line(old, new, words, tmp_path):
     check_declaration_refused(NAME, old, new, words, tmp_path)
-
-
-
-@pytest.mark.parametrize("args", [["plan", "{name}", "--poses", "20", "-o", "{out}/plan.csv"],
-                                  ["{name}", "--measurements", "{out}/measured.csv", "-o", "{out}/cal"]])
-@pytest.mark.parametrize("name", ["prs_head", "rps_table", NAME])
-def test_calibrate_refuses_a_constrained_machine_on_one_line(name, args, tmp_path):
-    """calibrate draws and fits poses in six free coordinates: off a constrained machine's manifold."""
-    (tmp_path / "measured.csv").write_text("q1,q2,q3,x,y,z,roll,pitch,yaw\n")
-    command = [word.format(name=name, out=tmp_path) for word in args]
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "calibrate", *command], capture_output=True,
-                            text=True, timeout=60)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("kingen: error: ") and f"{name}.yaml:" in lines[0]
-    assert "task: calibrate draws and fits poses in six free coordinates" in lines[0]
-    assert sorted(path.name for path in tmp_path.iterdir()) == ["measured.csv"]  # nothing written
 
 
 def test_analyze_sweeps_the_task_coordinates_with_the_parasitic_rotation_following():

@@ -2,7 +2,9 @@
 (scipy's ``least_squares``, Levenberg-Marquardt) on parameters scaled to mm-equivalents.
 
 Residuals: with pose measurements, each limb's joint predicted at the measured pose (the
-limbs' closure there) minus the joint read; with positions, the point forward kinematics
+limbs' closure there) minus the joint read, and for a machine with task coordinates its
+constraint equations' residuals there, each weighted by one over the deviation the measured
+pose's noise gives it (``pose_weights``); with positions, the point forward kinematics
 puts the target at for the read joints minus the measured point (mm). Steps:
 
 1. the nominal robot's forward kinematics of every read joint set, in the working posture and
@@ -25,12 +27,13 @@ import numpy as np
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..errors import KingenError
 from ..kinematics.forward import assemblies, free_mask, search_region
+from ..kinematics.parasitic import on_manifold
 from ..kinematics.poses import sample_poses
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
 from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
-                         pose_radians, predicted_measurements, synthesize)
+                         pose_radians, predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
 
 STEP = 1e-4
 """Central differences' step, mm-equivalents."""
@@ -44,15 +47,17 @@ UNITS = {"metres": 1e-3, "inches": 1.0 / 25.4}
 class Problem:
     """The residuals and their Jacobian for Parameters ``parameters`` and Measurements
     ``measurements``; ``start`` (n, 6; mm, radians) the poses forward kinematics starts from
-    (position measurements), kept at the last solution."""
+    (position measurements), kept at the last solution; ``weights`` (m,) each pose residual's
+    weight (pose measurements; None: all 1)."""
 
-    def __init__(self, parameters, measurements, start):
+    def __init__(self, parameters, measurements, start, weights=None):
         self.parameters, self.measurements, self.start = parameters, measurements, start
+        self.weights = 1.0 if weights is None else weights
 
     def residuals(self, values, keep=True):
-        """(m,) mm-equivalents (see the module docstring)."""
+        """(m,) mm-equivalents (see the module docstring), pose residuals times their weights."""
         if self.parameters.measure == "pose":
-            return joint_residuals(self.parameters, values, self.measurements).ravel()
+            return joint_residuals(self.parameters, values, self.measurements).ravel() * self.weights
         predicted, poses, _ = predicted_measurements(self.parameters, values, self.measurements.joints, self.start)
         if keep:
             self.start = poses
@@ -202,8 +207,12 @@ def _check_reachable(parameters, values, measurements):
 
 def region_poses(robot, count, seed):
     """``count`` seeded poses (mm, degrees) of the robot's verification region, the coordinates
-    forward kinematics does not solve for (a translating platform's angles) held at home."""
+    forward kinematics does not solve for (a translating platform's angles) held at home; a
+    machine with task coordinates at its nominal poses for the drawn task coordinates (on its
+    manifold, kingen.kinematics.parasitic.on_manifold)."""
     poses = sample_poses(robot, count, seed)
+    if robot.task:
+        return on_manifold(robot, poses)
     fixed = ~free_mask(robot)
     poses[:, fixed] = np.asarray(robot.verification.home)[fixed]
     return poses
@@ -232,14 +241,13 @@ def identifiable_columns(problem, values, parameters, selected):
 def needed_poses(parameters, values, selected):
     """(identifiable parameters, poses needed): the rank of the selected parameters' Jacobian
     on STRUCTURE_POSES seeded poses of the verification region, and the poses that many
-    parameters need (each pose gives dof equations, or 3 for positions)."""
+    parameters need (each pose gives residuals_per_pose equations)."""
     robot = parameters.robot
     poses = region_poses(robot, STRUCTURE_POSES, seed=1)
     problem, _ = synthetic_problem(parameters, values, poses, robot.working_posture)
     jacobian = problem.jacobian(values, np.flatnonzero(selected))
     rank = int(np.count_nonzero(identifiability.identifiable(jacobian, range(jacobian.shape[1]))))
-    per_pose = robot.dof if parameters.measure == "pose" else 3
-    return rank, -(-rank // per_pose)
+    return rank, -(-rank // residuals_per_pose(robot, parameters.measure))
 
 
 def least_squares_fit(problem, values, columns, max_evaluations):
@@ -269,7 +277,7 @@ def identify(parameters, measurements, selected, max_evaluations=None):
         raise KingenError(f"{measurements.path}:{measurements.lines[-1]}: poses: {len(measurements.joints)} "
                           f"measurements for {rank} identifiable parameters: at least {needed} poses are needed "
                           f"(kingen calibrate plan chooses them)")
-    problem = Problem(parameters, measurements, start)
+    problem = Problem(parameters, measurements, start, pose_weights(parameters, values, measurements))
     evaluations = 0
     frame_columns = np.flatnonzero(selected & np.isin(parameters.groups, ("frame", "target")))
     if len(frame_columns):
@@ -294,11 +302,24 @@ def identify(parameters, measurements, selected, max_evaluations=None):
                seconds=time.perf_counter() - began, problem=problem)
 
 
+def pose_weights(parameters, values, measurements):
+    """(m,) each pose residual's weight, or None for positions: one over the standard deviation
+    the measured pose's noise gives it (prediction.residual_sigma at ``values``, the noise taken
+    alike in every coordinate in mm-equivalents: 1 mm, and 1 mm over the robot's size in
+    radians), so that residuals that move more with the measured pose (a steep rail's carriage)
+    count less and the deviations' pooled variance holds for every residual."""
+    if parameters.measure != "pose":
+        return None
+    sigma = residual_sigma(parameters, values, measurements, 1.0, math.degrees(1.0 / parameters.lever))
+    return 1.0 / sigma
+
+
 def _translating(parameters, selected):
     """(selected, words): for pose measurements of a platform that does not rotate (forward
-    kinematics solves for no angle), the target's angles deselected, with the words why."""
+    kinematics solves for no angle, and no angle is parasitic), the target's angles deselected,
+    with the words why."""
     robot = parameters.robot
-    if parameters.measure != "pose" or not robot.forward_free or set(robot.forward_free) & {"roll", "pitch", "yaw"}:
+    if parameters.measure != "pose" or robot.task or not robot.forward_free or set(robot.forward_free) & {"roll", "pitch", "yaw"}:
         return selected, []
     angles = selected & (parameters.groups == "target") & np.array([entry.unit == "deg" for entry in parameters.entries])
     if not np.any(angles):

@@ -1,12 +1,17 @@
 """The calibrated robot file: the robot file with every limb written out (a layout expanded to
 explicit limbs) with the identified values in the file's own length unit, renamed ``<name>_calibrated``, its ``source``
 naming the measurement file; golden values are dropped (they were published for the
-drawing). The robot file's writer is the design optimiser's (kingen.design.problem)."""
+drawing). A machine with task coordinates keeps its task and passive leg: the identified
+constraint axes are written in its limbs, the passive leg's identified geometry in
+``passive_leg``, and its verification home is moved onto the calibrated machine's manifold (its
+task coordinates kept), so that it is a pose the calibrated machine takes. The robot file's writer is the design
+optimiser's (kingen.design.problem)."""
 
 import copy
 from dataclasses import replace
 
 from ..errors import KingenError
+from ..kinematics.parasitic import on_manifold
 
 from ..design.problem import robot_yaml, suffixed_name
 from ..units import LENGTH_UNITS, scaled_limbs
@@ -30,10 +35,26 @@ def calibrated_yaml(data, parameters, values, header):
     robot = replace(robot, limbs=tuple(_held(robot.path, name, limb) for name, limb in zip(robot.joint_names, robot.limbs)))
     limbs = scaled_limbs(robot.limbs, 1.0 / LENGTH_UNITS[robot.length_unit])
     data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model} for limb in limbs]
+    if robot.task:
+        _constrained(data, robot)
     data["name"] = calibrated_name(data["name"])
     data["description"] = f"{' '.join(str(data.get('description', '')).split())} Calibrated by kingen."
     data["source"] = " ".join(header)
     return robot_yaml(data, header)
+
+
+def _constrained(data, robot):
+    """Put ``robot``'s passive leg and its verification home on its own manifold into the robot
+    file's plain ``data`` (the file's length unit)."""
+    scale = 1.0 / LENGTH_UNITS[robot.length_unit]
+    leg = robot.passive_leg
+    if leg is not None:
+        data["passive_leg"] = {"base_point": [float(value) * scale for value in leg.base_point],
+                               "first_axis": [float(value) for value in leg.first_axis],
+                               "tube_axis": [float(value) for value in leg.tube_axis]}
+    home = on_manifold(robot, [robot.verification.home])[0]
+    data.setdefault("verification", {})["home"] = [float(value) * scale for value in home[:3]] + \
+        [float(value) for value in home[3:]]
 
 
 ROUNDING_MM = 1e-6

@@ -8,6 +8,9 @@ Values are in mm and degrees (a robot file in inches is read in mm, as kingen ho
   point does: it is kept as written and the rail point stands for both);
 - crank: pivot (3), crank direction, crank length, rod length, zero offset, platform point (3).
 
+A machine with task coordinates adds its constraints' geometry (kingen.calibrate.constraints):
+the revolute axes' turns and a passive leg's base point and axes.
+
 The measuring frame is the measuring device's frame in the base frame (x, y, z, roll, pitch,
 yaw); the target is the measured frame in the platform frame (a pose, ``--measure pose``) or
 the reflector's point (``--measure position``). A measured pose M (device frame) is then
@@ -25,13 +28,15 @@ import numpy as np
 
 from ..conventions import matrix_from_pose
 from ..errors import KingenError
+from . import constraints
+from .constraints import AXIS_GROUP
 
 GROUPS = dict(
     base="the limbs' base points (leg base points, rail points, crank pivots)", platform="the limbs' platform points",
     length="leg reference lengths, rail link lengths, crank and rod lengths",
     direction="rail directions and crank directions", zero="crank zero offsets and rail origins",
     frame="the measuring frame (the device's pose in the base frame)",
-    target="the target (the measured frame or reflector on the platform)")
+    target="the target (the measured frame or reflector on the platform)", **dict([AXIS_GROUP]))
 """The groups --identify selects, in words."""
 
 MODEL_FIELDS = {
@@ -52,7 +57,9 @@ POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
 class Parameter:
     """One identified number: ``name`` ('leg1.base_point.z', 'measuring_frame.yaw'), its
     ``group``, ``unit`` ('mm' or 'deg') and ``nominal`` value; where it lives (``limb`` index
-    or None, ``field``, ``component``: 0..2 of a vector, 'a'/'b' a rail direction's tilt, or None)."""
+    or None: the passive leg's, or the measuring frame's and target's (``field`` None); ``field``,
+    ``component``: 0..2 of a vector, 'a'/'b' a direction's tilt, 'turn' a rail's revolute axis's
+    turn (kingen.calibrate.constraints), or None)."""
 
     name: str
     group: str
@@ -63,25 +70,12 @@ class Parameter:
     component: object = None
 
 
-def _across(direction):
-    """Two unit vectors across ``direction`` (3,), right-handed with it: the tilt axes."""
-    unit = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
-    helper = np.eye(3)[int(np.argmin(np.abs(unit)))]
-    first = np.cross(unit, helper)
-    first /= np.linalg.norm(first)
-    return first, np.cross(unit, first)
-
-
 class Parameters:
     """The parameter vector of ``robot`` (a Robot, limbs expanded, mm) for measurements of
     kind ``measure`` ('pose' or 'position'), with the measuring frame's nominal pose ``frame``
     (6,) and the target's ``target`` (6,) or (3,) (mm, degrees)."""
 
     def __init__(self, robot, measure, frame=(0.0,) * 6, target=None):
-        if robot.task:
-            raise KingenError(f"{robot.path}:{robot.line_of('task')}: task: calibrate draws and fits poses in six free "
-                              f"coordinates and does not model the constraints of a machine with task coordinates "
-                              f"(its other coordinates are parasitic): not supported")
         self.robot, self.measure = robot, measure
         self.lever = robot.size_mm
         entries = []
@@ -93,6 +87,7 @@ class Parameters:
             name = robot.joint_names[index]
             for field, group, kind in fields:
                 entries.extend(_limb_entries(name, index, limb, field, group, kind))
+        entries += [Parameter(*spec) for spec in constraints.entries(robot)]
         target = (0.0,) * (6 if measure == "pose" else 3) if target is None else target
         entries += [Parameter(f"measuring_frame.{axis}", "frame", "mm" if i < 3 else "deg", float(frame[i]))
                     for i, axis in enumerate(POSE_NAMES)]
@@ -104,8 +99,7 @@ class Parameters:
         self.step = np.array([1.0 if entry.unit == "mm" else math.degrees(1.0 / self.lever) for entry in entries])
         """Value per unit of x: 1 for mm, the degrees one mm-equivalent turns for angles."""
         self.groups = np.array([entry.group for entry in entries])
-        self._across = {index: _across(limb.direction) for index, limb in enumerate(robot.limbs)
-                        if limb.model == "rail"}
+        self._partners = constraints.partners(robot)
 
     def __len__(self):
         return len(self.entries)
@@ -119,28 +113,42 @@ class Parameters:
         return (np.asarray(values, dtype=float) - self.nominal) / self.step
 
     def robot_of(self, values):
-        """The Robot with the limb parameters ``values`` (mm, degrees) put in."""
+        """The Robot with the limb and constraint parameters ``values`` (mm, degrees) put in."""
         updates = [{} for _ in self.robot.limbs]
+        turns, passive = {}, {}
         for entry, value in zip(self.entries, values):
-            if entry.limb is None:
+            if entry.field is None:
                 continue
-            update = updates[entry.limb]
-            limb = self.robot.limbs[entry.limb]
-            if entry.component is None:
-                update[entry.field] = float(value)
-            elif entry.field == "direction":
-                update.setdefault("_tilt", [0.0, 0.0])["ab".index(entry.component)] = math.radians(value)
+            if isinstance(entry.component, str):
+                turns.setdefault((entry.limb, entry.field), {})[entry.component] = math.radians(value)
+            elif entry.limb is None:
+                passive.setdefault(entry.field, list(getattr(self.robot.passive_leg, entry.field)))[
+                    entry.component] = float(value)
+            elif entry.component is None:
+                updates[entry.limb][entry.field] = float(value)
             else:
-                update.setdefault(entry.field, list(getattr(limb, entry.field)))[entry.component] = float(value)
+                limb = self.robot.limbs[entry.limb]
+                updates[entry.limb].setdefault(entry.field, list(getattr(limb, entry.field)))[entry.component] = \
+                    float(value)
         limbs = []
         for index, (limb, update) in enumerate(zip(self.robot.limbs, updates)):
-            tilt = update.pop("_tilt", None)
-            if tilt is not None:
-                first, second = self._across[index]
-                direction = np.asarray(limb.direction) + tilt[0] * first + tilt[1] * second
-                update["direction"] = list(direction / np.linalg.norm(direction))
+            direction = None
+            if limb.model == "rail":
+                direction = constraints.tilted(limb.direction, turns.get((index, "direction"), {}))
+                update["direction"] = [float(v) for v in direction]
+            for field in ("revolute_axis", "platform_revolute_axis"):
+                owner = self._partners.get(index, index)
+                if getattr(limb, field, None) is not None:
+                    update[field] = [float(v) for v in constraints.limb_axis(limb, field, turns.get((owner, field), {}),
+                                                                               direction)]
             limbs.append(limb.model_copy(update=update))
-        return replace(self.robot, limbs=tuple(limbs))
+        robot = replace(self.robot, limbs=tuple(limbs))
+        if self.robot.passive_leg is None:
+            return robot
+        leg = self.robot.passive_leg
+        angles = {field: angles for (limb, field), angles in turns.items() if limb is None}
+        return replace(robot, passive_leg=constraints.passive_leg_of(leg, passive.get("base_point", leg.base_point),
+                                                                     angles))
 
     def frame(self, values):
         """The measuring frame's homogeneous matrix (4, 4) in the base frame."""

@@ -1,7 +1,7 @@
 """Choosing the poses to measure: greedy D-optimal design among seeded candidates.
 
 Candidates are seeded poses of the robot's verification region (the coordinates forward
-kinematics does not solve for held at home) that kingen's reference judges good in the
+kinematics does not solve for held at home; a machine with task coordinates on its nominal manifold) that kingen's reference judges good in the
 working posture (reachable, within travel, away from singularities by the robot's
 ``direct_index_min``, and by MARGIN of the limbs' and forward kinematics' conditioning) and, where the robot file gives ``collision`` radii, whose links keep
 clear of each other. Each candidate's rows of the identification Jacobian (at the nominal
@@ -20,13 +20,13 @@ import numpy as np
 from ..conventions import t6_from_pose
 from ..errors import KingenError
 from ..kinematics.collision import clearances
-from ..kinematics.forward import closure, closure_derivative, free_mask
+from ..kinematics.forward import closure, closure_derivative, free_mask, t6_of
+from ..kinematics.parasitic import task_twists
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from . import identifiability
 from .identification import identifiable_columns, region_poses, synthetic_problem
-from .measurements import Measurements
-from .prediction import joint_residuals
+from .prediction import residual_sigma
 
 CANDIDATES = 5000
 MARGIN = 0.01
@@ -34,8 +34,6 @@ MARGIN = 0.01
 ratio of the smallest to the largest singular value of its closure Jacobian over the free
 pose coordinates (angles per robot size) must be at least this; D-optimal designs otherwise
 crowd where the joints or the pose are ill-conditioned, and the fit with them."""
-STEP_MEASURED = 1e-4
-"""Central differences' step (mm, degrees) for the residuals' derivative by the measurement."""
 
 
 @dataclass
@@ -73,36 +71,22 @@ def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed
     problem, data = synthetic_problem(parameters, values, poses, posture)
     _, jacobian, taken, chosen = identifiable_columns(problem, values, parameters, selected)
     blocks = jacobian[:, taken].reshape(len(poses), -1, int(np.count_nonzero(taken)))
-    sigma = _row_sigma(parameters, data, noise_mm, noise_deg).reshape(len(poses), -1)
+    sigma = residual_sigma(parameters, values, data, noise_mm, noise_deg).reshape(len(poses), -1)
     return Candidates(poses=poses, joints=data.joints, weighted=blocks / sigma[..., None], blocks=blocks, chosen=chosen)
 
 
 def _regular(robot, poses, joints):
     """(n,) bool: whether forward kinematics is well-conditioned at poses (n, 6; mm, degrees)
-    for joints (n, dof): the closure Jacobian's singular values' ratio at least MARGIN."""
+    for joints (n, dof): the closure Jacobian's singular values' ratio at least MARGIN (for a
+    machine with task coordinates, along its manifold: per unit rate of each task coordinate)."""
     radians = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
     _, wrenches = closure(robot, radians, joints)
     free = free_mask(robot)
     scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
-    values = np.linalg.svd(closure_derivative(wrenches, radians, free) * scale, compute_uv=False)
+    derivative = (wrenches @ task_twists(robot, t6_of(radians)) if robot.task
+                  else closure_derivative(wrenches, radians, free))
+    values = np.linalg.svd(derivative * scale, compute_uv=False)
     return values[:, -1] >= MARGIN * values[:, 0]
-
-
-def _row_sigma(parameters, data, noise_mm, noise_deg):
-    """(m,) the standard deviation of each residual the measurement noise gives: for positions,
-    ``noise_mm``; for poses, the joints' sensitivity to the measured pose times its noise."""
-    if parameters.measure == "position":
-        return np.full(data.measured.size, noise_mm)
-    variance = np.zeros(data.joints.size)
-    for column, noise in enumerate([noise_mm] * 3 + [noise_deg] * 3):
-        shifted = []
-        for sign in (1.0, -1.0):
-            measured = data.measured.copy()
-            measured[:, column] += sign * STEP_MEASURED
-            shifted.append(joint_residuals(parameters, parameters.nominal, Measurements(
-                "", "pose", data.joints, measured, data.lines, ())).ravel())
-        variance += ((shifted[0] - shifted[1]) / (2 * STEP_MEASURED) * noise) ** 2
-    return np.sqrt(np.maximum(variance, 1e-30))
 
 
 D_OPTIMAL_EXTRA = 3
@@ -142,8 +126,9 @@ def greedy(weighted, count, limbs=None):
 
 
 def limb_columns(candidates_, parameters):
-    """(identifiable parameters,) bool: which of the candidates' columns are limb parameters."""
-    return np.array([entry.limb is not None for entry in parameters.entries])[candidates_.chosen]
+    """(identifiable parameters,) bool: which of the candidates' columns are the machine's own
+    parameters (the limbs' and the constraints'; not the measuring frame or the target)."""
+    return ~np.isin(parameters.groups, ("frame", "target"))[candidates_.chosen]
 
 
 def predicted(candidates_, rows, parameters):

@@ -6,12 +6,17 @@ T = F M Tg^-1 in the base frame (kingen.calibrate.parameters); mm, degrees in an
 radians for revolute joints.
 """
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..conventions import matrix_from_pose, pose_from_t6, rotation_from_rpy, t6_from_matrix, wrap_angle
 from ..kinematics.forward import free_mask, newton
+from ..kinematics.parasitic import on_manifold, pose_constraint_residuals
 from ..kinematics.reference import platform_points_in_base
 
+STEP_MEASURED = 1e-4
+"""Central differences' step (mm, degrees) for the residuals' derivative by the measurement."""
 CLOSED = 1e-7
 """Forward kinematics reached the joints where no limb misses its length by more than this
 fraction of the robot's size."""
@@ -60,14 +65,47 @@ def inverse_joints(robot, platform):
 
 def joint_residuals(parameters, values, measurements):
     """Predicted minus read joints (n, dof) in mm-equivalents (radians times the robot's size)
-    at the measured poses, each limb on the branch nearer its read joint."""
+    at the measured poses, each limb on the branch nearer its read joint; for a machine with
+    task coordinates, then its constraint equations' residuals there (n, 3; mm,
+    kingen.kinematics.parasitic.pose_constraint_residuals): the built machine's pose keeps them,
+    so a measured pose lies on the real machine's manifold."""
     robot = parameters.robot_of(values)
-    joints, _ = inverse_joints(robot, platform_of_measured(parameters, values, measurements.measured))
+    platform = platform_of_measured(parameters, values, measurements.measured)
+    joints, _ = inverse_joints(robot, platform)
     difference = joints - measurements.joints[:, :, None]
     revolute = robot.revolute
     difference[:, revolute] = wrap_angle(difference[:, revolute])
     nearer = np.take_along_axis(difference, np.argmin(np.abs(difference), axis=2)[..., None], axis=2)[..., 0]
-    return nearer * np.where(revolute, parameters.lever, 1.0)
+    nearer = nearer * np.where(revolute, parameters.lever, 1.0)
+    if not robot.task:
+        return nearer
+    return np.concatenate([nearer, pose_constraint_residuals(robot, t6_from_matrix(platform))], axis=1)
+
+
+def residual_sigma(parameters, values, measurements, noise_mm, noise_deg):
+    """(m,) the standard deviation of each residual the measurement noise gives with ``values``:
+    for positions, ``noise_mm``; for poses, the residuals' (joint_residuals) sensitivity to the
+    measured pose (central differences) times its noise ``noise_mm`` and ``noise_deg`` (one
+    standard deviation per coordinate, independent)."""
+    if parameters.measure == "position":
+        return np.full(measurements.measured.size, noise_mm)
+    variance = 0.0
+    for column, noise in enumerate([noise_mm] * 3 + [noise_deg] * 3):
+        shifted = []
+        for sign in (1.0, -1.0):
+            measured = measurements.measured.copy()
+            measured[:, column] += sign * STEP_MEASURED
+            shifted.append(joint_residuals(parameters, values, replace(measurements, measured=measured)).ravel())
+        variance += ((shifted[0] - shifted[1]) / (2 * STEP_MEASURED) * noise) ** 2
+    return np.sqrt(np.maximum(variance, 1e-30))
+
+
+def residuals_per_pose(robot, measure):
+    """How many residuals one measured pose gives: the joints and, for a machine with task
+    coordinates, its constraint equations (pose measurements); 3 for positions."""
+    if measure != "pose":
+        return 3
+    return robot.dof + (3 if robot.task else 0)
 
 
 def forward_poses(robot, joints, start):
@@ -103,9 +141,10 @@ def _rotation(poses):
 def synthesize(parameters, values, poses, posture):
     """(joints (n, dof; mm, radians), measured (n, 6 or 3)) a robot with ``values`` reads and
     the device measures with the platform at ``poses`` (n, 6; mm, degrees, base frame), in
-    ``posture``: measurements made from the parameters' own model (for plans and tests)."""
+    ``posture``: measurements made from the parameters' own model (for plans and tests); a
+    machine with task coordinates at its own poses for the poses' task coordinates (on_manifold)."""
     robot = parameters.robot_of(values)
-    platform = matrix_from_pose(poses)
+    platform = matrix_from_pose(on_manifold(robot, poses) if robot.task else poses)
     joints, _ = inverse_joints(robot, platform)
     branches = np.array(robot.posture_branches(posture))
     chosen = np.take_along_axis(joints, np.broadcast_to(branches[None, :, None], joints.shape[:2] + (1,)), 2)[..., 0]

@@ -187,8 +187,9 @@ def plan(robot, count, noise_mm, noise_deg, measure, spec, output):
     poses = found.poses[rows]
     output = output or default_out_dir(model) / "calibrate" / "poses.csv"
     write_atomic(output, write_measurements(model, measure, found.joints[rows], poses[:, :6 if measure == "pose" else 3]))
-    say(f"plan {model.name}: {count} of {len(found.poses)} candidate poses (seeded in the verification region: "
-        f"reachable, within travel, away from singularities{', clear of collisions' if model.collision else ''}), "
+    manifold = ", on the machine's manifold" if model.task else ""
+    say(f"plan {model.name}: {count} of {len(found.poses)} candidate poses (seeded in the verification region"
+        f"{manifold}: reachable, within travel, away from singularities{', clear of collisions' if model.collision else ''}), "
         f"{identifiable} identifiable parameters")
     say(f"  predicted condition number {indices['condition_number']:.4g}; with noise {noise_mm:g} mm and "
         f"{noise_deg:g} deg, parameter deviations (one std): {_deviations_text(std, parameters.entries)}")

@@ -107,14 +107,21 @@ def _solve_rotation(robot, t6, solve):
 
 def constraint_residuals(robot, t6):
     """(n, 3) mm: each constraint equation's residual at the machine's pose for each T6 (n, 4, 4)
-    (solve_parasitic), computed forward from the constraints' own statement: a_i.(C_i - c_i) for
-    revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in the platform, the
-    tube's (kingen.kinematics.parasitic_tube.tube_residuals) for a passive leg; and
-    (n,) the radicand D (where D < 0 no pose closes them)."""
+    (solve_parasitic; pose_constraint_residuals there), and (n,) the radicand D (where D < 0 no
+    pose closes them)."""
     machine = solve_parasitic(robot, t6)
+    return pose_constraint_residuals(robot, machine.t6), machine.radicand
+
+
+def pose_constraint_residuals(robot, t6):
+    """(n, 3) mm: each constraint equation's residual with the platform at T6 (n, 4, 4) as given
+    (not moved onto the manifold), computed forward from the constraints' own statement:
+    a_i.(C_i - c_i) for revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in
+    the platform, the tube's (kingen.kinematics.parasitic_tube.tube_residuals) for a passive leg."""
+    t6 = np.asarray(t6, dtype=float)
     if family(robot) == "tube":
-        return tube_residuals(robot, machine.t6), machine.radicand
-    rotation, position = np.swapaxes(machine.t6[:, :3, :3], 1, 2), machine.t6[:, 3, :3]
+        return tube_residuals(robot, t6)
+    rotation, position = np.swapaxes(t6[:, :3, :3], 1, 2), t6[:, 3, :3]
     residuals = []
     for limb in robot.limbs:
         if family(robot) == "axes":
@@ -124,7 +131,7 @@ def constraint_residuals(robot, t6):
             axis, point = limb.constraint_plane()
             platform = rotation @ np.asarray(limb.platform_point, dtype=float) + position
             residuals.append((platform - point) @ axis)
-    return np.stack(residuals, axis=1), machine.radicand
+    return np.stack(residuals, axis=1)
 
 
 def on_manifold(robot, poses):
