@@ -26,6 +26,7 @@ from .layouts import Layout
 from .constraints import check_coordinates
 from .located import Locator, diagnostic
 from .passive_leg import PassiveLegFile, passive_leg_of
+from .wrist import refuse_wrist
 from .limbs import MODELS
 from ..runtime.resources import robots_dir
 from .reading import read_robot_file
@@ -36,7 +37,6 @@ MAX_GOLDEN = 1000
 MAX_LIMBS = 64
 MAX_TWO_BRANCH_LIMBS = 8
 """At most 2**8 = 256 postures: the solutions array is NUM_DOFS x NUM_SOLUTIONS doubles."""
-
 
 NAME_CHECKS = {}
 """How each host judges the names it makes from a robot's name: host name -> function (robot
@@ -319,6 +319,7 @@ def robot_from_data(data, path, lines=None, raw=None):
         raw = json.dumps(data, sort_keys=True).encode()
     lines = lines or {}
     locate = Locator(str(path), lines)
+    refuse_wrist(data, locate)
     try:
         document = robot_file_schema().model_validate(data)
     except ValidationError as error:

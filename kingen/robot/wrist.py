@@ -1,0 +1,105 @@
+"""A serial wrist on the platform of a machine with task x, y, z (docs/how-to/hybrid.md).
+
+A robot file's ``wrist:`` section lists the wrist's joints in chain order, each with its axis
+and origin in the platform frame with every wrist joint at 0, and ``tool:`` places the tool
+frame in the platform frame with every wrist joint at 0 (mm, degrees). This first version
+solves two revolute joints whose axes meet at the platform frame's origin (the wrist centre,
+the parallel part's task point) with the tool tip on the tool's z axis through that centre:
+the inverse from the tool pose is then in closed form (kingen.kinematics.wrist). Anything else
+is refused in one located line. No host writes a routine for a wrist yet: ``load_robot``
+refuses a file with one (:func:`refuse_wrist`); kingen.robot.hybrid.load_hybrid reads it for
+the numpy reference.
+"""
+
+from dataclasses import dataclass
+from typing import Annotated, Literal, Optional
+
+import numpy as np
+from pydantic import Field, ValidationError
+
+from ..conventions import REVOLUTE, matrix_from_pose
+from .located import Locator, diagnostic
+from .schema import Identifier, Pose, Strict, Travel, UnitVec3, Vec3
+
+WRIST_FIELDS = ("wrist", "tool")
+ALIGNED = 1e-6
+"""|a x b| below this: two unit axes are parallel (refused)."""
+ON_AXIS = 1e-9
+"""How far (mm) the tool tip may be from the tool's z axis through the wrist centre."""
+REFUSED = ("a serial wrist is solved by kingen's numpy reference only (kingen.robot.hybrid.load_hybrid); "
+           "no host writes its routine and no command reads it yet")
+
+
+class WristJoint(Strict):
+    """One wrist joint: its axis and a point on it, platform frame, every wrist joint at 0."""
+
+    name: Identifier
+    type: Literal["revolute", "prismatic"] = "revolute"
+    axis: UnitVec3
+    origin: Vec3 = [0.0, 0.0, 0.0]
+    travel: Optional[Travel] = None
+    """Degrees."""
+
+
+class Hybrid(Strict):
+    """The fields a robot file with a wrist adds to the parallel part's: the wrist, the tool and
+    golden values over the tool pose (the parallel part's joints, then the wrist's)."""
+
+    wrist: Annotated[list[WristJoint], Field(min_length=1, max_length=3)]
+    tool: Pose
+
+
+@dataclass(frozen=True, eq=False)
+class Wrist:
+    """The wrist in internal units: ``names`` (k,), ``axes`` (k, 3) unit, platform frame at zero,
+    ``lower``/``upper`` (k,) rad (-inf/+inf without travel), ``tool`` (4, 4) the tool frame in
+    the platform frame at zero, ``reach`` the signed distance (mm) from the wrist centre to the
+    tool tip along the tool's z axis."""
+
+    names: tuple
+    axes: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    tool: np.ndarray
+    reach: float
+
+
+def refuse_wrist(data, locate):
+    """Raise a located error when a robot file's data has a ``wrist`` or ``tool`` section: a
+    routine, verify or any command would otherwise drop the wrist silently."""
+    for field in WRIST_FIELDS:
+        if isinstance(data, dict) and field in data:
+            raise locate.error([field], REFUSED)
+
+
+def wrist_of(data, robot, locate):
+    """The Wrist of the ``wrist`` and ``tool`` sections of ``data`` (plain data, mm and degrees)
+    for the parallel part ``robot``; a located error for what this version does not solve."""
+    try:
+        section = Hybrid.model_validate({field: data.get(field) for field in WRIST_FIELDS})
+    except ValidationError as error:
+        raise diagnostic(error, locate) from None
+    if robot.task != ("x", "y", "z") or robot.length_unit != "mm":
+        raise locate.error(["wrist"], "a wrist needs a parallel part in mm with task: [x, y, z] (the wrist centre)")
+    for index, joint in enumerate(section.wrist):
+        if joint.type != "revolute":
+            raise locate.error(["wrist", index, "type"], "this version solves revolute wrist joints only")
+        if any(joint.origin):
+            raise locate.error(["wrist", index, "origin"], "this version solves axes through the platform frame's "
+                                                           "origin (the wrist centre) only: [0, 0, 0]")
+    if len(section.wrist) != 2:
+        raise locate.error(["wrist"], f"this version solves a wrist of two joints, not {len(section.wrist)}")
+    axes = np.array([joint.axis for joint in section.wrist])
+    tool = matrix_from_pose(section.tool)
+    if np.linalg.norm(np.cross(axes[0], axes[1])) < ALIGNED:
+        raise locate.error(["wrist", 1, "axis"], "parallel to the first joint's axis: the wrist would turn about one axis")
+    if np.linalg.norm(np.cross(axes[1], tool[:3, 2])) < ALIGNED:
+        raise locate.error(["tool"], "the tool's z axis lies along the last joint's axis, which would not tilt it")
+    reach = float(tool[:3, 3] @ tool[:3, 2])
+    if np.linalg.norm(tool[:3, 3] - reach * tool[:3, 2]) > ON_AXIS:
+        raise locate.error(["tool"], "this version solves a tool tip on the tool's z axis through the wrist centre only")
+    scale = REVOLUTE.yaml_scale
+    travel = [joint.travel or [-np.inf, np.inf] for joint in section.wrist]
+    return Wrist(names=tuple(joint.name for joint in section.wrist), axes=axes,
+                 lower=np.array([t[0] for t in travel]) * scale, upper=np.array([t[1] for t in travel]) * scale,
+                 tool=tool, reach=reach)
