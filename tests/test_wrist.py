@@ -122,6 +122,8 @@ def test_warnings_the_wrist_singularity_its_limits_and_a_cone_it_cannot_reach(tm
     solution = solve_tool(load_hybrid(nutating), horizontal)
     assert np.all(solution.warnings[0] == UNREACHABLE) and solution.radicand[0] < 0
     assert np.all(solution.warnings[1] == GOOD) and solution.radicand[1] > 0
+    nowhere = solve_tool(hybrid, t6_from_pose(np.array([(np.nan, 0, -1300, 170, 0, 0), (1e300, 0, -1300, 170, 0, 0)])))
+    assert np.all(nowhere.warnings == UNREACHABLE) and np.all(nowhere.joints == 0.0)
 
 
 @pytest.mark.parametrize("host", ["delmia", "linuxcnc", "c"])

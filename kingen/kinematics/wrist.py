@@ -16,7 +16,9 @@ Warnings, per posture (the parallel part's posture times 2 plus the wrist's bran
 of the parallel part's (kingen.kinematics.reference) and the wrist's: D below -1e-5 (no wrist
 angle reaches w) is unreachable; |D| within 1e-5 (the branches meet), or 1 - (a1.w_p)^2 within
 1e-5 (the tool axis along the first axis: t1 is lost, the wrist's singularity) is singular;
-a wrist joint outside its travel is beyond the joint limits. ``turn`` says how far (rad) the
+a wrist joint outside its travel is beyond the joint limits. A T6 the parallel part cannot
+answer (non-finite, or no rotation for its wrist centre) is unreachable in every posture; a
+non-finite one has wrist joints 0, as the reference gives its legs. ``turn`` says how far (rad) the
 asked tool frame is turned about the tool axis from the machine's: the answer ignores it.
 """
 
@@ -113,6 +115,7 @@ def solve_tool(hybrid, t6):
         legs = solve(robot, machine)
         rotation = np.swapaxes(machine[:, :3, :3], 1, 2)
         angles, radicand, aligned = _wrist_branches(wrist, np.einsum("nji,nj->ni", rotation, axis))
+    angles = np.where(legs.finite[:, None, None] & np.isfinite(angles), angles, 0.0)
     postures = robot.postures * 2
     joints = np.concatenate([np.repeat(legs.joints, 2, axis=2),
                              np.tile(np.swapaxes(angles, 1, 2), (1, 1, robot.postures))], axis=1)
