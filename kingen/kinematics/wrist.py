@@ -30,9 +30,9 @@ from .parasitic import solve_parasitic
 from .reference import solve
 from .routine import SINGULAR_TOLERANCE, WARNINGS
 
-RANK = {WARNINGS["WARN_GOOD_SOLUTION"]: 0, WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]: 1,
-        WARNINGS["WARN_SINGULAR_SOLUTION"]: 2, WARNINGS["WARN_UNREACHABLE"]: 3}
-"""Which warning wins when the parallel part and the wrist give two: the higher rank."""
+RANK = np.zeros(max(WARNINGS.values()) + 1, dtype=int)
+RANK[[WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]]] = 1, 2, 3
+"""Per WARN_* code, its rank: which warning wins when the parallel part and the wrist give two."""
 
 
 @dataclass(frozen=True)
@@ -98,8 +98,7 @@ def _wrist_warnings(wrist, angles, radicand, aligned):
 
 def worst(first, second):
     """Elementwise the warning of higher RANK of two WARN_* code arrays."""
-    ranks = np.vectorize(RANK.get)
-    return np.where(ranks(second) > ranks(first), second, first)
+    return np.where(RANK[second] > RANK[first], second, first)
 
 
 def solve_tool(hybrid, t6):
