@@ -1,13 +1,9 @@
-"""A serial wrist on the constrained Exechon (tests/data/exechon_wrist.yaml): the numpy
-reference's inverse from the tool pose (kingen.kinematics.wrist) against an independent
-computation written here (Newton on the whole chain's tool tip and tool axis, the platform's
-rotation by Newton on its constraint equations, rotations by scipy), its warnings, and the
-refusals: every command refuses a robot file with a wrist in one line, and load_hybrid refuses
-what this version does not solve."""
+"""A serial wrist on the constrained Exechon (robots/exechon_wrist.yaml): the numpy reference's
+inverse from the tool pose (kingen.kinematics.wrist) against an independent computation written
+here (Newton on the whole chain's tool tip and tool axis, the platform's rotation by Newton on its
+constraint equations, rotations by scipy), its warnings, the wrist's forward (tool_t6, tool_turn),
+and the one-line refusals of what this version does not solve."""
 
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,14 +12,14 @@ from scipy.spatial.transform import Rotation
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
 from kingen.kinematics.routine import WARNINGS
-from kingen.kinematics.wrist import solve_tool
-from kingen.robot.hybrid import load_hybrid
-from kingen.robot.model import load_robot
+from kingen.kinematics.reference import solve
+from kingen.kinematics.wrist import tool_t6, tool_turn
+from kingen.robot.model import load_robot, resolve_robot_path
 
 from constrained import newton_root
 from test_hybrid_axes import independent_joints, independent_pose
 
-FILE = Path(__file__).resolve().parent / "data" / "exechon_wrist.yaml"
+FILE = resolve_robot_path("exechon_wrist")
 TOOL_POSES = [(30, 40, -1400, 170, 10, 30), (-60, 100, -1300, 160, -15, 0), (100, -50, -1350, -165, 5, -70),
               (-20, 120, -1500, 175, -20, 120)]
 GOOD, SINGULAR = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_SINGULAR_SOLUTION"]
@@ -74,88 +70,78 @@ def independent_branches(robot, pose):
 
 
 def test_the_inverse_from_the_tool_pose_matches_an_independent_newton_in_both_branches():
-    hybrid = load_hybrid(FILE)
-    solution = solve_tool(hybrid, t6_from_pose(np.array(TOOL_POSES, dtype=float)))
+    robot = load_robot(FILE)
+    solution = solve(robot, t6_from_pose(np.array(TOOL_POSES, dtype=float)))
     assert np.all(solution.warnings == GOOD)
     for index, pose in enumerate(TOOL_POSES):
-        for branch, expected in independent_branches(hybrid.robot, pose).items():
+        for branch, expected in independent_branches(robot.parallel, pose).items():
             assert np.max(np.abs(solution.joints[index, :, branch] - expected)) < 1e-9
 
 
 def test_the_machine_tool_pose_has_the_asked_tip_and_axis_and_says_the_turn():
-    hybrid = load_hybrid(FILE)
+    robot = load_robot(FILE)
     asked = t6_from_pose(np.array(TOOL_POSES, dtype=float))
-    solution = solve_tool(hybrid, asked)
-    for posture in range(hybrid.postures):
-        tool = solution.tool_t6[:, posture]
+    solution = solve(robot, asked)
+    turns = []
+    for posture in range(robot.postures):
+        tool = tool_t6(robot, solution.platform, solution.joints[:, robot.dof:, posture])
         assert np.max(np.abs(tool[:, 3, :3] - asked[:, 3, :3])) < 1e-9
         assert np.max(np.abs(tool[:, 2, :3] - asked[:, 2, :3])) < 1e-12
-        for row, turn in zip(range(len(asked)), solution.turn[:, posture]):
+        turns.append(tool_turn(asked, tool))
+        for row, turn in zip(range(len(asked)), turns[-1]):
             about = Rotation.from_rotvec(tool[row, 2, :3] * turn)
             assert np.max(np.abs(about.apply(tool[row, 0, :3]) - asked[row, 0, :3])) < 1e-12
-    flip = np.angle(np.exp(1j * (solution.turn[:, 0] - solution.turn[:, 1])))
+    flip = np.angle(np.exp(1j * (turns[0] - turns[1])))
     assert np.allclose(np.abs(flip), np.pi)  # the A/C head's two branches: the tool turned by half a turn
 
 
 def test_golden_values_are_the_independent_computation():
-    hybrid = load_hybrid(FILE)
-    assert len(hybrid.golden) == 2
+    robot = load_robot(FILE)
+    assert len(robot.golden) == 2
     scale = np.radians(1.0)
-    for entry in hybrid.golden:
-        solution = solve_tool(hybrid, t6_from_pose(np.array([entry.pose], dtype=float)))
+    for entry in robot.golden:
+        solution = solve(robot, t6_from_pose(np.array([entry.pose], dtype=float)))
         joints = np.array(entry.joints) * np.array([1, 1, 1, scale, scale])
         assert np.max(np.abs(solution.joints[0, :, entry.posture] - joints)) < entry.tolerance * scale
-        expected = independent_branches(hybrid.robot, entry.pose)[entry.posture]
+        expected = independent_branches(robot.parallel, entry.pose)[entry.posture]
         assert np.max(np.abs(expected - joints)) < entry.tolerance * scale
 
 
 def test_warnings_the_wrist_singularity_its_limits_and_a_cone_it_cannot_reach(tmp_path):
-    hybrid = load_hybrid(FILE)
+    robot = load_robot(FILE)
     vertical, beyond = (0, 50, -1450, 180, 0, 0), (0, 50, -1300, 60, 0, 0)
-    solution = solve_tool(hybrid, t6_from_pose(np.array([vertical, beyond], dtype=float)))
+    solution = solve(robot, t6_from_pose(np.array([vertical, beyond], dtype=float)))
     assert np.all(solution.warnings[0] == SINGULAR)  # the tool along Ax4: Ax4's angle is lost
     assert np.all(solution.warnings[1] == LIMITS)  # Ax5 beyond its travel of +/-110 degrees
     assert np.all(np.degrees(np.abs(solution.joints[1, 4])) > 110.0)
     nutating = tmp_path / "nutating.yaml"
     nutating.write_text(FILE.read_text().replace("{name: ax5, axis: [1, 0, 0]", "{name: ax5, axis: [0, 0.6, 0.8]"))
     horizontal = t6_from_pose(np.array([(0, 50, -1300, 90, 0, 0), (0, 50, -1300, 170, 0, 0)], dtype=float))
-    solution = solve_tool(load_hybrid(nutating), horizontal)
-    assert np.all(solution.warnings[0] == UNREACHABLE) and solution.radicand[0] < 0
-    assert np.all(solution.warnings[1] == GOOD) and solution.radicand[1] > 0
-    nowhere = solve_tool(hybrid, t6_from_pose(np.array([(np.nan, 0, -1300, 170, 0, 0), (1e300, 0, -1300, 170, 0, 0)])))
+    solution = solve(load_robot(nutating), horizontal)
+    assert np.all(solution.warnings[0] == UNREACHABLE) and solution.radicands[0, -1] < 0
+    assert np.all(solution.warnings[1] == GOOD) and solution.radicands[1, -1] > 0
+    nowhere = solve(robot, t6_from_pose(np.array([(np.nan, 0, -1300, 170, 0, 0), (1e300, 0, -1300, 170, 0, 0)])))
     assert np.all(nowhere.warnings == UNREACHABLE) and np.all(nowhere.joints == 0.0)
 
 
-@pytest.mark.parametrize("host", ["delmia", "linuxcnc", "c"])
-def test_every_host_refuses_a_robot_file_with_a_wrist_in_one_line(tmp_path, host):
-    result = subprocess.run([sys.executable, "-m", "kingen.cli", "render", str(FILE), "--host", host,
-                             "-o", str(tmp_path / "o")], capture_output=True, text=True, timeout=60)
-    lines = result.stderr.strip().splitlines()
-    assert result.returncode == 2 and len(lines) == 1, result.stderr
-    assert lines[0].startswith(f"kingen: error: {FILE}:20: wrist: a serial wrist is solved by kingen's numpy")
-    assert not (tmp_path / "o").exists()
-    with pytest.raises(KingenError, match="no host writes its routine"):
-        load_robot(str(FILE))
-
-
 @pytest.mark.parametrize("old, new, words", [
-    ("{name: ax5, axis: [1, 0, 0]", "{name: ax5, type: prismatic, axis: [1, 0, 0]", ":22: wrist[1].type: this version "
+    ("{name: ax5, axis: [1, 0, 0]", "{name: ax5, type: prismatic, axis: [1, 0, 0]", ":21: wrist[1].type: this version "
                                                                                       "solves revolute wrist joints"),
-    ("{name: ax4, axis: [0, 0, 1]", "{name: ax4, axis: [0, 0, 1], origin: [0, 0, 50]", ":21: wrist[0].origin: "),
-    ("  - {name: ax5", "  - {name: ax6, axis: [0, 1, 0]}\n  - {name: ax5", ":20: wrist: this version solves a wrist "
+    ("{name: ax4, axis: [0, 0, 1]", "{name: ax4, axis: [0, 0, 1], origin: [0, 0, 50]", ":20: wrist[0].origin: "),
+    ("  - {name: ax5", "  - {name: ax6, axis: [0, 1, 0]}\n  - {name: ax5", ":19: wrist: this version solves a wrist "
                                                                           "of two joints, not 3"),
-    ("{name: ax5, axis: [1, 0, 0]", "{name: ax5, axis: [0, 0, -1]", ":22: wrist[1].axis: parallel to the first"),
-    ("tool: [0, 0, -200, 180, 0, 0]", "tool: [10, 0, -200, 180, 0, 0]", ":23: tool: this version solves a tool tip"),
-    ("tool: [0, 0, -200, 180, 0, 0]", "tool: [0, 0, -200, 0, 90, 0]", ":23: tool: the tool's z axis lies along"),
+    ("{name: ax5, axis: [1, 0, 0]", "{name: ax5, axis: [0, 0, -1]", ":21: wrist[1].axis: parallel to the first"),
+    ("tool: [0, 0, -200, 180, 0, 0]", "tool: [10, 0, -200, 180, 0, 0]", ":22: tool: this version solves a tool tip"),
+    ("tool: [0, 0, -200, 180, 0, 0]", "tool: [0, 0, -200, 0, 90, 0]", ":22: tool: the tool's z axis lies along"),
     ("golden:\n", "golden:\n  - {source: s, pose: [0, 0, -1300, 0, 0, 0], joints: [0, 0, 0], tolerance: 1}\n",
-     ":28: golden[0].joints: expected 5 joint values (the legs', then the wrist's), got 3"),
+     ":27: golden[0].joints: expected 5 joint values, got 3"),
 ])
-def test_load_hybrid_refuses_what_this_version_does_not_solve_in_one_line(tmp_path, old, new, words):
+def test_a_wrist_this_version_does_not_solve_is_refused_in_one_line(tmp_path, old, new, words):
     text = FILE.read_text()
     assert old in text
     path = tmp_path / "bad.yaml"
     path.write_text(text.replace(old, new, 1))
     with pytest.raises(KingenError) as refused:
-        load_hybrid(path)
+        load_robot(path)
     message = str(refused.value)
     assert message.startswith(str(path)) and words in message and "\n" not in message, message

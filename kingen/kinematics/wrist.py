@@ -12,43 +12,27 @@ g = +/- sqrt(D) / |a1 x a2|, D = 1 - |alpha a1 + beta a2|^2 the wrist's normalis
 branch 0 takes g >= 0, branch 1 g < 0 (an A/C head's flip). t2 turns z0 onto c about a2, t1
 turns c onto w_p about a1 (each an atan2 of the vectors' parts normal to the axis).
 
-Warnings, per posture (the parallel part's posture times 2 plus the wrist's branch), the worst
-of the parallel part's (kingen.kinematics.reference) and the wrist's: D below -1e-5 (no wrist
-angle reaches w) is unreachable; |D| within 1e-5 (the branches meet), or 1 - (a1.w_p)^2 within
-1e-5 (the tool axis along the first axis: t1 is lost, the wrist's singularity) is singular;
-a wrist joint outside its travel is beyond the joint limits. A T6 the parallel part cannot
-answer (non-finite, or no rotation for its wrist centre) is unreachable in every posture; a
-non-finite one has wrist joints 0, as the reference gives its legs. ``turn`` says how far (rad) the
-asked tool frame is turned about the tool axis from the machine's: the answer ignores it.
+The answer is the reference's kingen.kinematics.reference.Solution over the whole machine's
+joints (the legs', then the wrist's) and postures (the parallel part's posture times 2 plus the
+wrist's branch). Its radicands are the legs', then for the first wrist joint 1 - (a1.w_p)^2 and
+for the second D, so that the reference's rules give the wrist's warnings: D below -1e-5 (no
+wrist angle reaches w) is unreachable; |D| within 1e-5 (the branches meet), or 1 - (a1.w_p)^2
+within 1e-5 (the tool axis along the first axis: t1 is lost, the wrist's singularity) is
+singular; a wrist joint outside its travel is beyond the joint limits. Each posture's warning is
+the worst of the parallel part's and the wrist's. A T6 the parallel part cannot answer
+(non-finite, or no rotation for its wrist centre) is unreachable in every posture; a non-finite
+one has wrist joints 0, as the reference gives its legs. :func:`tool_turn` says how far (rad)
+the asked tool frame is turned about the tool axis from the machine's: the answer ignores it.
 """
-
-from dataclasses import dataclass
 
 import numpy as np
 
 from .parasitic import solve_parasitic
-from .reference import solve
 from .routine import SINGULAR_TOLERANCE, WARNINGS
 
 RANK = np.zeros(max(WARNINGS.values()) + 1, dtype=int)
 RANK[[WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]]] = 1, 2, 3
 """Per WARN_* code, its rank: which warning wins when the parallel part and the wrist give two."""
-
-
-@dataclass(frozen=True)
-class ToolSolution:
-    """Over n tool T6: ``joints`` (n, legs + wrist joints, postures) the legs' (mm) then the
-    wrist's (rad, (-pi, pi]); ``warnings`` (n, postures) WARN_* codes; ``platform_t6`` (n, 4, 4)
-    the parallel part's pose; ``tool_t6`` (n, postures, 4, 4) the machine's tool pose in each
-    posture; ``turn`` (n, postures) the asked tool frame's turn about the tool axis from the
-    machine's (rad); ``radicand`` (n,) the wrist's D."""
-
-    joints: np.ndarray
-    warnings: np.ndarray
-    platform_t6: np.ndarray
-    tool_t6: np.ndarray
-    turn: np.ndarray
-    radicand: np.ndarray
 
 
 def rotation_about(axis, angle):
@@ -87,47 +71,56 @@ def _wrist_branches(wrist, target):
     return np.stack(angles, 1), radicand, 1.0 - onto_first * onto_first
 
 
-def _wrist_warnings(wrist, angles, radicand, aligned):
-    """(n, 2) the wrist's own WARN_* code per branch (module docstring)."""
-    beyond = np.any((angles < wrist.lower) | (angles > wrist.upper), axis=2)
-    codes = np.where(beyond, WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_GOOD_SOLUTION"])
-    singular = (np.abs(radicand) <= SINGULAR_TOLERANCE) | (aligned <= SINGULAR_TOLERANCE)
-    codes = np.where(singular[:, None], WARNINGS["WARN_SINGULAR_SOLUTION"], codes)
-    return np.where(~(radicand >= -SINGULAR_TOLERANCE)[:, None], WARNINGS["WARN_UNREACHABLE"], codes)
-
-
 def worst(first, second):
     """Elementwise the warning of higher RANK of two WARN_* code arrays."""
     return np.where(RANK[second] > RANK[first], second, first)
 
 
-def solve_tool(hybrid, t6):
-    """Every posture of ``hybrid`` (kingen.robot.hybrid.HybridRobot) for tool T6 arrays
-    (n, 4, 4, base frame, mm): see the module docstring."""
-    robot, wrist = hybrid.robot, hybrid.wrist
+def solve_tool(robot, t6, solve_parallel, solution_type):
+    """Every posture of ``robot`` (a Robot with a wrist) for tool T6 arrays (n, 4, 4, base frame,
+    mm): ``solve_parallel`` (robot, T6) is the reference's solver of the parallel part,
+    ``solution_type`` its Solution, which this returns (module docstring) with ``platform`` the
+    parallel part's pose for each T6."""
+    parallel, wrist, dof = robot.parallel, robot.wrist, robot.dof
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
     axis, tip = t6[:, 2, :3], t6[:, 3, :3]
     platform = np.tile(np.eye(4), (len(t6), 1, 1))
     platform[:, 3, :3] = tip - wrist.reach * axis
-    with np.errstate(all="ignore"):
-        machine = solve_parasitic(robot, platform).t6
-        legs = solve(robot, machine)
-        rotation = np.swapaxes(machine[:, :3, :3], 1, 2)
-        angles, radicand, aligned = _wrist_branches(wrist, np.einsum("nji,nj->ni", rotation, axis))
+    machine = solve_parasitic(parallel, platform).t6
+    legs = solve_parallel(parallel, machine)
+    rotation = np.swapaxes(machine[:, :3, :3], 1, 2)
+    angles, radicand, aligned = _wrist_branches(wrist, np.einsum("nji,nj->ni", rotation, axis))
     angles = np.where(legs.finite[:, None, None] & np.isfinite(angles), angles, 0.0)
-    postures = robot.postures * 2
-    joints = np.concatenate([np.repeat(legs.joints, 2, axis=2),
-                             np.tile(np.swapaxes(angles, 1, 2), (1, 1, robot.postures))], axis=1)
-    warnings = worst(np.repeat(legs.warnings, 2, axis=1),
-                     np.tile(_wrist_warnings(wrist, angles, radicand, aligned), (1, robot.postures)))
-    tool = np.zeros((len(t6), postures, 4, 4))
-    for posture in range(postures):
-        turned = (rotation @ rotation_about(wrist.axes[0], joints[:, robot.dof, posture])
-                  @ rotation_about(wrist.axes[1], joints[:, robot.dof + 1, posture]))
-        tool[:, posture, :3, :3] = np.swapaxes(turned @ wrist.tool[:3, :3], 1, 2)
-        tool[:, posture, 3, :3] = machine[:, 3, :3] + turned @ wrist.tool[:3, 3]
-        tool[:, posture, 3, 3] = 1.0
-    turn = np.stack([angle_about(tool[:, posture, 2, :3], tool[:, posture, 0, :3], t6[:, 0, :3])
-                     for posture in range(postures)], 1)
-    return ToolSolution(joints=joints, warnings=warnings, platform_t6=machine, tool_t6=tool, turn=turn,
-                        radicand=radicand)
+    branch_joints = np.concatenate([legs.branch_joints, np.swapaxes(angles, 1, 2)], axis=1)
+    radicands = np.concatenate([legs.radicands, aligned[:, None], radicand[:, None]], axis=1)
+    lower, upper = robot.travel_limits()
+    beyond = np.any((angles < lower[dof:]) | (angles > upper[dof:]), axis=2)
+    codes = np.where(beyond, WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_GOOD_SOLUTION"])
+    codes = np.where(np.any(np.abs(radicands[:, dof:]) <= SINGULAR_TOLERANCE, axis=1)[:, None],
+                     WARNINGS["WARN_SINGULAR_SOLUTION"], codes)
+    codes = np.where(~(radicand >= -SINGULAR_TOLERANCE)[:, None], WARNINGS["WARN_UNREACHABLE"], codes)
+    warnings = worst(np.repeat(legs.warnings, 2, axis=1), np.tile(codes, (1, parallel.postures))).astype(np.int32)
+    branches = tuple(tuple(limbs) + (posture % 2,) * len(wrist.names)
+                     for limbs in legs.posture_branches for posture in (0, 1))
+    return solution_type(branch_joints=branch_joints, warnings=warnings, radicands=radicands, finite=legs.finite,
+                         posture_branches=branches, constraint=legs.constraint, points=legs.points, platform=machine)
+
+
+def tool_t6(robot, platform, wrist_joints):
+    """(n, 4, 4) the tool's T6 (base frame, mm) of ``robot`` (with a wrist) for its platform's
+    T6 ``platform`` (n, 4, 4) and the wrist's joints (n, 2) rad: the forward of the wrist."""
+    rotation = np.swapaxes(platform[:, :3, :3], 1, 2)
+    turned = (rotation @ rotation_about(robot.wrist.axes[0], wrist_joints[:, 0])
+              @ rotation_about(robot.wrist.axes[1], wrist_joints[:, 1]))
+    tool = np.zeros((len(platform), 4, 4))
+    tool[:, :3, :3] = np.swapaxes(turned @ robot.wrist.tool[:3, :3], 1, 2)
+    tool[:, 3, :3] = platform[:, 3, :3] + turned @ robot.wrist.tool[:3, 3]
+    tool[:, 3, 3] = 1.0
+    return tool
+
+
+def tool_turn(asked, reached):
+    """(n,) how far (rad, (-pi, pi]) the asked tool T6 ``asked`` (n, 4, 4) is turned about the
+    tool axis from the machine's ``reached`` (n, 4, 4): the part of the pose a five-axis reading
+    leaves free."""
+    return angle_about(reached[:, 2, :3], reached[:, 0, :3], asked[:, 0, :3])

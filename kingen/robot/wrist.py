@@ -2,32 +2,29 @@
 
 A robot file's ``wrist:`` section lists the wrist's joints in chain order, each with its axis
 and origin in the platform frame with every wrist joint at 0, and ``tool:`` places the tool
-frame in the platform frame with every wrist joint at 0 (mm, degrees). This first version
-solves two revolute joints whose axes meet at the platform frame's origin (the wrist centre,
-the parallel part's task point) with the tool tip on the tool's z axis through that centre:
-the inverse from the tool pose is then in closed form (kingen.kinematics.wrist). Anything else
-is refused in one located line. No host writes a routine for a wrist yet: ``load_robot``
-refuses a file with one (:func:`refuse_wrist`); kingen.robot.hybrid.load_hybrid reads it for
-the numpy reference.
+frame in the platform frame with every wrist joint at 0 (mm, degrees). This version solves two
+revolute joints whose axes meet at the platform frame's origin (the wrist centre, the parallel
+part's task point) with the tool tip on the tool's z axis through that centre: the inverse from
+the tool pose is then in closed form (kingen.kinematics.wrist). Anything else is refused in one
+located line. :func:`with_wrist` makes the whole machine's Robot from its parallel part's:
+its joints are the legs' then the wrist's, its postures the parallel part's times the wrist's
+two branches (the branch the last bit), its verification region and golden values over the
+tool pose, and it has no task coordinates: every tool tip and tool axis is the machine's (the
+turn about the tool axis is free), and its parallel part (``Robot.parallel``) keeps them.
 """
 
-from dataclasses import dataclass
-from typing import Annotated, Literal, Optional
+from dataclasses import dataclass, replace
+from typing import Literal, Optional
 
 import numpy as np
-from pydantic import Field, ValidationError
 
-from ..conventions import REVOLUTE, matrix_from_pose
-from .located import Locator, diagnostic
-from .schema import Identifier, Pose, Strict, Travel, UnitVec3, Vec3
+from ..conventions import REVOLUTE, matrix_from_pose, pose_from_t6, t6_from_matrix
+from .schema import Identifier, Strict, Travel, UnitVec3, Vec3
 
-WRIST_FIELDS = ("wrist", "tool")
 ALIGNED = 1e-6
 """|a x b| below this: two unit axes are parallel (refused)."""
 ON_AXIS = 1e-9
 """How far (mm) the tool tip may be from the tool's z axis through the wrist centre."""
-REFUSED = ("a serial wrist is solved by kingen's numpy reference only (kingen.robot.hybrid.load_hybrid); "
-           "no host writes its routine and no command reads it yet")
 
 
 class WristJoint(Strict):
@@ -39,14 +36,6 @@ class WristJoint(Strict):
     origin: Vec3 = [0.0, 0.0, 0.0]
     travel: Optional[Travel] = None
     """Degrees."""
-
-
-class Hybrid(Strict):
-    """The fields a robot file with a wrist adds to the parallel part's: the wrist, the tool and
-    golden values over the tool pose (the parallel part's joints, then the wrist's)."""
-
-    wrist: Annotated[list[WristJoint], Field(min_length=1, max_length=3)]
-    tool: Pose
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,21 +53,11 @@ class Wrist:
     reach: float
 
 
-def refuse_wrist(data, locate):
-    """Raise a located error when a robot file's data has a ``wrist`` or ``tool`` section: a
-    routine, verify or any command would otherwise drop the wrist silently."""
-    for field in WRIST_FIELDS:
-        if isinstance(data, dict) and field in data:
-            raise locate.error([field], REFUSED)
-
-
-def wrist_of(data, robot, locate):
-    """The Wrist of the ``wrist`` and ``tool`` sections of ``data`` (plain data, mm and degrees)
-    for the parallel part ``robot``; a located error for what this version does not solve."""
-    try:
-        section = Hybrid.model_validate({field: data.get(field) for field in WRIST_FIELDS})
-    except ValidationError as error:
-        raise diagnostic(error, locate) from None
+def wrist_of(section, robot, locate):
+    """The Wrist of a validated robot file's ``wrist`` and ``tool`` (mm and degrees) for the
+    parallel part ``robot``; a located error for what this version does not solve."""
+    if section.tool is None:
+        raise locate.error(["tool"], "required with a wrist: the tool frame in the platform frame, wrist joints at 0")
     if robot.task != ("x", "y", "z") or robot.length_unit != "mm":
         raise locate.error(["wrist"], "a wrist needs a parallel part in mm with task: [x, y, z] (the wrist centre)")
     for index, joint in enumerate(section.wrist):
@@ -103,3 +82,15 @@ def wrist_of(data, robot, locate):
     return Wrist(names=tuple(joint.name for joint in section.wrist), axes=axes,
                  lower=np.array([t[0] for t in travel]) * scale, upper=np.array([t[1] for t in travel]) * scale,
                  tool=tool, reach=reach)
+
+
+def with_wrist(parallel, document, locate):
+    """The whole machine's Robot: ``parallel`` (a Robot, its region the platform's, no golden
+    entries) with the validated robot file ``document``'s wrist and tool. Its verification region
+    is centred on the tool pose at the platform's home with every wrist joint at 0 (the same
+    half-widths); its golden entries are the file's, over the tool pose."""
+    wrist = wrist_of(document, parallel, locate)
+    home = matrix_from_pose(parallel.verification.home) @ wrist.tool
+    region = parallel.verification.model_copy(update={"home": pose_from_t6(t6_from_matrix(home)).tolist()})
+    return replace(parallel, wrist=wrist, parallel_part=parallel, verification=region, golden=tuple(document.golden),
+                   task=(), forward_free=())
