@@ -91,6 +91,8 @@ def solve_tool(robot, t6, solve_parallel, solution_type):
     rotation = np.swapaxes(machine[:, :3, :3], 1, 2)
     angles, radicand, aligned = _wrist_branches(wrist, np.einsum("nji,nj->ni", rotation, axis))
     angles = np.where(legs.finite[:, None, None] & np.isfinite(angles), angles, 0.0)
+    if wrist.branch is not None:  # a one-posture view: its branch's joints in both columns
+        angles = angles[:, [wrist.branch, wrist.branch]]
     branch_joints = np.concatenate([legs.branch_joints, np.swapaxes(angles, 1, 2)], axis=1)
     radicands = np.concatenate([legs.radicands, aligned[:, None], radicand[:, None]], axis=1)
     lower, upper = robot.travel_limits()
@@ -99,9 +101,11 @@ def solve_tool(robot, t6, solve_parallel, solution_type):
     codes = np.where(np.any(np.abs(radicands[:, dof:]) <= SINGULAR_TOLERANCE, axis=1)[:, None],
                      WARNINGS["WARN_SINGULAR_SOLUTION"], codes)
     codes = np.where(~(radicand >= -SINGULAR_TOLERANCE)[:, None], WARNINGS["WARN_UNREACHABLE"], codes)
-    warnings = worst(np.repeat(legs.warnings, 2, axis=1), np.tile(codes, (1, parallel.postures))).astype(np.int32)
-    branches = tuple(tuple(limbs) + (posture % 2,) * len(wrist.names)
-                     for limbs in legs.posture_branches for posture in (0, 1))
+    kept = (0, 1) if wrist.branch is None else (wrist.branch,)
+    codes = codes[:, :len(kept)]
+    warnings = worst(np.repeat(legs.warnings, len(kept), axis=1),
+                     np.tile(codes, (1, parallel.postures))).astype(np.int32)
+    branches = tuple(tuple(limbs) + (branch,) * len(wrist.names) for limbs in legs.posture_branches for branch in kept)
     return solution_type(branch_joints=branch_joints, warnings=warnings, radicands=radicands, finite=legs.finite,
                          posture_branches=branches, constraint=legs.constraint, points=legs.points, platform=machine)
 

@@ -118,8 +118,14 @@ class Robot:
 
     @property
     def postures(self):
-        """The limbs' branch combinations, times the wrist's two branches (the last bit)."""
-        return 2 ** sum(1 for bit in self.branch_bits if bit >= 0) * (2 if self.wrist is not None else 1)
+        """The limbs' branch combinations, times the wrist's two branches (the last bit; one
+        where a one-posture view holds the wrist on one branch)."""
+        return 2 ** sum(1 for bit in self.branch_bits if bit >= 0) * (2 if self._wrist_branches else 1)
+
+    @property
+    def _wrist_branches(self):
+        """Whether the wrist's two branches are postures (a wrist not held on one branch)."""
+        return self.wrist is not None and self.wrist.branch is None
 
     @property
     def joint_names(self):
@@ -191,7 +197,7 @@ class Robot:
     def posture_branches(self, posture):
         """Per limb: the branch (0 or 1) it takes in ``posture``; 0 for one-branch limbs (with a
         wrist: in the parallel part's posture, ``posture`` // 2)."""
-        posture = posture // 2 if self.wrist is not None else posture
+        posture = posture // 2 if self._wrist_branches else posture
         return tuple(int(branch_of_posture(posture, bit)) if bit >= 0 else 0 for bit in self.branch_bits)
 
 

@@ -43,7 +43,8 @@ class Wrist:
     """The wrist in internal units: ``names`` (k,), ``axes`` (k, 3) unit, platform frame at zero,
     ``lower``/``upper`` (k,) rad (-inf/+inf without travel), ``tool`` (4, 4) the tool frame in
     the platform frame at zero, ``reach`` the signed distance (mm) from the wrist centre to the
-    tool tip along the tool's z axis."""
+    tool tip along the tool's z axis; ``branch`` None (the wrist's two branches are postures) or
+    the one branch (0 or 1) a one-posture view holds it on (kingen.robot.one_posture)."""
 
     names: tuple
     axes: np.ndarray
@@ -51,6 +52,7 @@ class Wrist:
     upper: np.ndarray
     tool: np.ndarray
     reach: float
+    branch: Optional[int] = None
 
 
 def wrist_of(section, robot, locate):
