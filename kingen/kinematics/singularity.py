@@ -30,8 +30,20 @@ TRANSLATION_SINGULAR = 1e-12
 
 
 def branch_table(robot):
-    """(postures, dof) int array (read-only): the branch each limb takes in each posture."""
+    """(postures, joint_count) int array (read-only): the branch each limb takes in each posture,
+    then each wrist joint's (the posture's last bit, kingen.robot.wrist)."""
+    if robot.wrist is not None:
+        return _wrist_branch_table(robot.branch_bits, len(robot.wrist.names))
     return _branch_table(robot.branch_bits)
+
+
+@functools.lru_cache(maxsize=64)
+def _wrist_branch_table(branch_bits, wrist_joints):
+    legs = np.repeat(_branch_table(branch_bits), 2, axis=0)
+    wrist = np.repeat((np.arange(len(legs)) % 2)[:, None], wrist_joints, axis=1)
+    table = np.concatenate([legs, wrist], axis=1)
+    table.flags.writeable = False
+    return table
 
 
 @functools.lru_cache(maxsize=64)
@@ -49,17 +61,18 @@ closed form's error (at most about 1e-7 relative on the shipped robots)."""
 
 
 def representative_postures(robot):
-    """(dof, 2) int array (read-only): for each limb, the first posture taking its branch 0 and
-    its branch 1 (branch 0's again for one-branch limbs). A routine's value there stands for
-    that branch."""
-    return _representative_postures(robot.branch_bits)
+    """(joint_count, 2) int array (read-only): for each limb, then each wrist joint, the first
+    posture taking its branch 0 and its branch 1 (branch 0's again for one-branch limbs). A
+    routine's value there stands for that branch."""
+    return _representative_postures(robot.branch_bits, len(robot.wrist.names) if robot.wrist is not None else 0)
 
 
 @functools.lru_cache(maxsize=64)
-def _representative_postures(branch_bits):
-    table = _branch_table(branch_bits)
-    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(len(branch_bits))]
-    representative = np.array([row if bit >= 0 else [row[0], row[0]] for row, bit in zip(first, branch_bits)])
+def _representative_postures(branch_bits, wrist_joints):
+    table = _wrist_branch_table(branch_bits, wrist_joints) if wrist_joints else _branch_table(branch_bits)
+    bits = branch_bits + (0,) * wrist_joints
+    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(len(bits))]
+    representative = np.array([row if bit >= 0 else [row[0], row[0]] for row, bit in zip(first, bits)])
     representative.flags.writeable = False
     return representative
 
@@ -74,7 +87,7 @@ def branch_values(robot, per_posture):
 def posture_values(robot, per_branch):
     """(n, postures, dof, ...) each posture's value of each limb, from values per limb branch
     (n, dof, 2, ...): the inverse of branch_values, postures before limbs."""
-    return per_branch[:, np.arange(robot.dof), branch_table(robot)]
+    return per_branch[:, np.arange(robot.joint_count), branch_table(robot)]
 
 
 def limb_wrenches(robot, points, branch_joints, with_transmissions=True):

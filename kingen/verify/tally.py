@@ -31,7 +31,7 @@ def singular_bounds(robot, reference_solution, fixed=None):
     radicands = reference_solution.radicands
     if not np.any(np.isfinite(radicands)):  # legs only (D = +inf): no joint is ill-conditioned
         return np.zeros(radicands.shape)
-    scale = np.array([limb.singular_scale() for limb in robot.limbs])
+    scale = np.array([limb.singular_scale() for limb in robot.limbs] + [1.0] * (robot.joint_count - robot.dof))
     # A length's radicand is computed from coordinates as large as the robot or the joint
     # (a carriage far along its rail): its rounding grows with (that / link)^2.
     # np.fmax ignores a NaN as np.nanmax would; over the axis of two branches, several times faster.
@@ -231,14 +231,14 @@ def compared_columns(robot, calls, expected):
     if compares_by_branch(robot) and same_reach and (np.all(calls.repeats) if summarised
                                                else _repeats_branches(robot, calls.solutions)):
         weights = np.array([[np.count_nonzero(table[:, index] == branch) for branch in range(2)]
-                            for index in range(robot.dof)])
+                            for index in range(robot.joint_count)])
         reach = np.repeat(reference_solves[:, :1], 2, axis=1)
         values = calls.branch_values if summarised else branch_values(robot, calls.solutions)
         return _Columns(values, expected.branch_joints, reach, reach, table, weights)
     postures = np.arange(robot.postures)
     return _Columns(calls.solutions, expected.joints, reference_solves,
                     reference_solves & (calls.warnings != UNREACHABLE),
-                    np.repeat(postures[:, None], robot.dof, axis=1), np.ones((robot.dof, robot.postures), dtype=int))
+                    np.repeat(postures[:, None], robot.joint_count, axis=1), np.ones((robot.joint_count, robot.postures), dtype=int))
 
 
 def _repeats_branches(robot, solutions):
