@@ -9,7 +9,8 @@ keeps its value. Pure numpy, the same formulas as the module's C (templates/five
 import numpy as np
 
 from ...conventions import t6_from_pose
-from ...robot.limbs import c_double, c_vector
+from ...robot.limbs import c_vector
+from ..wrist import wrist_table
 
 COORDINATES = "XYZAC"
 """LinuxCNC's [TRAJ] COORDINATES of a five-axis module."""
@@ -60,7 +61,6 @@ def world_of_t6(robot, t6, scale=1.0):
 def wrist_view(robot):
     """What templates/five_axis.c.j2 shows of ``robot``'s wrist at its working posture."""
     wrist = robot.wrist
-    return {"names": ", ".join(wrist.names), "branch": robot.working_posture % 2, "reach": c_double(wrist.reach),
-            "home_axis": c_vector(home_axis(robot)), "axes": [c_vector(axis) for axis in wrist.axes],
-            "tool_axis": c_vector(wrist.tool[:3, 2]), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
+    return {**wrist_table(robot), "names": ", ".join(wrist.names), "branch": robot.working_posture % 2,
+            "home_axis": c_vector(home_axis(robot)), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
             "upper": c_vector(np.clip(wrist.upper, -1e300, 1e300))}
