@@ -64,3 +64,14 @@ def wrist_view(robot):
     return {**wrist_table(robot), "names": ", ".join(wrist.names), "branch": robot.working_posture % 2,
             "home_axis": c_vector(home_axis(robot)), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
             "upper": c_vector(np.clip(wrist.upper, -1e300, 1e300))}
+
+
+def wrist_joints(robot):
+    """The wrist's joints as the module view's joints (kingen.hosts.linuxcnc.render.view_model):
+    index after the legs', degrees, travel from the robot file."""
+    wrist = robot.wrist
+    limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
+    return [{"index": robot.dof + index, "name": name, "model": "wrist", "unit": "degrees", "revolute": 1,
+             "limited": int(limited[index]),
+             "travel_text": f"[{np.degrees(wrist.lower[index]):.10g}, {np.degrees(wrist.upper[index]):.10g}] degrees"
+             if limited[index] else ""} for index, name in enumerate(wrist.names)]
