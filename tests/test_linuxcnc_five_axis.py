@@ -104,3 +104,18 @@ def test_a_wrist_robot_without_a_working_posture_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "working_posture: LinuxCNC's inverse kinematics has one answer" in err and err.count("\n") == 1
     assert not (tmp_path / "b").exists()
+
+
+def test_the_one_posture_view_of_a_wrist_robot_is_that_posture_of_the_whole_machine():
+    from kingen.robot.one_posture import at_posture
+
+    robot = load_robot("exechon_wrist")
+    generator = np.random.default_rng(5)
+    poses = np.array(robot.verification.home) + generator.uniform(-1, 1, (200, 6)) * np.array(robot.verification.range)
+    t6 = t6_from_pose(poses)
+    whole = solve(robot, t6)
+    for posture in range(robot.postures):
+        seen = solve(at_posture(robot, posture), t6)
+        assert at_posture(robot, posture).postures == 1 and seen.joints.shape == (200, 5, 1)
+        assert np.array_equal(seen.joints[:, :, 0], whole.joints[:, :, posture])
+        assert np.array_equal(seen.warnings[:, 0], whole.warnings[:, posture])
