@@ -17,8 +17,11 @@ COORDINATES = "XYZAC"
 
 
 def home_axis(robot):
-    """(3,) w0: the tool axis (base frame, unit) at the verification home with the wrist at 0."""
-    return t6_from_pose(np.asarray([robot.verification.home], dtype=float))[0, 2, :3]
+    """(3,) w0: the tool axis (base frame, unit) at the verification home with the wrist at 0,
+    its components within 1e-12 of 0 (a degree's sine and cosine rounding) made exactly 0."""
+    axis = t6_from_pose(np.asarray([robot.verification.home], dtype=float))[0, 2, :3]
+    axis = np.where(np.abs(axis) < 1e-12, 0.0, axis)
+    return axis / np.linalg.norm(axis)
 
 
 def axis_of_world(w0, a, c):
