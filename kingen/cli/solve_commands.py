@@ -100,6 +100,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     say(f"routine returned {calls.returned[0]}")
     if model.task:
         say_fitted(_manifold_note(model, matrix), width)
+    if model.wrist is not None:
+        say_fitted(_turn_note(model, matrix, expected), width)
     say_fitted(_indices_note(model), width)
     if switch is not None:
         _predict_switch(model, matrix[0], expected, switch, scale, units, width)
@@ -179,6 +181,23 @@ def _manifold_note(model, matrix):
     return f"the machine's pose for this {task}: x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}"
 
 
+def _turn_note(model, matrix, expected):
+    """How far the asked tool frame (T6 (1, 4, 4)) is turned about the tool axis from the
+    machine's tool frame in each posture the reference reaches (the five-axis reading ignores it)."""
+    import numpy as np
+
+    from ..kinematics.routine import WARNINGS
+    from ..kinematics.wrist import tool_t6, tool_turn
+
+    turns = []
+    for k in range(model.postures):
+        if expected.warnings[0, k] != WARNINGS["WARN_UNREACHABLE"]:
+            reached = tool_t6(model, expected.platform, expected.joints[:, model.dof:, k])
+            turns.append(f"posture {k} {np.degrees(tool_turn(matrix, reached)[0]):.6f}")
+    turns = ", ".join(turns) or "no posture reaches it"
+    return f"the turn of the asked tool frame about the tool axis from the machine's (degrees; ignored): {turns}"
+
+
 def _indices_note(model):
     """What the index columns mean for this robot, in one line."""
     inverse = "min inverse index: the smallest normalised radicand D over the limbs (1 - 1/Inv_I; 0 at a limb singularity)"
@@ -221,8 +240,8 @@ def fk(robot, joints, more_joints, near, json_path, search):
         values = [float(v) for v in joints.replace(",", " ").split()] + [float(v) for v in more_joints]
     except ValueError:
         raise click.BadParameter("numbers expected", param_hint="--joints") from None
-    if len(values) != model.dof or not all(math.isfinite(v) for v in values):
-        raise click.BadParameter(f"{model.name} has {model.dof} joints; give {model.dof} finite numbers",
+    if len(values) != model.joint_count or not all(math.isfinite(v) for v in values):
+        raise click.BadParameter(f"{model.name} has {model.joint_count} joints; give {model.joint_count} finite numbers",
                                  param_hint="--joints")
     if not model.has_forward:
         raise KingenError(f"{model.path}: forward: forward kinematics needs free pose coordinates for a robot "
@@ -230,7 +249,12 @@ def fk(robot, joints, more_joints, near, json_path, search):
     internal = np.array(values) * model.joint_scale()
     near_pose = np.array(near if near is not None else model.verification.home, dtype=float)
     near_internal = np.concatenate([near_pose[:3], np.radians(near_pose[3:])])
-    modes = assemblies(model, internal, near_internal, search)
+    if model.wrist is not None:  # the tool's pose: the parallel part's modes, then the wrist's forward
+        from ..kinematics.wrist_forward import tool_assemblies
+
+        modes = tool_assemblies(model, internal, near_internal, search)
+    else:
+        modes = assemblies(model, internal, near_internal, search)
     found = modes.found
     rows = [("mode", "x (mm)", "y (mm)", "z (mm)", "roll (deg)", "pitch (deg)", "yaw (deg)", "residual (mm)",
              "from near (mm)")]
@@ -246,7 +270,10 @@ def fk(robot, joints, more_joints, near, json_path, search):
                                            indent=2, allow_nan=False) + "\n")
     say(modes.method)
     if not found:
-        best = best_residual(model, internal, near_internal, search)
+        parallel = model.parallel  # with a wrist: its legs, searched around the platform's home
+        home = np.asarray(parallel.verification.home, dtype=float)
+        best = best_residual(parallel, internal[:parallel.dof], np.concatenate([home[:3], np.radians(home[3:])])
+                             if model.wrist is not None else near_internal, search)
         say(f"no pose found for these joints (best residual {best:.3g} mm)")
         return EXIT_FAILED
     print_table(rows)
