@@ -43,9 +43,7 @@ def round_trip_check(robot, plugin, options, t6):
     if robot.wrist is not None:
         return wrist_round_trip(calibrated, options, t6, expected, joints)
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, joints)
-    candidates = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
-                  & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
-                  & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
+    candidates = regular_postures(expected, transmissions)
     # About ROUND_TRIP_POSTURES of them, along diagonals of (pose, posture), so that every posture takes part.
     stride = max(1, -(-int(np.count_nonzero(candidates)) // ROUND_TRIP_POSTURES))
     pose_number, posture_number = np.indices(candidates.shape)
@@ -81,19 +79,15 @@ def round_trip_check(robot, plugin, options, t6):
 
 def wrist_round_trip(robot, options, t6, expected, joints):
     """``round trip`` of a machine with a wrist (``robot`` calibrated): from the routine's
-    ``joints`` (n, joint_count, postures) of every regular posture (reached without warning,
-    every radicand above JACOBIAN_MIN_RADICAND, the legs' transmissions above
-    JACOBIAN_MIN_TRANSMISSION, the parallel part's conditioning above ROUND_TRIP_MIN_CONDITIONING),
+    ``joints`` (n, joint_count, postures) of every regular posture (regular_postures, the
+    parallel part's conditioning above ROUND_TRIP_MIN_CONDITIONING),
     the machine's forward (kingen.kinematics.wrist_forward: the parallel part's Newton seeded at
     the reference's platform pose, then the wrist) gives a tool T6 whose tip and axis must be
     the sampled one's, and the reference's inverse of that T6 must give the joints back in the
     same posture: within the value bounds (mm, rad)."""
     parallel = robot.parallel
     wrenches, transmissions = posture_wrenches(robot, expected.points, joints)
-    candidates = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
-                  & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
-                  & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
-    pose_index, posture = np.nonzero(candidates)
+    pose_index, posture = np.nonzero(regular_postures(expected, transmissions))
     near = platform_poses(expected.platform)[pose_index]
     conditioning = pose_conditioning(parallel, wrenches[pose_index, posture], near, free_mask(parallel))
     regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
@@ -110,13 +104,21 @@ def wrist_round_trip(robot, options, t6, expected, joints):
     worst_mm = float(np.max(error[:, ~robot.revolute], initial=0.0))
     worst_rad = float(np.max(error[:, robot.revolute], initial=0.0))
     bound_mm = report_tolerance_mm(robot)
+    detail = (f"the machine's forward (the parallel part's Newton, then the wrist) from the routine's joints of "
+              f"{len(pose_index)} regular postures of {len(t6)} poses gives each asked tool tip within {tip:.3g} mm "
+              f"and tool axis within {axis:.3g}, and the inverse of that tool pose the joints back within "
+              f"{worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds {bound_mm:.3g} mm, {VALUE_TOLERANCE_RAD:g} rad; "
+              f"postures near a singularity are left out)")
     passed = max(tip, worst_mm) <= bound_mm and max(axis, worst_rad) <= VALUE_TOLERANCE_RAD
-    return Check("round trip", passed, judged=len(pose_index), detail=
-                 f"the machine's forward (the parallel part's Newton, then the wrist) from the routine's joints of "
-                 f"{len(pose_index)} regular postures of {len(t6)} poses gives each asked tool tip within {tip:.3g} mm "
-                 f"and tool axis within {axis:.3g}, and the inverse of that tool pose the joints back within "
-                 f"{worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds {bound_mm:.3g} mm, {VALUE_TOLERANCE_RAD:g} rad; "
-                 f"postures near a singularity are left out)")
+    return Check("round trip", passed, detail, judged=len(pose_index))
+
+
+def regular_postures(expected, transmissions):
+    """(n, postures) the postures the reference reaches without warning, every radicand above
+    JACOBIAN_MIN_RADICAND and every limb's transmission (n, postures, dof) above JACOBIAN_MIN_TRANSMISSION."""
+    return ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
+            & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
+            & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
 
 
 def pose_conditioning(robot, wrenches, poses, free):
