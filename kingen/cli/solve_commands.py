@@ -86,7 +86,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     rows, compact_rows = [header], [compact]
     digits = [bit for bit in model.branch_bits if bit >= 0]
     for k in range(model.postures):
-        branches = "".join(str(branch_of_posture(k, bit)) for bit in digits) or "-"
+        wrist = str(k % 2) if model.wrist is not None else ""  # the wrist's branch: the posture's last bit
+        branches = "".join(str(branch_of_posture(k // 2 if wrist else k, bit)) for bit in digits) + wrist or "-"
         plugin = [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k])]
         indices = [_index_text(direct[k]), inverse_text]
         difference = np.abs(calls.solutions[0, :, k] - expected.joints[0, :, k]) * scale
