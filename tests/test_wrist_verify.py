@@ -1,7 +1,9 @@
-"""verify's numpy side and the commands on a machine with a serial wrist (robots/exechon_wrist.yaml):
-the checks are fed the reference's answers as a routine (as tests/test_verdicts.py does) and
-routines changed by a known amount, which they must fail; fk from legs and wrist joints returns
-the golden tool pose; the commands that do not handle a wrist refuse it in one located line."""
+"""verify's numpy side and the commands on a machine with a serial wrist (robots/exechon_wrist.yaml,
+robots/tricept_wrist.yaml): the checks are fed the reference's answers as a routine (as
+tests/test_verdicts.py does) and routines changed by a known amount, which they must fail; fk
+from legs and wrist joints returns the golden tool pose; the commands that do not handle a wrist
+refuse it in one located line; the Tricept's golden values are an independent computation (Newton
+on the whole chain, tests/test_wrist.py's, with tests/test_tricept.py's platform pose)."""
 
 import json
 
@@ -24,17 +26,33 @@ from kingen.verify.options import VerifyOptions
 from kingen.verify.report import Report
 from kingen.verify.tally import Tally, accumulate, posture_statistics
 
+import test_tricept
+from test_wrist import independent_branches
+
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
 
 
-@pytest.fixture(scope="module")
-def robot():
-    return load_robot("exechon_wrist")
+@pytest.fixture(scope="module", params=["exechon_wrist", "tricept_wrist"])
+def robot(request):
+    return load_robot(request.param)
 
 
 @pytest.fixture(scope="module")
 def t6(robot):
     return t6_from_pose(sample_poses(robot, 200, 0))
+
+
+def test_the_tricepts_golden_values_are_the_independent_computation():
+    robot = load_robot("tricept_wrist")
+    assert len(robot.golden) == 2
+    scale = np.array([1, 1, 1, np.radians(1.0), np.radians(1.0)])
+    for entry in robot.golden:
+        assert "Independent computation (tests/test_wrist_verify.py)" in entry.source
+        expected = independent_branches(robot.parallel, entry.pose, lambda _, x, y, z: test_tricept.independent_pose(x, y, z),
+                                        test_tricept.independent_joints)[entry.posture]
+        assert np.max(np.abs(expected - np.array(entry.joints) * scale)) < entry.tolerance * scale[-1]
+        solution = solve(robot, t6_from_pose(np.array([entry.pose], dtype=float)))
+        assert np.max(np.abs(solution.joints[0, :, entry.posture] - expected)) < 1e-9
 
 
 class Routine:
@@ -135,7 +153,8 @@ def test_the_machine_check_judges_the_parallel_part_at_the_platforms_home(robot)
     assert check.detail.startswith("the parallel part at the platform's home: posture 0 reaches the verification home")
 
 
-def test_verify_exercises_the_wrists_singularity_and_finds_its_boundary(robot):
+def test_verify_exercises_the_wrists_singularity_and_finds_its_boundary():
+    robot = load_robot("exechon_wrist")  # the Tricept's rays and descent from seed 0 do not meet it
     assert warnings_to_exercise(robot) == ["WARN_JOINT_LIMITS_EXCEEDED", "WARN_SINGULAR_SOLUTION"]
     poses, found, _ = boundary_poses(robot, 0)
     assert found["WARN_SINGULAR_SOLUTION"] >= 1
@@ -146,7 +165,7 @@ def test_verify_exercises_the_wrists_singularity_and_finds_its_boundary(robot):
 def test_fk_from_legs_and_wrist_joints_gives_the_golden_tool_tip_and_axis(robot, capsys, tmp_path):
     entry = robot.golden[0]
     output = tmp_path / "fk.json"
-    code = main(["fk", "exechon_wrist", "--joints", " ".join(f"{v:.9f}" for v in entry.joints), "--json", str(output)])
+    code = main(["fk", robot.name, "--joints", " ".join(f"{v:.9f}" for v in entry.joints), "--json", str(output)])
     out = capsys.readouterr().out
     assert code == 0 and out.startswith("the parallel part, then the wrist's forward: not exhaustive")
     found = json.loads(output.read_text())["solutions"]
@@ -155,21 +174,22 @@ def test_fk_from_legs_and_wrist_joints_gives_the_golden_tool_tip_and_axis(robot,
     assert np.max(np.abs(reached[0, 2, :3] - asked[0, 2, :3])) < 1e-8
 
 
-def test_fk_asks_for_every_joint_of_legs_and_wrist(capsys):
-    assert main(["fk", "exechon_wrist", "--joints", "1 2 3"]) == 2
-    assert capsys.readouterr().err.strip().endswith("exechon_wrist has 5 joints; give 5 finite numbers")
+def test_fk_asks_for_every_joint_of_legs_and_wrist(robot, capsys):
+    assert main(["fk", robot.name, "--joints", "1 2 3"]) == 2
+    assert capsys.readouterr().err.strip().endswith(f"{robot.name} has 5 joints; give 5 finite numbers")
 
 
 @pytest.mark.parametrize("command, argv", [
-    ("analyze", ["analyze", "exechon_wrist"]),
-    ("check-path", ["check-path", "exechon_wrist", "PROGRAM"]),
-    ("calibrate plan", ["calibrate", "plan", "exechon_wrist", "--poses", "10", "-o", "OUT"]),
-    ("calibrate run", ["calibrate", "run", "exechon_wrist", "--measurements", "PROGRAM"]),
+    ("analyze", ["analyze", "ROBOT"]),
+    ("check-path", ["check-path", "ROBOT", "PROGRAM"]),
+    ("calibrate plan", ["calibrate", "plan", "ROBOT", "--poses", "10", "-o", "OUT"]),
+    ("calibrate run", ["calibrate", "run", "ROBOT", "--measurements", "PROGRAM"]),
 ])
 def test_commands_without_a_wrist_refuse_it_in_one_located_line(robot, capsys, tmp_path, command, argv):
     program = tmp_path / "program.csv"
     program.write_text("x\n")
-    argv = [str(program) if arg == "PROGRAM" else str(tmp_path / "out.csv") if arg == "OUT" else arg for arg in argv]
+    named = {"PROGRAM": str(program), "OUT": str(tmp_path / "out.csv"), "ROBOT": robot.name}
+    argv = [named.get(arg, arg) for arg in argv]
     assert main(argv) == 2
     captured = capsys.readouterr()
     assert captured.err == (f"kingen: error: {robot.path}:{robot.line_of('wrist')}: wrist: kingen {command} does not "
