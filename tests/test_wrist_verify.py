@@ -153,8 +153,7 @@ def test_the_machine_check_judges_the_parallel_part_at_the_platforms_home(robot)
     assert check.detail.startswith("the parallel part at the platform's home: posture 0 reaches the verification home")
 
 
-def test_verify_exercises_the_wrists_singularity_and_finds_its_boundary():
-    robot = load_robot("exechon_wrist")  # the Tricept's rays and descent from seed 0 do not meet it
+def test_verify_exercises_the_wrists_singularity_and_finds_its_boundary(robot):
     assert warnings_to_exercise(robot) == ["WARN_JOINT_LIMITS_EXCEEDED", "WARN_SINGULAR_SOLUTION"]
     poses, found, _ = boundary_poses(robot, 0)
     assert found["WARN_SINGULAR_SOLUTION"] >= 1
