@@ -26,18 +26,19 @@ GOOD, SINGULAR = WARNINGS["WARN_GOOD_SOLUTION"], WARNINGS["WARN_SINGULAR_SOLUTIO
 UNREACHABLE, LIMITS = WARNINGS["WARN_UNREACHABLE"], WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]
 
 
-def chain(robot, unknowns):
+def chain(robot, unknowns, pose_of=independent_pose):
     """(tool tip, tool axis, platform pose) of the whole chain for the wrist centre x, y, z and
-    the wrist angles t4, t5 (rad): the platform's roll, pitch and yaw by Newton on its constraints,
-    then Rz(t4) Rx(t5) and the tool 200 mm down the tool's z axis, the platform's -z at zero."""
-    platform = independent_pose(robot, *unknowns[:3])
+    the wrist angles t4, t5 (rad): the platform's roll, pitch and yaw by Newton on its constraints
+    (``pose_of(robot, x, y, z)``), then Rz(t4) Rx(t5) and the tool 200 mm down the tool's z axis,
+    the platform's -z at zero."""
+    platform = pose_of(robot, *unknowns[:3])
     rotation = Rotation.from_euler("ZYX", platform[[5, 4, 3]], degrees=True)
     turned = rotation * Rotation.from_rotvec([0, 0, unknowns[3]]) * Rotation.from_rotvec([unknowns[4], 0, 0])
     axis = turned.apply([0.0, 0.0, -1.0])
     return unknowns[:3] + 200.0 * axis, axis, platform
 
 
-def independent_solution(robot, pose, start):
+def independent_solution(robot, pose, start, pose_of=independent_pose, joints_of=independent_joints):
     """The legs' joints (mm) and the wrist's angles (rad) for the tool pose ``pose`` (mm,
     degrees): Newton on the tool tip (3 equations) and the tool axis's parts along two directions
     normal to the asked one (2), from the wrist centre 200 mm above the tip and (t4, t5) = ``start``; None
@@ -46,23 +47,23 @@ def independent_solution(robot, pose, start):
     tip, axis, across = np.asarray(pose[:3], dtype=float), asked[:, 2], asked[:, :2]
 
     def residual(unknowns):
-        reached, reached_axis, _ = chain(robot, unknowns)
+        reached, reached_axis, _ = chain(robot, unknowns, pose_of)
         return np.concatenate([reached - tip, reached_axis @ across])
 
     unknowns = newton_root(residual, [*(tip + [0, 0, 200]), *start])
-    reached, reached_axis, platform = chain(robot, unknowns)
+    reached, reached_axis, platform = chain(robot, unknowns, pose_of)
     assert np.max(np.abs(reached - tip)) < 1e-9 and abs(reached_axis @ axis) > 0.999999
     if reached_axis @ axis < 0:
         return None  # the tool axis reversed: a root of these equations, not of the asked pose
-    return np.concatenate([independent_joints(robot, platform), np.angle(np.exp(1j * unknowns[3:]))])
+    return np.concatenate([joints_of(robot, platform), np.angle(np.exp(1j * unknowns[3:]))])
 
 
-def independent_branches(robot, pose):
+def independent_branches(robot, pose, pose_of=independent_pose, joints_of=independent_joints):
     """{branch: joints} of :func:`independent_solution` from t4 = 0 or pi, t5 = +/-0.3 (branch
     0: sin(t5) >= 0, the sign of g for this head); both branches must be found."""
     found = {}
     for start in ((0.0, 0.3), (0.0, -0.3), (np.pi, 0.3), (np.pi, -0.3)):
-        joints = independent_solution(robot, pose, start)
+        joints = independent_solution(robot, pose, start, pose_of, joints_of)
         if joints is not None:
             found.setdefault(0 if joints[4] >= 0 else 1, joints)
     assert sorted(found) == [0, 1]

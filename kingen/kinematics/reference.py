@@ -201,7 +201,10 @@ def certificate_settles(robot, t6):
 def limb_solution(robot, t6):
     """The limbs' part of solve for T6 arrays (n, 4, 4), for searches that decide their own
     warnings (about ten times cheaper on CEART): a Solution whose ``warnings`` and
-    ``direct_index`` are None, and whose ``finite`` is also False where a limb's value overflows."""
+    ``direct_index`` are None, and whose ``finite`` is also False where a limb's value overflows.
+    A robot with a wrist gets solve's whole answer (its legs stand at the platform's pose, not the tool's)."""
+    if robot.wrist is not None:
+        return solve(robot, t6)
     with np.errstate(all="ignore"):
         points, branch_joints, radicands, finite, overflow, _ = _limb_solutions(
             robot, np.asarray(t6, dtype=float).reshape(-1, 4, 4))
