@@ -51,16 +51,21 @@ def test_a_and_c_come_back_on_the_pair_nearest_the_seed():
     assert pole_a[0] == 0.0 and pole_c[0] == 37.0
 
 
+def built_module(name, folder):
+    """(robot, robot as LinuxCNC sees it, BuildResult) of shipped robot ``name``."""
+    require_linuxcnc_headers()
+    robot, host = load_robot(name), get_host("linuxcnc")
+    return robot, host.as_seen(robot), host.build(robot, folder)
+
+
 @pytest.fixture(scope="module")
 def module(tmp_path_factory):
-    require_linuxcnc_headers()
-    robot, host = load_robot("exechon_wrist"), get_host("linuxcnc")
-    built = host.build(robot, tmp_path_factory.mktemp("five_axis"))
-    return robot, host.as_seen(robot), built
+    return built_module("exechon_wrist", tmp_path_factory.mktemp("five_axis"))
 
 
-def test_the_five_axis_module_passes_verify(module):
-    _, seen, built = module
+@pytest.mark.parametrize("name", ["exechon_wrist", "tricept_wrist"])
+def test_the_five_axis_module_passes_verify(name, tmp_path):
+    _, seen, built = built_module(name, tmp_path)
     report = verify_library(seen, built.library, built.routine, VerifyOptions(samples=3000), host=get_host("linuxcnc"))
     assert report.passed, [(check.name, check.detail) for check in report.failures]
     assert report.max_abs_error_mm <= 1e-9 and report.max_abs_error_rad <= 1e-9
