@@ -20,6 +20,7 @@ import pytest
 from conftest import skip_or_fail
 from kingen.conventions import t6_from_pose
 from kingen.hosts import get_host
+from kingen.hosts.linuxcnc.five_axis import axis_of_world, home_axis
 from kingen.hosts.linuxcnc.package import render_package
 from kingen.robot.model import load_robot
 from kingen.kinematics.parasitic import on_manifold
@@ -107,7 +108,8 @@ def machine_ini(robot, folder, kins_ini, units):
                  f"HOME_LATCH_VEL = 0\nHOME_OFFSET = {body.split('HOME = ')[1].splitlines()[0]}\n"
                  if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")
-    coordinates = "X Y Z A B C" if robot.dof == 6 or robot.task else "X Y Z"
+    coordinates = ("X Y Z A C" if robot.wrist is not None else "X Y Z A B C" if robot.dof == 6 or robot.task
+                   else "X Y Z")
     axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -5000\nMAX_LIMIT = 5000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
                    for axis in coordinates.split())
     (folder / "sim.tbl").write_text("")
@@ -122,8 +124,10 @@ def machine_moves(robot, moves):
     return on_manifold(robot, np.array(moves, dtype=float)).tolist() if robot.task else moves
 
 
-def run_machine(name, tmp_path):
-    """Run LinuxCNC on kingen's module for shipped robot ``name``: (robot, the driver's result)."""
+def run_machine(name, tmp_path, case=None):
+    """Run LinuxCNC on kingen's module for shipped robot ``name`` making the moves of ``case``
+    (default CASES[name]): (robot, the driver's result)."""
+    case = CASES[name] if case is None else case
     robot = load_robot(name)
     host = get_host("linuxcnc")
     units = robot.length_unit
@@ -136,8 +140,9 @@ def run_machine(name, tmp_path):
     fifo.chmod(0o777)
     result = tmp_path / "result.json"
     environment = {**os.environ, "RTAPI_UID": "65534", "RTAPI_FIFO_PATH": str(fifo / "rtapi_fifo"),
-                   "KINGEN_RESULT": str(result), "KINGEN_MOVES": json.dumps(machine_moves(robot, CASES[name]["moves"])),
-                   "KINGEN_JOG": str(CASES[name]["jog"]), "KINGEN_MODULE": built.routine}
+                   "KINGEN_RESULT": str(result), "KINGEN_MOVES": json.dumps(machine_moves(robot, case["moves"])),
+                   "KINGEN_JOG": str(case["jog"]), "KINGEN_MODULE": built.routine, "KINGEN_AXES": case.get("axes", "XYZABC"),
+                   "KINGEN_FIRST_JOG": case.get("first_jog", "")}
     with open("/tmp/kingen-linuxcnc-test.lock", "w") as lock:  # one LinuxCNC at a time on a machine
         fcntl.flock(lock, fcntl.LOCK_EX)
         run = subprocess.run(["unshare", "-m", "sh", "-c", f"mount --bind '{modules}' '{MODULES}' && exec linuxcnc '{ini}'"],
@@ -184,3 +189,36 @@ def test_linuxcnc_runs_kingens_module_to_the_reference(name, tmp_path):
     assert np.max(np.abs(world - pose_in_mm(robot, before["world"]))) > 1e-3  # the platform moved
     back = solve(robot, t6_from_pose(world[None])).joints[0, :, posture]
     assert np.max(np.abs(back - in_mm(robot, after["joints"]))) <= 1e-9
+
+
+WRIST_CASE = {"moves": [[30, 20, -1470, 12, 40], [-40, 90, -1420, 20, -60]], "axes": "XYZAC", "jog": 2.0,
+              "first_jog": "4 10"}
+"""The five-axis module of exechon_wrist: X Y Z (tool tip) A C (tool axis) moves, after a joint jog
+of Ax5 by 10 degrees off the home, where the tool axis lies along Ax4 (the wrist's singularity,
+which the module refuses: LinuxCNC could not enter world mode there)."""
+
+
+def tool_t6(robot, world):
+    """A tool T6 (1, 4, 4) with the tip and tool axis of the five-axis world X Y Z A C (mm, degrees)."""
+    axis = axis_of_world(home_axis(robot), [world[3]], [world[4]])[0]
+    x = np.cross([0.0, 1.0, 0.0], axis)
+    x /= np.linalg.norm(x)
+    t6 = np.eye(4)[None].copy()
+    t6[0, 0, :3], t6[0, 1, :3], t6[0, 2, :3], t6[0, 3, :3] = x, np.cross(axis, x), axis, world[:3]
+    return t6
+
+
+@pytest.mark.xdist_group("linuxcnc")
+def test_linuxcnc_runs_the_five_axis_module_to_the_reference(tmp_path):
+    robot, outcome = run_machine("exechon_wrist", tmp_path, WRIST_CASE)
+    jogged = outcome["first_jog"]["after"]["joints"]
+    assert jogged[4] - outcome["first_jog"]["before"]["joints"][4] == pytest.approx(10.0, abs=1e-6)
+    for move in outcome["moves"]:
+        expected = solve(robot, tool_t6(robot, move["pose"])).joints[0, :, robot.working_posture]
+        joints = np.array(move["joints"][:robot.joint_count]) * np.where(robot.revolute, np.pi / 180.0, 1.0)
+        assert np.max(np.abs(joints - expected)) <= 1e-9, move
+        world = np.array(move["world"])[[0, 1, 2, 3, 5]]  # X Y Z A C (B is not a coordinate)
+        assert np.max(np.abs(world - move["pose"])) <= 1e-9, move
+    before, after = outcome["jog"]["before"], outcome["jog"]["after"]
+    assert after["joints"][0] - before["joints"][0] == pytest.approx(WRIST_CASE["jog"], abs=1e-6)
+    assert after["joints"][1:] == before["joints"][1:]

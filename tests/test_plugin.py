@@ -49,7 +49,7 @@ def test_generated_source_is_tables_plus_one_helper_per_model(name):
         assert f"static const kingen_{model} kingen_{model}s[] = {{" in text
     for model in {"leg", "rail", "crank"} - set(robot.models):
         assert f"kingen_solve_{model}" not in text
-    assert f"#define NUM_DOFS {robot.dof}\n" in text and f"#define NUM_SOLUTIONS {robot.postures}\n" in text
+    assert f"#define NUM_DOFS {robot.joint_count}\n" in text and f"#define NUM_SOLUTIONS {robot.postures}\n" in text
     assert "long double" not in text and "pow(" not in text
 
 
@@ -183,12 +183,12 @@ def test_plain_c_client_agrees_with_reference(built, abi_client, name):
     robot, result = built(name)
     _, t6 = random_t6(robot, 200, seed=21)
     config, rows = run_client(abi_client, result.library, result.routine, t6)
-    assert config[1:3] == [str(robot.dof), str(robot.postures)]
+    assert config[1:3] == [str(robot.joint_count), str(robot.postures)]
     expected = solve(robot, t6)
     postures = robot.postures
     for n, row in enumerate(rows):
         warnings = [int(w) for w in row[1:1 + postures]]
-        joints = np.array([float(v) for v in row[1 + postures:]]).reshape(robot.dof, postures)
+        joints = np.array([float(v) for v in row[1 + postures:]]).reshape(robot.joint_count, postures)
         assert warnings == expected.warnings[n].tolist(), f"{name} pose {n}"
         assert joint_errors(joints[None], expected.joints[n:n + 1], robot.revolute).max() <= 1e-9, f"{name} pose {n}"
 

@@ -39,7 +39,8 @@ def test_every_reachable_posture_closes_every_limb(name):
     if robot.task:  # a constrained machine reaches only the poses on its manifold
         t6 = t6_from_pose(on_manifold(robot, poses))
     solution = solve(robot, t6)
-    points = platform_points_in_base(t6, [limb.platform_point for limb in robot.limbs])
+    platform = solution.platform if robot.wrist is not None else t6  # a wrist: the legs close at the platform's pose
+    points = platform_points_in_base(platform, [limb.platform_point for limb in robot.limbs])
     checked = 0
     for n in range(len(t6)):
         for k in range(robot.postures):

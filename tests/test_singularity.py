@@ -66,6 +66,8 @@ def test_an_octahedral_arrangement_has_the_index_of_its_hand_computation():
 def test_analytic_jacobian_matches_finite_differences_of_the_reference(name):
     """As LinuxCNC's kinematics Jacobian tests do: every posture, random reachable poses."""
     robot = load_robot(name)
+    if robot.wrist is not None:
+        pytest.skip("the limbs' Jacobian has no wrist rows: tests/test_wrist_verify.py differentiates its forward map")
     poses, t6 = random_t6(robot, 30, seed=8)
     if robot.task:  # a constrained machine: on its manifold, the limbs' Jacobian along the task motion
         t6 = t6_from_pose(on_manifold(robot, poses))

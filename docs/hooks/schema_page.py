@@ -271,7 +271,7 @@ def _model_checks(model, words):
 
 
 def schema_markdown():
-    from kingen.robot.model import robot_file_schema
+    from kingen.robot.file_schema import robot_file_schema
 
     walker = Walker()
     walker.model_link(robot_file_schema(), "top-level", "top level")

@@ -10,7 +10,7 @@ import click
 
 from ..errors import KingenError
 from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model,
-                     print_table, refuse_special_files, say)
+                     print_table, refuse_special_files, refuse_wrist, say)
 
 
 @cli.command("check-path")
@@ -62,6 +62,7 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     from ..runtime.files import write_atomic
 
     model = load_model(robot)
+    refuse_wrist(model, "check-path")
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{posture}: {model.name} has postures 0 .. {model.postures - 1}",
                                  param_hint="'--posture'")

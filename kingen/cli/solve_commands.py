@@ -14,7 +14,7 @@ from ..errors import KingenError
 from ..runtime.text import counted, shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
                      _t6, calibration_options, cli, finite, in_child, load_model, output_width, print_table,
-                     routine_to_check, say, say_fitted, solve_job, table_lines)
+                     refuse_wrist, routine_to_check, say, say_fitted, solve_job, table_lines)
 
 
 @cli.command("list")
@@ -86,7 +86,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     rows, compact_rows = [header], [compact]
     digits = [bit for bit in model.branch_bits if bit >= 0]
     for k in range(model.postures):
-        branches = "".join(str(branch_of_posture(k, bit)) for bit in digits) or "-"
+        wrist = str(k % 2) if model.wrist is not None else ""  # the wrist's branch: the posture's last bit
+        branches = "".join(str(branch_of_posture(k // 2 if wrist else k, bit)) for bit in digits) + wrist or "-"
         plugin = [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k])]
         indices = [_index_text(direct[k]), inverse_text]
         difference = np.abs(calls.solutions[0, :, k] - expected.joints[0, :, k]) * scale
@@ -100,6 +101,8 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     say(f"routine returned {calls.returned[0]}")
     if model.task:
         say_fitted(_manifold_note(model, matrix), width)
+    if model.wrist is not None:
+        say_fitted(_turn_note(model, matrix, expected), width)
     say_fitted(_indices_note(model), width)
     if switch is not None:
         _predict_switch(model, matrix[0], expected, switch, scale, units, width)
@@ -179,6 +182,23 @@ def _manifold_note(model, matrix):
     return f"the machine's pose for this {task}: x y z roll pitch yaw = {where} (mm, degrees); the T6 is {asked}"
 
 
+def _turn_note(model, matrix, expected):
+    """How far the asked tool frame (T6 (1, 4, 4)) is turned about the tool axis from the
+    machine's tool frame in each posture the reference reaches (the five-axis reading ignores it)."""
+    import numpy as np
+
+    from ..kinematics.routine import WARNINGS
+    from ..kinematics.wrist import tool_t6, tool_turn
+
+    turns = []
+    for k in range(model.postures):
+        if expected.warnings[0, k] != WARNINGS["WARN_UNREACHABLE"]:
+            reached = tool_t6(model, expected.platform, expected.joints[:, model.dof:, k])
+            turns.append(f"posture {k} {np.degrees(tool_turn(matrix, reached)[0]):.6f}")
+    turns = ", ".join(turns) or "no posture reaches it"
+    return f"the turn of the asked tool frame about the tool axis from the machine's (degrees; ignored): {turns}"
+
+
 def _indices_note(model):
     """What the index columns mean for this robot, in one line."""
     inverse = "min inverse index: the smallest normalised radicand D over the limbs (1 - 1/Inv_I; 0 at a limb singularity)"
@@ -221,8 +241,8 @@ def fk(robot, joints, more_joints, near, json_path, search):
         values = [float(v) for v in joints.replace(",", " ").split()] + [float(v) for v in more_joints]
     except ValueError:
         raise click.BadParameter("numbers expected", param_hint="--joints") from None
-    if len(values) != model.dof or not all(math.isfinite(v) for v in values):
-        raise click.BadParameter(f"{model.name} has {model.dof} joints; give {model.dof} finite numbers",
+    if len(values) != model.joint_count or not all(math.isfinite(v) for v in values):
+        raise click.BadParameter(f"{model.name} has {model.joint_count} joints; give {model.joint_count} finite numbers",
                                  param_hint="--joints")
     if not model.has_forward:
         raise KingenError(f"{model.path}: forward: forward kinematics needs free pose coordinates for a robot "
@@ -230,7 +250,12 @@ def fk(robot, joints, more_joints, near, json_path, search):
     internal = np.array(values) * model.joint_scale()
     near_pose = np.array(near if near is not None else model.verification.home, dtype=float)
     near_internal = np.concatenate([near_pose[:3], np.radians(near_pose[3:])])
-    modes = assemblies(model, internal, near_internal, search)
+    if model.wrist is not None:  # the tool's pose: the parallel part's modes, then the wrist's forward
+        from ..kinematics.wrist_forward import tool_assemblies
+
+        modes = tool_assemblies(model, internal, near_internal, search)
+    else:
+        modes = assemblies(model, internal, near_internal, search)
     found = modes.found
     rows = [("mode", "x (mm)", "y (mm)", "z (mm)", "roll (deg)", "pitch (deg)", "yaw (deg)", "residual (mm)",
              "from near (mm)")]
@@ -246,7 +271,10 @@ def fk(robot, joints, more_joints, near, json_path, search):
                                            indent=2, allow_nan=False) + "\n")
     say(modes.method)
     if not found:
-        best = best_residual(model, internal, near_internal, search)
+        parallel = model.parallel  # with a wrist: its legs, searched around the platform's home
+        home = np.asarray(parallel.verification.home, dtype=float)
+        best = best_residual(parallel, internal[:parallel.dof], np.concatenate([home[:3], np.radians(home[3:])])
+                             if model.wrist is not None else near_internal, search)
         say(f"no pose found for these joints (best residual {best:.3g} mm)")
         return EXIT_FAILED
     print_table(rows)
@@ -286,6 +314,7 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
     from ..design.figures import figures, report_html
 
     model = load_model(robot)
+    refuse_wrist(model, "analyze")
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
     problem = model_problem(model, collision_model)

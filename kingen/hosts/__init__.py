@@ -9,7 +9,7 @@ built in.
 
 from ..defaults import DEFAULT_HOST
 from ..errors import KingenError
-from ..robot.model import NAME_CHECKS
+from ..robot.file_schema import NAME_CHECKS
 from .base import BuildResult, Host, LoadedRoutine
 from .delmia import DelmiaHost
 from .c import CHost

@@ -22,6 +22,7 @@ from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD
 from ..kinematics.singularity import PACKED, partial_sum_split
 from ..kinematics.parasitic_axes import home_axes
 from ..robot.constraints import axes_table, constraint_table, family
+from .wrist import whole_view
 
 
 def _partial_source(name):
@@ -60,7 +61,7 @@ def build_info(robot, routine, postures=None, extra=()):
     """What the library says about itself, compiled in as data (read back by kingen info):
     the robot, the ``routine``'s name, its joints and postures (default the robot's), the
     definition's sha256, kingen's version, then any ``extra`` (key, value) pairs."""
-    text = (f"{BUILD_INFO_MARKER} robot={robot.name} routine={routine} dof={robot.dof} "
+    text = (f"{BUILD_INFO_MARKER} robot={robot.name} routine={routine} dof={robot.joint_count} "
             f"postures={robot.postures if postures is None else postures} sha256={robot.sha256} kingen={VERSION}")
     return text + "".join(f" {key}={value}" for key, value in extra)
 
@@ -181,7 +182,10 @@ def axes_view(robot):
 def robot_view(robot, host):
     """What every host's routine template substitutes about the robot, already formatted as C:
     names (the routine's and library's as ``host`` names them), joints, limb model tables,
-    singularity tests, the calibration fields (in ``host``'s words) and the build information."""
+    singularity tests, the calibration fields (in ``host``'s words) and the build information;
+    a robot with a wrist: its parallel part's, with the whole machine's joints (kingen.hosts.wrist)."""
+    if robot.wrist is not None:
+        return whole_view(robot, robot_view(robot.parallel, host), build_info(robot, host.routine_name(robot)))
     lower, upper = robot.travel_limits()
     joints = []
     for index, (limb, bit) in enumerate(zip(robot.limbs, robot.branch_bits)):
@@ -230,4 +234,5 @@ def robot_view(robot, host):
         "degree": c_double(math.pi / 180.0),
         "calibration": [calibration_line(robot, host, *entry) for entry in robot.calibration()],
         "build_info": build_info(robot, host.routine_name(robot)),
+        "wrist": None,
     }

@@ -17,7 +17,8 @@ whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0. A machine
 coordinates (kingen.robot.constraints) is solved at the pose its constraints give for the T6's
 z, roll and pitch (kingen.kinematics.parasitic): a T6 off that manifold (for a routine that
 reads x, y and yaw: ``parasitic_given``), or one whose task coordinates no pose has, is
-unreachable with the joints of that pose.
+unreachable with the joints of that pose. A robot with a serial wrist is solved from the tool
+pose by kingen.kinematics.wrist.
 """
 
 import functools
@@ -28,6 +29,7 @@ import numpy as np
 from .certificate import certified_above
 from .parasitic import solve_parasitic
 from .routine import SINGULAR_TOLERANCE, WARNINGS
+from .wrist import solve_tool
 from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
                           gram_partial_sums, limb_wrenches, posture_values)
 
@@ -55,6 +57,9 @@ class Solution:
     """Per posture, the branch each limb takes (kingen.kinematics.singularity.branch_table as tuples)."""
     points: np.ndarray = None
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
+    platform: np.ndarray = None
+    """(n, 4, 4) a robot with a wrist: the parallel part's T6 (the platform's pose the machine
+    takes for each tool T6, kingen.kinematics.wrist); None for other robots."""
     direct_index: np.ndarray = None
     """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
     (robots without six force lines, or not asked for). Computed for the warnings only (not
@@ -105,8 +110,10 @@ def solve(robot, t6, link_lengths=None, link_offsets=None, indices=False):
     computed when the robot's warnings need it (``direct_index_min``) or ``indices`` asks
     for it, for robots with six force lines."""
     with np.errstate(all="ignore"):
-        return _solve(robot.calibrated(link_lengths, link_offsets), np.asarray(t6, dtype=float).reshape(-1, 4, 4),
-                      indices)
+        robot, t6 = robot.calibrated(link_lengths, link_offsets), np.asarray(t6, dtype=float).reshape(-1, 4, 4)
+        if robot.wrist is not None:
+            return solve_tool(robot, t6, lambda parallel, machine: _solve(parallel, machine, indices), Solution)
+        return _solve(robot, t6, indices)
 
 
 BLOCK_POSTURES = 8192
@@ -194,7 +201,10 @@ def certificate_settles(robot, t6):
 def limb_solution(robot, t6):
     """The limbs' part of solve for T6 arrays (n, 4, 4), for searches that decide their own
     warnings (about ten times cheaper on CEART): a Solution whose ``warnings`` and
-    ``direct_index`` are None, and whose ``finite`` is also False where a limb's value overflows."""
+    ``direct_index`` are None, and whose ``finite`` is also False where a limb's value overflows.
+    A robot with a wrist gets solve's whole answer (its legs stand at the platform's pose, not the tool's)."""
+    if robot.wrist is not None:
+        return solve(robot, t6)
     with np.errstate(all="ignore"):
         points, branch_joints, radicands, finite, overflow, _ = _limb_solutions(
             robot, np.asarray(t6, dtype=float).reshape(-1, 4, 4))

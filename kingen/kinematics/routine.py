@@ -38,11 +38,24 @@ def warnings_to_exercise(robot, vocabulary=None):
     if any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
            for limb in robot.limbs):  # a revolute travel of a full turn or more is never exceeded
         kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
-    if any(limb.has_radicand for limb in robot.limbs) or (robot.task and robot.parasitic_given):  # off the manifold
+    wrist = robot.wrist is not None
+    if (any(limb.has_radicand for limb in robot.limbs) or (robot.task and robot.parasitic_given)  # off the manifold
+            or wrist and _wrist_misses_axes(robot.wrist)):
         kinds.append("WARN_UNREACHABLE")
-    if any(limb.has_radicand for limb in robot.limbs) or robot.direct_index_min is not None:
-        kinds.append("WARN_SINGULAR_SOLUTION")
+    if any(limb.has_radicand for limb in robot.limbs) or robot.direct_index_min is not None or wrist:
+        kinds.append("WARN_SINGULAR_SOLUTION")  # a wrist: where its axes align
     return [kind for kind in kinds if vocabulary is None or kind in vocabulary]
+
+
+WRIST_EVERY_AXIS = 1e-6
+"""A two-axis wrist turns its tool onto every axis when its axes, and the last one and the
+tool's axis at zero, are perpendicular to within this (dot products of unit vectors)."""
+
+
+def _wrist_misses_axes(wrist):
+    """Whether some tool axes lie beyond the reach of the two-axis ``wrist`` (its WARN_UNREACHABLE)."""
+    first, second = wrist.axes
+    return abs(first @ second) > WRIST_EVERY_AXIS or abs(second @ wrist.tool[:3, 2]) > WRIST_EVERY_AXIS
 
 
 UNWRITTEN_WARNING = -1

@@ -30,15 +30,18 @@ TRANSLATION_SINGULAR = 1e-12
 
 
 def branch_table(robot):
-    """(postures, dof) int array (read-only): the branch each limb takes in each posture."""
-    return _branch_table(robot.branch_bits)
+    """(postures, joint_count) int array (read-only): the branch each joint takes in each
+    posture: each limb's, then (a robot with a wrist) each wrist joint's, the posture's last bit."""
+    return _branch_table(robot.branch_bits, robot.joint_count - robot.dof)
 
 
 @functools.lru_cache(maxsize=64)
-def _branch_table(branch_bits):
+def _branch_table(branch_bits, wrist_joints=0):
     postures = np.arange(2 ** sum(1 for bit in branch_bits if bit >= 0))
     table = np.stack([branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
                       for bit in branch_bits], axis=1)
+    if wrist_joints:  # posture = 2 * the parallel part's posture + the wrist's branch
+        table = np.concatenate([np.repeat(table, 2, axis=0), np.tile([[0], [1]], (len(postures), wrist_joints))], axis=1)
     table.flags.writeable = False
     return table
 
@@ -49,32 +52,37 @@ closed form's error (at most about 1e-7 relative on the shipped robots)."""
 
 
 def representative_postures(robot):
-    """(dof, 2) int array (read-only): for each limb, the first posture taking its branch 0 and
-    its branch 1 (branch 0's again for one-branch limbs). A routine's value there stands for
-    that branch."""
-    return _representative_postures(robot.branch_bits)
+    """(joint_count, 2) int array (read-only): for each joint (branch_table), the first posture
+    taking its branch 0 and its branch 1 (branch 0's again for one-branch limbs). A routine's
+    value there stands for that branch."""
+    return _representative_postures(robot.branch_bits, robot.joint_count - robot.dof)
 
 
 @functools.lru_cache(maxsize=64)
-def _representative_postures(branch_bits):
-    table = _branch_table(branch_bits)
-    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(len(branch_bits))]
-    representative = np.array([row if bit >= 0 else [row[0], row[0]] for row, bit in zip(first, branch_bits)])
+def _representative_postures(branch_bits, wrist_joints=0):
+    table = _branch_table(branch_bits, wrist_joints)
+    bits = branch_bits + (0,) * wrist_joints
+    first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(len(bits))]
+    representative = np.array([row if bit >= 0 else [row[0], row[0]] for row, bit in zip(first, bits)])
     representative.flags.writeable = False
     return representative
 
 
 def branch_values(robot, per_posture):
-    """(..., dof, 2) each limb's value in its branch 0 and 1 from values per posture
-    (..., dof, postures), read at representative_postures."""
+    """(..., k, 2) each joint's value in its branch 0 and 1 from values per posture
+    (..., k, postures), read at representative_postures: k the limbs (dof) or every joint
+    (joint_count)."""
+    count = per_posture.shape[-2]
     return np.take_along_axis(per_posture, np.broadcast_to(
-        representative_postures(robot), per_posture.shape[:-1] + (2,)), axis=-1)
+        representative_postures(robot)[:count], per_posture.shape[:-1] + (2,)), axis=-1)
 
 
 def posture_values(robot, per_branch):
-    """(n, postures, dof, ...) each posture's value of each limb, from values per limb branch
-    (n, dof, 2, ...): the inverse of branch_values, postures before limbs."""
-    return per_branch[:, np.arange(robot.dof), branch_table(robot)]
+    """(n, postures, k, ...) each posture's value of each joint, from values per branch
+    (n, k, 2, ...) (k the limbs, dof, or every joint, joint_count): the inverse of
+    branch_values, postures before joints."""
+    count = per_branch.shape[1]
+    return per_branch[:, np.arange(count), branch_table(robot)[:, :count]]
 
 
 def limb_wrenches(robot, points, branch_joints, with_transmissions=True):

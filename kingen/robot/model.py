@@ -13,128 +13,23 @@ import json
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Annotated, Literal, Optional, Union
+from typing import Optional
 
 import numpy as np
-from pydantic import AfterValidator, Field, ValidationError
+from pydantic import ValidationError
 
-from ..conventions import SIX, branch_of_posture
-from .design_schema import Optimize
+from ..conventions import REVOLUTE, SIX, branch_of_posture
 from ..errors import KingenError
 from ..runtime.file_gate import refuse_special_file
-from .layouts import Layout
 from .constraints import check_coordinates
 from .located import Locator, diagnostic
-from .passive_leg import PassiveLegFile, passive_leg_of
-from .limbs import MODELS
+from .passive_leg import passive_leg_of
 from ..runtime.resources import robots_dir
 from .reading import read_robot_file
-from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict, calibration_value
+from .file_schema import MAX_TWO_BRANCH_LIMBS, Region, robot_file_schema
+from .schema import MAX_MM, calibration_value
+from .wrist import with_wrist
 from ..units import LENGTH_UNITS, document_in_mm
-
-MAX_GOLDEN = 1000
-MAX_LIMBS = 64
-MAX_TWO_BRANCH_LIMBS = 8
-"""At most 2**8 = 256 postures: the solutions array is NUM_DOFS x NUM_SOLUTIONS doubles."""
-
-
-NAME_CHECKS = {}
-"""How each host judges the names it makes from a robot's name: host name -> function (robot
-name -> why it cannot be used, or None). kingen.hosts fills it as hosts register, so that
-reading a robot file asks every host without knowing any."""
-
-
-def _check_c_names(name):
-    """The robot's own name may be anything identifier-shaped ('int' gives kin_int); the names
-    every registered host makes from it must not collide with what that host or C reserves."""
-    problems = [problem for check in NAME_CHECKS.values() if (problem := check(name))]
-    if problems:
-        raise ValueError("; ".join(problems))
-    return name
-
-
-def _check_non_negative(values):
-    if any(value < 0 for value in values):
-        raise ValueError("ranges must not be negative")
-    return values
-
-
-class Region(Strict):
-    """Verification region: poses drawn uniformly in home +/- range (mm, degrees)."""
-
-    home: Pose
-    range: Annotated[Pose, AfterValidator(_check_non_negative)]
-
-
-class Golden(Strict):
-    """A published (or independently derived) pose -> joints pair, with its source."""
-
-    source: Annotated[str, Field(min_length=1)]
-    pose: Pose
-    posture: Annotated[int, Field(ge=0)] = 0
-    joints: Annotated[list[Coordinate], Field(max_length=MAX_LIMBS)]
-    """mm for prismatic joints, degrees for revolute joints."""
-    tolerance: Annotated[float, Field(gt=0, le=MAX_MM)]
-    """In the units of ``joints``: half a unit of the last published digit is typical."""
-
-
-class Singularity(Strict):
-    """``singularity:`` in a robot file: when to call a pose a direct singularity."""
-
-    direct_index_min: Length
-    """mm: postures whose direct index is at most this answer WARN_SINGULAR_SOLUTION."""
-
-
-class Forward(Strict):
-    """``forward:`` in a robot file: which pose coordinates forward kinematics solves for."""
-
-    free: Annotated[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]], Field(min_length=1, max_length=6)]
-
-
-class Collision(Strict):
-    """``collision:`` in a robot file: radii (mm) of the cylinders passive links and cranks
-    are modelled as; analyze reports clearances below them as collisions."""
-
-    leg_radius: Optional[Length] = None
-    rod_radius: Optional[Length] = None
-    crank_radius: Optional[Length] = None
-
-
-def robot_file_schema():
-    """The YAML schema over the registered limb models (built anew when the registry changed);
-    documented field by field in docs/how-to/robot-files.md."""
-    return _schema_over(tuple(MODELS.values()))
-
-
-@functools.lru_cache(maxsize=None)
-def _schema_over(models):
-    limb = Annotated[Union[models], Field(discriminator="model")]
-
-    class RobotFile(Strict):
-        name: Annotated[Identifier, AfterValidator(_check_c_names),
-                        Field(description="The robot's name; each host makes its C names from it.")]
-        description: Annotated[str, Field(min_length=1, description="What the robot is, in a sentence.")]
-        source: Optional[str] = Field(None, description="Where the geometry comes from (a drawing, a paper).")
-        limbs: Optional[Annotated[list[limb], Field(min_length=1, max_length=MAX_LIMBS)]] = Field(
-            None, description="The limbs, one joint each, in joint order (or give a `layout`).")
-        layout: Optional[Layout] = Field(None, description="A parametric layout that makes the limbs.")
-        verification: Region = Field(description="The region verify draws its poses from, around a home pose.")
-        golden: Annotated[list[Golden], Field(max_length=MAX_GOLDEN)] = Field(
-            [], description="Published pose-to-joints pairs every routine must reproduce.")
-        singularity: Optional[Singularity] = Field(None, description="When a pose counts as a direct singularity.")
-        forward: Optional[Forward] = Field(None, description="The pose coordinates forward kinematics solves for.")
-        task: Optional[list[Literal["x", "y", "z", "roll", "pitch", "yaw"]]] = Field(
-            None, description="A lower-mobility machine's task coordinates: [z, roll, pitch] (x, y, yaw follow) or "
-                  "[x, y, z] (roll, pitch, yaw follow).")
-        passive_leg: Optional[PassiveLegFile] = Field(None, description="A passive constraining leg (universal "
-                                                      "joint, prismatic joint, fixed to the platform): task [x, y, z].")
-        working_posture: Annotated[int, Field(ge=0)] = Field(
-            0, description="The posture a host with one answer per pose (LinuxCNC) uses.")
-        collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")
-        units: Literal["mm", "inch"] = Field("mm", description="The file's length unit.")
-        optimize: Optional[Optimize] = Field(None, description="The design problem `kingen optimize` searches.")
-
-    return RobotFile
 
 
 @dataclass(frozen=True)
@@ -169,6 +64,11 @@ class Robot:
     unreachable); False: a host that reads the task coordinates only (LinuxCNC)."""
     passive_leg: Optional[object] = None
     """The passive constraining leg (kingen.robot.passive_leg.PassiveLeg, mm), or None."""
+    wrist: Optional[object] = None
+    """A serial wrist on the platform (kingen.robot.wrist.Wrist), or None: then the pose is the
+    tool's, the joints are the legs' then the wrist's (kingen.robot.wrist.with_wrist)."""
+    parallel_part: Optional["Robot"] = None
+    """With a wrist: the parallel part alone (its region the platform's), else None."""
     lines: tuple = ()
     """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
 
@@ -182,8 +82,8 @@ class Robot:
 
     @property
     def has_forward(self):
-        """Whether forward kinematics is defined: six limbs, or free coordinates declared."""
-        return self.dof == 6 or bool(self.forward_free)
+        """Whether forward kinematics is defined: six limbs, free coordinates declared, or a wrist."""
+        return self.dof == 6 or bool(self.forward_free) or self.wrist is not None
 
     @property
     def has_direct_index(self):
@@ -193,7 +93,18 @@ class Robot:
 
     @property
     def dof(self):
+        """The number of limbs (the parallel part's actuators)."""
         return len(self.limbs)
+
+    @property
+    def joint_count(self):
+        """The number of joints a routine answers: the limbs', then the wrist's."""
+        return self.dof + (len(self.wrist.names) if self.wrist is not None else 0)
+
+    @property
+    def parallel(self):
+        """The parallel part alone: this robot, or without its wrist."""
+        return self.parallel_part if self.wrist is not None else self
 
     @functools.cached_property
     def branch_bits(self):
@@ -207,15 +118,23 @@ class Robot:
 
     @property
     def postures(self):
-        return 2 ** sum(1 for bit in self.branch_bits if bit >= 0)
+        """The limbs' branch combinations, times the wrist's two branches (the last bit; one
+        where a one-posture view holds the wrist on one branch)."""
+        return 2 ** sum(1 for bit in self.branch_bits if bit >= 0) * (2 if self._wrist_branches else 1)
+
+    @property
+    def _wrist_branches(self):
+        """Whether the wrist's two branches are postures (a wrist not held on one branch)."""
+        return self.wrist is not None and self.wrist.branch is None
 
     @property
     def joint_names(self):
-        return tuple(limb.name or f"joint{i + 1}" for i, limb in enumerate(self.limbs))
+        wrist = self.wrist.names if self.wrist is not None else ()
+        return tuple(limb.name or f"joint{i + 1}" for i, limb in enumerate(self.limbs)) + wrist
 
     @property
     def joint_types(self):
-        return tuple(limb.joint_type for limb in self.limbs)
+        return tuple(limb.joint_type for limb in self.limbs) + (REVOLUTE,) * (self.joint_count - self.dof)
 
     @property
     def models(self):
@@ -229,6 +148,8 @@ class Robot:
             if limb.travel is not None:
                 scale = limb.joint_type.yaml_scale
                 lower[i], upper[i] = limb.travel[0] * scale, limb.travel[1] * scale
+        if self.wrist is not None:
+            return np.concatenate([lower, self.wrist.lower]), np.concatenate([upper, self.wrist.upper])
         return lower, upper
 
     def calibration(self):
@@ -249,7 +170,8 @@ class Robot:
             value = calibration_value(field, link_lengths, link_offsets)
             if value != 0.0 and math.isfinite(value):
                 limbs[index] = limbs[index].model_copy(update={parameter: value})
-        return replace(self, limbs=tuple(limbs))
+        parallel = replace(self.parallel_part, limbs=tuple(limbs)) if self.wrist is not None else None
+        return replace(self, limbs=tuple(limbs), parallel_part=parallel)
 
     @functools.cached_property
     def size_mm(self):
@@ -265,7 +187,7 @@ class Robot:
 
     @property
     def revolute(self):
-        """(dof,) bool: which joints are angles (compared modulo 2 pi)."""
+        """(joint_count,) bool: which joints are angles (compared modulo 2 pi)."""
         return np.array([t.wraps for t in self.joint_types])
 
     def joint_scale(self):
@@ -273,7 +195,9 @@ class Robot:
         return np.array([t.yaml_scale for t in self.joint_types])
 
     def posture_branches(self, posture):
-        """Per limb: the branch (0 or 1) it takes in ``posture``; 0 for one-branch limbs."""
+        """Per limb: the branch (0 or 1) it takes in ``posture``; 0 for one-branch limbs (with a
+        wrist: in the parallel part's posture, ``posture`` // 2)."""
+        posture = posture // 2 if self._wrist_branches else posture
         return tuple(int(branch_of_posture(posture, bit)) if bit >= 0 else 0 for bit in self.branch_bits)
 
 
@@ -350,8 +274,10 @@ def robot_from_data(data, path, lines=None, raw=None):
     if robot.size_mm > MAX_MM:
         raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "
                                       "computes in")
-    _check_golden(robot, locate)
     check_coordinates(robot, locate)
+    if document.wrist is not None or document.tool is not None:
+        robot = with_wrist(replace(robot, golden=()), document, locate)
+    _check_golden(robot, locate)
     _check_postures(robot, document, locate)
     if robot.direct_index_min is not None and not robot.has_direct_index:
         raise locate.error(["singularity", "direct_index_min"],
@@ -392,8 +318,9 @@ def _check_postures(robot, document, locate):
 
 def _check_golden(robot, locate):
     for index, golden in enumerate(robot.golden):
-        if len(golden.joints) != robot.dof:
-            raise locate.error(["golden", index, "joints"], f"expected {robot.dof} joint values, got {len(golden.joints)}")
+        if len(golden.joints) != robot.joint_count:
+            raise locate.error(["golden", index, "joints"],
+                               f"expected {robot.joint_count} joint values, got {len(golden.joints)}")
         if golden.posture >= robot.postures:
             raise locate.error(["golden", index, "posture"],
                                f"posture {golden.posture} does not exist (the robot has {robot.postures})")

@@ -10,7 +10,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..conventions import branch_of_posture
 
 
 class OneBranch:
@@ -35,11 +34,17 @@ class OneBranch:
 
 
 def at_posture(robot, posture):
-    """``robot`` with one posture: its posture ``posture`` (golden entries of that posture only)."""
-    limbs = tuple(limb if bit < 0 else OneBranch(limb, int(branch_of_posture(posture, bit)))
-                  for limb, bit in zip(robot.limbs, robot.branch_bits))
+    """``robot`` with one posture: its posture ``posture`` (golden entries of that posture only);
+    with a wrist, its parallel part at posture ``posture // 2`` and the wrist held on branch
+    ``posture % 2``."""
+    limbs = tuple(limb if bit < 0 else OneBranch(limb, branch)
+                  for limb, bit, branch in zip(robot.limbs, robot.branch_bits, robot.posture_branches(posture)))
     golden = tuple(entry.model_copy(update={"posture": 0}) for entry in robot.golden if entry.posture == posture)
     other = [index for index, entry in enumerate(robot.golden) if entry.posture != posture]
     left_out = (f"golden {', '.join(f'[{index}]' for index in other)} not checked: at other postures than {posture}, "
                 "the one the routine answers",) if other else ()
-    return replace(robot, limbs=limbs, golden=golden, working_posture=0, left_out=robot.left_out + left_out)
+    held = {}
+    if robot.wrist is not None:
+        held = {"wrist": replace(robot.wrist, branch=posture % 2),
+                "parallel_part": at_posture(robot.parallel, posture // 2)}
+    return replace(robot, limbs=limbs, golden=golden, working_posture=0, left_out=robot.left_out + left_out, **held)

@@ -68,7 +68,7 @@ def verify(robot, plugin, options=VerifyOptions(), progress=None, phase=None, on
             decided([result for check in by_need(plugin.checks, need) for result in check.run(context)])
 
     run("routine")
-    if (plugin.dof, plugin.postures) == (robot.dof, robot.postures):
+    if (plugin.dof, plugin.postures) == (robot.joint_count, robot.postures):
         decided(_compare_samples(context, progress, printed, phase, loaded_from))
         run("golden values")
         if options.snapshot is not None:

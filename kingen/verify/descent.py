@@ -77,8 +77,8 @@ def _margins(robot, kind, solution, postures=None):
     place to be (unreachable, or in a limb's singular band where that decides the warning)."""
     count = len(solution.finite)
     least = np.min(solution.radicands, axis=1)  # +inf for robots of legs only
-    if kind == "WARN_SINGULAR_SOLUTION" and not any(limb.has_radicand for limb in robot.limbs):
-        kind = DIRECT_INDEX  # the threshold is that warning's only cause
+    if kind == "WARN_SINGULAR_SOLUTION" and not any(limb.has_radicand for limb in robot.limbs) and robot.wrist is None:
+        kind = DIRECT_INDEX  # the threshold is that warning's only cause (a wrist's radicands are its own)
     if kind == "WARN_UNREACHABLE":
         margin = (least + SINGULAR_TOLERANCE)[:, None]
     elif kind == "WARN_SINGULAR_SOLUTION":

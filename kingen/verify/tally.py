@@ -11,6 +11,7 @@ from ..conventions import joint_errors
 from ..kinematics.parasitic import constraint_residuals
 from ..kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
 from ..kinematics.singularity import branch_table, branch_values, posture_values, representative_postures
+from ..kinematics.wrist import tool_t6
 from .options import CONDITIONING_FACTOR
 
 DIAGNOSIS_POSES = 2000
@@ -31,7 +32,8 @@ def singular_bounds(robot, reference_solution, fixed=None):
     radicands = reference_solution.radicands
     if not np.any(np.isfinite(radicands)):  # legs only (D = +inf): no joint is ill-conditioned
         return np.zeros(radicands.shape)
-    scale = np.array([limb.singular_scale() for limb in robot.limbs])
+    # A wrist joint (an angle, from its own radicand) at the scale of one radian.
+    scale = np.array([limb.singular_scale() for limb in robot.limbs] + [1.0] * (robot.joint_count - robot.dof))
     # A length's radicand is computed from coordinates as large as the robot or the joint
     # (a carriage far along its rail): its rounding grows with (that / link)^2.
     # np.fmax ignores a NaN as np.nanmax would; over the axis of two branches, several times faster.
@@ -89,6 +91,10 @@ class Tally:
     constraint_checked: int = 0
     """A machine with task coordinates: the largest |constraint residual| (mm) at the machine's
     pose of the poses that have one, and how many poses were judged."""
+    wrist_worst: float = 0.0
+    wrist_checked: int = 0
+    """A robot with a wrist: the largest miss (wrist_error) of the asked tool tip (mm) or axis,
+    and how many (pose, posture) pairs were judged."""
     posture_counts: np.ndarray = None
     """(4, postures): right, wrong, unreachable wrongly, missed."""
     posture_worst: list = None
@@ -117,11 +123,12 @@ class Tally:
         """Add the totals of a later chunk (its ``first`` counts only when none is kept yet)."""
         self.warning_counts = self.warning_counts + other.warning_counts
         for name in ("returns_wrong", "reachable_poses", "aborted", "closure_checked", "faulty_calls",
-                     "direct_index_below", "constraint_checked"):
+                     "direct_index_below", "constraint_checked", "wrist_checked"):
             setattr(self, name, getattr(self, name) + getattr(other, name))
         self.fault_bits |= other.fault_bits
         self.closure_worst = max(self.closure_worst, other.closure_worst)
         self.constraint_worst = max(self.constraint_worst, other.constraint_worst)
+        self.wrist_worst = max(self.wrist_worst, other.wrist_worst)
         self.posture_counts += other.posture_counts
         self.posture_worst = [np.maximum(mine, theirs) for mine, theirs in zip(self.posture_worst, other.posture_worst)]
         if self.first is None:
@@ -167,13 +174,17 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected, keep_first=T
     closure_worst, closure_checked = closure_error(tally.calibrated, expected, calls.solutions)
     tally.closure_worst = max(tally.closure_worst, closure_worst)
     tally.closure_checked += closure_checked
-    if robot.task:
+    if robot.parallel.task:  # with a wrist: at the platform's pose the reference solves the tool pose at
         with np.errstate(all="ignore"):
-            residuals, radicand = constraint_residuals(tally.calibrated, t6)
+            residuals, radicand = constraint_residuals(tally.calibrated.parallel,
+                                                       t6 if robot.wrist is None else expected.platform)
         judged = radicand > SINGULAR_TOLERANCE
         tally.constraint_checked += int(np.count_nonzero(judged))
         worst = np.where(np.isfinite(residuals), np.abs(residuals), np.inf)[judged]
         tally.constraint_worst = max(tally.constraint_worst, float(worst.max()) if worst.size else 0.0)
+    if robot.wrist is not None:
+        worst, judged = wrist_error(tally.calibrated, t6, expected, calls.solutions)
+        tally.wrist_worst, tally.wrist_checked = max(tally.wrist_worst, worst), tally.wrist_checked + judged
     if keep_first and tally.first is None:
         keep = slice(0, DIAGNOSIS_POSES)
         tally.first = (t6[keep], calls.solutions[keep], calls.warnings[keep], expected.joints[keep],
@@ -214,8 +225,8 @@ class _Columns:
 
 def compares_by_branch(robot):
     """Whether compared_columns may compare ``robot``'s joints by limb branch: robots with more
-    than two postures (see _repeats_branches); the host's summary is asked for those only."""
-    return robot.postures > 2
+    than two postures and no wrist (see _repeats_branches); the host's summary is asked for those only."""
+    return robot.postures > 2 and robot.wrist is None
 
 
 def compared_columns(robot, calls, expected):
@@ -238,7 +249,8 @@ def compared_columns(robot, calls, expected):
     postures = np.arange(robot.postures)
     return _Columns(calls.solutions, expected.joints, reference_solves,
                     reference_solves & (calls.warnings != UNREACHABLE),
-                    np.repeat(postures[:, None], robot.dof, axis=1), np.ones((robot.dof, robot.postures), dtype=int))
+                    np.repeat(postures[:, None], robot.joint_count, axis=1),
+                    np.ones((robot.joint_count, robot.postures), dtype=int))
 
 
 def _repeats_branches(robot, solutions):
@@ -325,6 +337,30 @@ def closure_error(robot, expected, solutions):
             if np.any(judged):
                 worst = max(worst, float(np.max(np.where(judged, relative, 0.0))))
     return worst, judged_count
+
+
+def wrist_error(robot, t6, expected, solutions):
+    """(largest miss, (pose, posture) pairs judged) of a robot with a wrist: the wrist's forward
+    (kingen.kinematics.wrist.tool_t6) from the reference's platform pose and the routine's wrist
+    joints of each posture (``solutions`` (n, joint_count, postures)) against the asked tool T6
+    ``t6`` (n, 4, 4): the larger of the tool tip's distance (mm) and the tool axes' (unit
+    vectors; the turn about the tool axis is free). Judged: postures the reference reaches,
+    outside the wrist's singular bands (where its closest approach misses by design); NaN
+    joints count as infinitely wrong."""
+    reachable = expected.warnings != UNREACHABLE
+    regular = np.all(np.abs(expected.radicands[:, robot.dof:]) > SINGULAR_TOLERANCE + WARNING_BAND, axis=1)
+    judged = reachable & regular[:, None]
+    worst = 0.0
+    for posture in range(robot.postures):
+        rows = judged[:, posture]
+        if not np.any(rows):
+            continue
+        with np.errstate(all="ignore"):
+            tool = tool_t6(robot, expected.platform[rows], solutions[rows, robot.dof:, posture])
+            miss = np.fmax(np.linalg.norm(tool[:, 3, :3] - t6[rows, 3, :3], axis=1),
+                           np.linalg.norm(tool[:, 2, :3] - t6[rows, 2, :3], axis=1))
+        worst = max(worst, float(np.max(np.where(np.isfinite(miss), miss, np.inf))))
+    return worst, int(np.count_nonzero(judged))
 
 
 def closure_miss(limb, points, joints):

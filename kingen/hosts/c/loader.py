@@ -94,7 +94,7 @@ class Library:
                 raise PluginDefect(f"the library does not export {routine}_{name}") from None
         self.geometry = self.ffi.cast("void *", self.functions["default_geometry"])
         self.routine, self.robot = routine, robot
-        self.dof, self.postures = robot.dof, robot.postures
+        self.dof, self.postures = robot.joint_count, robot.postures
         self.driver = batch_driver()
 
     def reset_host(self):

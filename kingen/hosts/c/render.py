@@ -51,8 +51,8 @@ def view_model(robot):
     check_robot(robot)
     view = robot_view(robot, HOST)
     free = free_mask(robot)
-    joints = [{**joint, "unit": "radians" if limb.joint_type.wraps else "mm"}
-              for joint, limb in zip(view["joints"], robot.limbs)]
+    joints = [{**joint, "unit": "radians" if joint_type.wraps else "mm"}
+              for joint, joint_type in zip(view["joints"], robot.joint_types)]
     digits = ", ".join(f"{joint['name']} {joint['bit']}" for joint in joints if joint["bit"] >= 0)
     return {
         **view,
@@ -65,7 +65,7 @@ def view_model(robot):
         "entry_check": None,
         "singular_tolerance": c_double(SINGULAR_TOLERANCE),
         "digits": digits or "none (one posture)",
-        "revolute": [int(limb.joint_type.wraps) for limb in robot.limbs],
+        "revolute": [int(joint_type.wraps) for joint_type in robot.joint_types],
         "free_count": int(free.sum()),
         "free_angles": bool(free[3:].any() or robot.task),
         "task_words": ", ".join(robot.task),

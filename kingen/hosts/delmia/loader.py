@@ -239,7 +239,7 @@ class _BranchSummary:
     def __init__(self, robot, count):
         self._first_postures = np.array(representative_postures(robot), dtype=np.intc)
         self._branch_of = np.array(branch_table(robot), dtype=np.intc)
-        self.branch_values = np.empty((count, robot.dof, 2))
+        self.branch_values = np.empty((count, robot.joint_count, 2))
         self.repeats = np.empty(count, dtype=np.intc)
 
     def arguments(self):
@@ -262,11 +262,11 @@ class KinStat:
         self.types = ffi.new("int[]", [
             abi.CONSTANTS[abi.KINSTAT_JOINT_TYPES[t.name]] for t in robot.joint_types
         ])
-        self.values = ffi.new("double[]", list(joint_values if joint_values is not None else np.zeros(robot.dof)))
+        self.values = ffi.new("double[]", list(joint_values if joint_values is not None else np.zeros(robot.joint_count)))
         self.lower = ffi.new("double[]", [float(v) if np.isfinite(v) else -1e30 for v in lower])
         self.upper = ffi.new("double[]", [float(v) if np.isfinite(v) else 1e30 for v in upper])
         self.pointer = ffi.new("DLM_Data_KinStat *")
-        self.pointer.dof_count = robot.dof
+        self.pointer.dof_count = robot.joint_count
         self.pointer.joint_types = self.types
         self.pointer.kin_mode = kin_mode
         self.pointer.joint_values = self.values

@@ -21,7 +21,8 @@ from ...runtime.file_gate import refuse_special_file
 from ...kinematics.routine import WARNINGS, Calls
 from .build import harness
 from .render import translating
-from .checks import CHECKS
+from .checks import CHECKS, WRIST_CHECKS
+from .five_axis import world_of_t6
 
 ffi = cffi.FFI()
 ffi.cdef("""
@@ -107,8 +108,10 @@ class Module:
             if hal.kingen_hal_set(name.encode(), float(value)) != 0:
                 raise KingenError(f"--setp {name}: the module has no such pin or parameter")
         self.routine, self.robot = routine, robot
-        self.dof, self.postures = robot.dof, 1
+        self.dof, self.postures = robot.joint_count, 1
         self.pose_coordinates = np.array([True] * 3 + [not translating(robot)] * 3)
+        if robot.wrist is not None:
+            self.checks = WRIST_CHECKS
         self.scale = 25.4 if inch else 1.0
         self.status_pin = self._pin("status")
         self.iterations_pin = self._pin("iterations")
@@ -156,7 +159,10 @@ class Module:
         return [name for name in names if name.startswith(f"{self.routine}.")]
 
     def emc_poses(self, t6):
-        """EmcPose numbers (n, 9): x y z in machine units, a b c degrees, u v w 0, from T6 (mm)."""
+        """EmcPose numbers (n, 9): x y z in machine units, a b c degrees, u v w 0, from T6 (mm);
+        with a wrist, the five-axis world (:func:`.five_axis.world_of_t6`)."""
+        if self.robot.wrist is not None:
+            return world_of_t6(self.robot, t6, self.scale)
         pose = pose_from_t6(np.asarray(t6, dtype=float).reshape(-1, 4, 4))
         world = np.zeros((len(pose), 9))
         world[:, :3] = pose[:, :3] / self.scale

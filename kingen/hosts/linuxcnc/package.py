@@ -19,6 +19,8 @@ from .build import build_module, header_folder, headers_found
 from ..base import Written
 from ...units import LENGTH_UNITS, robot_in_units
 from .render import TEMPLATES, module_name, source_name, view_model
+from .five_axis import COORDINATES, world_of_t6, wrist_joints
+from ...conventions import t6_from_pose
 
 
 def _number(value):
@@ -59,10 +61,10 @@ def sheet_view(robot, units="mm", compiled=True):
     machine = robot_in_units(robot, units)
     lower, upper = machine.travel_limits()
     ini = []
-    for joint in view["joints"]:
+    for joint in view["joints"] + (wrist_joints(robot) if robot.wrist is not None else []):
         index, revolute = joint["index"], joint["revolute"]
         scale = 180.0 / math.pi if revolute else 1.0
-        limited = robot.limbs[index].travel is not None
+        limited = bool(joint["limited"])
         ini.append({**joint, "type": "ANGULAR" if revolute else "LINEAR",
                     "lower": _number(lower[index] * scale) if limited else "",
                     "upper": _number(upper[index] * scale) if limited else "",
@@ -70,13 +72,19 @@ def sheet_view(robot, units="mm", compiled=True):
                     "home": _exact(joints[index] * (scale if revolute else 1.0 / LENGTH_UNITS[units]))})
     parameters = [{**parameter, "value": _exact(parameter["value"])} for parameter in view["parameters"]]
     position = home[:3] / LENGTH_UNITS[units]
-    can_give = ["WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)]
+    world = (*position, *home[3:]) if robot.wrist is None else world_of_t6(robot, t6_from_pose(home[None]),
+                                                                             LENGTH_UNITS[units])[0, :6]
+    can_give = sorted({"WARN_GOOD_SOLUTION", *warnings_to_exercise(robot),
+                       *(("WARN_SINGULAR_SOLUTION", "WARN_UNREACHABLE") if robot.wrist is not None else ())})
     statuses = sorted((WARNINGS[name], STATUS_WORDS[name]) for name in can_give)
     refused = [str(code) for code, _ in statuses if code in (WARNINGS["WARN_UNREACHABLE"], WARNINGS["WARN_SINGULAR_SOLUTION"])]
+    if robot.wrist is not None:  # the five-axis module answers the wrist's own singularity
+        refused[-1] += " (the legs' singularity; the wrist's own is answered)"
     return {**view, "ini_joints": ini, "frames": frames(robot, units),
             "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": VERSION,
-            "joint_count": robot.dof, "joint_meanings": joint_meanings(robot, units), "compiled": compiled,
-            "home_text": " ".join(_exact(value) for value in (*position, *home[3:])), "description": robot.description}
+            "joint_count": robot.joint_count, "coordinates": " ".join(COORDINATES) if robot.wrist is not None else None,
+            "joint_meanings": joint_meanings(robot, units), "compiled": compiled,
+            "home_text": " ".join(_exact(value) for value in world), "description": robot.description}
 
 
 def render_package(robot, units="mm", compiled=True):

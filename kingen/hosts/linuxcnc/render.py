@@ -3,12 +3,14 @@ template, the shared view-model (:func:`kingen.hosts.render.robot_view`) and the
 partials (with their force lines and transmissions, for the forward Jacobian). Pure."""
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
 from ..render import refuse, build_info, gram_lines, robot_view, schur_test_lines, template
 from . import LinuxcncHost
+from .five_axis import wrist_view
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...units import LENGTH_UNITS, robot_in_units
 
@@ -67,7 +69,7 @@ def robot_problem(robot):
     """Why this host cannot drive ``robot``, or None."""
     if module_name(robot) in STOCK_MODULES:
         return f"name: the module name '{module_name(robot)}' is LinuxCNC's own module's"
-    if robot.dof != 6 and not translating(robot) and not robot.task:
+    if robot.dof != 6 and not translating(robot) and not robot.task and robot.wrist is None:
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
     names = [f"{module_name(robot)}.{name}" for name in (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot)))]
@@ -105,8 +107,14 @@ def _parameters(robot):
 
 def view_model(robot, units="mm"):
     """What the module's source shows, in the machine's ``units``; ``branch_words`` names the
-    working posture's branches in the limb models' words (true at the verification home)."""
+    working posture's branches in the limb models' words (true at the verification home). With
+    a wrist: its parallel part's at the working posture's, and the wrist (:mod:`.five_axis`)."""
     check_robot(robot)
+    if robot.wrist is not None:
+        parallel = replace(robot.parallel, working_posture=robot.working_posture // 2, working_posture_given=True)
+        return {**view_model(parallel, units), "wrist": wrist_view(robot),
+                "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
+                                                                        ("posture", robot.working_posture)))}
     labels = branch_words(robot)
     robot = robot_in_units(robot, units)
     view = robot_view(robot, HOST)
@@ -141,6 +149,7 @@ def view_model(robot, units="mm"):
         "working_posture": robot.working_posture,
         "branch_words": words,
         "joints": joints,
+        "wrist": None,
         "direct_index": True,
         "jacobian": True,
         "schur_lines": schur_test_lines("m[{k}]"),

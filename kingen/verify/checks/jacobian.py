@@ -3,10 +3,13 @@ of the limbs' constraint geometry (:mod:`kingen.kinematics.singularity`), on reg
 
 import numpy as np
 
+from ...conventions import joint_errors
 from ...kinematics.parasitic import task_rows, task_twists
 from ...kinematics.reference import solve
-from ...kinematics.routine import WARNINGS
+from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
+from ...kinematics.wrist import rotation_about
+from ...kinematics.wrist_forward import platform_poses, tool_rates
 from ...runtime.text import counted
 from ..report import not_exercised
 from .base import Check, VerifyCheck
@@ -48,7 +51,12 @@ def jacobian_check(robot, plugin, options, t6):
     plugin.reset_host()
     center = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
-    analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
+    if robot.wrist is not None:  # the forward map's rates, inverted (the tool's five driven directions)
+        analytic = wrist_rates(calibrated, expected, center)
+        transmissions = np.concatenate([transmissions, np.ones(transmissions.shape[:2] + (robot.joint_count - robot.dof,))],
+                                       axis=2)
+    else:
+        analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
     if robot.task:  # a constrained machine answers a twist with its task coordinates' motion on its manifold
         on_manifold = task_twists(calibrated, t6) @ task_rows(t6, robot.task)
         analytic = np.einsum("npkj,nji->npki", analytic, on_manifold)
@@ -77,10 +85,53 @@ def jacobian_check(robot, plugin, options, t6):
                                          f"to differentiate: of their {counted(expected.warnings.size, 'posture')}, "
                                          f"{irregular_reasons(expected.warnings)}")
     passed = worst <= JACOBIAN_TOLERANCE
-    detail = (f"finite differences of the routine's joints against the analytic Jacobian on {compared} "
+    against = ("the inverted central differences of the machine's forward (legs by Newton, then the wrist)"
+               if robot.wrist is not None else "the analytic Jacobian")
+    detail = (f"finite differences of the routine's joints against {against} on {compared} "
               f"regular joint-postures of {len(t6)} poses: max relative difference {worst:.3g} "
               f"(at most {JACOBIAN_TOLERANCE:g})")
+    if robot.wrist is not None:
+        turned = turn_change(robot, joints_of, t6, center, expected.warnings != WARNINGS["WARN_UNREACHABLE"])
+        passed = passed and turned <= VALUE_TOLERANCE_RAD * max(1.0, robot.size_mm)
+        detail += (f"; turning the tool {TURN_RAD:g} rad about its axis changes no joint: at most {turned:.3g} "
+                   f"(mm or rad)")
     return Check("jacobian", passed, detail, judged=compared)
+
+
+TURN_RAD = 0.5
+"""A machine with a wrist: the sampled tool frames are also turned by this about the tool axis."""
+
+
+def wrist_rates(robot, expected, joints):
+    """(n, joint_count, postures, 6) the joint rates per tool twist of ``robot`` (with a wrist)
+    at each posture's ``joints`` (n, joint_count, postures), the platform near the reference's
+    (kingen.kinematics.wrist_forward.tool_rates); NaN where that posture has no finite joints."""
+    count, total, postures = joints.shape
+    near = platform_poses(expected.platform)
+    usable = np.all(np.isfinite(joints), axis=1)
+    rates = np.full((count, total, postures, 6), np.nan)
+    for posture in range(postures):
+        rows = usable[:, posture]
+        if np.any(rows):
+            rates[rows, :, posture] = tool_rates(robot, joints[rows, :, posture], near[rows],
+                                                 WRIST_STEP * robot.size_mm, WRIST_STEP)
+    return rates
+
+
+WRIST_STEP = 1e-5
+"""The forward map's central-difference steps: this fraction of the robot's size (mm, legs)
+and this many radians (wrist): large against Newton's convergence (1e-13 of the size)."""
+
+
+def turn_change(robot, joints_of, t6, joints, reached):
+    """The largest change (mm or rad) of the routine's joints of postures the reference reaches
+    (``reached`` (n, postures)) when each tool T6 turns TURN_RAD about its own tool axis: a
+    five-axis reading ignores that turn."""
+    turned = np.array(t6, dtype=float)
+    rotation = rotation_about(np.array([0.0, 0.0, 1.0]), np.full(len(t6), TURN_RAD))
+    turned[:, :3, :3] = np.swapaxes(rotation, 1, 2) @ turned[:, :3, :3]  # rows n, o turn about a
+    change = joint_errors(joints_of(turned), joints, robot.revolute)
+    return float(np.max(np.where(reached[:, None, :], change, 0.0), initial=0.0))
 
 
 class Jacobian(VerifyCheck, name="jacobian", needs="compared poses", item="jacobian"):

@@ -12,7 +12,11 @@ from .base import Check, VerifyCheck
 def machine_check(robot):
     """``machine``: passes when the judged posture (the working posture when the file gives one,
     else some posture) can be the machine's home (:func:`kingen.kinematics.home.home_problem`:
-    reachable, within travel, not singular); the failure says why, in the robot file's units."""
+    reachable, within travel, not singular); the failure says why, in the robot file's units.
+    A machine with a wrist is judged by its parallel part at the platform's home, and its wrist
+    joints at 0 (the home's tool pose) within their travel."""
+    if robot.wrist is not None:
+        return _with_wrist(robot, machine_check(robot.parallel))
     home = judged_posture(robot)
     problem = home_problem(robot, home)
     if problem is not None:
@@ -23,6 +27,17 @@ def machine_check(robot):
         return Check("machine", False, f"{problem}: the machine cannot work there")
     index = "" if math.isnan(home.direct_index) else f", direct index {home.direct_index:.3g} mm"
     return Check("machine", True, f"posture {home.posture} reaches the verification home within travel{index}")
+
+
+def _with_wrist(robot, parallel):
+    """The ``machine`` Check of a robot with a wrist from its parallel part's ``parallel``."""
+    wrist = robot.wrist
+    outside = [name for name, low, high in zip(wrist.names, wrist.lower, wrist.upper) if not low <= 0.0 <= high]
+    if outside:
+        return Check("machine", False, f"the wrist joints {', '.join(outside)} at 0 (the verification home's tool "
+                                       f"pose) lie beyond travel: the machine cannot work there")
+    return Check("machine", parallel.passed, f"the parallel part at the platform's home: {parallel.detail}; "
+                                              f"the wrist joints at 0 lie within travel")
 
 
 class Machine(VerifyCheck, name="machine", needs="golden values"):

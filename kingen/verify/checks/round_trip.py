@@ -3,12 +3,13 @@ the sampled pose (:mod:`kingen.kinematics.forward`), within what the joints expl
 
 import numpy as np
 
-from ...conventions import pose_from_t6
+from ...conventions import joint_errors, pose_from_t6
 from ...kinematics.forward import closure_derivative, free_mask, newton, t6_of
 from ...kinematics.parasitic import task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
+from ...kinematics.wrist_forward import platform_poses, tool_forward
 from ..options import CONDITIONING_FACTOR, report_tolerance_mm
 from ..tally import closure_miss
 from ..report import not_exercised
@@ -39,10 +40,10 @@ def round_trip_check(robot, plugin, options, t6):
     expected = solve(robot, t6, options.link_lengths, options.link_offsets)
     plugin.reset_host()
     joints = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
+    if robot.wrist is not None:
+        return wrist_round_trip(calibrated, options, t6, expected, joints)
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, joints)
-    candidates = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
-                  & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
-                  & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
+    candidates = regular_postures(expected, transmissions)
     # About ROUND_TRIP_POSTURES of them, along diagonals of (pose, posture), so that every posture takes part.
     stride = max(1, -(-int(np.count_nonzero(candidates)) // ROUND_TRIP_POSTURES))
     pose_number, posture_number = np.indices(candidates.shape)
@@ -74,6 +75,50 @@ def round_trip_check(robot, plugin, options, t6):
                  f"{report_tolerance_mm(robot):.3g} mm, {VALUE_TOLERANCE_RAD:g} rad, or what the joints' closure "
                  f"residual and rounding explain through the posture's conditioning; postures near a singularity, "
                  f"where the pose is ill-conditioned, are left out)")
+
+
+def wrist_round_trip(robot, options, t6, expected, joints):
+    """``round trip`` of a machine with a wrist (``robot`` calibrated): from the routine's
+    ``joints`` (n, joint_count, postures) of every regular posture (regular_postures, the
+    parallel part's conditioning above ROUND_TRIP_MIN_CONDITIONING),
+    the machine's forward (kingen.kinematics.wrist_forward: the parallel part's Newton seeded at
+    the reference's platform pose, then the wrist) gives a tool T6 whose tip and axis must be
+    the sampled one's, and the reference's inverse of that T6 must give the joints back in the
+    same posture: within the value bounds (mm, rad)."""
+    parallel = robot.parallel
+    wrenches, transmissions = posture_wrenches(robot, expected.points, joints)
+    pose_index, posture = np.nonzero(regular_postures(expected, transmissions))
+    near = platform_poses(expected.platform)[pose_index]
+    conditioning = pose_conditioning(parallel, wrenches[pose_index, posture], near, free_mask(parallel))
+    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    pose_index, posture, near = pose_index[regular], posture[regular], near[regular]
+    if not len(pose_index):
+        return not_exercised("round trip", f"no regular posture among the {len(t6)} sampled poses to go round")
+    routine_joints = joints[pose_index, :, posture]
+    tool, _, _ = tool_forward(robot, routine_joints, near)
+    asked = t6[pose_index]
+    tip = float(np.max(np.abs(tool[:, 3, :3] - asked[:, 3, :3])))
+    axis = float(np.max(np.abs(tool[:, 2, :3] - asked[:, 2, :3])))
+    back = solve(robot, tool, options.link_lengths, options.link_offsets).joints[np.arange(len(pose_index)), :, posture]
+    error = joint_errors(back[:, :, None], routine_joints[:, :, None], robot.revolute)[:, :, 0]
+    worst_mm = float(np.max(error[:, ~robot.revolute], initial=0.0))
+    worst_rad = float(np.max(error[:, robot.revolute], initial=0.0))
+    bound_mm = report_tolerance_mm(robot)
+    detail = (f"the machine's forward (the parallel part's Newton, then the wrist) from the routine's joints of "
+              f"{len(pose_index)} regular postures of {len(t6)} poses gives each asked tool tip within {tip:.3g} mm "
+              f"and tool axis within {axis:.3g}, and the inverse of that tool pose the joints back within "
+              f"{worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds {bound_mm:.3g} mm, {VALUE_TOLERANCE_RAD:g} rad; "
+              f"postures near a singularity are left out)")
+    passed = max(tip, worst_mm) <= bound_mm and max(axis, worst_rad) <= VALUE_TOLERANCE_RAD
+    return Check("round trip", passed, detail, judged=len(pose_index))
+
+
+def regular_postures(expected, transmissions):
+    """(n, postures) the postures the reference reaches without warning, every radicand above
+    JACOBIAN_MIN_RADICAND and every limb's transmission (n, postures, dof) above JACOBIAN_MIN_TRANSMISSION."""
+    return ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
+            & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
+            & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
 
 
 def pose_conditioning(robot, wrenches, poses, free):

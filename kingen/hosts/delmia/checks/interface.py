@@ -22,9 +22,9 @@ class GetKinConfig(VerifyCheck, name="get_kin_config", needs="routine", item="in
         robot, plugin = context.robot, context.routine
         config = plugin.config
         problems = []
-        if (config.dof, config.solutions) != (robot.dof, robot.postures):
+        if (config.dof, config.solutions) != (robot.joint_count, robot.postures):
             problems.append(f"answers {counted(config.dof, 'joint')} and {counted(config.solutions, 'solution')}; "
-                            f"the robot has {robot.dof} and {robot.postures}")
+                            f"the robot has {robot.joint_count} and {robot.postures}")
         if config.data_hint not in (abi.CONSTANTS["USR_KIN_DATA_NULL"], abi.CONSTANTS["USR_KIN_DATA_KINSTAT"]):
             problems.append(f"answers an unknown data hint {config.data_hint}")
         if plugin.kin_config(plugin.routine + "_unknown").status == 0:

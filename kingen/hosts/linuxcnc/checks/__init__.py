@@ -4,11 +4,15 @@ another assembly mode (:mod:`.forward`); and ``CHECKS``: every check a LinuxCNC 
 in report order."""
 
 from ....verify.checks import Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Values, Warnings
+from .five_axis import FiveAxisForward
 from .forward import Forward
 from .refusal import Refusal
 
 CHECKS = (Definition(), Refusal(), Values(), Warnings(), Closure(), Jacobian(), RoundTrip(), Forward(),
           Determinism(), Machine(), Golden())
 """Every check a LinuxCNC module gets, in report order."""
+WRIST_CHECKS = (Definition(), Refusal(), Values(), Warnings(), FiveAxisForward(), Determinism(), Golden())
+"""The checks of a five-axis module (a robot with a wrist): its forward is judged by
+:class:`.five_axis.FiveAxisForward` (tool tip and axis, then the inverse of what it returns)."""
 
-__all__ = ["CHECKS", "Forward", "Refusal"]
+__all__ = ["CHECKS", "FiveAxisForward", "Forward", "Refusal", "WRIST_CHECKS"]

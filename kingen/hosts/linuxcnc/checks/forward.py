@@ -21,20 +21,24 @@ from ....verify.options import value_tolerance_mm
 FORWARD_POSES = 1000
 
 
+def regular_mask(robot, poses):
+    """(n,) which poses (n, 6) (mm, degrees) are reachable and regular at the robot's one
+    posture (a one-posture view, no wrist), and the reference's joints (n, dof) mm and radians."""
+    expected = solve(robot, t6_from_pose(poses))
+    good = expected.warnings[:, 0] == WARNINGS["WARN_GOOD_SOLUTION"]
+    joints = expected.joints[:, :, 0]
+    if not np.any(good):
+        return good, joints
+    wrenches, _ = posture_wrenches(robot, expected.points[good], expected.joints[good])
+    start = np.concatenate([poses[good, :3], np.radians(poses[good, 3:])], axis=1)
+    good[good] = pose_conditioning(robot, wrenches[:, 0], start, free_mask(robot)) > ROUND_TRIP_MIN_CONDITIONING
+    return good, joints
+
+
 def regular_poses(robot, poses):
     """The poses (m, 6) (mm, degrees) of ``poses`` that are reachable and regular at the
     robot's one posture (a one-posture view), with their reference joints (m, dof), mm and radians."""
-    t6 = t6_from_pose(poses)
-    expected = solve(robot, t6)
-    good = expected.warnings[:, 0] == WARNINGS["WARN_GOOD_SOLUTION"]
-    poses, t6 = poses[good], t6[good]
-    joints = expected.joints[good, :, 0]
-    if not len(poses):
-        return poses, joints
-    wrenches, _ = posture_wrenches(robot, expected.points[good], expected.joints[good])
-    start = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
-    conditioning = pose_conditioning(robot, wrenches[:, 0], start, free_mask(robot))
-    regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
+    regular, joints = regular_mask(robot, poses)
     return poses[regular], joints[regular]
 
 
@@ -69,7 +73,7 @@ class Forward(VerifyCheck, name="forward", needs="compared poses"):
             statistics = (f"iterations mean {counted.mean():.2f}, max {int(counted.max())}" if len(counted)
                           else "no iteration count (no pin <module>.iterations)" if np.any(converged) else "")
             parts.append(f"{label}: {int(np.count_nonzero(right))} of {len(poses)} returned the pose, "
-                         f"{int(np.count_nonzero(failed))} failed ({_codes(returns[failed])}), "
+                         f"{int(np.count_nonzero(failed))} failed ({codes_text(returns[failed])}), "
                          f"{int(np.count_nonzero(wrong))} returned another pose"
                          f"{f' (up to {float(np.max(position[wrong])):.3g} mm away)' if np.any(wrong) else ''}"
                          f"{'; ' + statistics if statistics else ''}")
@@ -96,6 +100,6 @@ def _diagnoses(module, codes):
             f"{module.routine}.max-error is {limit:g} {unit}: the forward gives up (-2) once the joints' error exceeds it"]
 
 
-def _codes(returns):
+def codes_text(returns):
     values, counts = np.unique(returns, return_counts=True)
     return ", ".join(f"{count} x {value}" for value, count in zip(values, counts)) or "none"

@@ -1,0 +1,44 @@
+"""The serial wrist's part of every host's view-model (templates/wrist.c.j2): its table as C
+text, and the whole machine's joints (the legs', then the wrist's) for a routine of all
+postures. Pure, like kingen.hosts.render."""
+
+import numpy as np
+
+from ..robot.limbs import c_double, c_vector
+
+
+def wrist_table(robot):
+    """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two rows, unit, platform
+    frame), ``start`` the tool's z axis and ``reach`` (mm) the tool tip's distance along it from
+    the wrist centre, every wrist joint at 0 (kingen.robot.wrist.Wrist)."""
+    wrist = robot.wrist
+    return {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(wrist.tool[:3, 2]),
+            "reach": c_double(wrist.reach)}
+
+
+def whole_view(robot, parallel_view, build_info):
+    """The shared view-model (kingen.hosts.render.robot_view) of ``robot`` (with a wrist) from its
+    parallel part's ``parallel_view``: joints the legs' (their posture digits one up: the wrist's
+    branch is the last digit) then the wrist's (digit 0, radians, travel in degrees), the joint
+    and posture counts, the wrist's table and ``build_info`` the library's build information."""
+    legs = [{**joint, "bit": joint["bit"] + 1 if joint["bit"] >= 0 else -1} for joint in parallel_view["joints"]]
+    wrist = robot.wrist
+    joints = legs + [{
+        "index": robot.dof + index,
+        "name": name,
+        "model": "wrist",
+        "units": "radians",
+        "bit": 0,
+        "limited": int(bool(limited)),
+        "lower": c_double(wrist.lower[index] if limited else 0.0),
+        "upper": c_double(wrist.upper[index] if limited else 0.0),
+        "travel_text": f"[{np.degrees(wrist.lower[index]):.10g}, {np.degrees(wrist.upper[index]):.10g}] degrees"
+        if limited else "",
+    } for index, name, limited in zip(range(len(wrist.names)), wrist.names,
+                                      np.isfinite(wrist.lower) | np.isfinite(wrist.upper))]
+    wrist_terms = [f"joints[{joint['index']}].value[0] + joints[{joint['index']}].value[1]" for joint in joints[robot.dof:]]
+    return {**parallel_view, "dof": robot.joint_count, "postures": robot.postures, "joints": joints,
+            "two_branch_count": parallel_view["two_branch_count"] + 1,
+            "joint_sum": parallel_view["joint_sum"] + wrist_terms,
+            "any_limits": any(joint["limited"] for joint in joints), "wrist": wrist_table(robot),
+            "build_info": build_info}

@@ -1,0 +1,130 @@
+"""The inverse kinematics of a parallel part with a two-axis wrist, from the tool pose, in
+closed form (kingen.robot.wrist says which wrists; docs/how-to/hybrid.md).
+
+The tool pose is read as a five-axis machine reads it: the tool tip q and the tool's z axis w
+(the T6's third row); the turn about the tool axis is free. With the tool tip on the tool's z
+axis at ``reach`` from the wrist centre, the wrist centre is p = q - reach w; the parallel
+part's closed form (kingen.kinematics.parasitic) gives its rotation R for p, and the reference
+its legs' joints. The wrist must then turn the tool's zero-joint axis z0 onto w_p = R^T w
+(platform frame): Rot(a1, t1) Rot(a2, t2) z0 = w_p. The intermediate c = Rot(a2, t2) z0 has
+a2.c = a2.z0, a1.c = a1.w_p and |c| = 1: c = alpha a1 + beta a2 + g (a1 x a2), with
+g = +/- sqrt(D) / |a1 x a2|, D = 1 - |alpha a1 + beta a2|^2 the wrist's normalised radicand;
+branch 0 takes g >= 0, branch 1 g < 0 (an A/C head's flip). t2 turns z0 onto c about a2, t1
+turns c onto w_p about a1 (each an atan2 of the vectors' parts normal to the axis).
+
+The answer is the reference's kingen.kinematics.reference.Solution over the whole machine's
+joints (the legs', then the wrist's) and postures (the parallel part's posture times 2 plus the
+wrist's branch). Its radicands are the legs', then for the first wrist joint 1 - (a1.w_p)^2 and
+for the second D, so that the reference's rules give the wrist's warnings: D below -1e-5 (no
+wrist angle reaches w) is unreachable; |D| within 1e-5 (the branches meet), or 1 - (a1.w_p)^2
+within 1e-5 (the tool axis along the first axis: t1 is lost, the wrist's singularity) is
+singular; a wrist joint outside its travel is beyond the joint limits. Each posture's warning is
+the worst of the parallel part's and the wrist's. A T6 the parallel part cannot answer
+(non-finite, or no rotation for its wrist centre) is unreachable in every posture; a non-finite
+one has wrist joints 0, as the reference gives its legs. :func:`tool_turn` says how far (rad)
+the asked tool frame is turned about the tool axis from the machine's: the answer ignores it.
+"""
+
+import numpy as np
+
+from .parasitic import solve_parasitic
+from .routine import SINGULAR_TOLERANCE, WARNINGS
+
+RANK = np.zeros(max(WARNINGS.values()) + 1, dtype=int)
+RANK[[WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]]] = 1, 2, 3
+"""Per WARN_* code, its rank: which warning wins when the parallel part and the wrist give two."""
+
+
+def rotation_about(axis, angle):
+    """Rotation matrices (n, 3, 3) by ``angle`` (n,) rad about the unit ``axis`` (3,) (Rodrigues)."""
+    cross = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    angle = np.asarray(angle, dtype=float)[:, None, None]
+    return np.eye(3) + np.sin(angle) * cross + (1.0 - np.cos(angle)) * (cross @ cross)
+
+
+def angle_about(axis, start, end):
+    """(n,) the angle (rad, (-pi, pi]) about the unit ``axis`` (3,) or (n, 3) from ``start`` to
+    ``end`` (n, 3 each), measured between their parts normal to the axis."""
+    start = start - np.sum(start * axis, -1)[:, None] * axis
+    end = end - np.sum(end * axis, -1)[:, None] * axis
+    return np.arctan2(np.sum(np.cross(start, end) * axis, -1), np.sum(start * end, -1))
+
+
+def _wrist_branches(wrist, target):
+    """(angles (n, 2 branches, 2 joints) rad, radicand (n,), aligned (n,) 1 - (a1.w_p)^2) for the
+    tool axis ``target`` w_p (n, 3), platform frame; see the module docstring."""
+    first, second = wrist.axes
+    start = wrist.tool[:3, 2]
+    cosine = first @ second
+    normal = np.cross(first, second)
+    onto_first, onto_second = target @ first, np.full(len(target), start @ second)
+    alpha = (onto_first - cosine * onto_second) / (1.0 - cosine * cosine)
+    beta = (onto_second - cosine * onto_first) / (1.0 - cosine * cosine)
+    particular = np.outer(alpha, first) + np.outer(beta, second)
+    radicand = 1.0 - np.sum(particular * particular, -1)
+    step = np.sqrt(np.where(radicand > 0.0, radicand, 0.0)) / np.linalg.norm(normal)
+    angles = []
+    for sign in (1.0, -1.0):
+        middle = particular + np.outer(sign * step, normal)
+        angles.append(np.stack([angle_about(first, middle, target),
+                                angle_about(second, np.broadcast_to(start, middle.shape), middle)], -1))
+    return np.stack(angles, 1), radicand, 1.0 - onto_first * onto_first
+
+
+def worst(first, second):
+    """Elementwise the warning of higher RANK of two WARN_* code arrays."""
+    return np.where(RANK[second] > RANK[first], second, first)
+
+
+def solve_tool(robot, t6, solve_parallel, solution_type):
+    """Every posture of ``robot`` (a Robot with a wrist) for tool T6 arrays (n, 4, 4, base frame,
+    mm): ``solve_parallel`` (robot, T6) is the reference's solver of the parallel part,
+    ``solution_type`` its Solution, which this returns (module docstring) with ``platform`` the
+    parallel part's pose for each T6."""
+    parallel, wrist, dof = robot.parallel, robot.wrist, robot.dof
+    t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
+    axis, tip = t6[:, 2, :3], t6[:, 3, :3]
+    platform = np.tile(np.eye(4), (len(t6), 1, 1))
+    platform[:, 3, :3] = tip - wrist.reach * axis
+    machine = solve_parasitic(parallel, platform).t6
+    legs = solve_parallel(parallel, machine)
+    rotation = np.swapaxes(machine[:, :3, :3], 1, 2)
+    angles, radicand, aligned = _wrist_branches(wrist, np.einsum("nji,nj->ni", rotation, axis))
+    angles = np.where(legs.finite[:, None, None] & np.isfinite(angles), angles, 0.0)
+    if wrist.branch is not None:  # a one-posture view: its branch's joints in both columns
+        angles = angles[:, [wrist.branch, wrist.branch]]
+    branch_joints = np.concatenate([legs.branch_joints, np.swapaxes(angles, 1, 2)], axis=1)
+    radicands = np.concatenate([legs.radicands, aligned[:, None], radicand[:, None]], axis=1)
+    lower, upper = robot.travel_limits()
+    beyond = np.any((angles < lower[dof:]) | (angles > upper[dof:]), axis=2)
+    codes = np.where(beyond, WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_GOOD_SOLUTION"])
+    codes = np.where(np.any(np.abs(radicands[:, dof:]) <= SINGULAR_TOLERANCE, axis=1)[:, None],
+                     WARNINGS["WARN_SINGULAR_SOLUTION"], codes)
+    codes = np.where(~(radicand >= -SINGULAR_TOLERANCE)[:, None], WARNINGS["WARN_UNREACHABLE"], codes)
+    kept = (0, 1) if wrist.branch is None else (wrist.branch,)
+    codes = codes[:, :len(kept)]
+    warnings = worst(np.repeat(legs.warnings, len(kept), axis=1),
+                     np.tile(codes, (1, parallel.postures))).astype(np.int32)
+    branches = tuple(tuple(limbs) + (branch,) * len(wrist.names) for limbs in legs.posture_branches for branch in kept)
+    return solution_type(branch_joints=branch_joints, warnings=warnings, radicands=radicands, finite=legs.finite,
+                         posture_branches=branches, constraint=legs.constraint, points=legs.points, platform=machine)
+
+
+def tool_t6(robot, platform, wrist_joints):
+    """(n, 4, 4) the tool's T6 (base frame, mm) of ``robot`` (with a wrist) for its platform's
+    T6 ``platform`` (n, 4, 4) and the wrist's joints (n, 2) rad: the forward of the wrist."""
+    rotation = np.swapaxes(platform[:, :3, :3], 1, 2)
+    turned = (rotation @ rotation_about(robot.wrist.axes[0], wrist_joints[:, 0])
+              @ rotation_about(robot.wrist.axes[1], wrist_joints[:, 1]))
+    tool = np.zeros((len(platform), 4, 4))
+    tool[:, :3, :3] = np.swapaxes(turned @ robot.wrist.tool[:3, :3], 1, 2)
+    tool[:, 3, :3] = platform[:, 3, :3] + turned @ robot.wrist.tool[:3, 3]
+    tool[:, 3, 3] = 1.0
+    return tool
+
+
+def tool_turn(asked, reached):
+    """(n,) how far (rad, (-pi, pi]) the asked tool T6 ``asked`` (n, 4, 4) is turned about the
+    tool axis from the machine's ``reached`` (n, 4, 4): the part of the pose a five-axis reading
+    leaves free."""
+    return angle_about(reached[:, 2, :3], reached[:, 0, :3], asked[:, 0, :3])

@@ -1,0 +1,89 @@
+"""Forward kinematics of a machine with a wrist (kingen.robot.wrist), numpy only: the parallel
+part's forward (kingen.kinematics.forward's Newton, along the manifold of a machine with task
+coordinates) from the legs' joints, then the wrist's forward (kingen.kinematics.wrist.tool_t6)
+from the wrist's; and the joint rates per tool twist from central differences of that map,
+independent of the inverse's closed form (what verify's ``jacobian`` check compares with).
+
+Poses are (x, y, z) mm and (roll, pitch, yaw) rad here, as in kingen.kinematics.forward.
+"""
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..conventions import pose_from_t6
+from .forward import SEARCH, assemblies, free_mask, newton, t6_of
+from .reference import solve
+from .wrist import tool_t6
+
+
+def platform_poses(t6):
+    """(n, 6) poses (mm, rad) of T6 arrays (n, 4, 4): Newton's starts from a platform's T6."""
+    pose = pose_from_t6(t6)
+    return np.concatenate([pose[:, :3], np.radians(pose[:, 3:])], axis=1)
+
+
+def tool_forward(robot, joints, near):
+    """The whole machine's forward for ``joints`` (n, joint_count) (mm, rad): (tool T6 (n, 4, 4),
+    the platform's pose (n, 6) mm and rad, the legs' largest closure residual (n,) mm). Newton
+    starts each platform at ``near`` (n, 6) and converges to the assembly mode nearest it."""
+    parallel = robot.parallel
+    joints = np.asarray(joints, dtype=float)
+    platform, residual = newton(parallel, near, joints[:, :robot.dof], free_mask(parallel))
+    return tool_t6(robot, t6_of(platform), joints[:, robot.dof:]), platform, residual
+
+
+def tool_rates(robot, joints, near, step_mm, step_rad):
+    """(n, joint_count, 6) the joint rates per unit tool twist (translations along base x, y,
+    z, mm; rotations about base x, y, z through the base origin, rad: the twists of
+    kingen.kinematics.singularity.twist_poses) at ``joints`` (n, joint_count), the platform
+    near ``near`` (n, 6). The forward map's derivative with respect to each joint, of the tool
+    tip and the tool axis, by Richardson-extrapolated central differences (steps ``step_mm``
+    for the legs, ``step_rad`` for the wrist, and half of them), is solved by least squares for
+    the tip's rate v + omega x tip and the axis's rate omega x axis: the five driven directions;
+    the twist about the tool axis asks neither and gets zero rates."""
+    joints = np.asarray(joints, dtype=float)
+    count, total = joints.shape
+    steps = np.where(np.arange(total) < robot.dof, step_mm, step_rad)
+    derivatives = []
+    for halving in (1.0, 2.0):
+        moved = np.repeat(joints[:, None, None], 2, axis=2).repeat(total, axis=1)  # (n, joint, sign, joint)
+        for joint in range(total):
+            moved[:, joint, 0, joint] -= steps[joint] / halving
+            moved[:, joint, 1, joint] += steps[joint] / halving
+        tool, _, _ = tool_forward(robot, moved.reshape(-1, total), np.repeat(near, 2 * total, axis=0))
+        tool = tool.reshape(count, total, 2, 4, 4)
+        motion = np.concatenate([tool[..., 3, :3], tool[..., 2, :3]], axis=-1)  # tip and axis
+        derivatives.append((motion[:, :, 1] - motion[:, :, 0]) / (2.0 * steps[None, :, None] / halving))
+    derivative = np.swapaxes((4.0 * derivatives[1] - derivatives[0]) / 3.0, 1, 2)  # (n, 6, joint)
+    tool, _, _ = tool_forward(robot, joints, near)
+    tip, axis = tool[:, 3, :3], tool[:, 2, :3]
+    omega = np.eye(3)
+    asked = np.zeros((count, 6, 6))  # (n, tip and axis rate, twist)
+    asked[:, :3, :3] = np.eye(3)
+    asked[:, :3, 3:] = np.swapaxes(np.cross(omega[None], tip[:, None]), 1, 2)
+    asked[:, 3:, 3:] = np.swapaxes(np.cross(omega[None], axis[:, None]), 1, 2)
+    # The axis's rows as mm of arc at the robot's size, so that both weigh alike; the pseudo-inverse
+    # solves them exactly (the derivative has full column rank away from the machine's singularities).
+    weights = np.array([1.0] * 3 + [robot.size_mm] * 3)[:, None]
+    return np.linalg.pinv(derivative * weights) @ (asked * weights)
+
+
+def tool_assemblies(robot, joints, near, search=SEARCH):
+    """AssemblyModes of ``robot`` (with a wrist) for ``joints`` (joint_count,) (mm, rad): the
+    parallel part's assembly modes (kingen.kinematics.forward.assemblies, searched near the
+    platform's pose for the tool pose ``near`` (6,) (mm, rad), or its home where the reference
+    has none), each carried to the tool by the wrist's forward: poses are the tool's (mm, rad),
+    nearest ``near`` first, residuals the legs'."""
+    joints, near = np.asarray(joints, dtype=float), np.asarray(near, dtype=float)
+    solved = solve(robot, t6_of(near[None]))
+    start = platform_poses(solved.platform)[0]
+    if not np.all(np.isfinite(start)):
+        start = np.concatenate([robot.parallel.verification.home[:3], np.radians(robot.parallel.verification.home[3:])])
+    modes = assemblies(robot.parallel, joints[:robot.dof], start, search)
+    found = []
+    for mode in modes.found:
+        tool = tool_t6(robot, t6_of(mode.pose[None]), joints[None, robot.dof:])
+        found.append(replace(mode, pose=platform_poses(tool)[0]))
+    found.sort(key=lambda mode: np.linalg.norm(mode.pose[:3] - near[:3]))
+    return replace(modes, found=found, method=f"the parallel part, then the wrist's forward: {modes.method}")

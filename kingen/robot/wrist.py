@@ -1,0 +1,98 @@
+"""A serial wrist on the platform of a machine with task x, y, z (docs/how-to/hybrid.md).
+
+A robot file's ``wrist:`` section lists the wrist's joints in chain order, each with its axis
+and origin in the platform frame with every wrist joint at 0, and ``tool:`` places the tool
+frame in the platform frame with every wrist joint at 0 (mm, degrees). This version solves two
+revolute joints whose axes meet at the platform frame's origin (the wrist centre, the parallel
+part's task point) with the tool tip on the tool's z axis through that centre: the inverse from
+the tool pose is then in closed form (kingen.kinematics.wrist). Anything else is refused in one
+located line. :func:`with_wrist` makes the whole machine's Robot from its parallel part's:
+its joints are the legs' then the wrist's, its postures the parallel part's times the wrist's
+two branches (the branch the last bit), its verification region and golden values over the
+tool pose, and it has no task coordinates: every tool tip and tool axis is the machine's (the
+turn about the tool axis is free), and its parallel part (``Robot.parallel``) keeps them.
+"""
+
+from dataclasses import dataclass, replace
+from typing import Literal, Optional
+
+import numpy as np
+
+from ..conventions import REVOLUTE, matrix_from_pose, pose_from_t6, t6_from_matrix
+from .schema import Identifier, Strict, Travel, UnitVec3, Vec3
+
+ALIGNED = 1e-6
+"""|a x b| below this: two unit axes are parallel (refused)."""
+ON_AXIS = 1e-9
+"""How far (mm) the tool tip may be from the tool's z axis through the wrist centre."""
+
+
+class WristJoint(Strict):
+    """One wrist joint: its axis and a point on it, platform frame, every wrist joint at 0."""
+
+    name: Identifier
+    type: Literal["revolute", "prismatic"] = "revolute"
+    axis: UnitVec3
+    origin: Vec3 = [0.0, 0.0, 0.0]
+    travel: Optional[Travel] = None
+    """Degrees."""
+
+
+@dataclass(frozen=True, eq=False)
+class Wrist:
+    """The wrist in internal units: ``names`` (k,), ``axes`` (k, 3) unit, platform frame at zero,
+    ``lower``/``upper`` (k,) rad (-inf/+inf without travel), ``tool`` (4, 4) the tool frame in
+    the platform frame at zero, ``reach`` the signed distance (mm) from the wrist centre to the
+    tool tip along the tool's z axis; ``branch`` None (the wrist's two branches are postures) or
+    the one branch (0 or 1) a one-posture view holds it on (kingen.robot.one_posture)."""
+
+    names: tuple
+    axes: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    tool: np.ndarray
+    reach: float
+    branch: Optional[int] = None
+
+
+def wrist_of(section, robot, locate):
+    """The Wrist of a validated robot file's ``wrist`` and ``tool`` (mm and degrees) for the
+    parallel part ``robot``; a located error for what this version does not solve."""
+    if section.tool is None:
+        raise locate.error(["tool"], "required with a wrist: the tool frame in the platform frame, wrist joints at 0")
+    if robot.task != ("x", "y", "z") or robot.length_unit != "mm":
+        raise locate.error(["wrist"], "a wrist needs a parallel part in mm with task: [x, y, z] (the wrist centre)")
+    for index, joint in enumerate(section.wrist):
+        if joint.type != "revolute":
+            raise locate.error(["wrist", index, "type"], "this version solves revolute wrist joints only")
+        if any(joint.origin):
+            raise locate.error(["wrist", index, "origin"], "this version solves axes through the platform frame's "
+                                                           "origin (the wrist centre) only: [0, 0, 0]")
+    if len(section.wrist) != 2:
+        raise locate.error(["wrist"], f"this version solves a wrist of two joints, not {len(section.wrist)}")
+    axes = np.array([joint.axis for joint in section.wrist])
+    tool = matrix_from_pose(section.tool)
+    if np.linalg.norm(np.cross(axes[0], axes[1])) < ALIGNED:
+        raise locate.error(["wrist", 1, "axis"], "parallel to the first joint's axis: the wrist would turn about one axis")
+    if np.linalg.norm(np.cross(axes[1], tool[:3, 2])) < ALIGNED:
+        raise locate.error(["tool"], "the tool's z axis lies along the last joint's axis, which would not tilt it")
+    reach = float(tool[:3, 3] @ tool[:3, 2])
+    if np.linalg.norm(tool[:3, 3] - reach * tool[:3, 2]) > ON_AXIS:
+        raise locate.error(["tool"], "this version solves a tool tip on the tool's z axis through the wrist centre only")
+    scale = REVOLUTE.yaml_scale
+    travel = [joint.travel or [-np.inf, np.inf] for joint in section.wrist]
+    return Wrist(names=tuple(joint.name for joint in section.wrist), axes=axes,
+                 lower=np.array([t[0] for t in travel]) * scale, upper=np.array([t[1] for t in travel]) * scale,
+                 tool=tool, reach=reach)
+
+
+def with_wrist(parallel, document, locate):
+    """The whole machine's Robot: ``parallel`` (a Robot, its region the platform's, no golden
+    entries) with the validated robot file ``document``'s wrist and tool. Its verification region
+    is centred on the tool pose at the platform's home with every wrist joint at 0 (the same
+    half-widths); its golden entries are the file's, over the tool pose."""
+    wrist = wrist_of(document, parallel, locate)
+    home = matrix_from_pose(parallel.verification.home) @ wrist.tool
+    region = parallel.verification.model_copy(update={"home": pose_from_t6(t6_from_matrix(home)).tolist()})
+    return replace(parallel, wrist=wrist, parallel_part=parallel, verification=region, golden=tuple(document.golden),
+                   task=(), forward_free=())
