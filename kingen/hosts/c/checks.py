@@ -92,7 +92,14 @@ class OnRegularPairs(VerifyCheck):
 
     poses = FORWARD_POSES
 
+    def refusal(self, context):
+        """Why this check does not apply to the context's robot, or None."""
+        return None
+
     def run(self, context):
+        reason = self.refusal(context)
+        if reason is not None:
+            return [not_exercised(self.name, reason)]
         t6 = context.tally.first[0][:self.poses]
         pairs = regular_pairs(context.robot, t6)
         if not len(pairs[0]):
@@ -141,11 +148,10 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
 class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
     poses = JACOBIAN_PAIRS
 
-    def run(self, context):
+    def refusal(self, context):
         if context.robot.wrist is not None:
-            return [not_exercised(self.name, "a robot with a wrist: this version's library answers its Jacobian "
-                                             "with -3 (not available)")]
-        return super().run(context)
+            return "a robot with a wrist: this version's library answers its Jacobian with -3 (not available)"
+        return None
 
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
@@ -171,11 +177,10 @@ class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
 class CDirectIndex(OnRegularPairs, name="c direct index", needs="compared poses"):
     poses = JACOBIAN_PAIRS
 
-    def run(self, context):
+    def refusal(self, context):
         if context.robot.dof != 6:
-            return [not_exercised(self.name, f"the direct index is defined for six force lines; "
-                                             f"{context.robot.name} has {context.robot.dof} limbs")]
-        return super().run(context)
+            return f"the direct index is defined for six force lines; {context.robot.name} has {context.robot.dof} limbs"
+        return None
 
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
