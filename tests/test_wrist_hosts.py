@@ -15,6 +15,7 @@ from kingen.hosts.delmia.build import build_plugin
 from kingen.hosts.delmia.loader import Plugin
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
+from kingen.kinematics.singularity import branch_table, representative_postures
 from kingen.robot.model import load_robot, resolve_robot_path
 
 FILE = resolve_robot_path("exechon_wrist")
@@ -94,3 +95,13 @@ def test_the_c_librarys_forward_returns_the_tool_tip_and_axis_and_its_jacobian_s
     assert np.max(np.abs(back[np.arange(len(good)), :, posture] - expected.joints[good, :, posture])) <= 1e-9
     rows, warning = loaded.jacobian(found[0], 0)
     assert warning == -3 and np.all(np.isnan(rows))
+
+
+def test_branch_tables_count_the_whole_machines_joints_with_the_wrist_branch_last():
+    """Posture = 2 * parallel posture + wrist branch: the one-branch legs take branch 0 in
+    both postures, each wrist joint its posture's last bit; each joint's first posture per
+    branch stands for it (what the hosts' branch summaries and verify's columns read)."""
+    robot = load_robot(FILE)
+    assert branch_table(robot).tolist() == [[0, 0, 0, 0, 0], [0, 0, 0, 1, 1]]
+    assert representative_postures(robot).tolist() == [[0, 0]] * 3 + [[0, 1]] * 2
+    assert branch_table(robot.parallel).tolist() == [[0, 0, 0]]
