@@ -10,10 +10,19 @@ from ..robot.limbs import c_double, c_vector
 def wrist_table(robot):
     """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two rows, unit, platform
     frame), ``start`` the tool's z axis and ``reach`` (mm) the tool tip's distance along it from
-    the wrist centre, every wrist joint at 0 (kingen.robot.wrist.Wrist)."""
+    the wrist centre, every wrist joint at 0 (kingen.robot.wrist.Wrist), then what follows from
+    them alone, by kingen.kinematics.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
+    its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
+    ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward."""
     wrist = robot.wrist
-    return {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(wrist.tool[:3, 2]),
-            "reach": c_double(wrist.reach)}
+    first, second = wrist.axes
+    start = wrist.tool[:3, 2]
+    cosine, normal, onto_second = first @ second, np.cross(first, second), start @ second
+    return {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
+            "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
+            "onto_second": c_double(onto_second), "normal": c_vector(normal),
+            "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
+            "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3])}
 
 
 def whole_view(robot, parallel_view, build_info):

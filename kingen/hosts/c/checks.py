@@ -8,11 +8,12 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   return it, far ones may fail or return another assembly mode (a pose the reference gives these
   joints, within a thousand times the value bounds) but never a pose without these joints. A
   machine with task coordinates is started off in those only, and the whole pose it writes
-  (its parasitic coordinates too) is compared.
+  (its parasitic coordinates too) is compared; a machine with a wrist is started off in every
+  coordinate, and the tool's tip and axis it writes are compared (the turn about the axis is free).
 - ``c jacobian``: the library's analytic Jacobian against kingen's
   (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample (a machine
   with task coordinates: the limbs' rows at the machine's pose, which the regular sampled poses
-  are, those off its manifold being unreachable).
+  are, those off its manifold being unreachable); not exercised for a wrist, whose library has none.
 - ``c direct index``: for six-limb robots, the library's direct index against kingen's
   (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
 """
@@ -47,7 +48,7 @@ def regular_pairs(robot, t6):
     transmissions (m, dof)) of one regular posture per pose of ``t6`` where it has one:
     reachable, good, away from limb singularities and well conditioned for the forward."""
     expected = solve(robot, t6)
-    wrenches, transmissions = posture_wrenches(robot, expected.points, expected.joints)
+    wrenches, transmissions = _legs_wrenches(robot, expected)
     good = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
             & np.all(np.abs(transmissions) > JACOBIAN_MIN_TRANSMISSION, axis=2)
             & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None])
@@ -55,13 +56,23 @@ def regular_pairs(robot, t6):
     # One posture per pose, taken round the postures so that each takes part.
     posture = np.array([np.nonzero(good[index])[0][index % np.count_nonzero(good[index])] for index in pose_index],
                        dtype=int)
-    sampled = pose_from_t6(t6[pose_index])
+    sampled = pose_from_t6(t6[pose_index] if robot.wrist is None else expected.platform[pose_index])
     start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)
-    conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free_mask(robot))
+    conditioning = pose_conditioning(robot.parallel, wrenches[pose_index, posture], start, free_mask(robot.parallel))
     keep = conditioning > ROUND_TRIP_MIN_CONDITIONING
     pose_index, posture = pose_index[keep], posture[keep]
     return (pose_index, posture, expected.joints[pose_index, :, posture], conditioning[keep],
             wrenches[pose_index, posture], transmissions[pose_index, posture])
+
+
+def _legs_wrenches(robot, expected):
+    """(wrenches (n, postures, dof, 6), transmissions (n, postures, dof)) of the limbs in the
+    reference's ``expected`` solution: a wrist's from its parallel part at the platform's pose
+    (the legs' joints are the same in both wrist branches, posture = 2 * parallel + branch)."""
+    if robot.wrist is None:
+        return posture_wrenches(robot, expected.points, expected.joints)
+    wrenches, transmissions = posture_wrenches(robot.parallel, expected.points, expected.joints[:, :robot.dof, ::2])
+    return np.repeat(wrenches, 2, axis=1), np.repeat(transmissions, 2, axis=1)
 
 
 def _same_joints(robot, t6, posture, joints):
@@ -81,10 +92,14 @@ class OnRegularPairs(VerifyCheck):
 
     poses = FORWARD_POSES
 
+    def refusal(self, context):
+        """Why this check does not apply to the context's robot, or None."""
+        return None
+
     def run(self, context):
-        if context.robot.wrist is not None:
-            return [not_exercised(self.name, "a robot with a wrist: this version's library answers its forward "
-                                             "kinematics and Jacobian with -3 (not available)")]
+        reason = self.refusal(context)
+        if reason is not None:
+            return [not_exercised(self.name, reason)]
         t6 = context.tally.first[0][:self.poses]
         pairs = regular_pairs(context.robot, t6)
         if not len(pairs[0]):
@@ -109,7 +124,9 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
             found, iterations, returns = library.forward(joints, posture, matrix_from_t6(t6_of(start + offset)).reshape(-1, 16))
             found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)
             position = np.max(np.abs(found_t6[:, 3, :3] - t6[pose_index, 3, :3]), axis=1)
-            rotation = np.max(np.abs(found_t6[:, :3, :3] - t6[pose_index, :3, :3]), axis=(1, 2))
+            # A wrist's tool pose is its tip and axis: the turn about the axis is free.
+            rows = slice(0, 3) if robot.wrist is None else slice(2, 3)
+            rotation = np.max(np.abs(found_t6[:, rows, :3] - t6[pose_index, rows, :3]), axis=(1, 2))
             converged = returns == 0
             right = converged & (position <= allowed_mm) & (rotation <= allowed_rad)
             wrong, failed = converged & ~right, ~converged
@@ -130,6 +147,11 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
 
 class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
     poses = JACOBIAN_PAIRS
+
+    def refusal(self, context):
+        if context.robot.wrist is not None:
+            return "a robot with a wrist: this version's library answers its Jacobian with -3 (not available)"
+        return None
 
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
@@ -155,11 +177,10 @@ class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
 class CDirectIndex(OnRegularPairs, name="c direct index", needs="compared poses"):
     poses = JACOBIAN_PAIRS
 
-    def run(self, context):
+    def refusal(self, context):
         if context.robot.dof != 6:
-            return [not_exercised(self.name, f"the direct index is defined for six force lines; "
-                                             f"{context.robot.name} has {context.robot.dof} limbs")]
-        return super().run(context)
+            return f"the direct index is defined for six force lines; {context.robot.name} has {context.robot.dof} limbs"
+        return None
 
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine

@@ -50,7 +50,8 @@ def view_model(robot):
     rows read from the geometry passed in, and the forward's settings."""
     check_robot(robot)
     view = robot_view(robot, HOST)
-    free = free_mask(robot)
+    parallel = robot.parallel  # a wrist's forward solves its parallel part's task coordinates, then the wrist
+    free = free_mask(parallel)
     joints = [{**joint, "unit": "radians" if joint_type.wraps else "mm"}
               for joint, joint_type in zip(view["joints"], robot.joint_types)]
     digits = ", ".join(f"{joint['name']} {joint['bit']}" for joint in joints if joint["bit"] >= 0)
@@ -67,11 +68,13 @@ def view_model(robot):
         "digits": digits or "none (one posture)",
         "revolute": [int(joint_type.wraps) for joint_type in robot.joint_types],
         "free_count": int(free.sum()),
-        "free_angles": bool(free[3:].any() or robot.task),
-        "task_words": ", ".join(robot.task),
-        "parasitic_indices": [index for index, name in enumerate(COORDINATES) if name not in robot.task],
+        "free_angles": bool(free[3:].any() or parallel.task),
+        "task_words": ", ".join(parallel.task),
+        "parasitic_indices": [index for index, name in enumerate(COORDINATES) if name not in parallel.task],
         "closed_form": tuple(free) == (True, True, True, False, False, False) and robot.models == ("rail",)
         and robot.dof == 3,
+        "limbs": robot.dof,
+        "limb_count": "KINGEN_LIMBS" if robot.wrist is not None else "NUM_DOFS",
         "free_columns": [index for index, name in enumerate(COORDINATES) if free[index]],
         "free_names": " ".join(name for index, name in enumerate(COORDINATES) if free[index]),
         "fixed_names": " ".join(name for index, name in enumerate(COORDINATES) if not free[index]) or "none",
