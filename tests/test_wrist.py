@@ -134,6 +134,10 @@ def test_warnings_the_wrist_singularity_its_limits_and_a_cone_it_cannot_reach(tm
     ("{name: ax5, axis: [1, 0, 0]", "{name: ax5, axis: [0, 0, -1]", ":21: wrist[1].axis: parallel to the first"),
     ("tool: [0, 0, -200, 180, 0, 0]", "tool: [10, 0, -200, 180, 0, 0]", ":22: tool: this version solves a tool tip"),
     ("tool: [0, 0, -200, 180, 0, 0]", "tool: [0, 0, -200, 0, 90, 0]", ":22: tool: the tool's z axis lies along"),
+    ("{name: ax5, axis: [1, 0, 0]", "{name: ax4, axis: [1, 0, 0]", ":21: wrist[1].name: joint name 'ax4' is used twice"),
+    ("{name: ax4, axis: [0, 0, 1]", "{name: leg1, axis: [0, 0, 1]", ":20: wrist[0].name: joint name 'leg1' is used twice"),
+    ("wrist:\n  - {name: ax4, axis: [0, 0, 1], travel: [-270, 270]}\n  - {name: ax5, axis: [1, 0, 0], travel: [-110, 110]}\n",
+     "", ":19: tool: a tool frame needs a wrist"),
     ("golden:\n", "golden:\n  - {source: s, pose: [0, 0, -1300, 0, 0, 0], joints: [0, 0, 0], tolerance: 1}\n",
      ":27: golden[0].joints: expected 5 joint values, got 3"),
 ])

@@ -35,10 +35,11 @@ def warnings_to_exercise(robot, vocabulary=None):
     routine's ``vocabulary`` of warnings, when it has one): verify exercises each of them,
     and the setup sheets list only these."""
     kinds = []
-    if any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
-           for limb in robot.limbs):  # a revolute travel of a full turn or more is never exceeded
-        kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
     wrist = robot.wrist is not None
+    if (any(limb.travel is not None and (not limb.joint_type.wraps or limb.travel[1] - limb.travel[0] < 360.0)
+            for limb in robot.limbs)  # a revolute travel of a full turn or more is never exceeded
+            or wrist and np.any((robot.wrist.lower > -np.pi) | (robot.wrist.upper < np.pi))):  # angles in (-pi, pi]
+        kinds.append("WARN_JOINT_LIMITS_EXCEEDED")
     if (any(limb.has_radicand for limb in robot.limbs) or (robot.task and robot.parasitic_given)  # off the manifold
             or wrist and _wrist_misses_axes(robot.wrist)):
         kinds.append("WARN_UNREACHABLE")

@@ -31,16 +31,21 @@ TRANSLATION_SINGULAR = 1e-12
 
 def branch_table(robot):
     """(postures, joint_count) int array (read-only): the branch each joint takes in each
-    posture: each limb's, then (a robot with a wrist) each wrist joint's, the posture's last bit."""
-    return _branch_table(robot.branch_bits, robot.joint_count - robot.dof)
+    posture: each limb's, then (a robot with a wrist) each wrist joint's, the posture's last bit
+    (0 where a one-posture view holds the wrist on one branch: its joints are that branch's in
+    both columns, kingen.kinematics.wrist)."""
+    held = robot.wrist is not None and robot.wrist.branch is not None
+    return _branch_table(robot.branch_bits, robot.joint_count - robot.dof, held)
 
 
 @functools.lru_cache(maxsize=64)
-def _branch_table(branch_bits, wrist_joints=0):
+def _branch_table(branch_bits, wrist_joints=0, held=False):
     postures = np.arange(2 ** sum(1 for bit in branch_bits if bit >= 0))
     table = np.stack([branch_of_posture(postures, bit) if bit >= 0 else np.zeros_like(postures)
                       for bit in branch_bits], axis=1)
-    if wrist_joints:  # posture = 2 * the parallel part's posture + the wrist's branch
+    if wrist_joints and held:
+        table = np.concatenate([table, np.zeros((len(postures), wrist_joints), dtype=table.dtype)], axis=1)
+    elif wrist_joints:  # posture = 2 * the parallel part's posture + the wrist's branch
         table = np.concatenate([np.repeat(table, 2, axis=0), np.tile([[0], [1]], (len(postures), wrist_joints))], axis=1)
     table.flags.writeable = False
     return table
@@ -55,13 +60,14 @@ def representative_postures(robot):
     """(joint_count, 2) int array (read-only): for each joint (branch_table), the first posture
     taking its branch 0 and its branch 1 (branch 0's again for one-branch limbs). A routine's
     value there stands for that branch."""
-    return _representative_postures(robot.branch_bits, robot.joint_count - robot.dof)
+    held = robot.wrist is not None and robot.wrist.branch is not None
+    return _representative_postures(robot.branch_bits, robot.joint_count - robot.dof, held)
 
 
 @functools.lru_cache(maxsize=64)
-def _representative_postures(branch_bits, wrist_joints=0):
-    table = _branch_table(branch_bits, wrist_joints)
-    bits = branch_bits + (0,) * wrist_joints
+def _representative_postures(branch_bits, wrist_joints=0, held=False):
+    table = _branch_table(branch_bits, wrist_joints, held)
+    bits = branch_bits + (-1 if held else 0,) * wrist_joints
     first = [[int(np.argmax(table[:, index] == branch)) for branch in range(2)] for index in range(len(bits))]
     representative = np.array([row if bit >= 0 else [row[0], row[0]] for row, bit in zip(first, bits)])
     representative.flags.writeable = False

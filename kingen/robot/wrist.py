@@ -28,7 +28,7 @@ ON_AXIS = 1e-9
 
 
 class WristJoint(Strict):
-    """One wrist joint: its axis and a point on it, platform frame, every wrist joint at 0."""
+    """One wrist joint: its unit axis and a point on it (mm), platform frame, every wrist joint at 0."""
 
     name: Identifier
     type: Literal["revolute", "prismatic"] = "revolute"
@@ -42,7 +42,8 @@ class WristJoint(Strict):
 class Wrist:
     """The wrist in internal units: ``names`` (k,), ``axes`` (k, 3) unit, platform frame at zero,
     ``lower``/``upper`` (k,) rad (-inf/+inf without travel), ``tool`` (4, 4) the tool frame in
-    the platform frame at zero, ``reach`` the signed distance (mm) from the wrist centre to the
+    the platform frame at zero as a column-form homogeneous matrix H (conventions.matrix_from_pose:
+    ``tool[:3, 3]`` its origin, mm; not a transposed T6), ``reach`` the signed distance (mm) from the wrist centre to the
     tool tip along the tool's z axis; ``branch`` None (the wrist's two branches are postures) or
     the one branch (0 or 1) a one-posture view holds it on (kingen.robot.one_posture)."""
 
@@ -58,11 +59,17 @@ class Wrist:
 def wrist_of(section, robot, locate):
     """The Wrist of a validated robot file's ``wrist`` and ``tool`` (mm and degrees) for the
     parallel part ``robot``; a located error for what this version does not solve."""
+    if section.wrist is None:
+        raise locate.error(["tool"], "a tool frame needs a wrist: give the wrist's joints in 'wrist', or leave 'tool' out")
     if section.tool is None:
         raise locate.error(["tool"], "required with a wrist: the tool frame in the platform frame, wrist joints at 0")
     if robot.task != ("x", "y", "z") or robot.length_unit != "mm":
         raise locate.error(["wrist"], "a wrist needs a parallel part in mm with task: [x, y, z] (the wrist centre)")
+    names = list(robot.joint_names)
     for index, joint in enumerate(section.wrist):
+        if joint.name in names:
+            raise locate.error(["wrist", index, "name"], f"joint name '{joint.name}' is used twice")
+        names.append(joint.name)
         if joint.type != "revolute":
             raise locate.error(["wrist", index, "type"], "this version solves revolute wrist joints only")
         if any(joint.origin):
@@ -90,9 +97,10 @@ def with_wrist(parallel, document, locate):
     """The whole machine's Robot: ``parallel`` (a Robot, its region the platform's, no golden
     entries) with the validated robot file ``document``'s wrist and tool. Its verification region
     is centred on the tool pose at the platform's home with every wrist joint at 0 (the same
-    half-widths); its golden entries are the file's, over the tool pose."""
+    half-widths); its golden entries are the file's, over the tool pose. Its parallel part's
+    working posture is the whole machine's without the wrist's branch (the last bit)."""
     wrist = wrist_of(document, parallel, locate)
     home = matrix_from_pose(parallel.verification.home) @ wrist.tool
     region = parallel.verification.model_copy(update={"home": pose_from_t6(t6_from_matrix(home)).tolist()})
-    return replace(parallel, wrist=wrist, parallel_part=parallel, verification=region, golden=tuple(document.golden),
-                   task=(), forward_free=())
+    return replace(parallel, wrist=wrist, verification=region, golden=tuple(document.golden), task=(), forward_free=(),
+                   parallel_part=replace(parallel, working_posture=parallel.working_posture // 2))

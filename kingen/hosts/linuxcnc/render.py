@@ -111,7 +111,7 @@ def view_model(robot, units="mm"):
     a wrist: its parallel part's at the working posture's, and the wrist (:mod:`.five_axis`)."""
     check_robot(robot)
     if robot.wrist is not None:
-        parallel = replace(robot.parallel, working_posture=robot.working_posture // 2, working_posture_given=True)
+        parallel = replace(robot.parallel, working_posture_given=True)
         return {**view_model(parallel, units), "wrist": wrist_view(robot),
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}

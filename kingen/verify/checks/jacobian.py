@@ -11,6 +11,7 @@ from ...kinematics.singularity import finite_difference_jacobian, jacobian, post
 from ...kinematics.wrist import rotation_about
 from ...kinematics.wrist_forward import platform_poses, tool_rates
 from ...runtime.text import counted
+from ..options import report_tolerance_mm
 from ..report import not_exercised
 from .base import Check, VerifyCheck
 
@@ -91,10 +92,12 @@ def jacobian_check(robot, plugin, options, t6):
               f"regular joint-postures of {len(t6)} poses: max relative difference {worst:.3g} "
               f"(at most {JACOBIAN_TOLERANCE:g})")
     if robot.wrist is not None:
-        turned = turn_change(robot, joints_of, t6, center, expected.warnings != WARNINGS["WARN_UNREACHABLE"])
-        passed = passed and turned <= VALUE_TOLERANCE_RAD * max(1.0, robot.size_mm)
-        detail += (f"; turning the tool {TURN_RAD:g} rad about its axis changes no joint: at most {turned:.3g} "
-                   f"(mm or rad)")
+        reached = expected.warnings != WARNINGS["WARN_UNREACHABLE"]
+        moved_mm, moved_rad = turn_change(robot, joints_of, t6, center, reached)
+        bound_mm = report_tolerance_mm(robot)
+        passed = passed and moved_mm <= bound_mm and moved_rad <= VALUE_TOLERANCE_RAD
+        detail += (f"; turning the tool {TURN_RAD:g} rad about its axis changes no joint: at most {moved_mm:.3g} mm "
+                   f"(at most {bound_mm:g}) and {moved_rad:.3g} rad (at most {VALUE_TOLERANCE_RAD:g})")
     return Check("jacobian", passed, detail, judged=compared)
 
 
@@ -124,14 +127,14 @@ and this many radians (wrist): large against Newton's convergence (1e-13 of the 
 
 
 def turn_change(robot, joints_of, t6, joints, reached):
-    """The largest change (mm or rad) of the routine's joints of postures the reference reaches
-    (``reached`` (n, postures)) when each tool T6 turns TURN_RAD about its own tool axis: a
-    five-axis reading ignores that turn."""
+    """(mm, rad) the largest change of the routine's prismatic and revolute joints of postures
+    the reference reaches (``reached`` (n, postures)) when each tool T6 turns TURN_RAD about its
+    own tool axis: a five-axis reading ignores that turn."""
     turned = np.array(t6, dtype=float)
     rotation = rotation_about(np.array([0.0, 0.0, 1.0]), np.full(len(t6), TURN_RAD))
     turned[:, :3, :3] = np.swapaxes(rotation, 1, 2) @ turned[:, :3, :3]  # rows n, o turn about a
-    change = joint_errors(joints_of(turned), joints, robot.revolute)
-    return float(np.max(np.where(reached[:, None, :], change, 0.0), initial=0.0))
+    change = np.where(reached[:, None, :], joint_errors(joints_of(turned), joints, robot.revolute), 0.0)
+    return tuple(float(np.max(change[:, robot.revolute == revolute], initial=0.0)) for revolute in (False, True))
 
 
 class Jacobian(VerifyCheck, name="jacobian", needs="compared poses", item="jacobian"):
