@@ -112,6 +112,7 @@ class _Checker:
         self.manifold = Manifold(robot, settings.task_only, csv) if robot.task else None
         self.five_axis = FiveAxis(robot) if robot.wrist is not None else None
         self.world = self.five_axis is not None and not csv
+        self.interpolation = "linuxcnc" if self.world else settings.host  # a five-axis world moves linearly
         self.posture = robot.working_posture if settings.posture is None else settings.posture
         self.limits = limits_for(robot, settings.ini)
         self.evaluator = Evaluator(robot, self.posture, self.limits)
@@ -138,7 +139,7 @@ class _Checker:
     def _tabulate(self):
         """The gathered pieces' moves as arrays, for evaluate: which are straight lines in the
         host's interpolation, their start and end poses, their assembly signs."""
-        host = self.settings.host
+        host = self.interpolation
         self.simple = np.array([p.straight and (host == "linuxcnc" or np.array_equal(p.move.start[3:], p.move.end[3:]))
                                 for p in self.pieces])
         self.starts = np.array([p.move.start for p in self.pieces])
@@ -155,7 +156,7 @@ class _Checker:
             t6[simple] = t6_from_pose(poses[simple])
         for number in np.unique(piece[~simple]):
             rows = np.flatnonzero(piece == number)
-            poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.settings.host)
+            poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.interpolation)
         if self.manifold is not None:
             poses, t6 = self.manifold.samples(poses)
         if self.world:
