@@ -128,3 +128,15 @@ def test_the_routine_cross_check_agrees_with_the_reference(host, tmp_path, capsy
     solver = json.loads((tmp_path / "r.json").read_text())["settings"]["solver"]
     difference = float(solver.split("largest difference from the reference ")[1].split()[0])
     assert difference < 1e-9 and "0 warnings differing" in solver
+
+
+def test_the_tricepts_head_through_a_0_is_caught_by_its_wrist_joints_speed(tmp_path, capsys):
+    needs_interpreter()
+    program, ini = tmp_path / "flip.ngc", tmp_path / "machine.ini"
+    program.write_text(FLIP.replace("Z-1450", "Z-1300").replace("Z-1420", "Z-1280"))
+    ini.write_text(ini_text())
+    code, _, _ = run(capsys, "check-path", "robots/tricept_wrist.yaml", program, "--ini", ini, "--json", tmp_path / "r.json")
+    assert code == 1
+    found = {(place["line"], place["kind"], place["joint"]) for place in json.loads((tmp_path / "r.json").read_text())["problems"]}
+    assert {(4, "joint speed", "ax4"), (6, "joint speed", "ax4")} <= found
+    assert not any(line in (3, 5) for line, _, _ in found)
