@@ -10,7 +10,7 @@ import click
 
 from ..errors import KingenError
 from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model,
-                     print_table, refuse_special_files, refuse_wrist, say)
+                     print_table, refuse_special_files, say)
 
 
 @cli.command("check-path")
@@ -55,14 +55,18 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     sample is the machine's pose at its task coordinates (the G-code words its LinuxCNC module
     reads), its parasitic ones computed; a CSV row off the manifold fails unless --task-only.
 
+    A machine with a wrist (robot file ``wrist``): a G-code program commands X Y Z (the tool tip)
+    and A, C (the tool axis) as its LinuxCNC five-axis module reads them (B and the turn about the
+    tool axis not read); a CSV gives tool poses. The wrist's joints are judged with the legs'.
+
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
     every limit judged, 1 when not, 2 bad input."""
     from ..paths.check import Settings, check_program
+    from ..paths.program import is_gcode
     from ..paths.report import problem_rows, report_json, runs, verdict_line
     from ..runtime.files import write_atomic
 
     model = load_model(robot)
-    refuse_wrist(model, "check-path")
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{posture}: {model.name} has postures 0 .. {model.postures - 1}",
                                  param_hint="'--posture'")
@@ -88,6 +92,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     say(verdict_line(outcome))
     for line in outcome.manifold.lines() if outcome.manifold is not None else ():
         say(f"  {line}")
+    if outcome.five_axis is not None:
+        say(f"  {outcome.five_axis.line(is_gcode(program), outcome.findings.peaks, model.joint_names)}")
     rows = problem_rows(outcome)
     if len(rows) > 1:
         print_table(rows)

@@ -19,6 +19,7 @@ from ..defaults import DEFAULT_TIMEOUT
 from ..kinematics.routine import WARNINGS
 from .evaluation import Evaluator
 from .findings import Findings
+from .five_axis import FiveAxis
 from .interpreter import gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import limits_for
@@ -59,8 +60,9 @@ class Settings:
 class Outcome:
     """A finished check: the robot, program, settings, limits, the evaluator (its checks), the
     findings, the source text of every line named, the seconds it took, and (with the routine)
-    how its answers agreed with the reference's (routine.Agreement; None: not used), and for a
-    machine with task coordinates its manifold.Manifold (None for other robots)."""
+    how its answers agreed with the reference's (routine.Agreement; None: not used), for a
+    machine with task coordinates its manifold.Manifold and for one with a wrist its
+    five_axis.FiveAxis (None for other robots)."""
 
     robot: object
     program: str
@@ -73,6 +75,7 @@ class Outcome:
     seconds: float
     agreement: object = None
     manifold: object = None
+    five_axis: object = None
 
 
 @dataclass
@@ -107,6 +110,9 @@ class _Checker:
     def __init__(self, robot, settings, sink, progress, csv):
         self.robot, self.settings, self.sink, self.progress = robot, settings, sink, progress
         self.manifold = Manifold(robot, settings.task_only, csv) if robot.task else None
+        self.five_axis = FiveAxis(robot) if robot.wrist is not None else None
+        self.world = self.five_axis is not None and not csv
+        self.interpolation = "linuxcnc" if self.world else settings.host  # a five-axis world moves linearly
         self.posture = robot.working_posture if settings.posture is None else settings.posture
         self.limits = limits_for(robot, settings.ini)
         self.evaluator = Evaluator(robot, self.posture, self.limits)
@@ -133,7 +139,7 @@ class _Checker:
     def _tabulate(self):
         """The gathered pieces' moves as arrays, for evaluate: which are straight lines in the
         host's interpolation, their start and end poses, their assembly signs."""
-        host = self.settings.host
+        host = self.interpolation
         self.simple = np.array([p.straight and (host == "linuxcnc" or np.array_equal(p.move.start[3:], p.move.end[3:]))
                                 for p in self.pieces])
         self.starts = np.array([p.move.start for p in self.pieces])
@@ -150,9 +156,11 @@ class _Checker:
             t6[simple] = t6_from_pose(poses[simple])
         for number in np.unique(piece[~simple]):
             rows = np.flatnonzero(piece == number)
-            poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.settings.host)
+            poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.interpolation)
         if self.manifold is not None:
             poses, t6 = self.manifold.samples(poses)
+        if self.world:
+            t6 = self.five_axis.t6(poses)
         batch = self.evaluator.evaluate(piece, u, poses, t6)
         column = self.evaluator.assembly_column()
         if column is not None:
@@ -198,7 +206,7 @@ class _Checker:
     def _routine_joints(self, grid):
         """The regular samples' joints and warnings from the routine, compared with the
         reference's; out of reach (the reference's warning) the reference's joints are kept."""
-        joints, warnings = self.routine(t6_from_pose(grid.poses))
+        joints, warnings = self.routine(self.five_axis.t6(grid.poses) if self.world else t6_from_pose(grid.poses))
         reachable = grid.warnings != WARNINGS["WARN_UNREACHABLE"]
         self.routine.compare(joints, warnings, grid.joints, grid.warnings, reachable, self.findings.display_scale)
         grid.joints = np.where(reachable[:, None], joints, grid.joints)
@@ -233,8 +241,8 @@ class _Checker:
 
 def program_moves(path, start):
     """The moves of the program at ``path``: a G-code file through LinuxCNC's interpreter, the
-    machine at pose ``start`` (mm, degrees) when it begins; any other file as a CSV of poses
-    (which starts at its first row)."""
+    machine at world position ``start`` (mm, degrees) when it begins; any other file as a CSV of
+    poses (which starts at its first row)."""
     return gcode_moves(path, start) if is_gcode(path) else csv_moves(path)
 
 
@@ -244,11 +252,12 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
     judged (lines (n,) their program lines; rates (n, 2, dof): speeds and accelerations, NaN
     off the regular samples); ``progress(findings)`` is called after each batch. KingenError on
     bad input. A machine with task coordinates is followed along its manifold (:mod:`.manifold`):
-    every sample is the machine's pose at its task coordinates."""
+    every sample is the machine's pose at its task coordinates; a G-code program for a machine
+    with a wrist commands its five-axis world (:mod:`.five_axis`)."""
     started = time.perf_counter()
     csv = not is_gcode(program)
     checker = _Checker(robot, settings, sink, progress, csv)
-    moves = program_moves(program, robot.verification.home)
+    moves = program_moves(program, checker.five_axis.start() if checker.world else robot.verification.home)
     if checker.manifold is not None and csv:
         moves = checker.manifold.moves(moves, checker.findings)
     for index, move in enumerate(moves):
@@ -259,4 +268,4 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
              + list(findings.worst.values())}
     return Outcome(robot, str(program), settings, checker.posture, checker.limits, checker.evaluator, findings,
                    source_lines(program, named), time.perf_counter() - started,
-                   None if checker.routine is None else checker.routine.agreement, checker.manifold)
+                   None if checker.routine is None else checker.routine.agreement, checker.manifold, checker.five_axis)

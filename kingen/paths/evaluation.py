@@ -7,7 +7,9 @@ Decision quantities (one column each), internal units:
 - ``travel``: upper - q and q - lower per joint with a limit (mm or rad);
 - ``unreachable``: D + tol and ``limb singular``: D - tol per limb with a radicand (D the
   limb's normalised radicand, tol kingen.kinematics.routine.SINGULAR_TOLERANCE), as the
-  routine's warnings decide them; a machine with task coordinates has the pair for its
+  routine's warnings decide them; a wrist's joints have theirs (kingen.kinematics.wrist: the
+  first's 1 - (a1.w)^2, 0 where the tool axis lies along the first axis, only singular; the
+  second's, below 0 where no wrist angle reaches the axis); a machine with task coordinates has the pair for its
   constraint's radicand too (kingen.kinematics.parasitic: below 0 no pose has the sample's
   task coordinates), its ``part`` 'constraint';
 - ``direct index``: the direct index minus the robot's ``direct_index_min`` (mm);
@@ -82,7 +84,7 @@ class Evaluator:
         self.six_lines = self.robot.has_direct_index
         self.threshold = robot.direct_index_min
         columns = []
-        for joint in range(self.robot.dof):
+        for joint in range(self.robot.joint_count):
             if np.isfinite(limits.upper[joint]):
                 columns.append(Quantity("travel", joint, True))
             if np.isfinite(limits.lower[joint]):
@@ -90,6 +92,10 @@ class Evaluator:
         for joint, limb in enumerate(self.robot.limbs):
             if limb.has_radicand:
                 columns += [Quantity("unreachable", joint), Quantity("limb singular", joint)]
+        if self.robot.wrist is not None:  # its first joint's radicand (the axes aligned) is never below 0
+            dof = self.robot.dof
+            columns += [Quantity("limb singular", dof), Quantity("unreachable", dof + 1),
+                        Quantity("limb singular", dof + 1)]
         if self.robot.task:
             columns += [Quantity("unreachable", part="constraint"), Quantity("limb singular", part="constraint")]
         if self.six_lines and self.threshold is not None:

@@ -1,6 +1,7 @@
 """The limits a program is checked against: each joint's travel, top speed and top acceleration
 from the robot file (``travel``, ``max_speed``, ``max_acceleration`` of each limb) or from a
-LinuxCNC ``.ini`` (``[JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION``), and
+LinuxCNC ``.ini`` (``[JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION``; a wrist's
+joints after the legs', their speeds and accelerations from the ``.ini`` only), and
 the path's own speed and acceleration caps from the ``.ini``'s ``[TRAJ]`` (what LinuxCNC's
 planner moves the tool at).
 
@@ -38,11 +39,12 @@ class Limits:
 
 
 def robot_limits(robot):
-    """The limits the robot file gives (internal units)."""
+    """The limits the robot file gives (internal units); a wrist's joints have travel only."""
     lower, upper = robot.travel_limits()
     scale = robot.joint_scale()
-    rates = [np.array([getattr(limb, name) if getattr(limb, name) is not None else np.inf for limb in robot.limbs])
-             * scale for name in ("max_speed", "max_acceleration")]
+    wrist = [np.inf] * (robot.joint_count - robot.dof)
+    rates = [np.array([getattr(limb, name) if getattr(limb, name) is not None else np.inf for limb in robot.limbs]
+                      + wrist) * scale for name in ("max_speed", "max_acceleration")]
     return Limits(lower, upper, *rates, sources=("the robot file",))
 
 
@@ -88,14 +90,15 @@ def ini_limits(robot, path):
     if unit_word not in INI_UNITS:
         raise located(path, _line_of(lines, "TRAJ"), "[TRAJ] LINEAR_UNITS", f"{unit_word!r}: mm or inch expected")
     unit = INI_UNITS[unit_word]
-    missing = [index for index in range(robot.dof) if not parser.has_section(f"JOINT_{index}")]
+    count = robot.joint_count
+    missing = [index for index in range(count) if not parser.has_section(f"JOINT_{index}")]
     if missing:
         raise located(path, len(lines), f"[JOINT_{missing[0]}]", f"missing (the file ends here): the robot has "
-                                                                 f"{robot.dof} joints (JOINT_0 .. JOINT_{robot.dof - 1})")
+                                                                 f"{count} joints (JOINT_0 .. JOINT_{count - 1})")
     scale = np.where(robot.revolute, np.pi / 180.0, unit)
     values = {}
     for key in ("MIN_LIMIT", "MAX_LIMIT", "MAX_VELOCITY", "MAX_ACCELERATION"):
-        column = [_number(parser, lines, path, f"JOINT_{index}", key) for index in range(robot.dof)]
+        column = [_number(parser, lines, path, f"JOINT_{index}", key) for index in range(count)]
         for index, value in enumerate(column):
             if value is None and key.startswith("MAX_") and key != "MAX_LIMIT":
                 raise located(path, _line_of(lines, f"JOINT_{index}"), f"[JOINT_{index}] {key}", "missing")

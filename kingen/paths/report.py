@@ -10,7 +10,7 @@ import numpy as np
 
 from ..runtime.text import counted, one_line
 from .manifold import OFF_MANIFOLD
-from .program import POSE_COLUMNS
+from .program import POSE_COLUMNS, is_gcode
 
 BLENDING = ("each move is timed from rest to rest (exact stop, G61); blending of consecutive moves (G64) is not "
             "modelled")
@@ -112,7 +112,8 @@ def report_json(outcome):
     """The JSON document (plain data): verdict, samples, moves, problems, first and worst place
     of each kind, peaks per joint, checks, limits and settings; for a machine with task
     coordinates also ``parasitic`` ({coordinate: [min, max]} over the reachable samples, mm and degrees)
-    and ``manifold`` (what is read, the CSV rows' deviations: manifold.Manifold.summary)."""
+    and ``manifold`` (what is read, the CSV rows' deviations: manifold.Manifold.summary); for one
+    with a wrist ``five_axis`` (how the program's poses are read: five_axis.FiveAxis.summary)."""
     findings, limits = outcome.findings, outcome.limits
     peaks = []
     for index, (name, peak) in enumerate(zip(outcome.robot.joint_names, findings.peaks)):
@@ -143,6 +144,8 @@ def report_json(outcome):
     if outcome.manifold is not None:
         document["parasitic"], document["manifold"] = outcome.manifold.summary()
         document["settings"]["task_only"] = outcome.settings.task_only
+    if outcome.five_axis is not None:
+        document["five_axis"] = outcome.five_axis.summary(is_gcode(outcome.program))
     return document
 
 
