@@ -179,7 +179,6 @@ def test_fk_asks_for_every_joint_of_legs_and_wrist(robot, capsys):
 
 
 @pytest.mark.parametrize("command, argv", [
-    ("analyze", ["analyze", "ROBOT"]),
     ("calibrate plan", ["calibrate", "plan", "ROBOT", "--poses", "10", "-o", "OUT"]),
     ("calibrate run", ["calibrate", "run", "ROBOT", "--measurements", "PROGRAM"]),
 ])

@@ -14,7 +14,7 @@ from ..errors import KingenError
 from ..runtime.text import counted, shorten
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
                      _t6, calibration_options, cli, finite, in_child, load_model, output_width, print_table,
-                     refuse_wrist, routine_to_check, say, say_fitted, solve_job, table_lines)
+                     routine_to_check, say, say_fitted, solve_job, table_lines)
 
 
 @cli.command("list")
@@ -314,7 +314,6 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
     from ..design.figures import figures, report_html
 
     model = load_model(robot)
-    refuse_wrist(model, "analyze")
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
     problem = model_problem(model, collision_model)

@@ -25,6 +25,7 @@ from ..kinematics.parasitic import solve_parasitic, task_twists
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
+from .wrist_analysis import at_pole, beyond_travel, radicand_stops, tool_moving, wrist_available
 
 CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none")
 TILT_CONVENTIONS = {
@@ -71,11 +72,13 @@ class Settings:
 class Home:
     """A posture's values at the verification home: direct index (mm, NaN: not available),
     the sign of the closure Jacobian's determinant (0: singular or unreachable) and whether
-    home itself is a singular pose (SINGULAR)."""
+    home itself is a singular pose (SINGULAR) and, with a wrist, lies at its pole
+    (kingen.design.wrist_analysis.at_pole)."""
 
     index_mm: float
     det_sign: float
     singular: bool = False
+    wrist_pole: bool = False
 
 
 def free_coordinates(robot):
@@ -89,7 +92,7 @@ def home_values(robot, posture, settings=Settings()):
                          settings, Home(np.nan, 0.0))
     singular = bool(evaluated["singular"][0])
     return Home(float(evaluated["direct_index_mm"][0]), 0.0 if singular else float(evaluated["det_sign"][0]),
-                singular)
+                singular, at_pole(robot))
 
 
 def evaluate(robot, t6, posture, settings=Settings(), home=None):
@@ -98,13 +101,16 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
     the closure Jacobian's determinant over the free coordinates; 0 where unreachable),
     min_inverse_index, min_rod_distance_mm and min_crank_distance_mm (clearances; NaN when
     not configured or not applicable), joints (n, dof), singular (n,) bool (SINGULAR).
-    ``home``: the posture's Home (computed when not given) for the crossing rules."""
+    ``home``: the posture's Home (computed when not given) for the crossing rules. With a wrist,
+    t6 are tool poses: the legs are judged at the platform pose the machine takes for them
+    (kingen.design.wrist_analysis)."""
     home = home_values(robot, posture, settings) if home is None else home
     if robot.task:  # a constrained machine over its task coordinates: the pose it takes for them
         with np.errstate(all="ignore"):
             t6 = solve_parasitic(robot, t6).t6
     plain = replace(robot, direct_index_min=None)
     expected = solve(plain, t6)
+    legs, platform = (robot.parallel, expected.platform) if robot.wrist is not None else (robot, t6)
     joints = expected.joints[:, :, posture]
     warning = expected.warnings[:, posture].copy()
     index = np.full(len(t6), np.nan)
@@ -114,17 +120,17 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
                                     with_transmissions=False)
         index[reachable] = direct_index_of_entries(posture_gram_entries(plain, wrenches)[:, :, posture],
                                                    robot.direct_index_min)
-    sign = np.where(reachable, _det_sign(robot, t6, expected.points, joints), 0.0)
+    sign = np.where(reachable, _det_sign(legs, platform, expected.points, joints[:, :legs.dof]), 0.0)
     singular = reachable & ((index <= singular_index_mm(robot)) if robot.has_direct_index else (sign == 0.0))
-    rods, cranks = clearances(robot, expected.points, joints, settings.collision)
+    rods, cranks = clearances(legs, expected.points, joints[:, :legs.dof], settings.collision)
     threshold = robot.direct_index_min if robot.direct_index_min is not None else -1.0
     crossed = (index < CROSSING * home.index_mm) | ((home.det_sign != 0) & (sign != home.det_sign) & reachable)
     cause = np.full(len(t6), CAUSES.index("none"))
     candidates = [
         ("collision", (rods < 0.0) | (cranks < 0.0)),
         ("direct_singularity", (index <= threshold) | crossed | singular),
-        ("joint_limits", warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]),
-        ("unreachable", ~reachable | (np.min(np.abs(expected.radicands), axis=1) <= 1e-5)),
+        ("joint_limits", (warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]) | beyond_travel(robot, joints)),
+        ("unreachable", ~reachable | radicand_stops(robot, expected, home.wrist_pole)),
     ]
     for name, mask in candidates:  # the last assigned wins: unreachable over limits over ...
         cause = np.where(mask, CAUSES.index(name), cause)
@@ -241,7 +247,7 @@ def sweeps(robot, posture, settings=Settings(), home=None):
     +-tilt_max in SWEEP_STEP_DEG steps, positions over +-the verification range."""
     start = np.array(robot.verification.home, dtype=float)
     result = {}
-    for axis in sorted(free_coordinates(robot), key=lambda axis: (axis < 3, axis)):
+    for axis in sorted(tool_moving(robot, free_coordinates(robot)), key=lambda axis: (axis < 3, axis)):
         if axis >= 3:
             values = start[axis] + np.arange(-settings.tilt_max_deg, settings.tilt_max_deg + SWEEP_STEP_DEG / 2,
                                              SWEEP_STEP_DEG)
@@ -355,6 +361,8 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
         "slices": "available" if sliced else
         f"not analysed: fewer than two free position coordinates (free: {', '.join(free)})",
     }
+    if robot.wrist is not None:
+        available.update(wrist_available(robot, free, list(swept), home.wrist_pole, bool(limits)))
     described = {**asdict(settings), "tilt_convention": TILT_CONVENTIONS[settings.tilt_convention],
                  "collision": MODELS[settings.collision], "free_coordinates": free,
                  "azimuths": len(settings.azimuths) if limits else 0, "tilt_steps": len(settings.tilts),
