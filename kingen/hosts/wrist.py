@@ -4,6 +4,7 @@ postures. Pure, like kingen.hosts.render."""
 
 import numpy as np
 
+from ..robot.constraints import family, platform_axes
 from ..robot.limbs import c_double, c_vector
 
 
@@ -23,6 +24,25 @@ def wrist_table(robot):
             "onto_second": c_double(onto_second), "normal": c_vector(normal),
             "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3])}
+
+
+def constraint_rows(robot):
+    """The parallel part's three constraint wrenches of ``robot`` (with a wrist) as C text, for
+    the C library's Jacobian (templates/wrist.c.j2, ``wrist_rates``): each row a platform axis
+    ``axis`` e (platform frame, unit), a base point or axis ``base`` b (base frame) and a
+    ``weight``; at platform rotation R the wrench is [weight R e; b x R e] (base frame, moment
+    about the base origin): a force along R e through the base point b (weight 1), or a couple
+    b x R e (weight 0). The same wrenches as kingen.kinematics.parasitic_axes.axes_wrenches
+    (the platform revolute axes, through their legs' base points) and
+    kingen.kinematics.parasitic_tube.tube_wrenches (the tube's two forces, its couple)."""
+    parallel = robot.parallel
+    if family(parallel) == "tube":
+        leg = parallel.passive_leg
+        rows = [(leg.second_axis, leg.base_point, 1.0), (leg.frame[:, 2], leg.base_point, 1.0),
+                (leg.second_axis, leg.first_axis, 0.0)]
+    else:
+        rows = [(axis, base, 1.0) for _, (axis, base, _) in platform_axes(parallel.limbs)]
+    return [{"axis": c_vector(axis), "base": c_vector(base), "weight": c_double(weight)} for axis, base, weight in rows]
 
 
 def whole_view(robot, parallel_view, build_info):
@@ -50,4 +70,5 @@ def whole_view(robot, parallel_view, build_info):
             "two_branch_count": parallel_view["two_branch_count"] + 1,
             "joint_sum": parallel_view["joint_sum"] + wrist_terms,
             "any_limits": any(joint["limited"] for joint in joints), "wrist": wrist_table(robot),
+            "constraint_rows": constraint_rows(robot),
             "build_info": build_info}
