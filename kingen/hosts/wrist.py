@@ -6,6 +6,11 @@ import numpy as np
 
 from ..robot.constraints import family, platform_axes
 from ..robot.limbs import c_double, c_vector
+from ..robot.limbs.base import axis_words
+
+IN_PLANE = 1e-9
+"""The tool's zero-joint axis lies in the plane of the wrist's axes when its part along their
+normal is at most this: then each branch is one sign of the second wrist joint."""
 
 
 def wrist_table(robot):
@@ -72,3 +77,35 @@ def whole_view(robot, parallel_view, build_info):
             "any_limits": any(joint["limited"] for joint in joints), "wrist": wrist_table(robot),
             "constraint_rows": constraint_rows(robot),
             "build_info": build_info}
+
+
+def branch_words(robot):
+    """(branch 0, branch 1) of ``robot``'s wrist in words, exact for every tool axis it reaches:
+    branch 0 takes the intermediate axis c = Rot(a2, t2) z0 on the side of a1 x a2
+    (kingen.kinematics.wrist), branch 1 the other (the head's flip). Where z0 lies in the plane
+    of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2."""
+    wrist = robot.wrist
+    first, second = wrist.names
+    normal, start = np.cross(*wrist.axes), wrist.tool[:3, 2]
+    if abs(start @ normal) <= IN_PLANE:
+        sign = np.sign(np.cross(wrist.axes[1], start) @ normal)
+        return (f"{second} >= 0" if sign > 0 else f"{second} <= 0",
+                f"{second} < 0 (the head's flip)" if sign > 0 else f"{second} > 0 (the head's flip)")
+    return (f"the tool axis turned by {second} on the side of {first} x {second}",
+            f"the tool axis turned by {second} on the other side (the head's flip)")
+
+
+def sheet_words(robot):
+    """What every host's setup sheet says of ``robot``'s wrist (it has one): ``joints`` its two
+    joints (name, axis in words in the platform frame at zero, travel in degrees or None),
+    ``chain`` them in words, ``branches`` (branch 0, branch 1) in words, ``tool`` the tool tip
+    (mm) and the tool axis in the platform frame with every wrist joint at 0, and ``reach`` (mm)."""
+    wrist = robot.wrist
+    limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
+    joints = [{"name": name, "axis": axis_words(axis),
+               "travel": (f"{np.degrees(lower):.10g}", f"{np.degrees(upper):.10g}") if bounded else None}
+              for name, axis, lower, upper, bounded in zip(wrist.names, wrist.axes, wrist.lower, wrist.upper, limited)]
+    tip = ", ".join(f"{value + 0.0:.10g}" for value in wrist.tool[:3, 3])
+    return {"joints": joints, "branches": branch_words(robot), "reach": f"{wrist.reach:.10g}",
+            "chain": ", then ".join(f"{joint['name']} about {joint['axis']}" for joint in joints),
+            "tool": f"tool tip at ({tip}) mm, tool axis {axis_words(wrist.tool[:3, 2])}"}
