@@ -8,9 +8,12 @@ import pytest
 
 from kingen.robot.limbs.base import axis_words
 from kingen.conventions import t6_from_pose
+from kingen.hosts.c.package import render_package as render_c
 from kingen.hosts.delmia.package import render_package
 from kingen.hosts.linuxcnc.package import render_package as render_linuxcnc
 from kingen.hosts.linuxcnc.render import robot_problem
+from kingen.hosts.wrist import sheet_words
+from kingen.kinematics.poses import sample_poses
 from kingen.robot.model import load_robot, robots_dir, shipped_robots
 from kingen.robot.placement import branch_words
 from kingen.kinematics.reference import solve
@@ -186,3 +189,32 @@ def test_sheets_read_as_plain_text_and_neutralise_markdown_and_html(tmp_path, ho
     for html in (python_markdown.markdown(line), python_markdown.markdown(line, extensions=["tables"])):
         assert "(centroid) +Z up, 1+1 &amp; a_b; # not a heading" in html
         assert "<script" not in html and "<a " not in html and "<em>" not in html and "<h1>" not in html
+
+
+@pytest.mark.parametrize("name", ["exechon_wrist", "tricept_wrist"])
+def test_a_wrist_sheet_lists_legs_and_wrist_joints_its_flip_and_the_tool_as_the_other_hosts(name):
+    """DELMIA's sheet of a machine with a wrist: five commanded joints (the legs', then the
+    wrist's, rotational in degrees), two postures whose wrist branch is the last digit, the
+    branches in words the reference bears out on sampled tool poses, and the tool; the C
+    package's and LinuxCNC's sheets say the same branches and tool."""
+    robot = load_robot(name)
+    text, words = sheet(name), sheet_words(robot)
+    assert "5 commanded joints" in text and "2 postures" in text
+    rows = re.findall(r"^\| (\d) \| dof\(\d\) \| (\w+) \| (.+?) \| (\w+) \|$", text, flags=re.MULTILINE)
+    assert rows == [("1", "Translational", "Trans Z", "leg1"), ("2", "Translational", "Trans Z", "leg2"),
+                    ("3", "Translational", "Trans Z", "leg3"), ("4", "Rotational", "Rot Z", "ax4"),
+                    ("5", "Rotational", "Rot Z", "ax5")]
+    assert "| ax4 | -270 | 270 | deg |" in text and "| ax5 | -110 | 110 | deg |" in text
+    assert "| 0 (0) | branch 0 |" in text and "| 1 (1) | branch 1 |" in text
+    assert words["branches"] == ("ax5 >= 0", "ax5 < 0 (the head's flip)")
+    assert f"| wrist (ax4, ax5) | {markdown(words['branches'][0])} | {markdown(words['branches'][1])} |" in text
+    assert "tool tip at (0, 0, -200) mm, tool axis -Z" in text and "one configuration" not in text
+    # The words hold for the reference: posture 2 k + 0 has ax5 >= 0, 2 k + 1 ax5 < 0, where reached.
+    solved = solve(robot, t6_from_pose(sample_poses(robot, 300, 0)))
+    reached = solved.warnings != WARNINGS["WARN_UNREACHABLE"]
+    ax5 = solved.joints[:, robot.dof + 1]
+    assert np.all(ax5[:, 0::2][reached[:, 0::2]] >= 0.0) and np.all(ax5[:, 1::2][reached[:, 1::2]] < 0.0)
+    assert reached.sum() >= 500
+    c_sheet = render_c(robot)["SETUP.md"]
+    assert f"branch 0 {words['branches'][0]}, branch 1\n{words['branches'][1]}" in c_sheet and words["tool"] in c_sheet
+    assert f"the wrist's branch 0, {words['branches'][0]}" in render_linuxcnc(robot)["SETUP.md"]

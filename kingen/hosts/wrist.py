@@ -4,7 +4,13 @@ postures. Pure, like kingen.hosts.render."""
 
 import numpy as np
 
+from ..robot.constraints import family, platform_axes
 from ..robot.limbs import c_double, c_vector
+from ..robot.limbs.base import axis_words
+
+IN_PLANE = 1e-9
+"""The tool's zero-joint axis lies in the plane of the wrist's axes when its part along their
+normal is at most this: then each branch is one sign of the second wrist joint."""
 
 
 def wrist_table(robot):
@@ -23,6 +29,25 @@ def wrist_table(robot):
             "onto_second": c_double(onto_second), "normal": c_vector(normal),
             "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3])}
+
+
+def constraint_rows(robot):
+    """The parallel part's three constraint wrenches of ``robot`` (with a wrist) as C text, for
+    the C library's Jacobian (templates/wrist.c.j2, ``wrist_rates``): each row a platform axis
+    ``axis`` e (platform frame, unit), a base point or axis ``base`` b (base frame) and a
+    ``weight``; at platform rotation R the wrench is [weight R e; b x R e] (base frame, moment
+    about the base origin): a force along R e through the base point b (weight 1), or a couple
+    b x R e (weight 0). The same wrenches as kingen.kinematics.parasitic_axes.axes_wrenches
+    (the platform revolute axes, through their legs' base points) and
+    kingen.kinematics.parasitic_tube.tube_wrenches (the tube's two forces, its couple)."""
+    parallel = robot.parallel
+    if family(parallel) == "tube":
+        leg = parallel.passive_leg
+        rows = [(leg.second_axis, leg.base_point, 1.0), (leg.frame[:, 2], leg.base_point, 1.0),
+                (leg.second_axis, leg.first_axis, 0.0)]
+    else:
+        rows = [(axis, base, 1.0) for _, (axis, base, _) in platform_axes(parallel.limbs)]
+    return [{"axis": c_vector(axis), "base": c_vector(base), "weight": c_double(weight)} for axis, base, weight in rows]
 
 
 def whole_view(robot, parallel_view, build_info):
@@ -50,4 +75,37 @@ def whole_view(robot, parallel_view, build_info):
             "two_branch_count": parallel_view["two_branch_count"] + 1,
             "joint_sum": parallel_view["joint_sum"] + wrist_terms,
             "any_limits": any(joint["limited"] for joint in joints), "wrist": wrist_table(robot),
+            "constraint_rows": constraint_rows(robot),
             "build_info": build_info}
+
+
+def branch_words(robot):
+    """(branch 0, branch 1) of ``robot``'s wrist in words, exact for every tool axis it reaches:
+    branch 0 takes the intermediate axis c = Rot(a2, t2) z0 on the side of a1 x a2
+    (kingen.kinematics.wrist), branch 1 the other (the head's flip). Where z0 lies in the plane
+    of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2."""
+    wrist = robot.wrist
+    first, second = wrist.names
+    normal, start = np.cross(*wrist.axes), wrist.tool[:3, 2]
+    if abs(start @ normal) <= IN_PLANE:
+        sign = np.sign(np.cross(wrist.axes[1], start) @ normal)
+        return (f"{second} >= 0" if sign > 0 else f"{second} <= 0",
+                f"{second} < 0 (the head's flip)" if sign > 0 else f"{second} > 0 (the head's flip)")
+    return (f"the tool axis turned by {second} on the side of {first} x {second}",
+            f"the tool axis turned by {second} on the other side (the head's flip)")
+
+
+def sheet_words(robot):
+    """What every host's setup sheet says of ``robot``'s wrist (it has one): ``joints`` its two
+    joints (name, axis in words in the platform frame at zero, travel in degrees or None),
+    ``chain`` them in words, ``branches`` (branch 0, branch 1) in words, ``tool`` the tool tip
+    (mm) and the tool axis in the platform frame with every wrist joint at 0, and ``reach`` (mm)."""
+    wrist = robot.wrist
+    limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
+    joints = [{"name": name, "axis": axis_words(axis),
+               "travel": (f"{np.degrees(lower):.10g}", f"{np.degrees(upper):.10g}") if bounded else None}
+              for name, axis, lower, upper, bounded in zip(wrist.names, wrist.axes, wrist.lower, wrist.upper, limited)]
+    tip = ", ".join(f"{value + 0.0:.10g}" for value in wrist.tool[:3, 3])
+    return {"joints": joints, "branches": branch_words(robot), "reach": f"{wrist.reach:.10g}",
+            "chain": ", then ".join(f"{joint['name']} about {joint['axis']}" for joint in joints),
+            "tool": f"tool tip at ({tip}) mm, tool axis {axis_words(wrist.tool[:3, 2])}"}

@@ -13,7 +13,8 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
 - ``c jacobian``: the library's analytic Jacobian against kingen's
   (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample (a machine
   with task coordinates: the limbs' rows at the machine's pose, which the regular sampled poses
-  are, those off its manifold being unreachable); not exercised for a wrist, whose library has none.
+  are, those off its manifold being unreachable; a machine with a wrist: the legs' and the wrist's
+  rates per tool twist, :func:`kingen.kinematics.wrist_rates.tool_jacobian`).
 - ``c direct index``: for six-limb robots, the library's direct index against kingen's
   (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
 """
@@ -25,6 +26,7 @@ from ...kinematics.forward import free_mask, t6_of
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
+from ...kinematics.wrist_rates import tool_jacobian
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)
 from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
@@ -148,15 +150,12 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
 class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
     poses = JACOBIAN_PAIRS
 
-    def refusal(self, context):
-        if context.robot.wrist is not None:
-            return "a robot with a wrist: this version's library answers its Jacobian with -3 (not available)"
-        return None
-
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
-        pose_index, posture, _, _, wrenches, transmissions = pairs
+        pose_index, posture, joints, _, wrenches, transmissions = pairs
         expected = jacobian(wrenches, transmissions)
+        if robot.wrist is not None:
+            expected = tool_jacobian(robot, t6[pose_index], solve(robot, t6[pose_index]).platform, joints, expected)
         units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
         poses, worst, warned = matrix_from_t6(t6[pose_index]).reshape(-1, 16), 0.0, 0
         for number, (pose, k) in enumerate(zip(poses, posture)):
@@ -167,7 +166,8 @@ class CJacobian(OnRegularPairs, name="c jacobian", needs="compared poses"):
                             / np.max(np.abs(expected[number]) * units, axis=1))
             worst = max(worst, float(np.max(np.where(np.isfinite(relative), relative, np.inf))))
         passed = worst <= C_JACOBIAN_TOLERANCE and not warned
-        where = " (the limbs' rows at the machine's pose)" if robot.task else ""
+        where = (" (the legs' and the wrist's rates per tool twist)" if robot.wrist is not None
+                 else " (the limbs' rows at the machine's pose)" if robot.task else "")
         return Check("c jacobian", passed, f"the library's Jacobian against kingen's{where} on {len(poses)} regular postures "
                                            f"of {len(t6)} poses: max relative difference {worst:.3g} (at most "
                                            f"{C_JACOBIAN_TOLERANCE:g}); {warned} answered another warning than good",

@@ -16,6 +16,7 @@ from ...kinematics.forward import free_mask
 from ...kinematics.home import judged_posture
 from ...runtime.files import write_atomic, write_folder
 from ..render import template
+from ..wrist import sheet_words
 from .build import build_library
 from .render import TEMPLATES, view_model
 
@@ -67,7 +68,8 @@ def render_package(robot):
     header, source = (template(name, TEMPLATES).render(**view) for name in ("header.c.j2", "source.c.j2"))
     version = ".".join(re.findall(r"\d+", VERSION)[:3]) or "0"
     package_view = {**view, **_example_view(robot), "cmake_version": version, "model_fields": _model_fields(view),
-                    "calibration_example": _calibration_example(view)}
+                    "calibration_example": _calibration_example(view),
+                    "wrist_sheet": sheet_words(robot) if robot.wrist is not None else None}
     return {
         f"include/{prefix}.h": header,
         f"src/{prefix}.c": source,

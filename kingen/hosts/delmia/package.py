@@ -14,6 +14,7 @@ from ...runtime.files import write_atomic, write_folder
 from ...robot.placement import branch_words, frames
 from ...kinematics.routine import warnings_to_exercise
 from ...robot.schema import CALIBRATION_FIELDS
+from ..wrist import sheet_words
 from . import abi, dialog
 from .build import WINDOWS_DEFINES, build_plugin, library_name
 from .render import delmia_template, render, view_model
@@ -30,13 +31,20 @@ WARNING_MEANINGS = {
 """What each warning means from a kingen routine, for the setup sheet (order: precedence last);
 the sheet lists WARN_GOOD_SOLUTION and the warnings the robot's routine can give
 (:func:`kingen.kinematics.routine.warnings_to_exercise`)."""
+WRIST_MEANINGS = {
+    "WARN_SINGULAR_SOLUTION": "or the wrist's singularity: the tool axis along {first}, or its two branches meeting",
+    "WARN_UNREACHABLE": "or no wrist angle turns the tool onto the asked tool axis",
+}
+"""What a machine with a wrist adds to a warning's meaning ({first}: the wrist's first joint)."""
 
 
 def sheet_view(robot, target):
     """What the setup sheet shows, in the dialog's units (mm, degrees): the frames placed by the
     limbs' joints, each two-branch limb's branches in its model's words (true at the
     verification home), and only the warnings the robot's routine can give."""
-    two_branch = [(index, bit) for index, bit in enumerate(robot.branch_bits) if bit >= 0]
+    wrist = sheet_words(robot) if robot.wrist is not None else None
+    # A wrist's branch is the posture's last digit, the legs' one up (kingen.hosts.wrist.whole_view).
+    two_branch = [(index, bit + (wrist is not None)) for index, bit in enumerate(robot.branch_bits) if bit >= 0]
     used = {field for _, _, field, _ in robot.calibration()}
     calibration = [
         {"label": dialog.field_label(field), "joint": robot.joint_names[index], "parameter": parameter,
@@ -57,6 +65,19 @@ def sheet_view(robot, target):
         })
     words = branch_words(robot)
     working = robot.posture_branches(robot.working_posture)
+    branch_rows = [{"name": robot.joint_names[index], "branch0": words[index][0], "branch1": words[index][1],
+                    "working": words[index][working[index]]} for index, _ in two_branch]
+    columns = [robot.joint_names[index] for index, _ in two_branch]
+    bits = [bit for _, bit in two_branch]
+    if wrist is not None:
+        kind, axis = dialog.ACTUATOR_SPACE["revolute"]
+        joints += [{"index": robot.dof + index, "name": joint["name"], "kind": kind, "axis": axis, "unit": "deg",
+                    "lower": joint["travel"][0] if joint["travel"] else "-",
+                    "upper": joint["travel"][1] if joint["travel"] else "-"} for index, joint in enumerate(wrist["joints"])]
+        columns.append(f"wrist ({', '.join(joint['name'] for joint in wrist['joints'])})")
+        bits.append(0)
+        branch_rows.append({"name": columns[-1], "branch0": wrist["branches"][0], "branch1": wrist["branches"][1],
+                            "working": wrist["branches"][branch_of_posture(robot.working_posture, 0)]})
     can_give = {"WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)}
     return {
         **view_model(robot),
@@ -67,16 +88,17 @@ def sheet_view(robot, target):
         "calibration": calibration,
         "frames": frames(robot),
         "home": " ".join(f"{value:g}" for value in robot.verification.home),
-        "branch_limbs": [robot.joint_names[index] for index, _ in two_branch],
-        "branch_words": [{"name": robot.joint_names[index], "branch0": words[index][0], "branch1": words[index][1],
-                          "working": words[index][working[index]]} for index, _ in two_branch],
+        "branch_limbs": columns,
+        "branch_words": branch_rows,
         "configurations": [
-            {"index": k, "digits": "".join(str(branch_of_posture(k, bit)) for _, bit in two_branch),
-             "branches": [f"branch {branch_of_posture(k, bit)}" for _, bit in two_branch]}
+            {"index": k, "digits": "".join(str(branch_of_posture(k, bit)) for bit in bits),
+             "branches": [f"branch {branch_of_posture(k, bit)}" for bit in bits]}
             for k in range(robot.postures)
         ],
         "joints": joints,
-        "any_limits": any(limb.travel for limb in robot.limbs),
+        "any_limits": any(joint["lower"] != "-" or joint["upper"] != "-" for joint in joints),
+        "wrist": wrist,
+        "wrist_task": list(robot.parallel.task),
         "warnings": [{"code": abi.WARNINGS[name], "name": name, "meaning": _meaning(robot, name, meaning)}
                      for name, meaning in WARNING_MEANINGS.items() if name in can_give],
         "limb_bands": any(limb.has_radicand for limb in robot.limbs),
@@ -91,6 +113,8 @@ def sheet_view(robot, target):
 def _meaning(robot, name, meaning):
     """``meaning`` as it holds for ``robot``: WARN_SINGULAR_SOLUTION names the limb band only if
     some limb has one, the direct index only if the robot sets its threshold."""
+    if robot.wrist is not None and name in WRIST_MEANINGS:
+        return f"{meaning}, {WRIST_MEANINGS[name].format(first=robot.wrist.names[0])}"
     if name != "WARN_SINGULAR_SOLUTION" or robot.direct_index_min is None:
         return meaning
     direct = f"the posture's direct index at most {robot.direct_index_min:g} mm (section 8)"

@@ -14,6 +14,7 @@ from ...runtime.files import write_atomic, write_folder
 from ...robot.placement import frames
 from ...kinematics.home import workable_home
 from ..render import template
+from ..wrist import branch_words
 from ...kinematics.routine import WARNINGS, warnings_to_exercise
 from .build import build_module, header_folder, headers_found
 from ..base import Written
@@ -83,7 +84,17 @@ def sheet_view(robot, units="mm", compiled=True):
             "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": VERSION,
             "joint_count": robot.joint_count, "coordinates": " ".join(COORDINATES) if robot.wrist is not None else None,
             "joint_meanings": joint_meanings(robot, units), "compiled": compiled,
-            "home_text": " ".join(_exact(value) for value in world), "description": robot.description}
+            "home_text": " ".join(_exact(value) for value in world), "description": robot.description,
+            "wrist_branch": _wrist_branch(robot)}
+
+
+def _wrist_branch(robot):
+    """The wrist's branch the module answers (the working posture's last digit) and it in
+    words (kingen.hosts.wrist.branch_words), or None without a wrist."""
+    if robot.wrist is None:
+        return None
+    number = robot.working_posture % 2
+    return {"number": number, "words": branch_words(robot)[number]}
 
 
 def render_package(robot, units="mm", compiled=True):
