@@ -26,8 +26,8 @@ from pathlib import Path
 import numpy as np
 
 ABOUT = ("The call cost of a lower-mobility machine's routine (its parasitic coordinates in closed form, then the "
-         "limbs) against the hexapod's, for each host ([Lower-mobility machines](how-to/hybrid.md)). Goal: at most 3 "
-         "times the hexapod's.")
+         "limbs; with a wrist, the wrist's joints too: in LinuxCNC the five-axis module) against the hexapod's, for "
+         "each host ([Lower-mobility machines](how-to/hybrid.md)). Goal: at most 3 times the hexapod's.")
 """What the section measures, for the performance page (links relative to docs/)."""
 MACHINES = ("prs_head", "rps_table", "exechon_constrained", "tricept", "exechon_wrist", "tricept_wrist")
 BASELINE = "hexapod"
