@@ -88,9 +88,10 @@ SECTION_FIGURES = {
         "package": {"robot": "tau", "steps": [["kingen package", 2.0], ["cmake configure", 0.5]],
                     "failed": "cmake configure failed:\nno compiler\n"},
         "instructions": [{"robot": "tau", "delmia": 800.0, "c": 760.0}]},
-    "hybrid": {"calls": 2000, "rounds": 3, "baseline": "hexapod",
-               "rows": [{"host": "delmia", "robot": "hexapod", "ns": 231.1},
-                        {"host": "delmia", "robot": "prs_head", "ns": 333.6}]},
+    "hybrid": {"calls": 2000, "rounds": 3, "baseline": "hexapod", "reference": "linuxcnc_hexapod",
+               "load_average": [1.5, 1.25, 1.0],
+               "rows": [{"host": "delmia", "robot": "hexapod", "ns": 231.1, "ratio": 1.0, "reference_ratio": 2.5},
+                        {"host": "linuxcnc", "robot": "exechon_wrist", "ns": 333.6, "ratio": 1.44, "reference_ratio": 3.61}]},
     "check_path": {
         "samples": 2000, "moves": 2,
         "speed": [{"robot": "hexapod", "long": {"samples": 2573, "moves": 3, "seconds": 0.02, "problems": 0, "peak_mb": 91.6},
@@ -127,10 +128,10 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
         assert f"`python benchmarks/{name}.py --small`, run on 2000-01-02 in 12 s; machine: machine of {name}." in text
     assert "| after | 6.98 | 23.70 |" in text and f"{100 * (1 - 6.98 / 1226):.2f} %" in text
     assert "least 75 %, median 100 %; parameters at 95 % or more: 40 of 42" in text
+    assert "| linuxcnc | exechon_wrist | 333.6 | 1.44 | 3.61 |" in text and "at the end: 1.50, 1.25, 1.00." in text
     assert f"| tau | 8 | 50.0 | 52.5 | {52.5 / 50:.3f} | {44 / 40:.3f} | 70 ns | 1,402 ns |" in text
     assert f"| tau | 84 | 400 | 300 | {300 / 400:.3f} | 0 | 1 |" in text
     assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
-    assert f"| delmia | prs_head | 333.6 | {333.6 / 231.1:.2f} |" in text
     assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
     assert f"| hexapod | 2573 | 0.0 | {2573 / 0.02:,.0f} | 92 MB | 1002, 92 MB | 200 in 0.3 s | 0.1 |" in text
     assert "grazes set up: 2; seen by the regular samples alone: 0; found by check-path at the default chord: 2" in text
