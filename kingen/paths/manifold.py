@@ -1,7 +1,8 @@
 """A machine with task coordinates followed along its manifold (docs/how-to/check-path.md).
 
 Such a machine is commanded by its task coordinates only (robot.task: z, roll, pitch or x, y,
-z), exactly the words its LinuxCNC module reads (kingen.hosts.linuxcnc.render.free_indices);
+z), exactly the words its LinuxCNC module reads (the coordinates its forward solves for:
+kingen.kinematics.forward.free_mask);
 the other coordinates are parasitic: the machine takes them
 (kingen.kinematics.parasitic.solve_parasitic). Every sample a check solves is first put on
 the manifold here: its task coordinates kept, its parasitic ones the machine's, so each
@@ -22,7 +23,8 @@ import math
 import numpy as np
 
 from ..conventions import angle_difference, pose_from_t6, t6_from_pose
-from ..hosts.linuxcnc.render import WORLD_AXES, free_indices
+from ..hosts.linuxcnc.render import WORLD_AXES
+from ..kinematics.forward import free_mask
 from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, solve_parasitic
 from .moves import Move
 from .program import POSE_COLUMNS
@@ -50,7 +52,7 @@ class Manifold:
 
     def __init__(self, robot, task_only, csv):
         self.robot, self.task_only, self.csv = robot, task_only, csv
-        self.task = free_indices(robot)
+        self.task = np.flatnonzero(free_mask(robot))
         self.parasitic = [index for index in range(6) if index not in self.task]
         self.low = np.full(6, np.inf)
         self.high = np.full(6, -np.inf)
