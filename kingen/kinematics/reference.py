@@ -28,7 +28,7 @@ import numpy as np
 
 from .certificate import certified_above
 from .parasitic import solve_parasitic
-from .routine import SINGULAR_TOLERANCE, WARNINGS, warning_codes
+from .routine import SINGULAR_TOLERANCE, warning_codes
 from .wrist import solve_tool
 from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
                           gram_partial_sums, limb_wrenches, posture_values)
