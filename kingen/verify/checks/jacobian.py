@@ -9,7 +9,8 @@ from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
 from ...kinematics.wrist import rotation_about
-from ...kinematics.wrist_forward import platform_poses, tool_rates
+from ...kinematics.forward import poses_of
+from ...kinematics.wrist_forward import tool_rates
 from ...runtime.text import counted
 from ..options import report_tolerance_mm
 from ..report import not_exercised
@@ -110,7 +111,7 @@ def wrist_rates(robot, expected, joints):
     at each posture's ``joints`` (n, joint_count, postures), the platform near the reference's
     (kingen.kinematics.wrist_forward.tool_rates); NaN where that posture has no finite joints."""
     count, total, postures = joints.shape
-    near = platform_poses(expected.platform)
+    near = poses_of(expected.platform)
     usable = np.all(np.isfinite(joints), axis=1)
     rates = np.full((count, total, postures, 6), np.nan)
     for posture in range(postures):
