@@ -195,3 +195,41 @@ def test_the_constraints_singular_band_is_judged_where_the_tube_lies_in_the_base
     assert band["line"] == 3 and band["pose"][0] == pytest.approx(300.0, abs=1e-9)
     assert band["pose"][2] == pytest.approx(-300.0 * np.sqrt(SINGULAR_TOLERANCE / (1.0 - SINGULAR_TOLERANCE)), abs=1e-6)
     assert first[("unreachable", "constraint")]["line"] == 3
+
+
+def test_csv_rows_solved_in_chunks_match_rows_solved_one_at_a_time(tmp_path, monkeypatch):
+    """Manifold.moves solves ROWS_AT_ONCE moves per call: across chunk boundaries (chunks of 3
+    over 10 rows) the moves, the off-manifold findings and the rows' bookkeeping are those of
+    machine_poses called on each row alone."""
+    from kingen.paths import manifold as module
+    from kingen.paths.program import csv_moves
+
+    robot = load_robot("prs_head")
+    golden = np.array(robot.golden[0].pose)
+    rows = np.tile(golden, (10, 1))
+    rows[:, 2] += np.linspace(-5.0, 5.0, 10)
+    rows[[1, 4, 8], 0] += 0.5  # off the manifold in x
+    program = tmp_path / "rows.csv"
+    program.write_text("x,y,z,roll,pitch,yaw\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in rows) + "\n")
+
+    class Findings:
+        def __init__(self):
+            self.added = []
+
+        def place(self, kind, joint, line, pose, joints, value, limit, margin, between=None):
+            return kind, line, value, between
+
+        def add(self, index, place):
+            self.added.append((index, place))
+
+    monkeypatch.setattr(module, "ROWS_AT_ONCE", 3)
+    manifold, findings = module.Manifold(robot, False, True), Findings()
+    moves = list(manifold.moves(csv_moves(program), findings))
+    machine = np.concatenate([module.machine_poses(robot, row[None])[0] for row in rows])
+    assert len(moves) == 9
+    assert all(np.allclose(move.start, machine[index], rtol=0, atol=1e-12)
+               and np.allclose(move.end, machine[index + 1], rtol=0, atol=1e-12) for index, move in enumerate(moves))
+    assert [(index, place[0], place[1], place[3]) for index, place in findings.added] == \
+        [(0, "off manifold", 3, "x"), (3, "off manifold", 6, "x"), (7, "off manifold", 10, "x")]
+    assert [place[2] for _, place in findings.added] == pytest.approx([0.5] * 3, abs=1e-6)
+    assert manifold.rows == 10 and manifold.rows_off == 3 and manifold.first_off[0] == 3

@@ -15,7 +15,8 @@ from kingen.conventions import t6_from_pose
 from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS, Calls, warnings_to_exercise
-from kingen.kinematics.wrist_forward import platform_poses, tool_rates
+from kingen.kinematics.forward import poses_of
+from kingen.kinematics.wrist_forward import tool_rates
 from kingen.robot.model import load_robot
 from kingen.verify.boundaries import boundary_poses
 from kingen.verify.checks import Closure, Context
@@ -133,7 +134,7 @@ def test_the_twist_about_the_tool_axis_gives_zero_joint_rates(robot, t6):
     """tool_rates from the forward map alone: a turn about the tool axis through the tip
     (omega = w, v = -w x tip at the base origin) asks no motion of tip or axis."""
     expected = solve(robot, t6[:20])
-    rates = tool_rates(robot, expected.joints[:, :, 0], platform_poses(expected.platform), 1e-5 * robot.size_mm, 1e-5)
+    rates = tool_rates(robot, expected.joints[:, :, 0], poses_of(expected.platform), 1e-5 * robot.size_mm, 1e-5)
     axis, tip = t6[:20, 2, :3], t6[:20, 3, :3]
     about_axis = np.concatenate([-np.cross(axis, tip), axis], axis=1)
     assert np.max(np.abs(np.einsum("nkj,nj->nk", rates, about_axis))) < 1e-9

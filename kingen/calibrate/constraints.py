@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from ..robot.constraints import axes_table, family
+from ..robot.passive_leg import PassiveLeg
 
 TILTS = ("a", "b")
 TURN = "turn"
@@ -107,5 +108,4 @@ def passive_leg_of(leg, base_point, angles):
     first_axis = tilted(leg.first_axis, angles.get("first_axis", {}))
     tube_axis = tilted(leg.tube_axis, angles.get("tube_axis", {}))
     second = turned_about(leg.second_axis, tube_axis, 0.0)
-    return type(leg)(base_point=np.asarray(base_point, dtype=float), first_axis=first_axis, tube_axis=tube_axis,
-                     second_axis=second, frame=np.stack([tube_axis, second, np.cross(tube_axis, second)], axis=1))
+    return PassiveLeg.of(base_point, first_axis, tube_axis, second)

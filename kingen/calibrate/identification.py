@@ -26,14 +26,14 @@ import numpy as np
 
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..errors import KingenError
-from ..kinematics.forward import assemblies, free_mask, search_region
+from ..kinematics.forward import assemblies, free_mask, poses_of, search_region
 from ..kinematics.parasitic import on_manifold
 from ..kinematics.poses import sample_poses
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
 from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
-                         pose_radians, predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
+                         predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
 
 STEP = 1e-4
 """Central differences' step, mm-equivalents."""
@@ -77,7 +77,7 @@ class Problem:
         """(position error (n,) mm, orientation error (n,) degrees or None, closed (n,)): what
         ``values`` predict from the read joints against what was measured."""
         if self.parameters.measure == "pose":
-            start = pose_radians(platform_of_measured(self.parameters, values, self.measurements.measured))
+            start = poses_of(t6_from_matrix(platform_of_measured(self.parameters, values, self.measurements.measured)))
         else:
             start = self.start
         predicted, _, closed = predicted_measurements(self.parameters, values, self.measurements.joints, start)

@@ -22,12 +22,6 @@ CLOSED = 1e-7
 fraction of the robot's size."""
 
 
-def pose_radians(matrix):
-    """Poses (n, 6) in mm and radians (forward kinematics' unknowns) of matrices H (n, 4, 4)."""
-    pose = pose_from_t6(t6_from_matrix(matrix))
-    return np.concatenate([pose[:, :3], np.radians(pose[:, 3:])], axis=1)
-
-
 def matrix_radians(poses):
     """Matrices H (n, 4, 4) of poses (n, 6) in mm and radians."""
     poses = np.asarray(poses, dtype=float)

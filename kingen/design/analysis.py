@@ -25,6 +25,7 @@ from ..kinematics.parasitic import solve_parasitic, task_twists
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
+from ..kinematics.wrist import rotation_about
 from .wrist_analysis import at_pole, beyond_travel, radicand_stops, tool_moving, wrist_available
 
 CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none")
@@ -185,14 +186,9 @@ def tilted_t6(robot, azimuths, tilts, convention="axis"):
         axis = np.array([np.cos(azimuth), np.sin(azimuth), 0.0])
         for angle in np.radians(tilts):
             turned = start.copy()
-            turned[:3, :3] = _rotation(axis, angle) @ start[:3, :3]
+            turned[:3, :3] = rotation_about(axis, [angle])[0] @ start[:3, :3]
             matrices.append(turned)
     return t6_from_matrix(np.array(matrices))
-
-
-def _rotation(axis, angle):
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
 
 
 def can_tilt(robot):

@@ -13,7 +13,6 @@ tilt walk can leave home; a pole met away from such a home stops a pose as unrea
 import numpy as np
 
 from ..conventions import matrix_from_pose, t6_from_matrix
-from ..kinematics.forward import COORDINATES
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 
@@ -60,7 +59,7 @@ def beyond_travel(robot, joints):
 
 
 def tool_moving(robot, free):
-    """The indices of ``free`` (into COORDINATES) whose change by TURN_PROBE_DEG (or mm) at the
+    """The indices of ``free`` (into kingen.kinematics.forward.COORDINATES) whose change by TURN_PROBE_DEG (or mm) at the
     home moves the tool tip or the tool axis; all of them without a wrist."""
     if robot.wrist is None:
         return list(free)

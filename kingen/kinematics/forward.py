@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import matrix_from_pose, t6_from_matrix
+from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..runtime.text import counted
 from .parasitic import on_manifold, task_twists
 from .reference import platform_points_in_base
@@ -71,6 +71,12 @@ def t6_of(poses):
     """T6 (n, 4, 4) of poses (n, 6) in mm and radians."""
     poses = np.asarray(poses, dtype=float)
     return t6_from_matrix(matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1)))
+
+
+def poses_of(t6):
+    """Poses (n, 6) in mm and radians (forward kinematics' unknowns) of T6 (n, 4, 4): t6_of's inverse."""
+    pose = pose_from_t6(t6)
+    return np.concatenate([pose[:, :3], np.radians(pose[:, 3:])], axis=1)
 
 
 def closure(robot, poses, joints):

@@ -28,7 +28,7 @@ import numpy as np
 
 from .certificate import certified_above
 from .parasitic import solve_parasitic
-from .routine import SINGULAR_TOLERANCE, WARNINGS
+from .routine import SINGULAR_TOLERANCE, warning_codes
 from .wrist import solve_tool
 from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
                           gram_partial_sums, limb_wrenches, posture_values)
@@ -265,10 +265,6 @@ def _solve(robot, t6, indices):
         if robot.direct_index_min is not None:
             singular = singular | (index <= robot.direct_index_min)
 
-    warnings = np.full((count, robot.postures), WARNINGS["WARN_GOOD_SOLUTION"], dtype=np.int32)
-    for flags, code in ((outside, "WARN_JOINT_LIMITS_EXCEEDED"), (singular, "WARN_SINGULAR_SOLUTION"),
-                        (unreachable, "WARN_UNREACHABLE")):  # each later one wins
-        np.copyto(warnings, WARNINGS[code], where=flags)
-    return Solution(branch_joints=branch_joints, warnings=warnings, radicands=radicands, constraint=constraint,
+    return Solution(branch_joints=branch_joints, warnings=warning_codes(outside, singular, unreachable), radicands=radicands, constraint=constraint,
                     finite=finite, posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points,
                     direct_index=index)

@@ -30,6 +30,18 @@ SINGULAR_TOLERANCE = 0.00001
 routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5."""
 
 
+def warning_codes(outside, singular, unreachable):
+    """(int32 array, the flags' broadcast shape) each posture's WARN_* code from its boolean flags:
+    a joint beyond its travel (``outside``), within a singular band (``singular``), no real
+    solution (``unreachable``); each later one wins (unreachable over singular over limits)."""
+    warnings = np.full(np.broadcast_shapes(np.shape(outside), np.shape(singular), np.shape(unreachable)),
+                       WARNINGS["WARN_GOOD_SOLUTION"], dtype=np.int32)
+    for flags, code in ((outside, "WARN_JOINT_LIMITS_EXCEEDED"), (singular, "WARN_SINGULAR_SOLUTION"),
+                        (unreachable, "WARN_UNREACHABLE")):
+        np.copyto(warnings, WARNINGS[code], where=flags)
+    return warnings
+
+
 def warnings_to_exercise(robot, vocabulary=None):
     """The warnings ``robot``'s routine can give besides WARN_GOOD_SOLUTION (within the
     routine's ``vocabulary`` of warnings, when it has one): verify exercises each of them,

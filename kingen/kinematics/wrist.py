@@ -28,11 +28,7 @@ the asked tool frame is turned about the tool axis from the machine's: the answe
 import numpy as np
 
 from .parasitic import solve_parasitic
-from .routine import SINGULAR_TOLERANCE, WARNINGS
-
-RANK = np.zeros(max(WARNINGS.values()) + 1, dtype=int)
-RANK[[WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_SINGULAR_SOLUTION"], WARNINGS["WARN_UNREACHABLE"]]] = 1, 2, 3
-"""Per WARN_* code, its rank: which warning wins when the parallel part and the wrist give two."""
+from .routine import SINGULAR_TOLERANCE, WARNINGS, warning_codes
 
 
 def rotation_about(axis, angle):
@@ -71,11 +67,6 @@ def _wrist_branches(wrist, target):
     return np.stack(angles, 1), radicand, 1.0 - onto_first * onto_first
 
 
-def worst(first, second):
-    """Elementwise the warning of higher RANK of two WARN_* code arrays."""
-    return np.where(RANK[second] > RANK[first], second, first)
-
-
 def solve_tool(robot, t6, solve_parallel, solution_type):
     """Every posture of ``robot`` (a Robot with a wrist) for tool T6 arrays (n, 4, 4, base frame,
     mm): ``solve_parallel`` (robot, T6) is the reference's solver of the parallel part,
@@ -96,15 +87,15 @@ def solve_tool(robot, t6, solve_parallel, solution_type):
     branch_joints = np.concatenate([legs.branch_joints, np.swapaxes(angles, 1, 2)], axis=1)
     radicands = np.concatenate([legs.radicands, aligned[:, None], radicand[:, None]], axis=1)
     lower, upper = robot.travel_limits()
-    beyond = np.any((angles < lower[dof:]) | (angles > upper[dof:]), axis=2)
-    codes = np.where(beyond, WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"], WARNINGS["WARN_GOOD_SOLUTION"])
-    codes = np.where(np.any(np.abs(radicands[:, dof:]) <= SINGULAR_TOLERANCE, axis=1)[:, None],
-                     WARNINGS["WARN_SINGULAR_SOLUTION"], codes)
-    codes = np.where(~(radicand >= -SINGULAR_TOLERANCE)[:, None], WARNINGS["WARN_UNREACHABLE"], codes)
     kept = (0, 1) if wrist.branch is None else (wrist.branch,)
-    codes = codes[:, :len(kept)]
-    warnings = worst(np.repeat(legs.warnings, len(kept), axis=1),
-                     np.tile(codes, (1, parallel.postures))).astype(np.int32)
+    beyond = np.any((angles < lower[dof:]) | (angles > upper[dof:]), axis=2)[:, :len(kept)]
+    beyond = np.tile(beyond, (1, parallel.postures))
+    wrist_singular = np.any(np.abs(radicands[:, dof:]) <= SINGULAR_TOLERANCE, axis=1)[:, None]
+    wrist_unreachable = ~(radicand >= -SINGULAR_TOLERANCE)[:, None]
+    legs_codes = np.repeat(legs.warnings, len(kept), axis=1)
+    warnings = warning_codes((legs_codes == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]) | beyond,
+                             (legs_codes == WARNINGS["WARN_SINGULAR_SOLUTION"]) | wrist_singular,
+                             (legs_codes == WARNINGS["WARN_UNREACHABLE"]) | wrist_unreachable)
     branches = tuple(tuple(limbs) + (branch,) * len(wrist.names) for limbs in legs.posture_branches for branch in kept)
     return solution_type(branch_joints=branch_joints, warnings=warnings, radicands=radicands, finite=legs.finite,
                          posture_branches=branches, constraint=legs.constraint, points=legs.points, platform=machine)

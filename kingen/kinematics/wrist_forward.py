@@ -11,16 +11,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..conventions import pose_from_t6
-from .forward import SEARCH, assemblies, free_mask, newton, t6_of
+from .forward import SEARCH, assemblies, free_mask, newton, poses_of, t6_of
 from .reference import solve
 from .wrist import tool_t6
-
-
-def platform_poses(t6):
-    """(n, 6) poses (mm, rad) of T6 arrays (n, 4, 4): Newton's starts from a platform's T6."""
-    pose = pose_from_t6(t6)
-    return np.concatenate([pose[:, :3], np.radians(pose[:, 3:])], axis=1)
 
 
 def tool_forward(robot, joints, near):
@@ -77,13 +70,13 @@ def tool_assemblies(robot, joints, near, search=SEARCH):
     nearest ``near`` first, residuals the legs'."""
     joints, near = np.asarray(joints, dtype=float), np.asarray(near, dtype=float)
     solved = solve(robot, t6_of(near[None]))
-    start = platform_poses(solved.platform)[0]
+    start = poses_of(solved.platform)[0]
     if not np.all(np.isfinite(start)):
         start = np.concatenate([robot.parallel.verification.home[:3], np.radians(robot.parallel.verification.home[3:])])
     modes = assemblies(robot.parallel, joints[:robot.dof], start, search)
     found = []
     for mode in modes.found:
         tool = tool_t6(robot, t6_of(mode.pose[None]), joints[None, robot.dof:])
-        found.append(replace(mode, pose=platform_poses(tool)[0]))
+        found.append(replace(mode, pose=poses_of(tool)[0]))
     found.sort(key=lambda mode: np.linalg.norm(mode.pose[:3] - near[:3]))
     return replace(modes, found=found, method=f"the parallel part, then the wrist's forward: {modes.method}")

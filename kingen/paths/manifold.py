@@ -1,7 +1,8 @@
 """A machine with task coordinates followed along its manifold (docs/how-to/check-path.md).
 
 Such a machine is commanded by its task coordinates only (robot.task: z, roll, pitch or x, y,
-z), exactly the words its LinuxCNC module reads (kingen.hosts.linuxcnc.render.free_indices);
+z), exactly the words its LinuxCNC module reads (the coordinates its forward solves for:
+kingen.kinematics.forward.free_mask);
 the other coordinates are parasitic: the machine takes them
 (kingen.kinematics.parasitic.solve_parasitic). Every sample a check solves is first put on
 the manifold here: its task coordinates kept, its parasitic ones the machine's, so each
@@ -16,18 +17,23 @@ it is a notice. Either way the path checked is the machine's, through the rows' 
 coordinates. A G-code program's parasitic words are not read.
 """
 
+import itertools
 import math
 
 import numpy as np
 
 from ..conventions import angle_difference, pose_from_t6, t6_from_pose
-from ..hosts.linuxcnc.render import WORLD_AXES, free_indices
+from ..hosts.linuxcnc.render import WORLD_AXES
+from ..kinematics.forward import free_mask
 from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, solve_parasitic
 from .moves import Move
 from .program import POSE_COLUMNS
 
 OFF_MANIFOLD = "off manifold"
 """The kind of problem a CSV row off the machine's manifold is."""
+
+ROWS_AT_ONCE = 1000
+"""How many CSV moves Manifold.moves solves in one machine_poses call."""
 
 
 def machine_poses(robot, poses):
@@ -46,7 +52,7 @@ class Manifold:
 
     def __init__(self, robot, task_only, csv):
         self.robot, self.task_only, self.csv = robot, task_only, csv
-        self.task = free_indices(robot)
+        self.task = np.flatnonzero(free_mask(robot))
         self.parasitic = [index for index in range(6) if index not in self.task]
         self.low = np.full(6, np.inf)
         self.high = np.full(6, -np.inf)
@@ -69,37 +75,43 @@ class Manifold:
             self.low = np.minimum(self.low, kept.min(axis=0))
             self.high = np.maximum(self.high, kept.max(axis=0))
 
-    def _row(self, line, pose):
+    def _row(self, line, pose, machine, off, deviation):
         """(the machine's pose for a CSV row's ``pose`` at ``line``, its deviations (6,) where it
-        is off the manifold, else None); the deviations are recorded. A row whose task
-        coordinates no pose has is kept as written (its samples are judged unreachable)."""
-        machine, _, off = machine_poses(self.robot, pose[None])
+        is off the manifold, else None), given ``machine`` (6,) and ``off`` from machine_poses
+        and ``deviation`` (6,) from deviations, 0 at the task coordinates; the deviations are
+        recorded. A row whose task coordinates no pose has is kept as written (its samples are
+        judged unreachable)."""
         if not np.all(np.isfinite(machine)):
             return pose, None
-        deviation = deviations(pose, machine[0])
-        deviation[self.task] = 0.0
         self.rows += 1
         self.deviation = np.maximum(self.deviation, deviation)
-        if off[0]:
+        if off:
             self.rows_off += 1
             if self.first_off is None:
                 self.first_off = (line, deviation)
-        return machine[0], deviation if off[0] else None
+        return machine, deviation if off else None
 
     def moves(self, moves, findings):
         """A CSV's ``moves`` between the machine's poses at its rows' task coordinates; a row off
         the manifold is added to ``findings`` as a problem unless the check reads task
-        coordinates only."""
-        start = None
-        for index, move in enumerate(moves):
-            if start is None:
-                start, off = self._row(move.start_line, move.start)
-                self._judge(findings, index, move.start_line, move.start, off)
-            end, off = self._row(move.line, move.end)
-            self._judge(findings, index, move.line, move.end, off)
-            yield Move(move.line, move.kind, start, end, feed=move.feed, duration=move.duration, arc=move.arc,
-                       start_line=move.start_line)
-            start = end
+        coordinates only. The rows are solved ROWS_AT_ONCE moves at a time (one machine_poses
+        call each); each move's rows are judged just before it is yielded."""
+        moves, start, index = iter(moves), None, 0
+        while chunk := list(itertools.islice(moves, ROWS_AT_ONCE)):
+            asked = np.array(([chunk[0].start] if start is None else []) + [move.end for move in chunk])
+            machine, _, off = machine_poses(self.robot, asked)
+            deviation = deviations(asked, machine)
+            deviation[:, self.task] = 0.0
+            solved = iter(zip(asked, machine, off, deviation))
+            for move in chunk:
+                if start is None:
+                    start, deviation = self._row(move.start_line, *next(solved))
+                    self._judge(findings, index, move.start_line, move.start, deviation)
+                end, deviation = self._row(move.line, *next(solved))
+                self._judge(findings, index, move.line, move.end, deviation)
+                yield Move(move.line, move.kind, start, end, feed=move.feed, duration=move.duration, arc=move.arc,
+                           start_line=move.start_line)
+                start, index = end, index + 1
 
     def _judge(self, findings, index, line, asked, deviation):
         """A row off the manifold (``deviation``: its deviations, else None) as a problem of
@@ -161,9 +173,11 @@ class Manifold:
 
 
 def deviations(asked, machine):
-    """(6,) |asked - machine| per pose coordinate (mm, and degrees with whole turns removed)."""
-    deviation = np.abs(asked - machine)
-    deviation[3:] = np.degrees(np.abs(angle_difference(np.radians(asked[3:]), np.radians(machine[3:]))))
+    """(n, 6) |asked - machine| per pose coordinate of poses (n, 6) (mm, and degrees with whole
+    turns removed); NaN where either is not finite."""
+    with np.errstate(invalid="ignore"):
+        deviation = np.abs(asked - machine)
+        deviation[:, 3:] = np.degrees(np.abs(angle_difference(np.radians(asked[:, 3:]), np.radians(machine[:, 3:]))))
     return deviation
 
 

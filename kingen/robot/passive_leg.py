@@ -51,6 +51,15 @@ class PassiveLeg:
     second_axis: np.ndarray
     frame: np.ndarray
 
+    @classmethod
+    def of(cls, base_point, first_axis, tube_axis, second_axis):
+        """The PassiveLeg with these ``base_point`` c (3,) mm, ``first_axis`` a (3,) base frame,
+        ``tube_axis`` t_p and ``second_axis`` b_p (3,) platform frame, unit and perpendicular;
+        its ``frame`` built from t_p and b_p."""
+        frame = np.stack([tube_axis, second_axis, np.cross(tube_axis, second_axis)], axis=1)
+        return cls(base_point=np.asarray(base_point, dtype=float), first_axis=first_axis, tube_axis=tube_axis,
+                   second_axis=second_axis, frame=frame)
+
 
 def passive_leg_of(document, locate):
     """The PassiveLeg of a validated robot file (mm; its verification home already in mm), or
@@ -73,8 +82,7 @@ def passive_leg_of(document, locate):
         raise locate.error(["passive_leg", "first_axis"], "at the verification home the tube lies along the "
                                                           "universal joint's first axis (its singularity)")
     second = rotation.T @ (across / np.linalg.norm(across))
-    return PassiveLeg(base_point=base, first_axis=axis, tube_axis=tube, second_axis=second,
-                      frame=np.stack([tube, second, np.cross(tube, second)], axis=1))
+    return PassiveLeg.of(base, axis, tube, second)
 
 
 def check_tube(robot, locate):

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..conventions import joint_errors
-from ..kinematics.parasitic import constraint_residuals
+from ..kinematics.parasitic import constraint_residuals, pose_constraint_residuals
 from ..kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
 from ..kinematics.singularity import branch_table, branch_values, posture_values, representative_postures
 from ..kinematics.wrist import tool_t6
@@ -175,9 +175,12 @@ def accumulate(robot, report, tally, revolute, t6, calls, expected, keep_first=T
     tally.closure_worst = max(tally.closure_worst, closure_worst)
     tally.closure_checked += closure_checked
     if robot.parallel.task:  # with a wrist: at the platform's pose the reference solves the tool pose at
-        with np.errstate(all="ignore"):
-            residuals, radicand = constraint_residuals(tally.calibrated.parallel,
-                                                       t6 if robot.wrist is None else expected.platform)
+        parallel = tally.calibrated.parallel
+        with np.errstate(all="ignore"):  # that pose is on the manifold: not solved again
+            if robot.wrist is None:
+                residuals, radicand = constraint_residuals(parallel, t6)
+            else:
+                residuals, radicand = pose_constraint_residuals(parallel, expected.platform), expected.constraint
         judged = radicand > SINGULAR_TOLERANCE
         tally.constraint_checked += int(np.count_nonzero(judged))
         worst = np.where(np.isfinite(residuals), np.abs(residuals), np.inf)[judged]

@@ -75,7 +75,7 @@ def sheet_view(robot, units="mm", compiled=True):
     position = home[:3] / LENGTH_UNITS[units]
     world = (*position, *home[3:]) if robot.wrist is None else world_of_t6(robot, t6_from_pose(home[None]),
                                                                              LENGTH_UNITS[units])[0, :6]
-    can_give = sorted({"WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)})
+    can_give = ["WARN_GOOD_SOLUTION", *warnings_to_exercise(robot)]
     statuses = sorted((WARNINGS[name], STATUS_WORDS[name]) for name in can_give)
     refused = [str(code) for code, _ in statuses if code in (WARNINGS["WARN_UNREACHABLE"], WARNINGS["WARN_SINGULAR_SOLUTION"])]
     if robot.wrist is not None:  # the five-axis module answers the wrist's own singularity

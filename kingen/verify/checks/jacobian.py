@@ -9,7 +9,8 @@ from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
 from ...kinematics.wrist import rotation_about
-from ...kinematics.wrist_forward import platform_poses, tool_rates
+from ...kinematics.forward import poses_of
+from ...kinematics.wrist_forward import tool_rates
 from ...runtime.text import counted
 from ..options import report_tolerance_mm
 from ..report import not_exercised
@@ -53,9 +54,13 @@ def jacobian_check(robot, plugin, options, t6):
     center = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
     if robot.wrist is not None:  # the forward map's rates, inverted (the tool's five driven directions)
-        analytic = wrist_rates(calibrated, expected, center)
         transmissions = np.concatenate([transmissions, np.ones(transmissions.shape[:2] + (robot.joint_count - robot.dof,))],
                                        axis=2)
+    regular = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])[:, None, :]
+               & (np.abs(np.swapaxes(transmissions, 1, 2)) > JACOBIAN_MIN_TRANSMISSION)
+               & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None, None])
+    if robot.wrist is not None:
+        analytic = wrist_rates(calibrated, expected, center, np.any(regular, axis=1))
     else:
         analytic = np.swapaxes(jacobian(wrenches, transmissions), 1, 2)
     if robot.task:  # a constrained machine answers a twist with its task coordinates' motion on its manifold
@@ -70,9 +75,6 @@ def jacobian_check(robot, plugin, options, t6):
     coarse, fine = (finite_difference_jacobian(joints_of, t6, JACOBIAN_STEP * robot.size_mm / halving,
                                                JACOBIAN_STEP / halving, robot.revolute) for halving in (1, 2))
     numeric = (4.0 * fine - coarse) / 3.0
-    regular = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])[:, None, :]
-               & (np.abs(np.swapaxes(transmissions, 1, 2)) > JACOBIAN_MIN_TRANSMISSION)
-               & np.all(expected.radicands > JACOBIAN_MIN_RADICAND, axis=1)[:, None, None])
     # Rotations in mm of arc at the robot's size, so that all six twists weigh alike; only the
     # pose coordinates the routine answers to (a translating platform's controller ignores rotations).
     units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3) * np.asarray(getattr(plugin, "pose_coordinates", True))
@@ -105,13 +107,14 @@ TURN_RAD = 0.5
 """A machine with a wrist: the sampled tool frames are also turned by this about the tool axis."""
 
 
-def wrist_rates(robot, expected, joints):
+def wrist_rates(robot, expected, joints, wanted):
     """(n, joint_count, postures, 6) the joint rates per tool twist of ``robot`` (with a wrist)
     at each posture's ``joints`` (n, joint_count, postures), the platform near the reference's
-    (kingen.kinematics.wrist_forward.tool_rates); NaN where that posture has no finite joints."""
+    (kingen.kinematics.wrist_forward.tool_rates), where ``wanted`` (n, postures); NaN elsewhere
+    and where that posture has no finite joints."""
     count, total, postures = joints.shape
-    near = platform_poses(expected.platform)
-    usable = np.all(np.isfinite(joints), axis=1)
+    near = poses_of(expected.platform)
+    usable = np.all(np.isfinite(joints), axis=1) & wanted
     rates = np.full((count, total, postures, 6), np.nan)
     for posture in range(postures):
         rows = usable[:, posture]

@@ -3,13 +3,13 @@ the sampled pose (:mod:`kingen.kinematics.forward`), within what the joints expl
 
 import numpy as np
 
-from ...conventions import joint_errors, pose_from_t6
-from ...kinematics.forward import closure_derivative, free_mask, newton, t6_of
+from ...conventions import joint_errors
+from ...kinematics.forward import closure_derivative, free_mask, newton, poses_of, t6_of
 from ...kinematics.parasitic import task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
-from ...kinematics.wrist_forward import platform_poses, tool_forward
+from ...kinematics.wrist_forward import tool_forward
 from ..options import CONDITIONING_FACTOR, report_tolerance_mm
 from ..tally import closure_miss
 from ..report import not_exercised
@@ -48,8 +48,7 @@ def round_trip_check(robot, plugin, options, t6):
     stride = max(1, -(-int(np.count_nonzero(candidates)) // ROUND_TRIP_POSTURES))
     pose_number, posture_number = np.indices(candidates.shape)
     pose_index, posture = np.nonzero(candidates & ((pose_number + posture_number) % stride == 0))
-    sampled = pose_from_t6(t6)
-    start = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)[pose_index]
+    start = poses_of(t6)[pose_index]
     free = free_mask(calibrated)
     conditioning = pose_conditioning(robot, wrenches[pose_index, posture], start, free)
     regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
@@ -88,7 +87,7 @@ def wrist_round_trip(robot, options, t6, expected, joints):
     parallel = robot.parallel
     wrenches, transmissions = posture_wrenches(robot, expected.points, joints)
     pose_index, posture = np.nonzero(regular_postures(expected, transmissions))
-    near = platform_poses(expected.platform)[pose_index]
+    near = poses_of(expected.platform)[pose_index]
     conditioning = pose_conditioning(parallel, wrenches[pose_index, posture], near, free_mask(parallel))
     regular = conditioning > ROUND_TRIP_MIN_CONDITIONING
     pose_index, posture, near = pose_index[regular], posture[regular], near[regular]
