@@ -59,8 +59,9 @@ def beyond_travel(robot, joints):
 
 
 def tool_moving(robot, free):
-    """The indices of ``free`` (into kingen.kinematics.forward.COORDINATES) whose change by TURN_PROBE_DEG (or mm) at the
-    home moves the tool tip or the tool axis; all of them without a wrist."""
+    """The indices of ``free`` (into kingen.kinematics.forward.COORDINATES) whose change by
+    TURN_PROBE_DEG (or mm) at the home moves the tool tip or the tool axis; all of them without a
+    wrist."""
     if robot.wrist is None:
         return list(free)
     start = np.array(robot.verification.home, dtype=float)
