@@ -21,14 +21,29 @@ def wrist_table(robot):
     its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
     ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward."""
     wrist = robot.wrist
-    first, second = wrist.axes
-    start = wrist.tool[:3, 2]
+    first, second = wrist.axes[:2]
+    three = len(wrist.axes) == 3
+    start = wrist.axes[2] if three else wrist.tool[:3, 2]
     cosine, normal, onto_second = first @ second, np.cross(first, second), start @ second
-    return {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
-            "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
-            "onto_second": c_double(onto_second), "normal": c_vector(normal),
-            "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
-            "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3])}
+    table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
+             "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
+             "onto_second": c_double(onto_second), "normal": c_vector(normal),
+             "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
+             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3]),
+             "three": three}
+    return {**table, **_third_table(wrist)} if three else table
+
+
+def _third_table(wrist):
+    """What a three-axis wrist adds to its table (C text): ``tip`` t = R0^T (the tool tip), the
+    tip in the tool frame (mm, constant: the wrist centre is p = q - R t for the tool pose R, q),
+    ``axis_tool`` R0^T a3, ``spare`` v = a2 x a3 made unit (normal to a3, platform frame: the
+    third angle is measured on it) and ``spare_tool`` R0^T v, R0 the tool's rotation at zero."""
+    rotation, third = wrist.tool[:3, :3], wrist.axes[2]
+    spare = np.cross(wrist.axes[1], third)
+    spare = spare / np.linalg.norm(spare)
+    return {"tip": c_vector(rotation.T @ wrist.tool[:3, 3]), "axis_tool": c_vector(rotation.T @ third),
+            "spare": c_vector(spare), "spare_tool": c_vector(rotation.T @ spare)}
 
 
 def constraint_rows(robot):
