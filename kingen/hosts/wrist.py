@@ -35,14 +35,15 @@ def wrist_table(robot):
 
 
 def _third_table(wrist):
-    """What a three-axis wrist adds to its table (C text): ``tip`` t = R0^T (the tool tip), the
-    tip in the tool frame (mm, constant: the wrist centre is p = q - R t for the tool pose R, q),
-    ``axis_tool`` R0^T a3, ``spare`` v = a2 x a3 made unit (normal to a3, platform frame: the
-    third angle is measured on it) and ``spare_tool`` R0^T v, R0 the tool's rotation at zero."""
+    """What a three-axis wrist adds to its table (C text): ``tip`` t (kingen.robot.wrist.Wrist.tip,
+    mm, the tool frame: the wrist centre is p = q - R t for the tool pose R, q), ``axis_tool``
+    R0^T a3, ``spare`` the unit u normal to a3 the third angle is measured on (platform frame, as
+    kingen.kinematics.wrist chooses it: a3 x the base axis a3 is least along) and ``spare_tool``
+    R0^T u, R0 the tool's rotation at zero."""
     rotation, third = wrist.tool[:3, :3], wrist.axes[2]
-    spare = np.cross(wrist.axes[1], third)
+    spare = np.cross(third, np.eye(3)[np.argmin(np.abs(third))])
     spare = spare / np.linalg.norm(spare)
-    return {"tip": c_vector(rotation.T @ wrist.tool[:3, 3]), "axis_tool": c_vector(rotation.T @ third),
+    return {"tip": c_vector(wrist.tip), "axis_tool": c_vector(rotation.T @ third),
             "spare": c_vector(spare), "spare_tool": c_vector(rotation.T @ spare)}
 
 
