@@ -14,6 +14,7 @@ from kingen.hosts.delmia.build import build_plugin
 from kingen.hosts.delmia.loader import Plugin
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
+from kingen.kinematics.wrist import rotation_about
 from kingen.robot.model import load_robot, resolve_robot_path
 
 FILE = resolve_robot_path("tricept_wrist3")
@@ -66,3 +67,37 @@ def test_the_c_librarys_forward_returns_the_whole_tool_pose(tmp_path):
     assert np.max(np.abs(found_t6 - t6[good])) <= 1e-9
     back, _, _ = loaded.inverse(found)
     assert np.max(np.abs(back[np.arange(len(good)), :, posture] - expected.joints[good, :, posture])) <= 1e-9
+
+
+def _moved(t6, twist, step):
+    """``t6`` (4, 4, transposed) moved by ``step`` along the unit tool twist ``twist`` (0..5:
+    translations along base x, y, z, then rotations about them through the base origin)."""
+    moved = t6.copy()
+    if twist < 3:
+        moved[3, twist] += step
+        return moved
+    turn = rotation_about(np.eye(3)[twist - 3], np.array([step]))[0]
+    moved[:3, :3] = t6[:3, :3] @ turn.T
+    moved[3, :3] = turn @ t6[3, :3]
+    return moved
+
+
+def test_the_c_librarys_jacobian_is_the_references_central_difference(tmp_path):
+    """Every row of the C library's Jacobian (the three legs' and the three wrist joints', per
+    unit twist of the tool) against central differences (step 1e-6 mm or rad) of the
+    reference's joints of the same posture, at 20 regular poses in both wrist branches: to 1e-5."""
+    robot = load_robot(FILE)
+    library = build_library(robot, tmp_path)
+    loaded = Library(library.library, library.routine, robot)
+    _, t6 = random_t6(robot, 20, seed=45)
+    expected = solve(robot, t6)
+    checked = 0
+    for index, posture in zip(*np.nonzero(expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])):
+        rows, warning = loaded.jacobian(matrix_from_t6(t6[index]).reshape(16), int(posture))
+        assert warning == 0 and rows.shape == (6, 6)
+        for twist in range(6):
+            ahead = solve(robot, _moved(t6[index], twist, 1e-6)[None]).joints[0, :, posture]
+            behind = solve(robot, _moved(t6[index], twist, -1e-6)[None]).joints[0, :, posture]
+            assert np.max(np.abs(rows[:, twist] - (ahead - behind) / 2e-6)) <= 1e-5
+        checked += 1
+    assert checked >= 30

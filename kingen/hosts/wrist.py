@@ -13,6 +13,13 @@ IN_PLANE = 1e-9
 normal is at most this: then each branch is one sign of the second wrist joint."""
 
 
+def turned_axis(wrist):
+    """(3,) z0, the unit axis (platform frame, every wrist joint at 0) the wrist's first two
+    joints turn: the tool's z axis for two joints, the third joint's axis for three
+    (kingen.kinematics.wrist)."""
+    return wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]
+
+
 def wrist_table(robot):
     """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two rows, unit, platform
     frame), ``start`` the tool's z axis and ``reach`` (mm) the tool tip's distance along it from
@@ -22,8 +29,7 @@ def wrist_table(robot):
     ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward."""
     wrist = robot.wrist
     first, second = wrist.axes[:2]
-    three = len(wrist.axes) == 3
-    start = wrist.axes[2] if three else wrist.tool[:3, 2]
+    three, start = wrist.whole_pose, turned_axis(wrist)
     cosine, normal, onto_second = first @ second, np.cross(first, second), start @ second
     table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
              "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
@@ -99,29 +105,32 @@ def branch_words(robot):
     """(branch 0, branch 1) of ``robot``'s wrist in words, exact for every tool axis it reaches:
     branch 0 takes the intermediate axis c = Rot(a2, t2) z0 on the side of a1 x a2
     (kingen.kinematics.wrist), branch 1 the other (the head's flip). Where z0 lies in the plane
-    of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2."""
+    of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2. z0 is
+    the tool axis of a two-axis wrist, the third joint's axis of a three-axis one (:func:`turned_axis`)."""
     wrist = robot.wrist
-    first, second = wrist.names
-    normal, start = np.cross(*wrist.axes), wrist.tool[:3, 2]
+    first, second = wrist.names[:2]
+    normal, start = np.cross(*wrist.axes[:2]), turned_axis(wrist)
+    turned = f"the axis of {wrist.names[2]}" if wrist.whole_pose else "the tool axis"
     if abs(start @ normal) <= IN_PLANE:
         sign = np.sign(np.cross(wrist.axes[1], start) @ normal)
         return (f"{second} >= 0" if sign > 0 else f"{second} <= 0",
                 f"{second} < 0 (the head's flip)" if sign > 0 else f"{second} > 0 (the head's flip)")
-    return (f"the tool axis turned by {second} on the side of {first} x {second}",
-            f"the tool axis turned by {second} on the other side (the head's flip)")
+    return (f"{turned} turned by {second} on the side of {first} x {second}",
+            f"{turned} turned by {second} on the other side (the head's flip)")
 
 
 def sheet_words(robot):
     """What every host's setup sheet says of ``robot``'s wrist (it has one): ``joints`` its two
-    joints (name, axis in words in the platform frame at zero, travel in degrees or None),
+    or three joints (name, axis in words in the platform frame at zero, travel in degrees or None),
     ``chain`` them in words, ``branches`` (branch 0, branch 1) in words, ``tool`` the tool tip
-    (mm) and the tool axis in the platform frame with every wrist joint at 0, and ``reach`` (mm)."""
+    (mm) and the tool axis in the platform frame with every wrist joint at 0, ``reach`` (mm) and
+    ``three`` whether the wrist has three joints (the tool pose read whole)."""
     wrist = robot.wrist
     limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
     joints = [{"name": name, "axis": axis_words(axis),
                "travel": (f"{np.degrees(lower):.10g}", f"{np.degrees(upper):.10g}") if bounded else None}
               for name, axis, lower, upper, bounded in zip(wrist.names, wrist.axes, wrist.lower, wrist.upper, limited)]
     tip = ", ".join(f"{value + 0.0:.10g}" for value in wrist.tool[:3, 3])
-    return {"joints": joints, "branches": branch_words(robot), "reach": f"{wrist.reach:.10g}",
+    return {"joints": joints, "branches": branch_words(robot), "reach": f"{wrist.reach:.10g}", "three": wrist.whole_pose,
             "chain": ", then ".join(f"{joint['name']} about {joint['axis']}" for joint in joints),
             "tool": f"tool tip at ({tip}) mm, tool axis {axis_words(wrist.tool[:3, 2])}"}
