@@ -11,9 +11,15 @@ from scipy.spatial.transform import Rotation
 
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
+from kingen.hosts.c.checks import regular_pairs
+from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
+from kingen.kinematics.singularity import jacobian
 from kingen.kinematics.wrist import tool_t6
+from kingen.kinematics.forward import poses_of
+from kingen.kinematics.wrist_forward import tool_rates
+from kingen.kinematics.wrist_rates import tool_jacobian
 from kingen.robot.model import load_robot, resolve_robot_path
 
 import test_tricept
@@ -150,3 +156,39 @@ def test_a_three_axis_wrist_kingen_does_not_solve_is_refused_in_one_line(tmp_pat
         load_robot(path)
     message = str(refused.value)
     assert message.startswith(str(path)) and words in message and "\n" not in message, message
+
+
+def test_joint_rates_closed_form_forward_differences_and_inverse_differences_agree(robot):
+    """Three computations of the joint rates per tool twist (all six twists, no free turn): the
+    closed form (tool_jacobian), the forward map's central differences inverted (tool_rates) and
+    central differences of the reference's inverse along each unit twist."""
+    t6 = t6_from_pose(sample_poses(robot, 40, 0))
+    pose_index, _, joints, _, wrenches, transmissions = regular_pairs(robot, t6)
+    tool = t6[pose_index]
+    platform = solve(robot, tool).platform
+    closed = tool_jacobian(robot, tool, platform, joints, jacobian(wrenches, transmissions))
+    differences = tool_rates(robot, joints, poses_of(platform), 1e-5 * robot.size_mm, 1e-5)
+    assert len(pose_index) >= 20 and np.all(np.isfinite(closed))
+    units = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)
+    scale = np.max(np.abs(closed) * units, axis=-1)
+    assert np.max(np.max(np.abs(closed - differences) * units, axis=-1) / scale) <= 1e-8
+    inverse = np.zeros_like(closed)
+    step = 1e-4
+    for twist in range(6):
+        moved = []
+        for sign in (1.0, -1.0):
+            motion = np.zeros(6)
+            motion[twist] = sign * step
+            turn = Rotation.from_rotvec(motion[3:]).as_matrix()
+            frames = np.swapaxes(tool, 1, 2).copy()  # column-form frames
+            frames[:, :3, :3] = turn @ frames[:, :3, :3]
+            frames[:, :3, 3] = frames[:, :3, 3] @ turn.T + motion[:3]
+            solved = solve(robot, np.swapaxes(frames, 1, 2))
+            moved.append(solved.joints[np.arange(len(tool)), :, _postures_of(solved, joints)])
+        inverse[:, :, twist] = (moved[0] - moved[1]) / (2 * step)
+    assert np.max(np.max(np.abs(closed - inverse) * units, axis=-1) / scale) <= 1e-6
+
+
+def _postures_of(solved, joints):
+    """(m,) the posture of ``solved`` whose joints are nearest ``joints`` (m, joint_count)."""
+    return np.argmin(np.max(np.abs(solved.joints - joints[:, :, None]), axis=1), axis=1)
