@@ -149,6 +149,21 @@ def tool_t6(robot, platform, wrist_joints):
     return tool
 
 
+def orientation_rows(wrist):
+    """The T6 rows of the tool's orientation ``wrist`` answers: the tool axis (row 2) for two
+    joints (the turn about it free), all three (the whole rotation) for three."""
+    return (0, 1, 2) if wrist.whole_pose else (2,)
+
+
+def tool_miss(wrist, reached, asked):
+    """((n,) tool tip distance mm, (n,) orientation miss) of the tool T6 ``reached`` from
+    ``asked`` (n, 4, 4 each): the miss the largest distance of the :func:`orientation_rows`
+    (unit vectors) between them."""
+    tip = np.linalg.norm(reached[:, 3, :3] - asked[:, 3, :3], axis=1)
+    rows = list(orientation_rows(wrist))
+    return tip, np.max(np.linalg.norm(reached[:, rows, :3] - asked[:, rows, :3], axis=2), axis=1)
+
+
 def tool_turn(asked, reached):
     """(n,) how far (rad, (-pi, pi]) the asked tool T6 ``asked`` (n, 4, 4) is turned about the
     tool axis from the machine's ``reached`` (n, 4, 4): the part of the pose a five-axis reading
