@@ -76,13 +76,15 @@ def world_of_t6(robot, t6, scale=1.0):
 def wrist_view(robot):
     """What templates/five_axis.c.j2 shows of ``robot``'s wrist at its working posture: the wrist's
     table, its branch and travel (radians), and what follows from w0 alone (its length normal
-    to the base x axis and angle about it, as :func:`world_of_axis` computes them)."""
+    to the base x axis and angle about it, as :func:`world_of_axis` computes them), and the
+    platform's verification home (mm; a six-axis forward's second start)."""
     wrist = robot.wrist
     w0 = home_axis(robot)
     return {**wrist_table(robot), "names": ", ".join(wrist.names), "count": len(wrist.names),
             "branch": robot.working_posture % 2,
             "home_axis": c_vector(w0), "home_radius": c_double(np.hypot(w0[1], w0[2])),
-            "home_phi": c_double(np.arctan2(w0[1], w0[2])), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
+            "home_phi": c_double(np.arctan2(w0[1], w0[2])),
+            "home_centre": c_vector(robot.parallel.verification.home[:3]), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
             "upper": c_vector(np.clip(wrist.upper, -1e300, 1e300))}
 
 
