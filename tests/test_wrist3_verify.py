@@ -14,6 +14,7 @@ from kingen.conventions import t6_from_pose
 from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.robot.model import load_robot
+from kingen.kinematics.wrist_forward import tool_forward
 from kingen.verify.checks.jacobian import jacobian_check
 from kingen.verify.checks.round_trip import round_trip_check
 from kingen.verify.options import VerifyOptions
@@ -75,3 +76,22 @@ def test_fk_from_legs_and_wrist_joints_gives_the_whole_golden_tool_pose(robot, t
     assert np.max(np.abs(reached[0, :3, :3] - asked[0, :3, :3])) < 1e-8
     capsys.readouterr()
 
+
+
+def test_analyze_sweeps_every_coordinate_and_its_joints_give_the_swept_tool_pose_back(robot, tmp_path):
+    output = tmp_path / "analysis.json"
+    assert main(["analyze", robot.name, "-o", str(tmp_path / "out"), "--json", str(output), "--tilt-max", "20"]) == 0
+    document = json.loads(output.read_text())
+    assert document["available"]["poses"].startswith("tool poses (the whole pose")
+    assert document["available"]["sweeps"] == "available" and "yaw" in document["sweeps"]  # no free turn
+    home = np.array(robot.verification.home, dtype=float)
+    for index, name in enumerate(("x", "y", "z", "roll", "pitch", "yaw")):
+        # z and yaw keep the tool along Ax4 (home's gimbal lock, singular): its joints give the pose all the same
+        entries = [entry for entry in document["sweeps"][name] if entry["warning"] != UNREACHABLE]
+        assert len(entries) > 40
+        poses = np.tile(home, (len(entries), 1))
+        poses[:, index] = [entry["value"] for entry in entries]
+        joints = np.array([entry["joints"] for entry in entries]) * robot.joint_scale()
+        tool, _, _ = tool_forward(robot, joints, np.tile([*robot.parallel.verification.home[:3], 0, 0, 0],
+                                                         (len(entries), 1)))
+        assert np.max(np.abs(tool - t6_from_pose(poses))) < 1e-6  # the joints as analysis.json rounds them
