@@ -43,14 +43,11 @@ def wrist_table(robot):
 def _third_table(wrist):
     """What a three-axis wrist adds to its table (C text): ``tip`` t (kingen.robot.wrist.Wrist.tip,
     mm, the tool frame: the wrist centre is p = q - R t for the tool pose R, q), ``axis_tool``
-    R0^T a3, ``spare`` the unit u normal to a3 the third angle is measured on (platform frame, as
-    kingen.kinematics.wrist chooses it: a3 x the base axis a3 is least along) and ``spare_tool``
-    R0^T u, R0 the tool's rotation at zero."""
-    rotation, third = wrist.tool[:3, :3], wrist.axes[2]
-    spare = np.cross(third, np.eye(3)[np.argmin(np.abs(third))])
-    spare = spare / np.linalg.norm(spare)
-    return {"tip": c_vector(wrist.tip), "axis_tool": c_vector(rotation.T @ third),
-            "spare": c_vector(spare), "spare_tool": c_vector(rotation.T @ spare)}
+    R0^T a3 (R0 the tool's rotation at zero) and ``second_normal`` a2's part normal to a3, on
+    which the third angle is measured (templates/wrist.c.j2, kingen_wrist_third)."""
+    second, third = wrist.axes[1], wrist.axes[2]
+    return {"tip": c_vector(wrist.tip), "axis_tool": c_vector(wrist.tool[:3, :3].T @ third),
+            "second_normal": c_vector(second - (second @ third) * third)}
 
 
 def constraint_rows(robot):
