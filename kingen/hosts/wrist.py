@@ -21,9 +21,11 @@ def turned_axis(wrist):
 
 
 def wrist_table(robot):
-    """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two rows, unit, platform
-    frame), ``start`` the tool's z axis and ``reach`` (mm) the tool tip's distance along it from
-    the wrist centre, every wrist joint at 0 (kingen.robot.wrist.Wrist), then what follows from
+    """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two or three rows, unit,
+    platform frame), ``start`` the axis z0 the first two joints turn (:func:`turned_axis`) and
+    ``reach`` (mm) the tool tip's distance along the tool's z axis from the wrist centre, every
+    wrist joint at 0 (kingen.robot.wrist.Wrist), ``three`` whether it has three joints (then
+    :func:`_third_table`'s entries too), then what follows from
     them alone, by kingen.kinematics.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
     its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
     ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward."""
