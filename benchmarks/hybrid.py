@@ -1,7 +1,7 @@
 """The call cost of a constrained machine's routine (parasitic coordinates solved in closed form,
-then the limbs; with a wrist, its two joints too) against the hexapod's, in kingen's batch
-driver, for each host: DELMIA's routines and LinuxCNC's modules (a wrist robot's is the
-five-axis module). Printed as a Markdown table, and with --json written as plain data for
+then the limbs; with a wrist, its two or three joints too) against the hexapod's, in kingen's
+batch driver, for each host: DELMIA's routines and LinuxCNC's modules (a wrist robot's is the
+five-axis module, or with a three-axis wrist the six-axis one). Printed as a Markdown table, and with --json written as plain data for
 benchmarks/run.py (the performance page's section). The issue's goal: at most 3 times the
 hexapod's.
 
@@ -26,10 +26,11 @@ from pathlib import Path
 import numpy as np
 
 ABOUT = ("The call cost of a lower-mobility machine's routine (its parasitic coordinates in closed form, then the "
-         "limbs; with a wrist, the wrist's joints too: in LinuxCNC the five-axis module) against the hexapod's, for "
+         "limbs; with a wrist, the wrist's joints too: in LinuxCNC the five- or six-axis module) against the hexapod's, for "
          "each host ([Lower-mobility machines](how-to/hybrid.md)). Goal: at most 3 times the hexapod's.")
 """What the section measures, for the performance page (links relative to docs/)."""
-MACHINES = ("prs_head", "rps_table", "exechon_constrained", "tricept", "exechon_wrist", "tricept_wrist")
+MACHINES = ("prs_head", "rps_table", "exechon_constrained", "tricept", "exechon_wrist", "tricept_wrist",
+            "tricept_wrist3")
 BASELINE = "hexapod"
 REFERENCE = "linuxcnc_hexapod"
 """A second hexapod each ratio is also given against: LinuxCNC's own hexapod's geometry

@@ -28,7 +28,7 @@ ROBOTS = sorted(Path(__file__).resolve().parent.parent.glob("robots/*.yaml"))
 STRICT_C = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror")
 STRICT_CXX = ("-x", "c++", "-std=c++17", "-Wall", "-Wextra", "-Werror")
 COMPILED = ("tau.yaml", "rotary_delta.yaml", "hexapod.yaml", "exechon.yaml", "prs_head.yaml", "exechon_constrained.yaml",
-            "tricept.yaml", "exechon_wrist.yaml")
+            "tricept.yaml", "exechon_wrist.yaml", "tricept_wrist3.yaml")
 """Robots whose library each compiler compiles: every limb model, one and many postures, a
 general set of free coordinates, every family of constraints."""
 

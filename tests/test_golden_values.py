@@ -32,7 +32,7 @@ import golden_cranks  # noqa: E402
 SOURCES = ("thesis", "Table", "LinuxCNC", "Independent 6-RUS inverse", "Derived by hand",
            "Independent computation (tests/test_hybrid.py)", "Independent computation (tests/test_hybrid_axes.py)",
            "Independent computation (tests/test_tricept.py)", "Independent computation (tests/test_wrist.py)",
-           "Independent computation (tests/test_wrist_verify.py)")
+           "Independent computation (tests/test_wrist_verify.py)", "Independent computation (tests/test_wrist3.py)")
 
 
 @pytest.mark.parametrize("name", shipped_robots())

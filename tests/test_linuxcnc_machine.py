@@ -108,8 +108,8 @@ def machine_ini(robot, folder, kins_ini, units):
                  f"HOME_LATCH_VEL = 0\nHOME_OFFSET = {body.split('HOME = ')[1].splitlines()[0]}\n"
                  if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")
-    coordinates = ("X Y Z A C" if robot.wrist is not None else "X Y Z A B C" if robot.dof == 6 or robot.task
-                   else "X Y Z")
+    coordinates = ("X Y Z A C" if robot.wrist is not None and not robot.wrist.whole_pose
+                   else "X Y Z A B C" if robot.dof == 6 or robot.task or robot.wrist is not None else "X Y Z")
     axes = "".join(f"[AXIS_{axis}]\nMIN_LIMIT = -5000\nMAX_LIMIT = 5000\nMAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n"
                    for axis in coordinates.split())
     (folder / "sim.tbl").write_text("")
@@ -221,4 +221,27 @@ def test_linuxcnc_runs_the_five_axis_module_to_the_reference(tmp_path):
         assert np.max(np.abs(world - move["pose"])) <= 1e-9, move
     before, after = outcome["jog"]["before"], outcome["jog"]["after"]
     assert after["joints"][0] - before["joints"][0] == pytest.approx(WRIST_CASE["jog"], abs=1e-6)
+    assert after["joints"][1:] == before["joints"][1:]
+
+
+WRIST3_CASE = {"moves": [[30, 20, -1270, 170, 10, 30], [-40, 90, -1320, 195, -8, -50]], "jog": 2.0,
+               "first_jog": "4 10"}
+"""The six-axis module of tricept_wrist3: X Y Z A B C (the tool pose: tip, roll, pitch, yaw) moves,
+after a joint jog of ax5 by 10 degrees off the home, where the axis of ax6 lies along ax4 (the
+gimbal lock, which the module answers as singular: LinuxCNC could not enter world mode there); A
+stays near 180 (195 is roll -165) so that the straight move in A B C stays within the wrist's travel."""
+
+
+@pytest.mark.xdist_group("linuxcnc")
+def test_linuxcnc_runs_the_six_axis_module_to_the_reference(tmp_path):
+    robot, outcome = run_machine("tricept_wrist3", tmp_path, WRIST3_CASE)
+    jogged = outcome["first_jog"]["after"]["joints"]
+    assert jogged[4] - outcome["first_jog"]["before"]["joints"][4] == pytest.approx(10.0, abs=1e-6)
+    for move in outcome["moves"]:
+        expected = solve(robot, t6_from_pose(np.array([move["pose"]], dtype=float))).joints[0, :, robot.working_posture]
+        joints = np.array(move["joints"][:robot.joint_count]) * np.where(robot.revolute, np.pi / 180.0, 1.0)
+        assert np.max(np.abs(joints - expected)) <= 1e-9, move
+        assert np.max(np.abs(np.array(move["world"][:6]) - move["pose"])) <= 1e-9, move
+    before, after = outcome["jog"]["before"], outcome["jog"]["after"]
+    assert after["joints"][0] - before["joints"][0] == pytest.approx(WRIST3_CASE["jog"], abs=1e-6)
     assert after["joints"][1:] == before["joints"][1:]

@@ -15,7 +15,7 @@ EXPECTED_SHAPE = {  # (dof, postures, limb model) from docs/explanation/conventi
     "stewart_gough_example": (6, 1, "leg"),
     "linuxcnc_hexapod": (6, 1, "leg"), "linear_delta": (3, 8, "rail"), "rotary_delta": (3, 8, "crank"),
     "prs_head": (3, 8, "rail"), "rps_table": (3, 1, "leg"), "exechon_constrained": (3, 1, "leg"), "exechon_wrist": (3, 2, "leg"), "tricept": (3, 1, "leg"),
-    "tricept_wrist": (3, 2, "leg"),
+    "tricept_wrist": (3, 2, "leg"), "tricept_wrist3": (3, 2, "leg"),
 }
 
 

@@ -57,7 +57,9 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
 
     A machine with a wrist (robot file ``wrist``): a G-code program commands X Y Z (the tool tip)
     and A, C (the tool axis) as its LinuxCNC five-axis module reads them (B and the turn about the
-    tool axis not read); a CSV gives tool poses. The wrist's joints are judged with the legs'.
+    tool axis not read); a CSV gives tool poses. A three-axis wrist reads the whole tool pose: G-code
+    X Y Z A B C are the tool tip and its roll, pitch, yaw, as for a hexapod. The wrist's joints are
+    judged with the legs'.
 
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
     every limit judged, 1 when not, 2 bad input."""

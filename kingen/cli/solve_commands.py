@@ -101,7 +101,7 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     say(f"routine returned {calls.returned[0]}")
     if model.task:
         say_fitted(_manifold_note(model, matrix), width)
-    if model.wrist is not None:
+    if model.wrist is not None and not model.wrist.whole_pose:  # a three-axis wrist reads the pose whole
         say_fitted(_turn_note(model, matrix, expected), width)
     say_fitted(_indices_note(model), width)
     if switch is not None:

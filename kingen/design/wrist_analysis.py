@@ -1,7 +1,7 @@
 """What ``analyze`` judges differently on a machine with a serial wrist (kingen.robot.wrist).
 
 Its poses are tool poses (mm, degrees; the tool tip and the tool axis, the turn about the axis
-free), solved by the numpy reference from the tool's T6 (kingen.kinematics.wrist): joints the
+free; with a three-axis wrist the whole pose), solved by the numpy reference from the tool's T6 (kingen.kinematics.wrist): joints the
 legs', then the wrist's. The parallel part is judged at the platform pose the machine takes for
 each tool pose, the wrist by its radicands (the first wrist joint's 1 - (a1.w_p)^2 and the
 branches' D). An A/C head's usual home has its tool axis along the first wrist axis (the
@@ -15,6 +15,7 @@ import numpy as np
 from ..conventions import matrix_from_pose, t6_from_matrix
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
+from ..kinematics.wrist import orientation_rows
 
 TURN_PROBE_DEG = 1.0
 """A coordinate moved by this much at home that moves neither the tool tip nor the tool axis
@@ -60,15 +61,16 @@ def beyond_travel(robot, joints):
 
 def tool_moving(robot, free):
     """The indices of ``free`` (into kingen.kinematics.forward.COORDINATES) whose change by
-    TURN_PROBE_DEG (or mm) at the home moves the tool tip or the tool axis; all of them without a
-    wrist."""
+    TURN_PROBE_DEG (or mm) at the home moves the tool tip or the tool axis (a three-axis wrist:
+    any tool axis, so all of them); all of them without a wrist."""
     if robot.wrist is None:
         return list(free)
     start = np.array(robot.verification.home, dtype=float)
     poses = np.tile(start, (len(free) + 1, 1))
     poses[np.arange(1, len(free) + 1), free] += TURN_PROBE_DEG
     t6 = t6_from_matrix(matrix_from_pose(poses))
-    moved = np.max(np.abs(t6[1:, 2:4, :3] - t6[0, 2:4, :3]), axis=(1, 2))
+    rows = [*orientation_rows(robot.wrist), 3]
+    moved = np.max(np.abs(t6[1:, rows, :3] - t6[0, rows, :3]), axis=(1, 2))
     return [axis for axis, distance in zip(free, moved) if distance > TURN_FREE]
 
 
@@ -77,10 +79,12 @@ def wrist_available(robot, free, swept, pole, tilted):
     what is not exercised and why (``free``/``swept``: the coordinates' names; ``tilted``:
     whether tilt limits were found)."""
     names = ", ".join(robot.wrist.names)
+    read, aligned = (("the whole pose: tool tip and tool frame", f"{robot.wrist.names[-1]}'s axis")
+                     if robot.wrist.whole_pose else
+                     ("the tool tip and the tool axis; the turn about the axis is free", "the tool axis"))
     unswept = [name for name in free if name not in swept]
     return {
-        "poses": f"tool poses (the tool tip and the tool axis; the turn about the axis is free); joints: "
-                 f"the legs', then the wrist's ({names})",
+        "poses": f"tool poses ({read}); joints: the legs', then the wrist's ({names})",
         "direct_index": f"not available: the parallel part's {robot.dof} legs (its constraints are not in the index)",
         "direct_singularity": "crossings only: the sign of the parallel part's closure Jacobian over the wrist "
                               "centre's x, y, z at the platform pose the machine takes (the tool's motion moves "
@@ -91,7 +95,7 @@ def wrist_available(robot, free, swept, pole, tilted):
                       "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file; "
                       "the wrist and the tool have no collision geometry (not exercised)"),
         "wrist_singularity": (f"stops a pose as unreachable: a wrist radicand within {SINGULAR_TOLERANCE:g} of 0 "
-                              f"(the tool axis along {robot.wrist.names[0]}'s axis, or the branches meeting)"
+                              f"({aligned} along {robot.wrist.names[0]}'s axis, or the branches meeting)"
                               + ("; home lies there (the head's pole): poses in that band are judged through "
                                  f"({robot.wrist.names[0]}'s angle there is arbitrary)" if pole else "")),
         "tilt_limits": ("available: the tool frame turned about a horizontal axis through the tool tip, the tilt "

@@ -13,22 +13,43 @@ IN_PLANE = 1e-9
 normal is at most this: then each branch is one sign of the second wrist joint."""
 
 
+def turned_axis(wrist):
+    """(3,) z0, the unit axis (platform frame, every wrist joint at 0) the wrist's first two
+    joints turn: the tool's z axis for two joints, the third joint's axis for three
+    (kingen.kinematics.wrist)."""
+    return wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]
+
+
 def wrist_table(robot):
-    """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two rows, unit, platform
-    frame), ``start`` the tool's z axis and ``reach`` (mm) the tool tip's distance along it from
-    the wrist centre, every wrist joint at 0 (kingen.robot.wrist.Wrist), then what follows from
+    """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two or three rows, unit,
+    platform frame), ``start`` the axis z0 the first two joints turn (:func:`turned_axis`) and
+    ``reach`` (mm) the tool tip's distance along the tool's z axis from the wrist centre, every
+    wrist joint at 0 (kingen.robot.wrist.Wrist), ``three`` whether it has three joints (then
+    :func:`_third_table`'s entries too), then what follows from
     them alone, by kingen.kinematics.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
     its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
     ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward."""
     wrist = robot.wrist
-    first, second = wrist.axes
-    start = wrist.tool[:3, 2]
+    first, second = wrist.axes[:2]
+    three, start = wrist.whole_pose, turned_axis(wrist)
     cosine, normal, onto_second = first @ second, np.cross(first, second), start @ second
-    return {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
-            "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
-            "onto_second": c_double(onto_second), "normal": c_vector(normal),
-            "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
-            "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3])}
+    table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
+             "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
+             "onto_second": c_double(onto_second), "normal": c_vector(normal),
+             "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
+             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3]),
+             "three": three}
+    return {**table, **_third_table(wrist)} if three else table
+
+
+def _third_table(wrist):
+    """What a three-axis wrist adds to its table (C text): ``tip`` t (kingen.robot.wrist.Wrist.tip,
+    mm, the tool frame: the wrist centre is p = q - R t for the tool pose R, q), ``axis_tool``
+    R0^T a3 (R0 the tool's rotation at zero) and ``second_normal`` a2's part normal to a3, on
+    which the third angle is measured (templates/wrist.c.j2, kingen_wrist_third)."""
+    second, third = wrist.axes[1], wrist.axes[2]
+    return {"tip": c_vector(wrist.tip), "axis_tool": c_vector(wrist.tool[:3, :3].T @ third),
+            "second_normal": c_vector(second - (second @ third) * third)}
 
 
 def constraint_rows(robot):
@@ -83,29 +104,32 @@ def branch_words(robot):
     """(branch 0, branch 1) of ``robot``'s wrist in words, exact for every tool axis it reaches:
     branch 0 takes the intermediate axis c = Rot(a2, t2) z0 on the side of a1 x a2
     (kingen.kinematics.wrist), branch 1 the other (the head's flip). Where z0 lies in the plane
-    of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2."""
+    of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2. z0 is
+    the tool axis of a two-axis wrist, the third joint's axis of a three-axis one (:func:`turned_axis`)."""
     wrist = robot.wrist
-    first, second = wrist.names
-    normal, start = np.cross(*wrist.axes), wrist.tool[:3, 2]
+    first, second = wrist.names[:2]
+    normal, start = np.cross(*wrist.axes[:2]), turned_axis(wrist)
+    turned = f"the axis of {wrist.names[2]}" if wrist.whole_pose else "the tool axis"
     if abs(start @ normal) <= IN_PLANE:
         sign = np.sign(np.cross(wrist.axes[1], start) @ normal)
         return (f"{second} >= 0" if sign > 0 else f"{second} <= 0",
                 f"{second} < 0 (the head's flip)" if sign > 0 else f"{second} > 0 (the head's flip)")
-    return (f"the tool axis turned by {second} on the side of {first} x {second}",
-            f"the tool axis turned by {second} on the other side (the head's flip)")
+    return (f"{turned} turned by {second} on the side of {first} x {second}",
+            f"{turned} turned by {second} on the other side (the head's flip)")
 
 
 def sheet_words(robot):
     """What every host's setup sheet says of ``robot``'s wrist (it has one): ``joints`` its two
-    joints (name, axis in words in the platform frame at zero, travel in degrees or None),
+    or three joints (name, axis in words in the platform frame at zero, travel in degrees or None),
     ``chain`` them in words, ``branches`` (branch 0, branch 1) in words, ``tool`` the tool tip
-    (mm) and the tool axis in the platform frame with every wrist joint at 0, and ``reach`` (mm)."""
+    (mm) and the tool axis in the platform frame with every wrist joint at 0, ``reach`` (mm) and
+    ``three`` whether the wrist has three joints (the tool pose read whole)."""
     wrist = robot.wrist
     limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
     joints = [{"name": name, "axis": axis_words(axis),
                "travel": (f"{np.degrees(lower):.10g}", f"{np.degrees(upper):.10g}") if bounded else None}
               for name, axis, lower, upper, bounded in zip(wrist.names, wrist.axes, wrist.lower, wrist.upper, limited)]
     tip = ", ".join(f"{value + 0.0:.10g}" for value in wrist.tool[:3, 3])
-    return {"joints": joints, "branches": branch_words(robot), "reach": f"{wrist.reach:.10g}",
+    return {"joints": joints, "branches": branch_words(robot), "reach": f"{wrist.reach:.10g}", "three": wrist.whole_pose,
             "chain": ", then ".join(f"{joint['name']} about {joint['axis']}" for joint in joints),
             "tool": f"tool tip at ({tip}) mm, tool axis {axis_words(wrist.tool[:3, 2])}"}

@@ -67,8 +67,8 @@ tool's axis at zero, are perpendicular to within this (dot products of unit vect
 
 def _wrist_misses_axes(wrist):
     """Whether some tool axes lie beyond the reach of the two-axis ``wrist`` (its WARN_UNREACHABLE)."""
-    first, second = wrist.axes
-    return abs(first @ second) > WRIST_EVERY_AXIS or abs(second @ wrist.tool[:3, 2]) > WRIST_EVERY_AXIS
+    first, second, start = wrist.axes[0], wrist.axes[1], wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]
+    return abs(first @ second) > WRIST_EVERY_AXIS or abs(second @ start) > WRIST_EVERY_AXIS
 
 
 UNWRITTEN_WARNING = -1

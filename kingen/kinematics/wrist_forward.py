@@ -13,7 +13,7 @@ import numpy as np
 
 from .forward import SEARCH, assemblies, free_mask, newton, poses_of, t6_of
 from .reference import solve
-from .wrist import tool_t6
+from .wrist import orientation_rows, tool_t6
 
 
 def tool_forward(robot, joints, near):
@@ -34,9 +34,11 @@ def tool_rates(robot, joints, near, step_mm, step_rad):
     tip and the tool axis, by Richardson-extrapolated central differences (steps ``step_mm``
     for the legs, ``step_rad`` for the wrist, and half of them), is solved by least squares for
     the tip's rate v + omega x tip and the axis's rate omega x axis: the five driven directions;
-    the twist about the tool axis asks neither and gets zero rates."""
+    the twist about the tool axis asks neither and gets zero rates. With three wrist joints
+    every tool axis's rate is asked (kingen.kinematics.wrist.orientation_rows): all six twists."""
     joints = np.asarray(joints, dtype=float)
     count, total = joints.shape
+    rows = (3, *orientation_rows(robot.wrist))
     steps = np.where(np.arange(total) < robot.dof, step_mm, step_rad)
     derivatives = []
     for halving in (1.0, 2.0):
@@ -46,19 +48,20 @@ def tool_rates(robot, joints, near, step_mm, step_rad):
             moved[:, joint, 1, joint] += steps[joint] / halving
         tool, _, _ = tool_forward(robot, moved.reshape(-1, total), np.repeat(near, 2 * total, axis=0))
         tool = tool.reshape(count, total, 2, 4, 4)
-        motion = np.concatenate([tool[..., 3, :3], tool[..., 2, :3]], axis=-1)  # tip and axis
+        motion = np.concatenate([tool[..., row, :3] for row in rows], axis=-1)  # tip and axes
         derivatives.append((motion[:, :, 1] - motion[:, :, 0]) / (2.0 * steps[None, :, None] / halving))
-    derivative = np.swapaxes((4.0 * derivatives[1] - derivatives[0]) / 3.0, 1, 2)  # (n, 6, joint)
+    derivative = np.swapaxes((4.0 * derivatives[1] - derivatives[0]) / 3.0, 1, 2)  # (n, 3 rows, joint)
     tool, _, _ = tool_forward(robot, joints, near)
-    tip, axis = tool[:, 3, :3], tool[:, 2, :3]
+    tip = tool[:, 3, :3]
     omega = np.eye(3)
-    asked = np.zeros((count, 6, 6))  # (n, tip and axis rate, twist)
+    asked = np.zeros((count, 3 * len(rows), 6))  # (n, tip and axes rates, twist)
     asked[:, :3, :3] = np.eye(3)
     asked[:, :3, 3:] = np.swapaxes(np.cross(omega[None], tip[:, None]), 1, 2)
-    asked[:, 3:, 3:] = np.swapaxes(np.cross(omega[None], axis[:, None]), 1, 2)
-    # The axis's rows as mm of arc at the robot's size, so that both weigh alike; the pseudo-inverse
+    for index, row in enumerate(rows[1:], start=1):
+        asked[:, 3 * index:3 * index + 3, 3:] = np.swapaxes(np.cross(omega[None], tool[:, row, None, :3]), 1, 2)
+    # The axes' rows as mm of arc at the robot's size, so that all weigh alike; the pseudo-inverse
     # solves them exactly (the derivative has full column rank away from the machine's singularities).
-    weights = np.array([1.0] * 3 + [robot.size_mm] * 3)[:, None]
+    weights = np.array([1.0] * 3 + [robot.size_mm] * (3 * len(rows) - 3))[:, None]
     return np.linalg.pinv(derivative * weights) @ (asked * weights)
 
 

@@ -62,7 +62,7 @@ class Outcome:
     findings, the source text of every line named, the seconds it took, and (with the routine)
     how its answers agreed with the reference's (routine.Agreement; None: not used), for a
     machine with task coordinates its manifold.Manifold and for one with a wrist its
-    five_axis.FiveAxis (None for other robots)."""
+    five_axis.FiveAxis (None for other robots, a three-axis wrist's included)."""
 
     robot: object
     program: str
@@ -110,7 +110,8 @@ class _Checker:
     def __init__(self, robot, settings, sink, progress, csv):
         self.robot, self.settings, self.sink, self.progress = robot, settings, sink, progress
         self.manifold = Manifold(robot, settings.task_only, csv) if robot.task else None
-        self.five_axis = FiveAxis(robot) if robot.wrist is not None else None
+        # A three-axis wrist's world is the tool pose, X Y Z A B C read as a hexapod's (roll, pitch, yaw).
+        self.five_axis = FiveAxis(robot) if robot.wrist is not None and not robot.wrist.whole_pose else None
         self.world = self.five_axis is not None and not csv
         self.interpolation = "linuxcnc" if self.world else settings.host  # a five-axis world moves linearly
         self.posture = robot.working_posture if settings.posture is None else settings.posture

@@ -2,15 +2,17 @@
 
 A robot file's ``wrist:`` section lists the wrist's joints in chain order, each with its axis
 and origin in the platform frame with every wrist joint at 0, and ``tool:`` places the tool
-frame in the platform frame with every wrist joint at 0 (mm, degrees). This version solves two
-revolute joints whose axes meet at the platform frame's origin (the wrist centre, the parallel
-part's task point) with the tool tip on the tool's z axis through that centre: the inverse from
-the tool pose is then in closed form (kingen.kinematics.wrist). Anything else is refused in one
-located line. :func:`with_wrist` makes the whole machine's Robot from its parallel part's:
+frame in the platform frame with every wrist joint at 0 (mm, degrees). kingen solves two or
+three revolute joints whose axes meet at the platform frame's origin (the wrist centre, the
+parallel part's task point): two with the tool tip on the tool's z axis through that centre (a
+five-axis machine: tool tip and tool axis), three anywhere (a spherical wrist: the whole tool
+pose); the inverse from the tool pose is then in closed form (kingen.kinematics.wrist). Anything
+else (prismatic joints, axes off the centre) is refused in one located line. :func:`with_wrist` makes the whole machine's Robot from its parallel part's:
 its joints are the legs' then the wrist's, its postures the parallel part's times the wrist's
 two branches (the branch the last bit), its verification region and golden values over the
-tool pose, and it has no task coordinates: every tool tip and tool axis is the machine's (the
-turn about the tool axis is free), and its parallel part (``Robot.parallel``) keeps them.
+tool pose, and it has no task coordinates: every tool tip and tool axis is the machine's (with
+two joints the turn about the tool axis is free; with three the whole pose is read), and its
+parallel part (``Robot.parallel``) keeps them.
 """
 
 from dataclasses import dataclass, replace
@@ -24,7 +26,10 @@ from .schema import Identifier, Strict, Travel, UnitVec3, Vec3
 ALIGNED = 1e-6
 """|a x b| below this: two unit axes are parallel (refused)."""
 ON_AXIS = 1e-9
-"""How far (mm) the tool tip may be from the tool's z axis through the wrist centre."""
+"""How far (mm) the tool tip may be from the tool's z axis through the wrist centre (two joints)."""
+SOLVED = ("kingen solves two or three revolute wrist joints whose axes pass through the wrist centre "
+          "(the platform frame's origin)")
+"""What every refusal of a wrist kingen does not solve says is solved."""
 
 
 class WristJoint(Strict):
@@ -55,6 +60,18 @@ class Wrist:
     reach: float
     branch: Optional[int] = None
 
+    @property
+    def whole_pose(self):
+        """Whether the wrist has three joints (a spherical wrist): the tool pose is read whole,
+        six coordinates; False for two joints (a five-axis reading, the turn about the tool axis free)."""
+        return len(self.names) == 3
+
+    @property
+    def tip(self):
+        """(3,) the tool tip's offset (mm) from the wrist centre in the tool frame: R0^T tool[:3, 3],
+        constant as the wrist turns (its axes pass through the centre)."""
+        return self.tool[:3, :3].T @ self.tool[:3, 3]
+
 
 def wrist_of(section, robot, locate):
     """The Wrist of a validated robot file's ``wrist`` and ``tool`` (mm and degrees) for the
@@ -71,21 +88,23 @@ def wrist_of(section, robot, locate):
             raise locate.error(["wrist", index, "name"], f"joint name '{joint.name}' is used twice")
         names.append(joint.name)
         if joint.type != "revolute":
-            raise locate.error(["wrist", index, "type"], "this version solves revolute wrist joints only")
+            raise locate.error(["wrist", index, "type"], f"a prismatic wrist joint is not solved: {SOLVED}")
         if any(joint.origin):
-            raise locate.error(["wrist", index, "origin"], "this version solves axes through the platform frame's "
-                                                           "origin (the wrist centre) only: [0, 0, 0]")
-    if len(section.wrist) != 2:
-        raise locate.error(["wrist"], f"this version solves a wrist of two joints, not {len(section.wrist)}")
+            raise locate.error(["wrist", index, "origin"], f"off the wrist centre: {SOLVED}, origin [0, 0, 0]")
+    if len(section.wrist) == 1:
+        raise locate.error(["wrist"], f"a wrist of one joint is not solved: {SOLVED}")
     axes = np.array([joint.axis for joint in section.wrist])
     tool = matrix_from_pose(section.tool)
-    if np.linalg.norm(np.cross(axes[0], axes[1])) < ALIGNED:
-        raise locate.error(["wrist", 1, "axis"], "parallel to the first joint's axis: the wrist would turn about one axis")
-    if np.linalg.norm(np.cross(axes[1], tool[:3, 2])) < ALIGNED:
-        raise locate.error(["tool"], "the tool's z axis lies along the last joint's axis, which would not tilt it")
+    for index in range(1, len(axes)):
+        if np.linalg.norm(np.cross(axes[index - 1], axes[index])) < ALIGNED:
+            raise locate.error(["wrist", index, "axis"], "parallel to the joint's before it: the wrist would lose a turn")
     reach = float(tool[:3, 3] @ tool[:3, 2])
-    if np.linalg.norm(tool[:3, 3] - reach * tool[:3, 2]) > ON_AXIS:
-        raise locate.error(["tool"], "this version solves a tool tip on the tool's z axis through the wrist centre only")
+    if len(axes) == 2:
+        if np.linalg.norm(np.cross(axes[1], tool[:3, 2])) < ALIGNED:
+            raise locate.error(["tool"], "the tool's z axis lies along the last joint's axis, which would not tilt it")
+        if np.linalg.norm(tool[:3, 3] - reach * tool[:3, 2]) > ON_AXIS:
+            raise locate.error(["tool"], "a two-joint wrist is solved with the tool tip on the tool's z axis through "
+                                         "the wrist centre (three joints take any tool frame)")
     scale = REVOLUTE.yaml_scale
     travel = [joint.travel or [-np.inf, np.inf] for joint in section.wrist]
     return Wrist(names=tuple(joint.name for joint in section.wrist), axes=axes,

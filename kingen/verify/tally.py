@@ -11,7 +11,7 @@ from ..conventions import joint_errors
 from ..kinematics.parasitic import constraint_residuals, pose_constraint_residuals
 from ..kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
 from ..kinematics.singularity import branch_table, branch_values, posture_values, representative_postures
-from ..kinematics.wrist import tool_t6
+from ..kinematics.wrist import tool_miss, tool_t6
 from .options import CONDITIONING_FACTOR
 
 DIAGNOSIS_POSES = 2000
@@ -347,7 +347,8 @@ def wrist_error(robot, t6, expected, solutions):
     (kingen.kinematics.wrist.tool_t6) from the reference's platform pose and the routine's wrist
     joints of each posture (``solutions`` (n, joint_count, postures)) against the asked tool T6
     ``t6`` (n, 4, 4): the larger of the tool tip's distance (mm) and the tool axes' (unit
-    vectors; the turn about the tool axis is free). Judged: postures the reference reaches,
+    vectors; with two wrist joints the tool's z axis only, the turn about it free; with three
+    every axis: the whole pose, kingen.kinematics.wrist.tool_miss). Judged: postures the reference reaches,
     outside the wrist's singular bands (where its closest approach misses by design); NaN
     joints count as infinitely wrong."""
     reachable = expected.warnings != UNREACHABLE
@@ -360,8 +361,7 @@ def wrist_error(robot, t6, expected, solutions):
             continue
         with np.errstate(all="ignore"):
             tool = tool_t6(robot, expected.platform[rows], solutions[rows, robot.dof:, posture])
-            miss = np.fmax(np.linalg.norm(tool[:, 3, :3] - t6[rows, 3, :3], axis=1),
-                           np.linalg.norm(tool[:, 2, :3] - t6[rows, 2, :3], axis=1))
+            miss = np.fmax(*tool_miss(robot.wrist, tool, t6[rows]))
         worst = max(worst, float(np.max(np.where(np.isfinite(miss), miss, np.inf))))
     return worst, int(np.count_nonzero(judged))
 

@@ -36,6 +36,9 @@ WRIST_MEANINGS = {
     "WARN_UNREACHABLE": "or no wrist angle turns the tool onto the asked tool axis",
 }
 """What a machine with a wrist adds to a warning's meaning ({first}: the wrist's first joint)."""
+SPHERICAL_SINGULAR = ("or the wrist's singularity: the axis of {third} along {first} (the gimbal lock), "
+                      "or its two branches meeting")
+"""What a three-axis wrist adds to WARN_SINGULAR_SOLUTION's meaning (it reaches every tool rotation)."""
 
 
 def sheet_view(robot, target):
@@ -113,6 +116,8 @@ def sheet_view(robot, target):
 def _meaning(robot, name, meaning):
     """``meaning`` as it holds for ``robot``: WARN_SINGULAR_SOLUTION names the limb band only if
     some limb has one, the direct index only if the robot sets its threshold."""
+    if robot.wrist is not None and robot.wrist.whole_pose and name == "WARN_SINGULAR_SOLUTION":
+        return f"{meaning}, {SPHERICAL_SINGULAR.format(first=robot.wrist.names[0], third=robot.wrist.names[2])}"
     if robot.wrist is not None and name in WRIST_MEANINGS:
         return f"{meaning}, {WRIST_MEANINGS[name].format(first=robot.wrist.names[0])}"
     if name != "WARN_SINGULAR_SOLUTION" or robot.direct_index_min is None:

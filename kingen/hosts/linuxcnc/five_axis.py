@@ -1,5 +1,6 @@
-"""LinuxCNC's world for a machine with a two-axis wrist (docs/how-to/linuxcnc.md, 'Five-axis
-machines'): X Y Z the tool tip (base frame, the machine's units) and A, C the tool axis,
+"""LinuxCNC's world for a machine with a wrist (docs/how-to/linuxcnc.md, 'Five-axis
+machines'). A three-axis wrist makes a six-axis machine: X Y Z A B C the tool pose as the hexapod
+modules read it (the tip, roll, pitch, yaw in degrees, R = Rz(C) Ry(B) Rx(A)). A two-axis wrist: X Y Z the tool tip (base frame, the machine's units) and A, C the tool axis,
 w = Rz(C) Rx(A) w0 (degrees), w0 the tool axis (base frame) at the verification home with the
 wrist at 0. The turn about the tool axis is free: B is not read, and the forward gives B = 0.
 An axis has two (A, C) pairs, (A, C) and (2 phi - A, C + 180) for w0 = (0, 0, -1) (phi = 180):
@@ -8,12 +9,19 @@ keeps its value. Pure numpy, the same formulas as the module's C (templates/five
 
 import numpy as np
 
-from ...conventions import t6_from_pose
+from ...conventions import pose_from_t6, t6_from_pose
 from ...robot.limbs import c_double, c_vector
 from ..wrist import wrist_table
 
 COORDINATES = "XYZAC"
 """LinuxCNC's [TRAJ] COORDINATES of a five-axis module."""
+SIX_COORDINATES = "XYZABC"
+"""LinuxCNC's [TRAJ] COORDINATES of a six-axis module (a three-axis wrist)."""
+
+
+def coordinates(robot):
+    """The [TRAJ] COORDINATES of ``robot``'s module (it has a wrist)."""
+    return SIX_COORDINATES if robot.wrist.whole_pose else COORDINATES
 
 
 def home_axis(robot):
@@ -52,24 +60,31 @@ def world_of_axis(w0, w, seed_a, seed_c):
 
 
 def world_of_t6(robot, t6, scale=1.0):
-    """EmcPose numbers (n, 9) of tool T6 (n, 4, 4) (mm): X Y Z the tool tip / ``scale``, A and C
-    the tool axis's pair nearest A = C = 0, B and U V W 0."""
+    """EmcPose numbers (n, 9) of tool T6 (n, 4, 4) (mm): X Y Z the tool tip / ``scale``; A and C
+    the tool axis's pair nearest A = C = 0, B 0 (a two-axis wrist) or A B C the tool's roll,
+    pitch, yaw in degrees (a three-axis wrist); U V W 0."""
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
     world = np.zeros((len(t6), 9))
     world[:, :3] = t6[:, 3, :3] / scale
-    world[:, 3], world[:, 5] = world_of_axis(home_axis(robot), t6[:, 2, :3], 0.0, 0.0)
+    if robot.wrist.whole_pose:
+        world[:, 3:6] = pose_from_t6(t6)[:, 3:]
+    else:
+        world[:, 3], world[:, 5] = world_of_axis(home_axis(robot), t6[:, 2, :3], 0.0, 0.0)
     return world
 
 
 def wrist_view(robot):
     """What templates/five_axis.c.j2 shows of ``robot``'s wrist at its working posture: the wrist's
     table, its branch and travel (radians), and what follows from w0 alone (its length normal
-    to the base x axis and angle about it, as :func:`world_of_axis` computes them)."""
+    to the base x axis and angle about it, as :func:`world_of_axis` computes them), and the
+    platform's verification home (mm; a six-axis forward's second start)."""
     wrist = robot.wrist
     w0 = home_axis(robot)
-    return {**wrist_table(robot), "names": ", ".join(wrist.names), "branch": robot.working_posture % 2,
+    return {**wrist_table(robot), "names": ", ".join(wrist.names), "count": len(wrist.names),
+            "branch": robot.working_posture % 2,
             "home_axis": c_vector(w0), "home_radius": c_double(np.hypot(w0[1], w0[2])),
-            "home_phi": c_double(np.arctan2(w0[1], w0[2])), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
+            "home_phi": c_double(np.arctan2(w0[1], w0[2])),
+            "home_centre": c_vector(robot.parallel.verification.home[:3]), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
             "upper": c_vector(np.clip(wrist.upper, -1e300, 1e300))}
 
 

@@ -20,7 +20,7 @@ from .build import build_module, header_folder, headers_found
 from ..base import Written
 from ...units import LENGTH_UNITS, robot_in_units
 from .render import TEMPLATES, module_name, source_name, view_model
-from .five_axis import COORDINATES, world_of_t6, wrist_joints
+from .five_axis import coordinates, world_of_t6, wrist_joints
 from ...conventions import t6_from_pose
 
 
@@ -82,7 +82,7 @@ def sheet_view(robot, units="mm", compiled=True):
         refused[-1] += " (the legs' singularity; the wrist's own is answered)"
     return {**view, "ini_joints": ini, "frames": frames(robot, units),
             "statuses": ", ".join(f"{code} {words}" for code, words in statuses), "refused": " and ".join(refused), "parameters": parameters, "version": VERSION,
-            "joint_count": robot.joint_count, "coordinates": " ".join(COORDINATES) if robot.wrist is not None else None,
+            "joint_count": robot.joint_count, "coordinates": " ".join(coordinates(robot)) if robot.wrist is not None else None,
             "joint_meanings": joint_meanings(robot, units), "compiled": compiled,
             "home_text": " ".join(_exact(value) for value in world), "description": robot.description,
             "wrist_branch": _wrist_branch(robot)}

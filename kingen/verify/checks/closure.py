@@ -11,7 +11,7 @@ CONSTRAINT_TOLERANCE_MM = 1e-9
 """A machine with task coordinates: the largest constraint residual at its pose (mm)."""
 WRIST_TOLERANCE = 1e-9
 """A machine with a wrist: how far (mm, and as unit vectors) the wrist's forward from the
-routine's wrist joints may miss the asked tool tip and tool axis."""
+routine's wrist joints may miss the asked tool tip and tool axis (three joints: every tool axis)."""
 
 
 class Closure(VerifyCheck, name="closure", needs="compared poses", item="closure"):
@@ -44,13 +44,16 @@ def constraint_checks(robot, tally):
 
 def wrist_checks(robot, tally):
     """[] for a robot without a wrist; else ``wrist``: the wrist's forward from the routine's
-    wrist joints, on the platform's pose, gives the asked tool tip and tool axis back."""
+    wrist joints, on the platform's pose, gives the asked tool tip and tool axis back (with three
+    wrist joints the whole tool frame)."""
     if robot.wrist is None:
         return []
+    read, free = (("tool frame (its three axes)", "the whole pose is read") if robot.wrist.whole_pose
+                  else ("tool axis", "the turn about the tool axis is free"))
     if not tally.wrist_checked:
         return [not_exercised("wrist", "no posture the reference reaches lay outside the wrist's singular bands")]
     return [Check("wrist", tally.wrist_worst <= WRIST_TOLERANCE,
                   f"the wrist's forward from the routine's wrist joints at the platform's pose: the asked tool tip "
-                  f"and tool axis missed by at most {tally.wrist_worst:.3g} (mm; unit vector) over "
-                  f"{tally.wrist_checked} (pose, posture) pairs (at most {WRIST_TOLERANCE:g}; the turn about the "
-                  f"tool axis is free)", judged=tally.wrist_checked)]
+                  f"and {read} missed by at most {tally.wrist_worst:.3g} (mm; unit vector) over "
+                  f"{tally.wrist_checked} (pose, posture) pairs (at most {WRIST_TOLERANCE:g}; {free})",
+                  judged=tally.wrist_checked)]

@@ -53,7 +53,7 @@ def jacobian_check(robot, plugin, options, t6):
     plugin.reset_host()
     center = plugin.call(t6, options.link_lengths, options.link_offsets).solutions
     wrenches, transmissions = posture_wrenches(calibrated, expected.points, center)
-    if robot.wrist is not None:  # the forward map's rates, inverted (the tool's five driven directions)
+    if robot.wrist is not None:  # the forward map's rates, inverted (the tool's driven directions)
         transmissions = np.concatenate([transmissions, np.ones(transmissions.shape[:2] + (robot.joint_count - robot.dof,))],
                                        axis=2)
     regular = ((expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])[:, None, :]
@@ -93,7 +93,7 @@ def jacobian_check(robot, plugin, options, t6):
     detail = (f"finite differences of the routine's joints against {against} on {compared} "
               f"regular joint-postures of {len(t6)} poses: max relative difference {worst:.3g} "
               f"(at most {JACOBIAN_TOLERANCE:g})")
-    if robot.wrist is not None:
+    if robot.wrist is not None and not robot.wrist.whole_pose:  # a three-axis wrist reads the turn too
         reached = expected.warnings != WARNINGS["WARN_UNREACHABLE"]
         moved_mm, moved_rad = turn_change(robot, joints_of, t6, center, reached)
         bound_mm = report_tolerance_mm(robot)
@@ -104,7 +104,7 @@ def jacobian_check(robot, plugin, options, t6):
 
 
 TURN_RAD = 0.5
-"""A machine with a wrist: the sampled tool frames are also turned by this about the tool axis."""
+"""A machine with a two-axis wrist: the sampled tool frames are also turned by this about the tool axis."""
 
 
 def wrist_rates(robot, expected, joints, wanted):

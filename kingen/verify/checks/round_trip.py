@@ -9,6 +9,7 @@ from ...kinematics.parasitic import task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
+from ...kinematics.wrist import orientation_rows
 from ...kinematics.wrist_forward import tool_forward
 from ..options import CONDITIONING_FACTOR, report_tolerance_mm
 from ..tally import closure_miss
@@ -81,8 +82,8 @@ def wrist_round_trip(robot, options, t6, expected, joints):
     ``joints`` (n, joint_count, postures) of every regular posture (regular_postures, the
     parallel part's conditioning above ROUND_TRIP_MIN_CONDITIONING),
     the machine's forward (kingen.kinematics.wrist_forward: the parallel part's Newton seeded at
-    the reference's platform pose, then the wrist) gives a tool T6 whose tip and axis must be
-    the sampled one's, and the reference's inverse of that T6 must give the joints back in the
+    the reference's platform pose, then the wrist) gives a tool T6 whose tip and axis (with
+    three wrist joints: whole frame) must be the sampled one's, and the reference's inverse of that T6 must give the joints back in the
     same posture: within the value bounds (mm, rad)."""
     parallel = robot.parallel
     wrenches, transmissions = posture_wrenches(robot, expected.points, joints)
@@ -96,8 +97,9 @@ def wrist_round_trip(robot, options, t6, expected, joints):
     routine_joints = joints[pose_index, :, posture]
     tool, _, _ = tool_forward(robot, routine_joints, near)
     asked = t6[pose_index]
+    rows = list(orientation_rows(robot.wrist))
     tip = float(np.max(np.abs(tool[:, 3, :3] - asked[:, 3, :3])))
-    axis = float(np.max(np.abs(tool[:, 2, :3] - asked[:, 2, :3])))
+    axis = float(np.max(np.abs(tool[:, rows, :3] - asked[:, rows, :3])))
     back = solve(robot, tool, options.link_lengths, options.link_offsets).joints[np.arange(len(pose_index)), :, posture]
     error = joint_errors(back[:, :, None], routine_joints[:, :, None], robot.revolute)[:, :, 0]
     worst_mm = float(np.max(error[:, ~robot.revolute], initial=0.0))
@@ -105,7 +107,7 @@ def wrist_round_trip(robot, options, t6, expected, joints):
     bound_mm = report_tolerance_mm(robot)
     detail = (f"the machine's forward (the parallel part's Newton, then the wrist) from the routine's joints of "
               f"{len(pose_index)} regular postures of {len(t6)} poses gives each asked tool tip within {tip:.3g} mm "
-              f"and tool axis within {axis:.3g}, and the inverse of that tool pose the joints back within "
+              f"and {'tool frame' if robot.wrist.whole_pose else 'tool axis'} within {axis:.3g}, and the inverse of that tool pose the joints back within "
               f"{worst_mm:.3g} mm and {worst_rad:.3g} rad (bounds {bound_mm:.3g} mm, {VALUE_TOLERANCE_RAD:g} rad; "
               f"postures near a singularity are left out)")
     passed = max(tip, worst_mm) <= bound_mm and max(axis, worst_rad) <= VALUE_TOLERANCE_RAD
