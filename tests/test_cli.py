@@ -23,6 +23,7 @@ def test_list_shows_every_shipped_robot(capsys):
     assert code == 0
     assert any(line.split()[:3] == ["ceart", "6", "64"] for line in out.splitlines())
     assert any(line.split()[:5] == ["tau", "3", "8", "3", "rail"] for line in out.splitlines())
+    assert any(line.split()[:7] == ["tricept_wrist3", "6", "2", "3", "leg", "+", "3-axis"] for line in out.splitlines())
 
 
 @pytest.mark.parametrize("columns", ["60", "80", "132"])
@@ -31,7 +32,8 @@ def test_list_fits_the_terminal_and_gives_pipes_whole_descriptions(capsys, monke
 
     monkeypatch.setenv("COLUMNS", columns)
     _, out, _ = run(capsys, "list")
-    assert max(len(line) for line in out.splitlines()) <= max(int(columns), 68)  # 20 description characters at least
+    lead = out.splitlines()[0].index("description")  # 20 description characters at least
+    assert max(len(line) for line in out.splitlines()) <= max(int(columns), lead + 20)
     assert "..." in out
     monkeypatch.delenv("COLUMNS")
     _, out, _ = run(capsys, "list")

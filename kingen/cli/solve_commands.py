@@ -19,15 +19,18 @@ from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _o
 
 @cli.command("list")
 def list_robots():
-    """The shipped robots with DOF, postures and limb models (descriptions cut to fit the
-    terminal's width, at least 20 characters of them; whole to a pipe or file)."""
+    """The shipped robots with DOF (the joints a routine answers: the limbs', then a wrist's),
+    postures and limb models, a wrist's joints added (descriptions cut to fit the terminal's
+    width, at least 20 characters of them; whole to a pipe or file)."""
     from ..robot.model import shipped_robots
 
     rows = [("robot", "dof", "postures", "limbs", "description")]
     for name in shipped_robots():
         robot = load_model(name)
         counts = ", ".join(f"{sum(l.model == m for l in robot.limbs)} {m}" for m in robot.models)
-        rows.append((name, str(robot.dof), str(robot.postures), counts, " ".join(robot.description.split())))
+        if robot.wrist is not None:
+            counts += f" + {len(robot.wrist.names)}-axis wrist"
+        rows.append((name, str(robot.joint_count), str(robot.postures), counts, " ".join(robot.description.split())))
     width = output_width()
     if width is not None:
         lead = sum(max(len(row[column]) for row in rows) + 2 for column in range(4))
