@@ -16,7 +16,7 @@ parallel part (``Robot.parallel``) keeps them.
 """
 
 from dataclasses import dataclass, replace
-from typing import Annotated, Literal, Optional
+from typing import Literal, Optional
 
 import numpy as np
 from pydantic import Field
@@ -42,10 +42,10 @@ class WristJoint(Strict):
     origin: Vec3 = [0.0, 0.0, 0.0]
     travel: Optional[Travel] = None
     """Degrees, of the joint's reading (its geometric angle less ``zero_offset``)."""
-    zero_offset: Annotated[float, Field(ge=-180.0, le=180.0)] = 0.0
-    """Degrees: the geometric angle at which the joint reads 0 (a crank's convention): the joint
-    reads its geometric angle (0 where ``axis`` and the tool frame are given) less this, wrapped
-    to (-180, 180]. What a calibration identifies; 0 for a joint whose zero mark is exact."""
+    zero_offset: float = Field(0.0, ge=-180.0, le=180.0, description=(
+        "Degrees: the geometric angle at which the joint reads 0 (as a crank's zero_offset): the joint reads its "
+        "geometric angle (0 where 'axis' and 'tool' are given) less this, wrapped to (-180, 180]; its travel "
+        "limits the reading. What `kingen calibrate` identifies."))
 
 
 @dataclass(frozen=True, eq=False)
