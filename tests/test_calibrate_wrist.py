@@ -2,7 +2,8 @@
 the tool, the wrist's zero offsets, axes and the tool's reach among the parameters. Noise-free
 measurements of a perturbed machine are made by the reference's inverse from tool poses (legs
 and wrist joints) and the wrist's forward; the fit predicts held-out measurements of the truth
-exactly, recovers the wrist's parameters that are not a gauge of the platform frame, and the
+exactly (the Exechon with its A/C head, the Tricept with two and three wrist axes), recovers the
+wrist's parameters that are not a gauge of the platform frame, and the
 commands plan, calibrate and write a calibrated robot file that loads and verifies."""
 
 import numpy as np
@@ -101,3 +102,15 @@ def test_plan_and_calibrate_write_a_calibrated_file_that_verifies(robot, tmp_pat
     assert abs(calibrated.wrist.reach - float(truth[names == "tool.reach"][0])) <= 1e-6
     capsys.readouterr()
     assert main(["verify", str(written), "--host", "c", "--samples", "500", "-o", str(tmp_path / "verify")]) == 0
+
+
+@pytest.mark.parametrize("name", ["tricept_wrist", "tricept_wrist3"])
+def test_a_tube_machine_with_two_or_three_wrist_axes_fits_held_out_poses(name):
+    robot = load_robot(name)
+    parameters = Parameters(robot, "pose")
+    truth = perturbed(parameters, seed=5)
+    fit = identify(parameters, measured(parameters, truth, region_poses(robot, 40, 5)), parameters.selected("all,-target"))
+    assert fit.converged and np.any(fit.chosen & (parameters.groups == "zero"))
+    held = measured(parameters, truth, region_poses(robot, 30, 11))
+    position, angle, _ = validation_problem(parameters, fit.values, held).errors(fit.values)
+    assert np.max(position) <= 1e-6 and np.max(angle) <= 1e-5
