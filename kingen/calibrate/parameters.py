@@ -38,7 +38,8 @@ GROUPS = dict(
     length="leg reference lengths, rail link lengths, crank and rod lengths, a tool's reach",
     direction="rail directions and crank directions", zero="crank zero offsets, rail origins, wrist joints' zero offsets",
     frame="the measuring frame (the device's pose in the base frame)",
-    target="the target (the measured frame or reflector on the platform)", **dict([AXIS_GROUP]))
+    target="the target (the measured frame or reflector on the platform; on the tool with a wrist)",
+    **dict([AXIS_GROUP]))
 """The groups --identify selects, in words."""
 
 MODEL_FIELDS = {
