@@ -1,8 +1,7 @@
 """verify's numpy side and the commands on a machine with a serial wrist (robots/exechon_wrist.yaml,
 robots/tricept_wrist.yaml): the checks are fed the reference's answers as a routine (as
 tests/test_verdicts.py does) and routines changed by a known amount, which they must fail; fk
-from legs and wrist joints returns the golden tool pose; the commands that do not handle a wrist
-refuse it in one located line; the Tricept's golden values are an independent computation (Newton
+from legs and wrist joints returns the golden tool pose; the Tricept's golden values are an independent computation (Newton
 on the whole chain, tests/test_wrist.py's, with tests/test_tricept.py's platform pose)."""
 
 import json
@@ -177,23 +176,6 @@ def test_fk_from_legs_and_wrist_joints_gives_the_golden_tool_tip_and_axis(robot,
 def test_fk_asks_for_every_joint_of_legs_and_wrist(robot, capsys):
     assert main(["fk", robot.name, "--joints", "1 2 3"]) == 2
     assert capsys.readouterr().err.strip().endswith(f"{robot.name} has 5 joints; give 5 finite numbers")
-
-
-@pytest.mark.parametrize("command, argv", [
-    ("calibrate plan", ["calibrate", "plan", "ROBOT", "--poses", "10", "-o", "OUT"]),
-    ("calibrate run", ["calibrate", "run", "ROBOT", "--measurements", "PROGRAM"]),
-])
-def test_commands_without_a_wrist_refuse_it_in_one_located_line(robot, capsys, tmp_path, command, argv):
-    program = tmp_path / "program.csv"
-    program.write_text("x\n")
-    named = {"PROGRAM": str(program), "OUT": str(tmp_path / "out.csv"), "ROBOT": robot.name}
-    argv = [named.get(arg, arg) for arg in argv]
-    assert main(argv) == 2
-    captured = capsys.readouterr()
-    assert captured.err == (f"kingen: error: {robot.path}:{robot.line_of('wrist')}: wrist: kingen {command} does not "
-                            f"handle a serial wrist yet: give it the parallel part's robot file (without wrist: and "
-                            f"tool:)\n")
-    assert not (tmp_path / "out.csv").exists()
 
 
 def test_solve_says_the_turn_about_the_tool_axis_per_posture(robot):

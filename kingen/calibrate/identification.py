@@ -24,16 +24,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
+from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.forward import assemblies, free_mask, poses_of, search_region
 from ..kinematics.parasitic import on_manifold
 from ..kinematics.poses import sample_poses
+from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
-from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, platform_of_measured,
+from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, measured_platform,
                          predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
+from .wrist import tool_of_platform
 
 STEP = 1e-4
 """Central differences' step, mm-equivalents."""
@@ -77,7 +79,7 @@ class Problem:
         """(position error (n,) mm, orientation error (n,) degrees or None, closed (n,)): what
         ``values`` predict from the read joints against what was measured."""
         if self.parameters.measure == "pose":
-            start = poses_of(t6_from_matrix(platform_of_measured(self.parameters, values, self.measurements.measured)))
+            start = poses_of(t6_from_matrix(measured_platform(self.parameters, values, self.measurements)[1]))
         else:
             start = self.start
         predicted, _, closed = predicted_measurements(self.parameters, values, self.measurements.joints, start)
@@ -110,18 +112,22 @@ def align(parameters, measurements):
     """(values, start): the nominal values with the measuring frame fitted to the nominal
     robot's forward kinematics of the read joints (rigid, closed form), and those poses (n, 6;
     mm, radians). KingenError for joints the nominal robot cannot close, positions that look
-    like another unit, and measured poses it cannot reach."""
-    robot = parameters.robot
+    like another unit, and measured poses it cannot reach. With a wrist: the parallel part's
+    forward kinematics of the legs' joints, the measurements on the tool (the wrist's forward)."""
+    whole = parameters.robot
+    robot, legs = whole.parallel, measurements.joints[:, :whole.dof]
     home, half = search_region(robot)
-    poses, closed = forward_poses(robot, measurements.joints, np.tile(home, (len(measurements.joints), 1)))
-    closed &= _in_working_posture(robot, poses, measurements.joints) & np.all(np.abs(poses - home) <= half, axis=1)
+    poses, closed = forward_poses(robot, legs, np.tile(home, (len(legs), 1)))
+    closed &= _in_working_posture(robot, poses, legs) & np.all(np.abs(poses - home) <= half, axis=1)
     for row in np.flatnonzero(~closed):
-        poses[row], closed[row] = _working_assembly(robot, measurements.joints[row], home, half)
+        poses[row], closed[row] = _working_assembly(robot, legs[row], home, half)
     if not np.all(closed):
         row = int(np.flatnonzero(~closed)[0])
         raise KingenError(f"{measurements.where(row, 'q1')}: the nominal robot reaches no pose "
                           f"with these joints in its working posture (forward kinematics finds none)")
     platform = matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
+    if whole.wrist is not None:
+        platform = tool_of_platform(whole, platform, measurements.joints)
     _check_units(measurements, platform[:, :3, 3])
     values = parameters.nominal.copy()
     frame = _fitted_frame(parameters, values, measurements, platform)
@@ -197,7 +203,7 @@ def _check_units(measurements, positions):
 
 def _check_reachable(parameters, values, measurements):
     """KingenError at the first measured pose some limb of the nominal robot cannot reach."""
-    _, radicands = inverse_joints(parameters.robot, platform_of_measured(parameters, values, measurements.measured))
+    _, radicands = inverse_joints(parameters.robot.parallel, measured_platform(parameters, values, measurements)[1])
     unreachable = radicands < -SINGULAR_TOLERANCE
     if np.any(unreachable):
         row, limb = (int(i) for i in np.argwhere(unreachable)[0])
@@ -209,8 +215,11 @@ def region_poses(robot, count, seed):
     """``count`` seeded poses (mm, degrees) of the robot's verification region, the coordinates
     forward kinematics does not solve for (a translating platform's angles) held at home; a
     machine with task coordinates at its nominal poses for the drawn task coordinates (on its
-    manifold, kingen.kinematics.parasitic.on_manifold)."""
+    manifold, kingen.kinematics.parasitic.on_manifold); a machine with a wrist: tool poses of
+    its region (kingen.calibrate.prediction.synthesize takes the machine's turn about the tool axis)."""
     poses = sample_poses(robot, count, seed)
+    if robot.wrist is not None:
+        return poses
     if robot.task:
         return on_manifold(robot, poses)
     fixed = ~free_mask(robot)
@@ -223,7 +232,10 @@ def synthetic_problem(parameters, values, poses, posture):
     mm, degrees) in ``posture``, and the identification problem started at those poses."""
     joints, measured = synthesize(parameters, values, poses, posture)
     data = Measurements("", parameters.measure, joints, measured, tuple(range(len(poses))), ())
-    return Problem(parameters, data, np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)), data
+    start = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+    if parameters.robot.wrist is not None:  # the platform's, not the tool's
+        start = poses_of(solve(parameters.robot_of(values), t6_from_pose(poses)).platform)
+    return Problem(parameters, data, start), data
 
 
 def identifiable_columns(problem, values, parameters, selected):

@@ -24,8 +24,8 @@ MEASURED = {"pose": POSE_NAMES, "position": POSE_NAMES[:3]}
 
 @dataclass(frozen=True)
 class Measurements:
-    """Measurements read from ``path``: ``joints`` (n, dof) in kingen's internal units (mm,
-    radians), ``measured`` (n, 6) mm and degrees or (n, 3) mm (converted from the robot file's unit), ``lines`` (n,) each row's
+    """Measurements read from ``path``: ``joints`` (n, joint_count: the legs', then a wrist's) in
+    kingen's internal units (mm, radians), ``measured`` (n, 6) mm and degrees or (n, 3) mm (converted from the robot file's unit), ``lines`` (n,) each row's
     1-based line in the file, ``columns`` the header as written (for errors)."""
 
     path: str
@@ -42,7 +42,7 @@ class Measurements:
 
 def joint_columns(robot):
     """q1 .. qN for ``robot``."""
-    return tuple(f"q{i + 1}" for i in range(robot.dof))
+    return tuple(f"q{i + 1}" for i in range(robot.joint_count))
 
 
 def read_measurements(path, robot, measure):
@@ -67,8 +67,8 @@ def read_measurements(path, robot, measure):
             raise located(path, number, None, f"{len(row)} values; the header has {len(header)} columns")
         for column, (name, cell) in enumerate(zip(header, row)):
             values[row_index, column] = _number(path, number, name, cell)
-    joints = values[:, order[:robot.dof]] * _joint_scale(robot)
-    measured = values[:, order[robot.dof:]]
+    joints = values[:, order[:robot.joint_count]] * _joint_scale(robot)
+    measured = values[:, order[robot.joint_count:]]
     measured[:, :3] *= LENGTH_UNITS[robot.length_unit]
     return Measurements(str(path), measure, joints, measured, tuple(number for number, _ in data), header)
 
@@ -111,7 +111,7 @@ def _number(path, line, column, cell):
 
 
 def write_measurements(robot, measure, joints, measured):
-    """CSV text of ``joints`` (n, dof; internal units) and ``measured`` (n, 6 or 3; mm,
+    """CSV text of ``joints`` (n, joint_count; internal units) and ``measured`` (n, 6 or 3; mm,
     degrees) in the layout and units read_measurements reads (the robot file's)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")

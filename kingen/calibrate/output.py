@@ -4,10 +4,13 @@ naming the measurement file; golden values are dropped (they were published for 
 drawing). A machine with task coordinates keeps its task and passive leg: the identified
 constraint axes are written in its limbs, the passive leg's identified geometry in
 ``passive_leg``, and its verification home is moved onto the calibrated machine's manifold (its
-task coordinates kept), so that it is a pose the calibrated machine takes. The robot file's writer is the design
+task coordinates kept), so that it is a pose the calibrated machine takes. A machine with a
+serial wrist keeps ``wrist`` and ``tool`` with the identified zero offsets, axes and the tool's
+origin moved along its z axis to the identified reach. The robot file's writer is the design
 optimiser's (kingen.design.problem)."""
 
 import copy
+import math
 from dataclasses import replace
 
 from ..errors import KingenError
@@ -35,8 +38,10 @@ def calibrated_yaml(data, parameters, values, header):
     robot = replace(robot, limbs=tuple(_held(robot.path, name, limb) for name, limb in zip(robot.joint_names, robot.limbs)))
     limbs = scaled_limbs(robot.limbs, 1.0 / LENGTH_UNITS[robot.length_unit])
     data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model} for limb in limbs]
-    if robot.task:
-        _constrained(data, robot)
+    if robot.parallel.task:
+        _constrained(data, robot.parallel)
+    if robot.wrist is not None:
+        _wrist(data, robot.wrist)
     data["name"] = calibrated_name(data["name"])
     data["description"] = f"{' '.join(str(data.get('description', '')).split())} Calibrated by kingen."
     data["source"] = " ".join(header)
@@ -55,6 +60,15 @@ def _constrained(data, robot):
     home = on_manifold(robot, [robot.verification.home])[0]
     data.setdefault("verification", {})["home"] = [float(value) * scale for value in home[:3]] + \
         [float(value) for value in home[3:]]
+
+
+def _wrist(data, wrist):
+    """Put the identified ``wrist``'s zero offsets and axes and its tool frame's origin (mm: a
+    wrist's robot file is in mm) into the robot file's plain ``data``."""
+    for joint, axis, zero in zip(data["wrist"], wrist.axes, wrist.zero):
+        joint["axis"] = [float(value) for value in axis]
+        joint["zero_offset"] = math.degrees(zero)
+    data["tool"] = [float(value) for value in wrist.tool[:3, 3]] + [float(value) for value in data["tool"][3:]]
 
 
 ROUNDING_MM = 1e-6

@@ -9,7 +9,9 @@ Values are in mm and degrees (a robot file in inches is read in mm, as kingen ho
 - crank: pivot (3), crank direction, crank length, rod length, zero offset, platform point (3).
 
 A machine with task coordinates adds its constraints' geometry (kingen.calibrate.constraints):
-the revolute axes' turns and a passive leg's base point and axes.
+the revolute axes' turns and a passive leg's base point and axes. A machine with a serial wrist
+adds its parallel part's and the wrist's (kingen.calibrate.wrist: each joint's zero offset and
+axis, the tool's reach); its target is on the tool.
 
 The measuring frame is the measuring device's frame in the base frame (x, y, z, roll, pitch,
 yaw); the target is the measured frame in the platform frame (a pose, ``--measure pose``) or
@@ -28,15 +30,16 @@ import numpy as np
 
 from ..conventions import matrix_from_pose
 from ..errors import KingenError
-from . import constraints
+from . import constraints, wrist
 from .constraints import AXIS_GROUP
 
 GROUPS = dict(
     base="the limbs' base points (leg base points, rail points, crank pivots)", platform="the limbs' platform points",
-    length="leg reference lengths, rail link lengths, crank and rod lengths",
-    direction="rail directions and crank directions", zero="crank zero offsets and rail origins",
+    length="leg reference lengths, rail link lengths, crank and rod lengths, a tool's reach",
+    direction="rail directions and crank directions", zero="crank zero offsets, rail origins, wrist joints' zero offsets",
     frame="the measuring frame (the device's pose in the base frame)",
-    target="the target (the measured frame or reflector on the platform)", **dict([AXIS_GROUP]))
+    target="the target (the measured frame or reflector on the platform; on the tool with a wrist)",
+    **dict([AXIS_GROUP]))
 """The groups --identify selects, in words."""
 
 MODEL_FIELDS = {
@@ -59,7 +62,8 @@ class Parameter:
     ``group``, ``unit`` ('mm' or 'deg') and ``nominal`` value; where it lives (``limb`` index
     or None: the passive leg's, or the measuring frame's and target's (``field`` None); ``field``,
     ``component``: 0..2 of a vector, 'a'/'b' a direction's tilt, 'turn' a rail's revolute axis's
-    turn (kingen.calibrate.constraints), or None)."""
+    turn (kingen.calibrate.constraints), or None); ``wrist`` a wrist joint's index or 'tool'
+    for the wrist's (kingen.calibrate.wrist), else None."""
 
     name: str
     group: str
@@ -68,6 +72,7 @@ class Parameter:
     limb: int = None
     field: str = None
     component: object = None
+    wrist: object = None
 
 
 class Parameters:
@@ -87,7 +92,9 @@ class Parameters:
             name = robot.joint_names[index]
             for field, group, kind in fields:
                 entries.extend(_limb_entries(name, index, limb, field, group, kind))
-        entries += [Parameter(*spec) for spec in constraints.entries(robot)]
+        entries += [Parameter(*spec) for spec in constraints.entries(robot.parallel)]
+        entries += [Parameter(*spec, wrist=place[0], field=place[1], component=place[2])
+                    for spec, place in wrist.entries(robot)]
         target = (0.0,) * (6 if measure == "pose" else 3) if target is None else target
         entries += [Parameter(f"measuring_frame.{axis}", "frame", "mm" if i < 3 else "deg", float(frame[i]))
                     for i, axis in enumerate(POSE_NAMES)]
@@ -99,7 +106,7 @@ class Parameters:
         self.step = np.array([1.0 if entry.unit == "mm" else math.degrees(1.0 / self.lever) for entry in entries])
         """Value per unit of x: 1 for mm, the degrees one mm-equivalent turns for angles."""
         self.groups = np.array([entry.group for entry in entries])
-        self._partners = constraints.partners(robot)
+        self._partners = constraints.partners(robot.parallel)
 
     def __len__(self):
         return len(self.entries)
@@ -113,25 +120,36 @@ class Parameters:
         return (np.asarray(values, dtype=float) - self.nominal) / self.step
 
     def robot_of(self, values):
-        """The Robot with the limb and constraint parameters ``values`` (mm, degrees) put in."""
-        updates = [{} for _ in self.robot.limbs]
+        """The Robot with the limb, constraint and wrist parameters ``values`` (mm, degrees) put in."""
+        parallel = self._parallel_of(values)
+        if self.robot.wrist is None:
+            return parallel
+        placed = [((entry.wrist, entry.field, entry.component), value)
+                  for entry, value in zip(self.entries, values) if entry.wrist is not None]
+        return replace(self.robot, limbs=parallel.limbs, passive_leg=parallel.passive_leg, parallel_part=parallel,
+                       wrist=wrist.calibrated_wrist(self.robot.wrist, placed))
+
+    def _parallel_of(self, values):
+        """The parallel part (the robot itself without a wrist) with its parameters ``values`` put in."""
+        base = self.robot.parallel
+        updates = [{} for _ in base.limbs]
         turns, passive = {}, {}
         for entry, value in zip(self.entries, values):
-            if entry.field is None:
+            if entry.field is None or entry.wrist is not None:
                 continue
             if isinstance(entry.component, str):
                 turns.setdefault((entry.limb, entry.field), {})[entry.component] = math.radians(value)
             elif entry.limb is None:
-                passive.setdefault(entry.field, list(getattr(self.robot.passive_leg, entry.field)))[
+                passive.setdefault(entry.field, list(getattr(base.passive_leg, entry.field)))[
                     entry.component] = float(value)
             elif entry.component is None:
                 updates[entry.limb][entry.field] = float(value)
             else:
-                limb = self.robot.limbs[entry.limb]
+                limb = base.limbs[entry.limb]
                 updates[entry.limb].setdefault(entry.field, list(getattr(limb, entry.field)))[entry.component] = \
                     float(value)
         limbs = []
-        for index, (limb, update) in enumerate(zip(self.robot.limbs, updates)):
+        for index, (limb, update) in enumerate(zip(base.limbs, updates)):
             direction = None
             if limb.model == "rail":
                 direction = constraints.tilted(limb.direction, turns.get((index, "direction"), {}))
@@ -142,10 +160,10 @@ class Parameters:
                     update[field] = [float(v) for v in constraints.limb_axis(limb, field, turns.get((owner, field), {}),
                                                                                direction)]
             limbs.append(limb.model_copy(update=update))
-        robot = replace(self.robot, limbs=tuple(limbs))
-        if self.robot.passive_leg is None:
+        robot = replace(base, limbs=tuple(limbs))
+        if base.passive_leg is None:
             return robot
-        leg = self.robot.passive_leg
+        leg = base.passive_leg
         angles = {field: angles for (limb, field), angles in turns.items() if limb is None}
         return replace(robot, passive_leg=constraints.passive_leg_of(leg, passive.get("base_point", leg.base_point),
                                                                      angles))
@@ -155,7 +173,8 @@ class Parameters:
         return matrix_from_pose(self._slice(values, "frame"))
 
     def target(self, values):
-        """The target: its matrix (4, 4) in the platform frame (pose), or its point (3,) (position)."""
+        """The target: its matrix (4, 4) in the platform frame (the tool frame with a wrist) (pose),
+        or its point (3,) (position)."""
         target = self._slice(values, "target")
         return matrix_from_pose(target) if self.measure == "pose" else target
 

@@ -1,7 +1,9 @@
 """Choosing the poses to measure: greedy D-optimal design among seeded candidates.
 
 Candidates are seeded poses of the robot's verification region (the coordinates forward
-kinematics does not solve for held at home; a machine with task coordinates on its nominal manifold) that kingen's reference judges good in the
+kinematics does not solve for held at home; a machine with task coordinates on its nominal
+manifold; a machine with a wrist: tool poses, the parallel part's forward judged at the
+platform's pose the reference gives, the wrist's singularity by the same margin) that kingen's reference judges good in the
 working posture (reachable, within travel, away from singularities by the robot's
 ``direct_index_min``, and by MARGIN of the limbs' and forward kinematics' conditioning) and, where the robot file gives ``collision`` radii, whose links keep
 clear of each other. Each candidate's rows of the identification Jacobian (at the nominal
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import t6_from_pose
+from ..conventions import pose_from_t6, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.collision import clearances
 from ..kinematics.forward import closure, closure_derivative, free_mask, t6_of
@@ -58,11 +60,13 @@ def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed
     poses = region_poses(robot, count, seed)
     solution = solve(robot, t6_from_pose(poses))
     good = solution.warnings[:, posture] == WARNINGS["WARN_GOOD_SOLUTION"]
+    legs = solution.joints[:, :robot.dof, posture]
     if robot.collision is not None:
-        rods, cranks = clearances(robot, solution.points, solution.joints[:, :, posture])
+        rods, cranks = clearances(robot.parallel, solution.points, legs)
         good &= ~(rods < 0.0) & ~(cranks < 0.0)
     good &= solution.min_inverse_index >= MARGIN
-    good[good] = _regular(robot, poses[good], solution.joints[good, :, posture])
+    platform = poses if robot.wrist is None else pose_from_t6(solution.platform)  # poses are then the tool's
+    good[good] = _regular(robot.parallel, platform[good], legs[good])
     poses = poses[good]
     if not len(poses):
         raise KingenError(f"{robot.path}: verification: no pose of the verification region is reachable, within "

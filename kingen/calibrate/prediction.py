@@ -3,17 +3,21 @@ pose, through each limb model's inverse), the measurement that read joints give 
 forward kinematics, Newton from a nearby pose), and the errors between prediction and
 measurement. Frames: a measured pose M is in the device's frame, the platform's pose
 T = F M Tg^-1 in the base frame (kingen.calibrate.parameters); mm, degrees in and out,
-radians for revolute joints.
+radians for revolute joints. On a machine with a serial wrist the target is on the tool: T is
+the tool's pose, the platform's is T W(q)^-1 for the wrist's read joints q
+(kingen.calibrate.wrist), and the legs' closure and constraints are the parallel part's there.
 """
 
 from dataclasses import replace
 
 import numpy as np
 
-from ..conventions import matrix_from_pose, pose_from_t6, rotation_from_rpy, t6_from_matrix, wrap_angle
+from ..conventions import (matrix_from_pose, matrix_from_t6, pose_from_t6, rotation_from_rpy, t6_from_matrix,
+                           t6_from_pose, wrap_angle)
 from ..kinematics.forward import free_mask, newton
 from ..kinematics.parasitic import on_manifold, pose_constraint_residuals
-from ..kinematics.reference import platform_points_in_base
+from ..kinematics.reference import platform_points_in_base, solve
+from .wrist import platform_of_tool, tool_of_platform
 
 STEP_MEASURED = 1e-4
 """Central differences' step (mm, degrees) for the residuals' derivative by the measurement."""
@@ -29,13 +33,22 @@ def matrix_radians(poses):
 
 
 def platform_of_measured(parameters, values, measured):
-    """The platform's poses H (n, 4, 4), base frame, that measured poses (n, 6; mm, degrees,
-    device frame) put it at: T = F M Tg^-1."""
+    """The platform's (with a wrist: the tool's) poses H (n, 4, 4), base frame, that measured
+    poses (n, 6; mm, degrees, device frame) put it at: T = F M Tg^-1."""
     return parameters.frame(values) @ matrix_from_pose(measured) @ np.linalg.inv(parameters.target(values))
 
 
+def measured_platform(parameters, values, measurements):
+    """(robot of ``values``, the platform's poses H (n, 4, 4), base frame) at the measured poses
+    of ``measurements`` (with a wrist: the tool's poses carried back by the read wrist joints)."""
+    robot = parameters.robot_of(values)
+    body = platform_of_measured(parameters, values, measurements.measured)
+    return robot, body if robot.wrist is None else platform_of_tool(robot, body, measurements.joints)
+
+
 def measured_of_platform(parameters, values, platform):
-    """What the device measures (n, 6; mm, degrees) or (n, 3; mm) with the platform at H (n, 4, 4)."""
+    """What the device measures (n, 6; mm, degrees) or (n, 3; mm) with the platform (with a
+    wrist: the tool) at H (n, 4, 4)."""
     inverse = np.linalg.inv(parameters.frame(values))
     if parameters.measure == "pose":
         return pose_from_t6(t6_from_matrix(inverse @ platform @ parameters.target(values)))
@@ -62,11 +75,13 @@ def joint_residuals(parameters, values, measurements):
     at the measured poses, each limb on the branch nearer its read joint; for a machine with
     task coordinates, then its constraint equations' residuals there (n, 3; mm,
     kingen.kinematics.parasitic.pose_constraint_residuals): the built machine's pose keeps them,
-    so a measured pose lies on the real machine's manifold."""
-    robot = parameters.robot_of(values)
-    platform = platform_of_measured(parameters, values, measurements.measured)
+    so a measured pose lies on the real machine's manifold. With a wrist, the legs' and the
+    parallel part's constraints at the platform pose the measured tool pose and the read wrist
+    joints give (:func:`measured_platform`)."""
+    whole, platform = measured_platform(parameters, values, measurements)
+    robot = whole.parallel
     joints, _ = inverse_joints(robot, platform)
-    difference = joints - measurements.joints[:, :, None]
+    difference = joints - measurements.joints[:, :robot.dof, None]
     revolute = robot.revolute
     difference[:, revolute] = wrap_angle(difference[:, revolute])
     nearer = np.take_along_axis(difference, np.argmin(np.abs(difference), axis=2)[..., None], axis=2)[..., 0]
@@ -99,7 +114,7 @@ def residuals_per_pose(robot, measure):
     coordinates, its constraint equations (pose measurements); 3 for positions."""
     if measure != "pose":
         return 3
-    return robot.dof + (3 if robot.task else 0)
+    return robot.dof + (3 if robot.parallel.task else 0)
 
 
 def forward_poses(robot, joints, start):
@@ -111,9 +126,14 @@ def forward_poses(robot, joints, start):
 
 def predicted_measurements(parameters, values, joints, start):
     """(measured (n, 6 or 3), platform poses (n, 6; mm, radians), closed (n,)) that read joints
-    (n, dof) give with ``values``, forward kinematics started at ``start`` (n, 6)."""
-    poses, closed = forward_poses(parameters.robot_of(values), joints, start)
-    return measured_of_platform(parameters, values, matrix_radians(poses)), poses, closed
+    (n, joint_count) give with ``values``, forward kinematics of the legs (the parallel part)
+    started at ``start`` (n, 6), then with a wrist the wrist's forward."""
+    robot = parameters.robot_of(values)
+    poses, closed = forward_poses(robot.parallel, joints[:, :robot.dof], start)
+    body = matrix_radians(poses)
+    if robot.wrist is not None:
+        body = tool_of_platform(robot, body, joints)
+    return measured_of_platform(parameters, values, body), poses, closed
 
 
 def errors(predicted, measured):
@@ -136,8 +156,15 @@ def synthesize(parameters, values, poses, posture):
     """(joints (n, dof; mm, radians), measured (n, 6 or 3)) a robot with ``values`` reads and
     the device measures with the platform at ``poses`` (n, 6; mm, degrees, base frame), in
     ``posture``: measurements made from the parameters' own model (for plans and tests); a
-    machine with task coordinates at its own poses for the poses' task coordinates (on_manifold)."""
+    machine with task coordinates at its own poses for the poses' task coordinates (on_manifold);
+    a machine with a wrist at the tool poses the reference reaches for ``poses`` (tool poses;
+    with two wrist joints the turn about the tool axis is the machine's)."""
     robot = parameters.robot_of(values)
+    if robot.wrist is not None:
+        solution = solve(robot, t6_from_pose(poses))
+        joints = solution.joints[:, :, posture]
+        tool = tool_of_platform(robot, matrix_from_t6(solution.platform), joints)
+        return joints, measured_of_platform(parameters, values, tool)
     platform = matrix_from_pose(on_manifold(robot, poses) if robot.task else poses)
     joints, _ = inverse_joints(robot, platform)
     branches = np.array(robot.posture_branches(posture))

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from .common import (EXIT_FAILED, ROBOT, FiniteRange, _out_folder, _output_file, cli, finite, load_model_and_data,
-                     refuse_special_files, refuse_wrist, say)
+                     refuse_special_files, say)
 
 MEASURE = click.option("--measure", type=click.Choice(["pose", "position"]), default="pose", show_default=True,
                        help="What the device measures: the target's pose (x y z roll pitch yaw) or a reflector's "
@@ -68,7 +68,6 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
 
     refuse_special_files(measurements_path, validate_path)
     model, data, _ = load_model_and_data(robot)
-    refuse_wrist(model, "calibrate run")
     parameters = Parameters(model, measure)
     selected = parameters.selected(spec)
     measurements = read_measurements(measurements_path, model, measure)
@@ -172,7 +171,6 @@ def plan(robot, count, noise_mm, noise_deg, measure, spec, output):
     from ..runtime.files import default_out_dir, write_atomic
 
     model, _, _ = load_model_and_data(robot)
-    refuse_wrist(model, "calibrate plan")
     parameters = Parameters(model, measure)
     selected = parameters.selected(spec)
     found = planning.candidates(parameters, selected, noise_mm, noise_deg)

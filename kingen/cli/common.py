@@ -275,17 +275,6 @@ def load_model_and_data(robot):
     return load_robot_and_data(robot)
 
 
-def refuse_wrist(model, command):
-    """Raise the one-line located error (exit 2) of ``kingen COMMAND``, which does not handle
-    a robot with a serial wrist yet, at the robot file's ``wrist`` field."""
-    from ..errors import located
-
-    if model.wrist is not None:
-        raise located(model.path, model.line_of("wrist"), "wrist", f"kingen {command} does not handle a serial wrist "
-                                                                   f"yet: give it the parallel part's robot file "
-                                                                   f"(without wrist: and tool:)")
-
-
 def finite(data):
     if isinstance(data, float):
         return data if math.isfinite(data) else None

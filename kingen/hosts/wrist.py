@@ -28,7 +28,9 @@ def wrist_table(robot):
     :func:`_third_table`'s entries too), then what follows from
     them alone, by kingen.kinematics.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
     its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
-    ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward."""
+    ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward; ``zero`` the
+    joints' zero offsets (rad, kingen.robot.wrist.Wrist.zero), empty when all are 0 (the C is
+    then as without them)."""
     wrist = robot.wrist
     first, second = wrist.axes[:2]
     three, start = wrist.whole_pose, turned_axis(wrist)
@@ -38,7 +40,7 @@ def wrist_table(robot):
              "onto_second": c_double(onto_second), "normal": c_vector(normal),
              "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
              "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3]),
-             "three": three}
+             "three": three, "zero": [c_double(zero) for zero in wrist.zero] if np.any(wrist.zero) else []}
     return {**table, **_third_table(wrist)} if three else table
 
 

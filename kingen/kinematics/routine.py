@@ -60,15 +60,14 @@ def warnings_to_exercise(robot, vocabulary=None):
     return [kind for kind in kinds if vocabulary is None or kind in vocabulary]
 
 
-WRIST_EVERY_AXIS = 1e-6
-"""A two-axis wrist turns its tool onto every axis when its axes, and the last one and the
-tool's axis at zero, are perpendicular to within this (dot products of unit vectors)."""
-
-
 def _wrist_misses_axes(wrist):
-    """Whether some tool axes lie beyond the reach of the two-axis ``wrist`` (its WARN_UNREACHABLE)."""
+    """Whether some tool axes lie beyond the reach of the two-axis ``wrist`` (its WARN_UNREACHABLE):
+    over every target axis w_p the wrist's radicand D (kingen.kinematics.wrist) is least at
+    a1.w_p = +/-1, -(|a1.a2| + |a2.z0|)^2 / (1 - (a1.a2)^2), and only below -SINGULAR_TOLERANCE is
+    an axis unreachable (axes a calibration tilted by a few hundredths of a degree reach every axis)."""
     first, second, start = wrist.axes[0], wrist.axes[1], wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]
-    return abs(first @ second) > WRIST_EVERY_AXIS or abs(second @ start) > WRIST_EVERY_AXIS
+    cosine, along = abs(first @ second), abs(second @ start)
+    return (cosine + along) ** 2 / (1.0 - cosine * cosine) > SINGULAR_TOLERANCE
 
 
 UNWRITTEN_WARNING = -1

@@ -10,7 +10,9 @@ its legs' joints. The wrist must then turn the tool's zero-joint axis z0 onto w_
 a2.c = a2.z0, a1.c = a1.w_p and |c| = 1: c = alpha a1 + beta a2 + g (a1 x a2), with
 g = +/- sqrt(D) / |a1 x a2|, D = 1 - |alpha a1 + beta a2|^2 the wrist's normalised radicand;
 branch 0 takes g >= 0, branch 1 g < 0 (an A/C head's flip). t2 turns z0 onto c about a2, t1
-turns c onto w_p about a1 (each an atan2 of the vectors' parts normal to the axis).
+turns c onto w_p about a1 (each an atan2 of the vectors' parts normal to the axis). These are
+the geometric angles; each joint reads its angle less its zero offset (Wrist.zero), wrapped to
+(-pi, pi], and its travel limits apply to that reading.
 
 The answer is the reference's kingen.kinematics.reference.Solution over the whole machine's
 joints (the legs', then the wrist's) and postures (the parallel part's posture times 2 plus the
@@ -37,6 +39,7 @@ turn is free.
 
 import numpy as np
 
+from ..conventions import wrap_angle
 from .parasitic import solve_parasitic
 from .routine import SINGULAR_TOLERANCE, WARNINGS, warning_codes
 
@@ -97,6 +100,7 @@ def solve_tool(robot, t6, solve_parallel, solution_type):
     else:
         angles, radicand, aligned = _wrist_branches(wrist.axes[0], wrist.axes[1], wrist.tool[:3, 2],
                                                     np.einsum("nji,nj->ni", rotation, axis))
+    angles = wrap_angle(angles - wrist.zero)  # the joints' readings (kingen.robot.wrist.WristJoint.zero_offset)
     angles = np.where(legs.finite[:, None, None] & np.isfinite(angles), angles, 0.0)
     if wrist.branch is not None:  # a one-posture view: its branch's joints in both columns
         angles = angles[:, [wrist.branch, wrist.branch]]
@@ -138,10 +142,11 @@ def _spherical_branches(wrist, platform_rotation, tool_rotation):
 
 def tool_t6(robot, platform, wrist_joints):
     """(n, 4, 4) the tool's T6 (base frame, mm) of ``robot`` (with a wrist) for its platform's
-    T6 ``platform`` (n, 4, 4) and the wrist's joints (n, 2 or 3) rad: the forward of the wrist."""
+    T6 ``platform`` (n, 4, 4) and the wrist's joints' readings (n, 2 or 3) rad (each joint turns
+    by its reading plus its ``zero``): the forward of the wrist."""
     turned = np.swapaxes(platform[:, :3, :3], 1, 2)
     for index, joint_axis in enumerate(robot.wrist.axes):
-        turned = turned @ rotation_about(joint_axis, wrist_joints[:, index])
+        turned = turned @ rotation_about(joint_axis, wrist_joints[:, index] + robot.wrist.zero[index])
     tool = np.zeros((len(platform), 4, 4))
     tool[:, :3, :3] = np.swapaxes(turned @ robot.wrist.tool[:3, :3], 1, 2)
     tool[:, 3, :3] = platform[:, 3, :3] + turned @ robot.wrist.tool[:3, 3]

@@ -50,7 +50,7 @@ def tool_jacobian(robot, tool, platform, joints, leg_rows):
     """(n, joint_count, 6) the joint rates (mm or rad) per unit tool twist of ``robot`` (with a
     wrist): ``tool`` its tool T6 (n, 4, 4), ``platform`` the machine's platform T6 there (n, 4,
     4, kingen.kinematics.reference.solve's ``platform``), ``joints`` (n, joint_count) one
-    posture's joints (rad for the wrist's), ``leg_rows`` (n, dof, 6) the legs' rates per
+    posture's joints (the wrist's readings, rad), ``leg_rows`` (n, dof, 6) the legs' rates per
     platform twist in that posture (kingen.kinematics.singularity.jacobian). NaN where the
     wrist is singular (its rates' directions dependent)."""
     tool, platform = np.asarray(tool, dtype=float), np.asarray(platform, dtype=float)
@@ -58,11 +58,12 @@ def tool_jacobian(robot, tool, platform, joints, leg_rows):
     platform_twist = task_twists(robot.parallel, platform) @ centre_rates(platform)  # (n, 6, 6)
     legs = np.asarray(leg_rows, dtype=float) @ platform_twist
     rotation = np.swapaxes(platform[:, :3, :3], 1, 2)
+    angles = np.asarray(joints, dtype=float)[:, dof:] + wrist.zero  # geometric, from the readings
     if wrist.whole_pose:
-        return np.concatenate([legs, _spherical_rates(wrist, rotation, joints[:, dof:], platform_twist)], axis=1)
+        return np.concatenate([legs, _spherical_rates(wrist, rotation, angles, platform_twist)], axis=1)
     axis = tool[:, 2, :3]
     first = rotation @ wrist.axes[0]
-    second = np.einsum("nij,nj->ni", rotation @ rotation_about(wrist.axes[0], joints[:, dof]), np.broadcast_to(
+    second = np.einsum("nij,nj->ni", rotation @ rotation_about(wrist.axes[0], angles[:, 0]), np.broadcast_to(
         wrist.axes[1], first.shape))
     directions = np.stack([np.cross(first, axis), np.cross(second, axis)], axis=2)  # (n, 3, 2)
     spin = np.zeros((len(tool), 3, 6))

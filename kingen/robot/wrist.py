@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Literal, Optional
 
 import numpy as np
+from pydantic import Field
 
 from ..conventions import REVOLUTE, matrix_from_pose, pose_from_t6, t6_from_matrix
 from .schema import Identifier, Strict, Travel, UnitVec3, Vec3
@@ -40,13 +41,19 @@ class WristJoint(Strict):
     axis: UnitVec3
     origin: Vec3 = [0.0, 0.0, 0.0]
     travel: Optional[Travel] = None
-    """Degrees."""
+    """Degrees, of the joint's reading (its geometric angle less ``zero_offset``)."""
+    zero_offset: float = Field(0.0, ge=-180.0, le=180.0, description=(
+        "Degrees: the geometric angle at which the joint reads 0 (as a crank's zero_offset): the joint reads its "
+        "geometric angle (0 where 'axis' and 'tool' are given) less this, wrapped to (-180, 180]; its travel "
+        "limits the reading. What `kingen calibrate` identifies."))
 
 
 @dataclass(frozen=True, eq=False)
 class Wrist:
     """The wrist in internal units: ``names`` (k,), ``axes`` (k, 3) unit, platform frame at zero,
-    ``lower``/``upper`` (k,) rad (-inf/+inf without travel), ``tool`` (4, 4) the tool frame in
+    ``lower``/``upper`` (k,) rad (-inf/+inf without travel) of the joints' readings, ``zero``
+    (k,) rad each joint's geometric angle at reading 0 (reading = geometric - zero, wrapped to
+    (-pi, pi]), ``tool`` (4, 4) the tool frame in
     the platform frame at zero as a column-form homogeneous matrix H (conventions.matrix_from_pose:
     ``tool[:3, 3]`` its origin, mm; not a transposed T6), ``reach`` the signed distance (mm) from the wrist centre to the
     tool tip along the tool's z axis; ``branch`` None (the wrist's two branches are postures) or
@@ -58,6 +65,7 @@ class Wrist:
     upper: np.ndarray
     tool: np.ndarray
     reach: float
+    zero: np.ndarray
     branch: Optional[int] = None
 
     @property
@@ -109,7 +117,7 @@ def wrist_of(section, robot, locate):
     travel = [joint.travel or [-np.inf, np.inf] for joint in section.wrist]
     return Wrist(names=tuple(joint.name for joint in section.wrist), axes=axes,
                  lower=np.array([t[0] for t in travel]) * scale, upper=np.array([t[1] for t in travel]) * scale,
-                 tool=tool, reach=reach)
+                 tool=tool, reach=reach, zero=np.radians([joint.zero_offset for joint in section.wrist]))
 
 
 def with_wrist(parallel, document, locate):
