@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """A headless LinuxCNC display for tests/test_check_path_machine.py: LinuxCNC starts it as its
 [DISPLAY] program. It homes, then runs each G-code program of $KINGEN_PROGRAMS (a JSON list of
-paths; each ends where it started) in AUTO mode, every 10 ms recording the time, the line
-motion is executing, the world and the joint positions, and keeping every message of
+paths; each ends where it started) in AUTO mode, every 10 ms recording the line motion is
+executing, the world position and each joint's velocity as motion computes it (per servo
+period, so independent of how late a loaded machine runs it), and keeping every message of
 LinuxCNC's error channel; it writes everything as JSON to $KINGEN_RESULT, then exits, and
 LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
 
@@ -29,9 +30,8 @@ def run(program):
     started = time.time()
     while time.time() - started < 120:
         status.poll()
-        run["samples"].append({"time": time.time(), "line": status.motion_line,
-                               "world": list(status.actual_position[:6]),
-                               "joints": list(status.joint_actual_position[:status.joints])})
+        run["samples"].append({"line": status.motion_line, "world": list(status.actual_position[:6]),
+                               "velocities": [joint["velocity"] for joint in status.joint[:status.joints]]})
         message = errors.poll()
         if message:
             run["errors"].append({"kind": message[0], "text": message[1]})
