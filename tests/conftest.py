@@ -123,6 +123,44 @@ class ChangedCalls:
         return calls
 
 
+def refusal_of(source, folder, old, new):
+    """(path, message): robot file ``source`` written to ``folder``/bad.yaml with its text ``old``
+    (which must be there) replaced once by ``new``, and the KingenError loading it raises."""
+    from kingen.errors import KingenError
+
+    text = Path(source).read_text()
+    assert old in text
+    path = Path(folder) / "bad.yaml"
+    path.write_text(text.replace(old, new, 1))
+    with pytest.raises(KingenError) as refused:
+        load_robot(path)
+    return path, str(refused.value)
+
+
+class ReferenceRoutine:
+    """The numpy reference as a routine (kingen.kinematics.routine.Calls), its joints changed by
+    ``change(t6, joints)`` (in place) after each call when given: a routine right, or wrong in a
+    chosen way, without a compiler."""
+
+    def __init__(self, robot, change=None):
+        self.robot, self.change = robot, change
+
+    def reset_host(self):
+        pass
+
+    def call(self, t6, link_lengths=None, link_offsets=None):
+        from kingen.kinematics.reference import solve
+        from kingen.kinematics.routine import WARNINGS, Calls
+
+        expected = solve(self.robot, t6, link_lengths, link_offsets)
+        joints = expected.joints.copy()
+        if self.change:
+            self.change(np.asarray(t6), joints)
+        unreachable = np.all(expected.warnings == WARNINGS["WARN_UNREACHABLE"], axis=1)
+        return Calls(returned=np.where(unreachable, 1, 0).astype(np.intc), solutions=joints,
+                     warnings=expected.warnings.astype(np.intc), faults=np.zeros(len(joints), dtype=np.intc))
+
+
 class ChangedJoints(ChangedCalls):
     """A loaded plugin whose joints ``change(t6 (n, 4, 4), solutions (n, dof, postures))``
     alters in place after each call: a routine that rounds differently, or is wrong."""

@@ -13,11 +13,10 @@ Every expected number follows from the construction stated beside it."""
 
 import math
 from dataclasses import replace
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from conftest import ONE_RAIL, PLUMB_LEG, ChangedCalls
+from conftest import ONE_RAIL, PLUMB_LEG, ChangedCalls, ReferenceRoutine
 
 from kingen.conventions import t6_from_pose
 from kingen.hosts import get_host
@@ -110,22 +109,6 @@ def test_an_unwritten_warning_is_never_excused_inside_a_band(leg):
     assert (report.warnings_in_band, report.warning_mismatches) == (0, 1)
 
 
-class Routine:
-    """The reference as a routine, its joints changed by ``change(t6, joints)`` (in place)."""
-
-    def __init__(self, robot, change=None):
-        self.robot, self.change = robot, change
-
-    def reset_host(self):
-        pass
-
-    def call(self, t6, link_lengths=None, link_offsets=None):
-        joints = solve(self.robot, t6, link_lengths, link_offsets).joints.copy()
-        if self.change:
-            self.change(np.asarray(t6), joints)
-        return SimpleNamespace(solutions=joints)
-
-
 def sg_t6():
     """Five poses of the Stewart-Gough example inside its leg travel 10..140 mm (joints 49 to
     86 mm: WARN_GOOD_SOLUTION), and one beyond it (z = 340: every leg 153.7 mm,
@@ -139,7 +122,7 @@ def test_the_jacobian_check_compares_every_regular_joint_posture_and_passes_the_
     robot = load_robot("stewart_gough_example")
     t6 = sg_t6()
     assert solve(robot, t6).warnings[:, 0].tolist() == [GOOD] * 5 + [LIMITS]
-    check = jacobian_check(robot, Routine(robot), VerifyOptions(), t6)
+    check = jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), t6)
     assert check.passed and check.judged == 5 * 6  # five good poses x six legs x one posture
     assert "on 30 regular joint-postures of 6 poses" in check.detail
 
@@ -153,14 +136,15 @@ def test_the_jacobian_check_compares_every_regular_joint_posture_and_passes_the_
 ])
 def test_the_jacobian_check_fails_a_routine_whose_rates_are_wrong(change):
     robot = load_robot("stewart_gough_example")
-    check = jacobian_check(robot, Routine(robot, change), VerifyOptions(), sg_t6())
+    check = jacobian_check(robot, ReferenceRoutine(robot, change), VerifyOptions(), sg_t6())
     assert not check.passed and check.judged == 30
 
 
 def test_the_jacobian_check_passes_a_constant_offset():
     """A constant offset changes no rate: the values check catches it, not this one."""
     robot = load_robot("stewart_gough_example")
-    check = jacobian_check(robot, Routine(robot, lambda t6, joints: joints.__iadd__(5.0)), VerifyOptions(), sg_t6())
+    shifted = ReferenceRoutine(robot, lambda t6, joints: joints.__iadd__(5.0))
+    check = jacobian_check(robot, shifted, VerifyOptions(), sg_t6())
     assert check.passed and check.judged == 30
 
 
@@ -236,7 +220,7 @@ def test_closure_judges_every_reachable_branch_outside_the_singular_band_and_fai
 
 def test_the_jacobian_check_with_no_regular_posture_judges_nothing_and_says_so():
     robot = load_robot("stewart_gough_example")
-    check = jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()[-1:])  # only the pose beyond travel
+    check = jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), sg_t6()[-1:])  # only the pose beyond travel
     assert (check.passed, check.exercised, check.judged) == (True, False, 0)
     assert check.detail == ("no reachable, regular joint-posture among the 1 pose to differentiate: of their 1 posture, "
                             "1 beyond travel")
@@ -475,13 +459,13 @@ def test_the_jacobian_tolerance_is_inclusive(monkeypatch):
     robot = load_robot("stewart_gough_example")
     Recorder.seen.clear()
     monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", Recorder(1e-6))
-    assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    assert jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), sg_t6()).passed
     worst = Recorder.seen[-1]
     assert 0.0 < worst < 1e-6
     monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", worst)
-    assert jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    assert jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), sg_t6()).passed
     monkeypatch.setattr(module, "JACOBIAN_TOLERANCE", np.nextafter(worst, 0.0))
-    assert not jacobian_check(robot, Routine(robot), VerifyOptions(), sg_t6()).passed
+    assert not jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), sg_t6()).passed
 
 
 def test_closure_leaves_out_a_link_of_at_most_zero_length_inclusive(leg):

@@ -10,12 +10,12 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from kingen.conventions import t6_from_pose
-from kingen.errors import KingenError
 from kingen.kinematics.routine import WARNINGS
 from kingen.kinematics.reference import solve
 from kingen.kinematics.wrist import tool_t6, tool_turn
 from kingen.robot.model import load_robot, resolve_robot_path
 
+from conftest import refusal_of
 from constrained import newton_root
 from test_hybrid_axes import independent_joints, independent_pose
 
@@ -142,11 +142,5 @@ def test_warnings_the_wrist_singularity_its_limits_and_a_cone_it_cannot_reach(tm
      ":27: golden[0].joints: expected 5 joint values, got 3"),
 ])
 def test_a_wrist_this_version_does_not_solve_is_refused_in_one_line(tmp_path, old, new, words):
-    text = FILE.read_text()
-    assert old in text
-    path = tmp_path / "bad.yaml"
-    path.write_text(text.replace(old, new, 1))
-    with pytest.raises(KingenError) as refused:
-        load_robot(path)
-    message = str(refused.value)
+    path, message = refusal_of(FILE, tmp_path, old, new)
     assert message.startswith(str(path)) and words in message and "\n" not in message, message

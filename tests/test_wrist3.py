@@ -10,7 +10,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from kingen.conventions import t6_from_pose
-from kingen.errors import KingenError
 from kingen.hosts.c.checks import regular_pairs
 from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
@@ -23,6 +22,7 @@ from kingen.kinematics.wrist_rates import tool_jacobian
 from kingen.robot.model import load_robot, resolve_robot_path
 
 import test_tricept
+from conftest import refusal_of
 from constrained import newton_root
 
 FILE = resolve_robot_path("tricept_wrist3")
@@ -148,13 +148,7 @@ def test_any_tool_frame_is_solved_with_three_joints(tmp_path):
     ("  - {name: ax6", "  - {name: ax7, axis: [0, 1, 0]}\n  - {name: ax6", ":25: wrist: "),
 ])
 def test_a_three_axis_wrist_kingen_does_not_solve_is_refused_in_one_line(tmp_path, old, new, words):
-    text = FILE.read_text()
-    assert old in text
-    path = tmp_path / "bad.yaml"
-    path.write_text(text.replace(old, new, 1))
-    with pytest.raises(KingenError) as refused:
-        load_robot(path)
-    message = str(refused.value)
+    path, message = refusal_of(FILE, tmp_path, old, new)
     assert message.startswith(str(path)) and words in message and "\n" not in message, message
 
 

@@ -7,6 +7,7 @@ library's forward gives the whole tool pose back to 1e-9."""
 import numpy as np
 
 from conftest import random_t6
+from test_wrist_hosts import forward_from_reference
 from kingen.conventions import matrix_from_t6, t6_from_pose
 from kingen.hosts.c.build import build_library
 from kingen.hosts.c.loader import Library
@@ -53,16 +54,7 @@ def test_delmia_and_the_c_library_answer_as_the_reference(tmp_path):
 def test_the_c_librarys_forward_returns_the_whole_tool_pose(tmp_path):
     """Forward from the reference's joints of every regular posture, seeded 1 mm and 1 degree
     off: the whole tool T6 to 1e-9 (mm, and its rotation's entries); its inverse gives the joints back."""
-    robot = load_robot(FILE)
-    library = build_library(robot, tmp_path)
-    loaded = Library(library.library, library.routine, robot)
-    poses, t6 = random_t6(robot, 200, seed=43)
-    expected = solve(robot, t6)
-    good, posture = np.nonzero(expected.warnings == WARNINGS["WARN_GOOD_SOLUTION"])
-    assert len(good) > 200 and set(posture) == {0, 1}
-    seeds = matrix_from_t6(t6_from_pose(poses[good] + np.array([1.0, -1.0, 1.0, 1.0, -1.0, 1.0]))).reshape(-1, 16)
-    found, iterations, returns = loaded.forward(expected.joints[good, :, posture], posture, seeds)
-    assert np.all(returns == 0) and iterations.max() <= 20
+    loaded, t6, expected, good, posture, found = forward_from_reference(load_robot(FILE), tmp_path)
     found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)
     assert np.max(np.abs(found_t6 - t6[good])) <= 1e-9
     back, _, _ = loaded.inverse(found)

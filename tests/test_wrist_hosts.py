@@ -74,13 +74,13 @@ def test_delmia_and_the_c_library_answer_as_the_reference(which, tmp_path):
     _assert_matches(robot, t6, joints, warnings)
 
 
-def test_the_c_librarys_forward_returns_the_tool_tip_and_axis_and_its_jacobian_answers(tmp_path):
-    """Forward from the reference's joints of every regular posture, seeded 1 mm and 1 degree
-    off: the tool tip to 1e-9 mm and the tool axis to 1e-9 (the turn about it is free); the
-    inverse of what it found gives the joints back; the Jacobian there answers the posture's
-    warning with finite rows for all five joints (its values: tests/test_wrist_rates.py)."""
-    robot = load_robot(FILE)
-    library = build_library(robot, tmp_path)
+def forward_from_reference(robot, folder):
+    """(library, t6, expected, good, posture, found): ``robot``'s C library built in ``folder``,
+    200 drawn tool T6 (seed 43) and the reference's answer, the (pose, posture) pairs answered
+    WARN_GOOD_SOLUTION (more than 200, both postures among them), and the library's forward of
+    each pair's joints seeded 1 mm and 1 degree off (flat row-major H, 16 a row; every call
+    returned 0 within 20 Newton steps)."""
+    library = build_library(robot, folder)
     loaded = Library(library.library, library.routine, robot)
     poses, t6 = random_t6(robot, 200, seed=43)
     expected = solve(robot, t6)
@@ -89,6 +89,15 @@ def test_the_c_librarys_forward_returns_the_tool_tip_and_axis_and_its_jacobian_a
     seeds = matrix_from_t6(t6_from_pose(poses[good] + np.array([1.0, -1.0, 1.0, 1.0, -1.0, 1.0]))).reshape(-1, 16)
     found, iterations, returns = loaded.forward(expected.joints[good, :, posture], posture, seeds)
     assert np.all(returns == 0) and iterations.max() <= 20
+    return loaded, t6, expected, good, posture, found
+
+
+def test_the_c_librarys_forward_returns_the_tool_tip_and_axis_and_its_jacobian_answers(tmp_path):
+    """Forward from the reference's joints of every regular posture, seeded 1 mm and 1 degree
+    off: the tool tip to 1e-9 mm and the tool axis to 1e-9 (the turn about it is free); the
+    inverse of what it found gives the joints back; the Jacobian there answers the posture's
+    warning with finite rows for all five joints (its values: tests/test_wrist_rates.py)."""
+    loaded, t6, expected, good, posture, found = forward_from_reference(load_robot(FILE), tmp_path)
     found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)
     assert np.max(np.abs(found_t6[:, 3, :3] - t6[good, 3, :3])) <= 1e-9
     assert np.max(np.abs(found_t6[:, 2, :3] - t6[good, 2, :3])) <= 1e-9

@@ -13,7 +13,7 @@ from kingen.cli import main
 from kingen.conventions import t6_from_pose
 from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
-from kingen.kinematics.routine import WARNINGS, Calls, warnings_to_exercise
+from kingen.kinematics.routine import WARNINGS, warnings_to_exercise
 from kingen.kinematics.forward import poses_of
 from kingen.kinematics.wrist_forward import tool_rates
 from kingen.robot.model import load_robot
@@ -27,6 +27,7 @@ from kingen.verify.report import Report
 from kingen.verify.tally import Tally, accumulate, posture_statistics
 
 import test_tricept
+from conftest import ReferenceRoutine
 from test_wrist import independent_branches
 
 UNREACHABLE = WARNINGS["WARN_UNREACHABLE"]
@@ -55,25 +56,6 @@ def test_the_tricepts_golden_values_are_the_independent_computation():
         assert np.max(np.abs(solution.joints[0, :, entry.posture] - expected)) < 1e-9
 
 
-class Routine:
-    """The reference as a routine, its joints changed by ``change(t6, joints)`` (in place)."""
-
-    def __init__(self, robot, change=None):
-        self.robot, self.change = robot, change
-
-    def reset_host(self):
-        pass
-
-    def call(self, t6, link_lengths=None, link_offsets=None):
-        expected = solve(self.robot, t6, link_lengths, link_offsets)
-        joints = expected.joints.copy()
-        if self.change:
-            self.change(np.asarray(t6), joints)
-        return Calls(returned=np.where(np.all(expected.warnings == UNREACHABLE, axis=1), 1, 0).astype(np.intc),
-                     solutions=joints, warnings=expected.warnings.astype(np.intc),
-                     faults=np.zeros(len(joints), dtype=np.intc))
-
-
 def shifted(joint, amount):
     return lambda t6, joints: joints.__setitem__((slice(None), joint), joints[:, joint] + amount)
 
@@ -87,7 +69,7 @@ def closure_lines(robot, t6, routine):
 
 
 def test_closure_the_constraints_and_the_wrist_pass_the_reference_and_judge_every_reached_posture(robot, t6):
-    lines, tally = closure_lines(robot, t6, Routine(robot))
+    lines, tally = closure_lines(robot, t6, ReferenceRoutine(robot))
     assert set(lines) == {"closure", "constraints", "wrist"}
     assert all(check.passed and check.exercised for check in lines.values())
     reached = int(np.count_nonzero(solve(robot, t6).warnings != UNREACHABLE))
@@ -100,19 +82,19 @@ def test_closure_the_constraints_and_the_wrist_pass_the_reference_and_judge_ever
 
 def test_a_wrong_wrist_joint_fails_the_wrist_line_by_its_lever_and_counts_as_wrong(robot, t6):
     """Ax5 off by 1e-6 rad: the tool axis turns 1e-6 and the tip, 200 mm out, moves 2e-4 mm."""
-    lines, tally = closure_lines(robot, t6, Routine(robot, shifted(4, 1e-6)))
+    lines, tally = closure_lines(robot, t6, ReferenceRoutine(robot, shifted(4, 1e-6)))
     assert lines["closure"].passed and lines["constraints"].passed and not lines["wrist"].passed
     assert f"{tally.wrist_worst:.3g}" == "0.0002"
     assert [entry["wrong"] for entry in posture_statistics(robot, tally)] == [len(t6)] * 2
 
 
 def test_a_wrong_leg_fails_the_closure_at_the_platform(robot, t6):
-    lines, _ = closure_lines(robot, t6, Routine(robot, shifted(0, 1e-6)))
+    lines, _ = closure_lines(robot, t6, ReferenceRoutine(robot, shifted(0, 1e-6)))
     assert not lines["closure"].passed and lines["wrist"].passed
 
 
 def test_the_jacobian_passes_the_reference_against_the_forward_maps_differences(robot, t6):
-    check = jacobian_check(robot, Routine(robot), VerifyOptions(), t6[:60])
+    check = jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), t6[:60])
     assert check.passed and check.exercised and check.judged > 0
     assert "turning the tool 0.5 rad about its axis changes no joint: at most 0 " in check.detail
 
@@ -125,7 +107,7 @@ def test_the_jacobian_passes_the_reference_against_the_forward_maps_differences(
                  id="ax5 follows the tool's turn"),
 ])
 def test_the_jacobian_fails_a_routine_whose_rates_are_wrong(robot, t6, change):
-    check = jacobian_check(robot, Routine(robot, change), VerifyOptions(), t6[:60])
+    check = jacobian_check(robot, ReferenceRoutine(robot, change), VerifyOptions(), t6[:60])
     assert not check.passed
 
 
@@ -141,9 +123,9 @@ def test_the_twist_about_the_tool_axis_gives_zero_joint_rates(robot, t6):
 
 
 def test_forward_then_inverse_gives_every_regular_posture_back(robot, t6):
-    check = round_trip_check(robot, Routine(robot), VerifyOptions(), t6[:100])
+    check = round_trip_check(robot, ReferenceRoutine(robot), VerifyOptions(), t6[:100])
     assert check.passed and check.judged > 100  # of 200 (pose, posture) pairs, those away from singularities
-    wrong = round_trip_check(robot, Routine(robot, shifted(2, 1e-6)), VerifyOptions(), t6[:100])
+    wrong = round_trip_check(robot, ReferenceRoutine(robot, shifted(2, 1e-6)), VerifyOptions(), t6[:100])
     assert not wrong.passed
 
 
