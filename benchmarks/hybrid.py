@@ -69,11 +69,13 @@ def measure(calls, rounds):
 
 def markdown(figures):
     """The figures as a Markdown table, each robot against the baseline of its host (paired rounds)."""
-    lines = [f"Median of {figures['rounds']} paired rounds of `kingen bench ROBOT --host HOST --calls {figures['calls']}` "
-             "(the routine called from kingen's C batch driver over the verification region's poses; each round "
-             f"runs the {figures['baseline']} and the {figures['reference']}, then every machine, on one host; a ratio is "
-             "the median of the rounds' ratios). LinuxCNC's module of a robot with a wrist is its five-axis module (two wrist joints) or six-axis module (three). Load average (1, 5, 15 "
-             "minutes) at the end: " + ", ".join(f"{load:.2f}" for load in figures["load_average"]) + ".", ""]
+    loads = ", ".join(f"{load:.2f}" for load in figures["load_average"])
+    lines = [f"Median of {figures['rounds']} paired rounds of "
+             f"`kingen bench ROBOT --host HOST --calls {figures['calls']}` (the routine called from kingen's C batch "
+             f"driver over the verification region's poses; each round runs the {figures['baseline']} and the "
+             f"{figures['reference']}, then every machine, on one host; a ratio is the median of the rounds' "
+             "ratios). LinuxCNC's module of a robot with a wrist is its five-axis module (two wrist joints) or "
+             f"six-axis module (three). Load average (1, 5, 15 minutes) at the end: {loads}.", ""]
     lines += [f"| host | robot | ns per call | against the {figures['baseline']} | against the {figures['reference']} |",
               "| --- | --- | --- | --- | --- |"]
     lines += [f"| {row['host']} | {row['robot']} | {row['ns']:.1f} | {row['ratio']:.2f} | {row['reference_ratio']:.2f} |"
