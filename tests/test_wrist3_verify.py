@@ -19,7 +19,8 @@ from kingen.verify.checks.jacobian import jacobian_check
 from kingen.verify.checks.round_trip import round_trip_check
 from kingen.verify.options import VerifyOptions
 
-from test_wrist_verify import UNREACHABLE, Routine, closure_lines, shifted
+from conftest import ReferenceRoutine
+from test_wrist_verify import UNREACHABLE, closure_lines, shifted
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +34,7 @@ def t6(robot):
 
 
 def test_closure_the_constraints_and_the_wrist_pass_the_reference(robot, t6):
-    lines, _ = closure_lines(robot, t6, Routine(robot))
+    lines, _ = closure_lines(robot, t6, ReferenceRoutine(robot))
     assert set(lines) == {"closure", "constraints", "wrist"}
     assert all(check.passed and check.exercised for check in lines.values())
     assert "tool frame (its three axes)" in lines["wrist"].detail and "the whole pose is read" in lines["wrist"].detail
@@ -44,26 +45,26 @@ def test_closure_the_constraints_and_the_wrist_pass_the_reference(robot, t6):
 def test_a_wrong_last_wrist_joint_fails_the_wrist_line_though_tip_and_axis_are_right(robot, t6):
     """Ax6 off by 1e-6 rad turns the tool about its own axis (the tool lies along Ax6): tip and tool
     axis stay put, so only the whole pose's reading sees the tool's x and y axes turn 1e-6."""
-    lines, tally = closure_lines(robot, t6, Routine(robot, shifted(5, 1e-6)))
+    lines, tally = closure_lines(robot, t6, ReferenceRoutine(robot, shifted(5, 1e-6)))
     assert lines["closure"].passed and lines["constraints"].passed and not lines["wrist"].passed
     assert f"{tally.wrist_worst:.2g}" == "1e-06"
 
 
 def test_the_jacobian_passes_the_reference_over_all_six_twists(robot, t6):
-    check = jacobian_check(robot, Routine(robot), VerifyOptions(), t6[:60])
+    check = jacobian_check(robot, ReferenceRoutine(robot), VerifyOptions(), t6[:60])
     assert check.passed and check.exercised and check.judged > 0
     assert "turning the tool" not in check.detail
 
 
 def test_the_jacobian_fails_a_routine_that_ignores_the_turn_about_the_tool_axis(robot, t6):
     change = (lambda poses, joints: joints.__setitem__((slice(None), 5), joints[:, 5] + 1e-3 * poses[:, 0, 0, None]))
-    assert not jacobian_check(robot, Routine(robot, change), VerifyOptions(), t6[:60]).passed
+    assert not jacobian_check(robot, ReferenceRoutine(robot, change), VerifyOptions(), t6[:60]).passed
 
 
 def test_forward_then_inverse_gives_every_regular_posture_and_the_whole_pose_back(robot, t6):
-    check = round_trip_check(robot, Routine(robot), VerifyOptions(), t6[:100])
+    check = round_trip_check(robot, ReferenceRoutine(robot), VerifyOptions(), t6[:100])
     assert check.passed and check.judged > 100 and "tool frame within" in check.detail
-    assert not round_trip_check(robot, Routine(robot, shifted(5, 1e-6)), VerifyOptions(), t6[:100]).passed
+    assert not round_trip_check(robot, ReferenceRoutine(robot, shifted(5, 1e-6)), VerifyOptions(), t6[:100]).passed
 
 
 def test_fk_from_legs_and_wrist_joints_gives_the_whole_golden_tool_pose(robot, tmp_path, capsys):
