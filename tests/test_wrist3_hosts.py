@@ -7,12 +7,10 @@ library's forward gives the whole tool pose back to 1e-9."""
 import numpy as np
 
 from conftest import random_t6
-from test_wrist_hosts import forward_from_reference
+from test_wrist_hosts import assert_both_hosts_answer_as_the_reference, forward_from_reference
 from kingen.conventions import matrix_from_t6, t6_from_pose
 from kingen.hosts.c.build import build_library
 from kingen.hosts.c.loader import Library
-from kingen.hosts.delmia.build import build_plugin
-from kingen.hosts.delmia.loader import Plugin
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.kinematics.wrist import rotation_about
@@ -30,12 +28,6 @@ def _poses(robot):
     return np.concatenate([t6_from_pose(np.array(SPECIAL, dtype=float)), drawn])
 
 
-def _assert_matches(robot, t6, joints, warnings):
-    expected = solve(robot, t6)
-    assert np.array_equal(warnings, expected.warnings)
-    assert np.max(np.abs(joints - expected.joints)) <= 1e-9
-
-
 def test_delmia_and_the_c_library_answer_as_the_reference(tmp_path):
     robot = load_robot(FILE)
     t6 = _poses(robot)
@@ -43,12 +35,7 @@ def test_delmia_and_the_c_library_answer_as_the_reference(tmp_path):
     assert np.all(expected[0] == WARNINGS["WARN_SINGULAR_SOLUTION"])
     assert np.all(expected[2:4] == WARNINGS["WARN_UNREACHABLE"])
     assert np.sum(expected == WARNINGS["WARN_GOOD_SOLUTION"]) > 300
-    built = build_plugin(robot, tmp_path / "delmia")
-    calls = Plugin(built.library, built.routine).call(t6)
-    _assert_matches(robot, t6, calls.solutions, calls.warnings)
-    library = build_library(robot, tmp_path / "c")
-    joints, warnings, _ = Library(library.library, library.routine, robot).inverse(matrix_from_t6(t6).reshape(-1, 16))
-    _assert_matches(robot, t6, joints, warnings)
+    assert_both_hosts_answer_as_the_reference(robot, t6, tmp_path)
 
 
 def test_the_c_librarys_forward_returns_the_whole_tool_pose(tmp_path):
