@@ -48,21 +48,34 @@ def ini_text(joints=5):
     return "\n".join(lines)
 
 
-def test_a_gcode_programs_samples_recompose_the_commanded_tool_tip_and_axis(tmp_path):
+def gcode_samples(robot, text, folder):
+    """(outcome, world (n, 6), joints (n, joint_count), warnings (n,)) of check-path on ``robot``
+    for the G-code ``text`` (written to ``folder``/inside.ngc): every sample it judged."""
     needs_interpreter()
-    robot = load_robot(ROBOT)
-    program = tmp_path / "inside.ngc"
-    program.write_text(INSIDE)
+    program = folder / "inside.ngc"
+    program.write_text(text)
     rows = []
 
     def sink(lines, batch, rates):
-        rows.append((lines, batch.poses.copy(), batch.joints.copy(), batch.warnings.copy()))
+        rows.append((batch.poses.copy(), batch.joints.copy(), batch.warnings.copy()))
     outcome = check_program(robot, program, Settings(), sink=sink)
-    lines, world, joints, warnings = (np.concatenate(part) for part in zip(*rows))
+    return (outcome, *(np.concatenate(part) for part in zip(*rows)))
+
+
+def machine_forward(robot, joints):
+    """(tool T6 (n, 4, 4), residual (n,)) of the machine's forward from ``joints``, the platform
+    started at its home's position."""
+    near = np.tile(np.concatenate([robot.parallel.verification.home[:3], [0.0, 0.0, 0.0]]), (len(joints), 1))
+    tool, _, residual = tool_forward(robot, joints, near)
+    return tool, residual
+
+
+def test_a_gcode_programs_samples_recompose_the_commanded_tool_tip_and_axis(tmp_path):
+    robot = load_robot(ROBOT)
+    outcome, world, joints, warnings = gcode_samples(robot, INSIDE, tmp_path)
     regular = (warnings == 0) & (world[:, 3] > 1.0)  # off the home's singularity, where Ax4 is free
     assert np.sum(regular) > 1000
-    near = np.tile(np.concatenate([robot.parallel.verification.home[:3], [0.0, 0.0, 0.0]]), (int(np.sum(regular)), 1))
-    tool, _, residual = tool_forward(robot, joints[regular], near)
+    tool, residual = machine_forward(robot, joints[regular])
     assert np.max(residual) < 1e-9
     np.testing.assert_allclose(tool[:, 3, :3], world[regular, :3], atol=1e-9)
     axis = axis_of_world(home_axis(robot), world[regular, 3], world[regular, 5])

@@ -9,10 +9,9 @@ import json
 import numpy as np
 
 from kingen.conventions import t6_from_pose
-from kingen.kinematics.wrist_forward import tool_forward
-from kingen.paths.check import Settings, check_program
 from kingen.robot.model import load_robot
-from test_check_path import needs_interpreter, run
+from test_check_path import run
+from test_check_path_wrist import gcode_samples, machine_forward
 
 ROBOT = "robots/tricept_wrist3.yaml"
 INSIDE = """G21 G90
@@ -26,20 +25,11 @@ wrist's gimbal lock, where the machine homes)."""
 
 
 def test_a_gcode_programs_samples_recompose_the_whole_commanded_tool_pose(tmp_path):
-    needs_interpreter()
     robot = load_robot(ROBOT)
-    program = tmp_path / "inside.ngc"
-    program.write_text(INSIDE)
-    rows = []
-
-    def sink(lines, batch, rates):
-        rows.append((batch.poses.copy(), batch.joints.copy(), batch.warnings.copy()))
-    outcome = check_program(robot, program, Settings(), sink=sink)
-    world, joints, warnings = (np.concatenate(part) for part in zip(*rows))
+    outcome, world, joints, warnings = gcode_samples(robot, INSIDE, tmp_path)
     regular = (warnings == 0) & (np.abs(world[:, 3]) < 179.0)  # off the home's gimbal lock
     assert np.sum(regular) > 1000
-    near = np.tile(np.concatenate([robot.parallel.verification.home[:3], [0.0, 0.0, 0.0]]), (int(np.sum(regular)), 1))
-    tool, _, residual = tool_forward(robot, joints[regular], near)
+    tool, residual = machine_forward(robot, joints[regular])
     assert np.max(residual) < 1e-9
     np.testing.assert_allclose(tool, t6_from_pose(world[regular]), atol=1e-9)
     assert {place.line for place in outcome.findings.problems.values()} == {2}  # leaving the home only
