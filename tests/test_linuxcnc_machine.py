@@ -195,7 +195,7 @@ WRIST_CASE = {"moves": [[30, 20, -1470, 12, 40], [-40, 90, -1420, 20, -60]], "ax
               "first_jog": "4 10"}
 """The five-axis module of exechon_wrist: X Y Z (tool tip) A C (tool axis) moves, after a joint jog
 of Ax5 by 10 degrees off the home, where the tool axis lies along Ax4 (the wrist's singularity,
-which the module refuses: LinuxCNC could not enter world mode there)."""
+which the module answers as singular)."""
 
 
 def tool_t6(robot, world):
@@ -208,40 +208,32 @@ def tool_t6(robot, world):
     return t6
 
 
-@pytest.mark.xdist_group("linuxcnc")
-def test_linuxcnc_runs_the_five_axis_module_to_the_reference(tmp_path):
-    robot, outcome = run_machine("exechon_wrist", tmp_path, WRIST_CASE)
-    jogged = outcome["first_jog"]["after"]["joints"]
-    assert jogged[4] - outcome["first_jog"]["before"]["joints"][4] == pytest.approx(10.0, abs=1e-6)
-    for move in outcome["moves"]:
-        expected = solve(robot, tool_t6(robot, move["pose"])).joints[0, :, robot.working_posture]
-        joints = np.array(move["joints"][:robot.joint_count]) * np.where(robot.revolute, np.pi / 180.0, 1.0)
-        assert np.max(np.abs(joints - expected)) <= 1e-9, move
-        world = np.array(move["world"])[[0, 1, 2, 3, 5]]  # X Y Z A C (B is not a coordinate)
-        assert np.max(np.abs(world - move["pose"])) <= 1e-9, move
-    before, after = outcome["jog"]["before"], outcome["jog"]["after"]
-    assert after["joints"][0] - before["joints"][0] == pytest.approx(WRIST_CASE["jog"], abs=1e-6)
-    assert after["joints"][1:] == before["joints"][1:]
-
-
 WRIST3_CASE = {"moves": [[30, 20, -1270, 170, 10, 30], [-40, 90, -1320, 195, -8, -50]], "jog": 2.0,
                "first_jog": "4 10"}
 """The six-axis module of tricept_wrist3: X Y Z A B C (the tool pose: tip, roll, pitch, yaw) moves,
 after a joint jog of ax5 by 10 degrees off the home, where the axis of ax6 lies along ax4 (the
-gimbal lock, which the module answers as singular: LinuxCNC could not enter world mode there); A
+gimbal lock, which the module answers as singular); A
 stays near 180 (195 is roll -165) so that the straight move in A B C stays within the wrist's travel."""
 
 
 @pytest.mark.xdist_group("linuxcnc")
-def test_linuxcnc_runs_the_six_axis_module_to_the_reference(tmp_path):
-    robot, outcome = run_machine("tricept_wrist3", tmp_path, WRIST3_CASE)
+@pytest.mark.parametrize("name, case", [("exechon_wrist", WRIST_CASE), ("tricept_wrist3", WRIST3_CASE)],
+                         ids=["five_axis", "six_axis"])
+def test_linuxcnc_runs_a_wrist_machines_module_to_the_reference(name, case, tmp_path):
+    """The five-axis module (world X Y Z A C: B is not a coordinate) and the six-axis one (X Y Z A
+    B C): the joints LinuxCNC commands for each move and the world it reads back, against the
+    reference, to 1e-9; a joint jog moves that joint alone."""
+    robot, outcome = run_machine(name, tmp_path, case)
     jogged = outcome["first_jog"]["after"]["joints"]
     assert jogged[4] - outcome["first_jog"]["before"]["joints"][4] == pytest.approx(10.0, abs=1e-6)
+    five_axis = len(robot.wrist.names) == 2
     for move in outcome["moves"]:
-        expected = solve(robot, t6_from_pose(np.array([move["pose"]], dtype=float))).joints[0, :, robot.working_posture]
+        asked = tool_t6(robot, move["pose"]) if five_axis else t6_from_pose(np.array([move["pose"]], dtype=float))
+        expected = solve(robot, asked).joints[0, :, robot.working_posture]
         joints = np.array(move["joints"][:robot.joint_count]) * np.where(robot.revolute, np.pi / 180.0, 1.0)
         assert np.max(np.abs(joints - expected)) <= 1e-9, move
-        assert np.max(np.abs(np.array(move["world"][:6]) - move["pose"])) <= 1e-9, move
+        world = np.array(move["world"])[[0, 1, 2, 3, 5] if five_axis else slice(0, 6)]
+        assert np.max(np.abs(world - move["pose"])) <= 1e-9, move
     before, after = outcome["jog"]["before"], outcome["jog"]["after"]
-    assert after["joints"][0] - before["joints"][0] == pytest.approx(WRIST3_CASE["jog"], abs=1e-6)
+    assert after["joints"][0] - before["joints"][0] == pytest.approx(case["jog"], abs=1e-6)
     assert after["joints"][1:] == before["joints"][1:]
