@@ -80,3 +80,15 @@ def test_the_c_librarys_jacobian_is_the_references_central_difference(tmp_path):
             assert np.max(np.abs(rows[:, twist] - (ahead - behind) / 2e-6)) <= 1e-5
         checked += 1
     assert checked >= 30
+
+
+def test_the_c_library_of_three_legs_and_a_three_axis_wrist_exports_no_direct_index():
+    """Six joints are not six force lines: the direct index is a six-limb robot's (the header
+    and source of tricept_wrist3 have none, the hexapod's have it)."""
+    from kingen.hosts.c.render import render
+
+    for name, limbs in (("tricept_wrist3", 3), ("hexapod", 6)):
+        robot = load_robot(name)
+        assert (robot.dof, robot.joint_count) == ((3, 6) if limbs == 3 else (6, 6))
+        texts = "".join(render(robot).values())
+        assert ("_direct_index(" in texts) == (limbs == 6)
