@@ -215,6 +215,19 @@ def test_an_ini_without_the_robots_joints_is_bad_input(tmp_path, capsys):
                    f"(JOINT_0 .. JOINT_5)\n")
 
 
+@pytest.mark.parametrize("velocity, acceleration, key, text", [(0.0, 100.0, "MAX_VELOCITY", "'0.0'"),
+                                                               (10.0, -5.0, "MAX_ACCELERATION", "'-5.0'")])
+def test_an_ini_speed_or_acceleration_not_above_zero_is_bad_input(tmp_path, capsys, velocity, acceleration, key,
+                                                                  text):
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(velocity=velocity, acceleration=acceleration))
+    program = tmp_path / "p.csv"
+    program.write_text("0,0,508,0,0,0\n1,0,508,0,0,0\n")
+    code, out, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini)
+    line = ini.read_text().splitlines().index("[JOINT_0]") + 1
+    assert (code, out) == (2, "") and err == f"kingen: error: {ini}:{line}: [JOINT_0] {key}: {text}: must be above 0\n"
+
+
 def test_speed_limits_in_an_inch_robot_file_judge_as_the_same_limits_in_an_ini(tmp_path, capsys):
     document = yaml.safe_load((ROBOTS / "linuxcnc_hexapod.yaml").read_text())
     limit = 5.0  # mm/s

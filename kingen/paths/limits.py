@@ -66,7 +66,8 @@ def _line_of(lines, section):
 
 
 def _number(parser, lines, path, section, key):
-    """[section] key as a positive finite number (None when absent); KingenError otherwise."""
+    """[section] key as a finite number (None when absent), above 0 for a speed or acceleration
+    (a key other than MIN_LIMIT and MAX_LIMIT); KingenError otherwise."""
     text = parser.get(section, key, fallback=None)
     if text is None:
         return None
@@ -76,6 +77,8 @@ def _number(parser, lines, path, section, key):
         value = float("nan")
     if not np.isfinite(value):
         raise located(path, _line_of(lines, section), f"[{section}] {key}", f"{text!r} is not a number")
+    if value <= 0.0 and key not in ("MIN_LIMIT", "MAX_LIMIT"):
+        raise located(path, _line_of(lines, section), f"[{section}] {key}", f"{text!r}: must be above 0")
     return value
 
 
