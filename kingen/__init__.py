@@ -92,13 +92,14 @@ def solve(robot, poses, link_lengths=None, link_offsets=None):
 
 
 def assembly_modes(robot, joints, near=None, search=2.0):
-    """Forward kinematics: every platform pose the joints admit.
+    """Forward kinematics: every platform pose the joints admit (a robot with a wrist: every
+    tool pose).
 
     Parameters
     ----------
     robot : kingen.robot.model.Robot
-    joints : array_like, shape (dof,)
-        Joint values: mm for prismatic, radians for revolute joints.
+    joints : array_like, shape (joint_count,)
+        Joint values (the limbs', then a wrist's): mm for prismatic, radians for revolute joints.
     near : array_like, shape (6,), optional
         A pose (mm and radians) that orders the answers and gives the coordinates the
         robot does not move; the robot's home pose by default.

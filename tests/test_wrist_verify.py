@@ -155,6 +155,20 @@ def test_fk_from_legs_and_wrist_joints_gives_the_golden_tool_tip_and_axis(robot,
     assert np.max(np.abs(reached[0, 2, :3] - asked[0, 2, :3])) < 1e-8
 
 
+def test_the_public_assembly_modes_and_a_posture_switch_are_the_tools(robot, capsys):
+    """kingen.assembly_modes of the legs' and the wrist's joints gives tool poses (one of them the
+    golden pose's tool tip), and a switch of the wrist's branch alone moves no tool: `kingen solve
+    --switch` finds the commanded TCP, 0 mm away."""
+    import kingen
+
+    entry = robot.golden[0]
+    joints = np.array(entry.joints) * robot.joint_scale()
+    modes = kingen.assembly_modes(robot, joints).found
+    assert min(np.linalg.norm(mode.pose[:3] - np.array(entry.pose[:3])) for mode in modes) < 1e-5  # 9 decimals
+    assert main(["solve", robot.name, "--pose", *map(str, entry.pose), "--switch", "0", "1"]) == 0
+    assert "may jump up to 0.000 mm" in capsys.readouterr().out
+
+
 def test_fk_asks_for_every_joint_of_legs_and_wrist(robot, capsys):
     assert main(["fk", robot.name, "--joints", "1 2 3"]) == 2
     assert capsys.readouterr().err.strip().endswith(f"{robot.name} has 5 joints; give 5 finite numbers")

@@ -253,12 +253,7 @@ def fk(robot, joints, more_joints, near, json_path, search):
     internal = np.array(values) * model.joint_scale()
     near_pose = np.array(near if near is not None else model.verification.home, dtype=float)
     near_internal = np.concatenate([near_pose[:3], np.radians(near_pose[3:])])
-    if model.wrist is not None:  # the tool's pose: the parallel part's modes, then the wrist's forward
-        from ..kinematics.wrist_forward import tool_assemblies
-
-        modes = tool_assemblies(model, internal, near_internal, search)
-    else:
-        modes = assemblies(model, internal, near_internal, search)
+    modes = assemblies(model, internal, near_internal, search)  # a wrist's: the tool's poses
     found = modes.found
     rows = [("mode", "x (mm)", "y (mm)", "z (mm)", "roll (deg)", "pitch (deg)", "yaw (deg)", "residual (mm)",
              "from near (mm)")]

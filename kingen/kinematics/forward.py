@@ -191,8 +191,13 @@ def search_region(robot, search=SEARCH):
 
 
 def assemblies(robot, joints, near, search=SEARCH):
-    """AssemblyModes for ``joints`` (dof,) (mm, rad); ``near`` (6,) (mm, rad) orders them and
-    gives the values of coordinates that are not free; ``search`` widens a multi-start search."""
+    """AssemblyModes for ``joints`` (joint_count,) (mm, rad); ``near`` (6,) (mm, rad) orders them
+    and gives the values of coordinates that are not free; ``search`` widens a multi-start search.
+    A robot with a wrist: the tool's poses (kingen.kinematics.wrist_forward.tool_assemblies)."""
+    if robot.wrist is not None:
+        from .wrist_forward import tool_assemblies  # here: wrist_forward builds on this module
+
+        return tool_assemblies(robot, joints, near, search)
     from . import sgp  # here: it loads scipy (about 0.6 s), which nothing else verify runs needs
 
     joints = np.asarray(joints, dtype=float)
