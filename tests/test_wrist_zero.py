@@ -106,3 +106,19 @@ def test_verify_passes_with_offsets(host_name, name, tmp_path):
     report = verify_library(seen, built.library, built.routine, VerifyOptions(samples=2000), host=host)
     assert report.passed, [(check.name, check.detail) for check in report.failures]
     assert report.max_abs_error_mm <= 1e-9 and report.max_abs_error_rad <= 1e-9
+
+
+def test_the_machine_check_judges_the_wrists_readings_at_the_home(tmp_path):
+    """At the verification home's tool pose every wrist joint stands at its geometric 0 and reads
+    minus its zero_offset: Ax5 with an offset of 150 degrees reads -150 there, beyond its travel
+    of +/-110, which the machine check says; with 100 it reads -100, within."""
+    from kingen.verify.checks.machine import machine_check
+
+    _, beyond = offset_robot("exechon_wrist", tmp_path, [0.0, 150.0])
+    home = solve(beyond, t6_from_pose(np.array([beyond.verification.home])))
+    assert np.degrees(home.joints[0, 4, 0]) == pytest.approx(-150.0, abs=1e-9)
+    check = machine_check(beyond)
+    assert not check.passed and "ax5" in check.detail and "reading 0, -150 deg" in check.detail
+    _, within = offset_robot("exechon_wrist", tmp_path, [0.0, 100.0])
+    check = machine_check(within)
+    assert check.passed and check.detail.endswith("(reading 0, -100 deg) lie within travel")

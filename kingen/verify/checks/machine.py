@@ -5,6 +5,7 @@ implausibly small or large across gets a notice naming the units its file was re
 
 import math
 
+from ...conventions import wrap_angle
 from ...kinematics.home import home_problem, judged_posture, scale_notice
 from .base import Check, VerifyCheck
 
@@ -30,14 +31,19 @@ def machine_check(robot):
 
 
 def _with_wrist(robot, parallel):
-    """The ``machine`` Check of a robot with a wrist from its parallel part's ``parallel``."""
+    """The ``machine`` Check of a robot with a wrist from its parallel part's ``parallel``: the
+    wrist's readings at the verification home's tool pose (every geometric angle 0: each joint
+    reads -zero_offset, wrapped) within travel."""
     wrist = robot.wrist
-    outside = [name for name, low, high in zip(wrist.names, wrist.lower, wrist.upper) if not low <= 0.0 <= high]
+    readings = wrap_angle(0.0 - wrist.zero)  # not -zero: a zero offset of 0 reads 0, not -0
+    read = f"reading {', '.join(f'{math.degrees(r):g}' for r in readings)} deg"
+    outside = [name for name, reading, low, high in zip(wrist.names, readings, wrist.lower, wrist.upper)
+               if not low <= reading <= high]
     if outside:
-        return Check("machine", False, f"the wrist joints {', '.join(outside)} at 0 (the verification home's tool "
-                                       f"pose) lie beyond travel: the machine cannot work there")
+        return Check("machine", False, f"the wrist joints {', '.join(outside)} at the verification home's tool pose "
+                                       f"({read}) lie beyond travel: the machine cannot work there")
     return Check("machine", parallel.passed, f"the parallel part at the platform's home: {parallel.detail}; "
-                                              f"the wrist joints at 0 lie within travel")
+                                              f"the wrist joints at the home's tool pose ({read}) lie within travel")
 
 
 class Machine(VerifyCheck, name="machine", needs="golden values"):
