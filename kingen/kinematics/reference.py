@@ -50,11 +50,11 @@ class Solution:
     radicands: np.ndarray
     finite: np.ndarray
     posture_branches: tuple
+    """Per posture, the branch each joint takes (kingen.kinematics.singularity.branch_table as tuples)."""
     constraint: np.ndarray = None
     """(n,) a machine with task coordinates: the normalised radicand D of its parasitic yaw
     (kingen.kinematics.parasitic), -inf off the manifold where its routine reads x, y and yaw;
     None for other robots. Its warnings count it as a limb's."""
-    """Per posture, the branch each limb takes (kingen.kinematics.singularity.branch_table as tuples)."""
     points: np.ndarray = None
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
     platform: np.ndarray = None
