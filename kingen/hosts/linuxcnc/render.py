@@ -134,6 +134,7 @@ def view_model(robot, units="mm"):
         })
     two_branch = [(index, limb) for index, limb in enumerate(robot.limbs) if limb.branches == 2]
     words = ", ".join(f"{robot.joint_names[index]} {labels[index][branches[index]]}" for index, limb in two_branch)
+    free = free_indices(robot)
     return {
         **view,
         "module": module_name(robot),
@@ -141,10 +142,10 @@ def view_model(robot, units="mm"):
                                                                 ("posture", robot.working_posture))),
         "unit_name": units,
         "translating": translating(robot),
-        "free_count": 3 if translating(robot) or robot.task else 6,
-        "free_indices": free_indices(robot),
-        "parasitic_indices": [index for index in range(6) if index not in free_indices(robot)],
-        "task_words": ", ".join(WORLD_AXES[index] for index in free_indices(robot)),
+        "free_count": len(free),
+        "free_indices": free,
+        "parasitic_indices": [index for index in range(6) if index not in free],
+        "task_words": ", ".join(WORLD_AXES[index] for index in free),
         "closed_form": translating(robot) and robot.dof == 3 and robot.models == ("rail",),
         "working_posture": robot.working_posture,
         "branch_words": words,
