@@ -10,7 +10,6 @@ from conftest import SHIPPED, ChangedJoints, random_t6
 from kingen.cli import main
 from kingen.conventions import pose_from_t6, t6_from_pose
 from kingen.kinematics.forward import assemblies, closure, free_mask, newton, t6_of
-from kingen.kinematics.wrist_forward import tool_assemblies
 from kingen.kinematics.posture_switch import predict_switch
 from kingen.robot.model import load_robot
 from kingen.kinematics.reference import solve
@@ -50,7 +49,7 @@ def test_forward_kinematics_returns_the_pose_the_joints_came_from(name):
             continue
         near = internal(pose)
         if robot.wrist is not None:  # the tool's pose: its tip and axis (the turn about the axis is free)
-            found = tool_assemblies(robot, joints[:, posture], near).found
+            found = assemblies(robot, joints[:, posture], near).found
             reached, asked = t6_of(found[0].pose[None])[0], t6_from_pose([pose])[0]
             assert np.max(np.abs(reached[2:, :3] - asked[2:, :3])) < 1e-7, (name, pose, found[0].pose)
             continue

@@ -25,14 +25,15 @@ Poses are (x, y, z) in mm and (roll, pitch, yaw) in radians here; the command li
 degrees.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..runtime.text import counted
 from .parasitic import on_manifold, task_twists
-from .reference import platform_points_in_base
+from .reference import platform_points_in_base, solve
+from .wrist import tool_t6
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 ITERATIONS = 60
@@ -193,11 +194,9 @@ def search_region(robot, search=SEARCH):
 def assemblies(robot, joints, near, search=SEARCH):
     """AssemblyModes for ``joints`` (joint_count,) (mm, rad); ``near`` (6,) (mm, rad) orders them
     and gives the values of coordinates that are not free; ``search`` widens a multi-start search.
-    A robot with a wrist: the tool's poses (kingen.kinematics.wrist_forward.tool_assemblies)."""
+    A robot with a wrist: the tool's poses (:func:`_tool_assemblies`)."""
     if robot.wrist is not None:
-        from .wrist_forward import tool_assemblies  # here: wrist_forward builds on this module
-
-        return tool_assemblies(robot, joints, near, search)
+        return _tool_assemblies(robot, joints, near, search)
     from . import sgp  # here: it loads scipy (about 0.6 s), which nothing else verify runs needs
 
     joints = np.asarray(joints, dtype=float)
@@ -338,3 +337,23 @@ def _three_spheres(centres, radii):
     z = np.sqrt(max(squared, 0.0))
     base = centres[0] + x * ex + y * ey
     return [base + z * ez, base - z * ez] if z > 0 else [base]
+
+
+def _tool_assemblies(robot, joints, near, search=SEARCH):
+    """AssemblyModes of ``robot`` (with a wrist) for ``joints`` (joint_count,) (mm, rad): the
+    parallel part's assembly modes (kingen.kinematics.forward.assemblies, searched near the
+    platform's pose for the tool pose ``near`` (6,) (mm, rad), or its home where the reference
+    has none), each carried to the tool by the wrist's forward: poses are the tool's (mm, rad),
+    nearest ``near`` first, residuals the legs'."""
+    joints, near = np.asarray(joints, dtype=float), np.asarray(near, dtype=float)
+    solved = solve(robot, t6_of(near[None]))
+    start = poses_of(solved.platform)[0]
+    if not np.all(np.isfinite(start)):
+        start = np.concatenate([robot.parallel.verification.home[:3], np.radians(robot.parallel.verification.home[3:])])
+    modes = assemblies(robot.parallel, joints[:robot.dof], start, search)
+    found = []
+    for mode in modes.found:
+        tool = tool_t6(robot, t6_of(mode.pose[None]), joints[None, robot.dof:])
+        found.append(replace(mode, pose=poses_of(tool)[0]))
+    found.sort(key=lambda mode: np.linalg.norm(mode.pose[:3] - near[:3]))
+    return replace(modes, found=found, method=f"the parallel part, then the wrist's forward: {modes.method}")

@@ -3,16 +3,14 @@ part's forward (kingen.kinematics.forward's Newton, along the manifold of a mach
 coordinates) from the legs' joints, then the wrist's forward (kingen.kinematics.wrist.tool_t6)
 from the wrist's; and the joint rates per tool twist from central differences of that map,
 independent of the inverse's closed form (what verify's ``jacobian`` check compares with).
+Every assembly mode of such a machine: kingen.kinematics.forward.assemblies.
 
 Poses are (x, y, z) mm and (roll, pitch, yaw) rad here, as in kingen.kinematics.forward.
 """
 
-from dataclasses import replace
-
 import numpy as np
 
-from .forward import SEARCH, assemblies, free_mask, newton, poses_of, t6_of
-from .reference import solve
+from .forward import free_mask, newton, t6_of
 from .wrist import orientation_rows, tool_t6
 
 
@@ -63,23 +61,3 @@ def tool_rates(robot, joints, near, step_mm, step_rad):
     # solves them exactly (the derivative has full column rank away from the machine's singularities).
     weights = np.array([1.0] * 3 + [robot.size_mm] * (3 * len(rows) - 3))[:, None]
     return np.linalg.pinv(derivative * weights) @ (asked * weights)
-
-
-def tool_assemblies(robot, joints, near, search=SEARCH):
-    """AssemblyModes of ``robot`` (with a wrist) for ``joints`` (joint_count,) (mm, rad): the
-    parallel part's assembly modes (kingen.kinematics.forward.assemblies, searched near the
-    platform's pose for the tool pose ``near`` (6,) (mm, rad), or its home where the reference
-    has none), each carried to the tool by the wrist's forward: poses are the tool's (mm, rad),
-    nearest ``near`` first, residuals the legs'."""
-    joints, near = np.asarray(joints, dtype=float), np.asarray(near, dtype=float)
-    solved = solve(robot, t6_of(near[None]))
-    start = poses_of(solved.platform)[0]
-    if not np.all(np.isfinite(start)):
-        start = np.concatenate([robot.parallel.verification.home[:3], np.radians(robot.parallel.verification.home[3:])])
-    modes = assemblies(robot.parallel, joints[:robot.dof], start, search)
-    found = []
-    for mode in modes.found:
-        tool = tool_t6(robot, t6_of(mode.pose[None]), joints[None, robot.dof:])
-        found.append(replace(mode, pose=poses_of(tool)[0]))
-    found.sort(key=lambda mode: np.linalg.norm(mode.pose[:3] - near[:3]))
-    return replace(modes, found=found, method=f"the parallel part, then the wrist's forward: {modes.method}")
