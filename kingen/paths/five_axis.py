@@ -13,22 +13,12 @@ inverse kinematics ignores, the home frame's carried along). A CSV of poses give
 
 import numpy as np
 
-from ..conventions import matrix_from_pose, t6_from_matrix, t6_from_pose
+from ..conventions import matrix_from_pose, t6_from_matrix
 from ..hosts.linuxcnc.five_axis import COORDINATES, home_axis, world_of_t6
+from ..kinematics.wrist import rotation_about
 
 NOT_READ = "B, and the turn about the tool axis"
 """What of a pose a five-axis machine does not read."""
-
-
-def _rotations(axis, angles):
-    """(n, 3, 3) rotations by ``angles`` (n,) rad about base axis ``axis`` (0: x, 2: z)."""
-    cosine, sine = np.cos(angles), np.sin(angles)
-    first, second = [index for index in range(3) if index != axis]
-    rotation = np.zeros((len(angles), 3, 3))
-    rotation[:, axis, axis] = 1.0
-    rotation[:, first, first], rotation[:, first, second] = cosine, -sine
-    rotation[:, second, first], rotation[:, second, second] = sine, cosine
-    return rotation
 
 
 class FiveAxis:
@@ -42,13 +32,14 @@ class FiveAxis:
     def start(self):
         """(6,) the world X Y Z A B C (mm, degrees; B 0) of the verification home: where a
         G-code program starts."""
-        return world_of_t6(self.robot, t6_from_pose(np.asarray([self.robot.verification.home], dtype=float)))[0, :6]
+        return world_of_t6(self.robot, t6_from_matrix(self.home[None]))[0, :6]
 
     def t6(self, world):
         """(n, 4, 4) the tool T6 (base frame, mm) at world positions ``world`` (n, 6) X Y Z A B C
         (mm, degrees): tool tip X Y Z, tool axis Rz(C) Rx(A) w0 (B not read)."""
         world = np.asarray(world, dtype=float)
-        turn = _rotations(2, np.radians(world[:, 5])) @ _rotations(0, np.radians(world[:, 3]))
+        x_axis, z_axis = np.eye(3)[0], np.eye(3)[2]
+        turn = rotation_about(z_axis, np.radians(world[:, 5])) @ rotation_about(x_axis, np.radians(world[:, 3]))
         matrix = np.tile(self.home, (len(world), 1, 1))
         matrix[:, :3, :3] = turn @ self.home[:3, :3]
         matrix[:, :3, 3] = world[:, :3]

@@ -10,7 +10,6 @@ the orientation about one fixed axis at a uniform rate (spherical linear interpo
 import math
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 
@@ -73,6 +72,8 @@ def poses_and_t6(move, u, host):
     poses = np.empty((len(u), 6))
     poses[:, :3] = positions(move, u)
     if host == "delmia" and np.any(move.end[3:] != move.start[3:]):
+        from scipy.spatial.transform import Rotation, Slerp  # here: scipy costs 0.35 s that only this needs
+
         ends = Rotation.from_matrix(matrix_from_pose(np.stack([move.start, move.end]))[:, :3, :3])
         matrices = np.zeros((len(u), 4, 4))
         matrices[:, :3, :3] = Slerp([0.0, 1.0], ends)(u).as_matrix()
