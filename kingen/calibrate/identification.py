@@ -33,8 +33,8 @@ from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from . import identifiability
 from .measurements import Measurements
-from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, measured_platform,
-                         predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
+from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, matrix_radians,
+                         measured_platform, predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
 from .wrist import tool_of_platform
 
 STEP = 1e-4
@@ -125,7 +125,7 @@ def align(parameters, measurements):
         row = int(np.flatnonzero(~closed)[0])
         raise KingenError(f"{measurements.where(row, 'q1')}: the nominal robot reaches no pose "
                           f"with these joints in its working posture (forward kinematics finds none)")
-    platform = matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
+    platform = matrix_radians(poses)
     if whole.wrist is not None:
         platform = tool_of_platform(whole, platform, measurements.joints)
     _check_units(measurements, platform[:, :3, 3])
@@ -140,7 +140,7 @@ def align(parameters, measurements):
 def _in_working_posture(robot, poses, joints):
     """(n,) bool: whether the reference's working posture at poses (n, 6; mm, radians) gives
     the joints (n, dof): the assembly mode the machine is built in."""
-    platform = matrix_from_pose(np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))
+    platform = matrix_radians(poses)
     branches, _ = inverse_joints(robot, platform)
     chosen = np.take_along_axis(branches, np.array(robot.posture_branches(robot.working_posture))[None, :, None]
                                 .repeat(len(poses), 0), axis=2)[..., 0]
