@@ -73,6 +73,17 @@ def constraint_rows(robot):
     return [{"axis": c_vector(axis), "base": c_vector(base), "weight": c_double(weight)} for axis, base, weight in rows]
 
 
+def wrist_joint_rows(robot):
+    """Per wrist joint of ``robot``, what every host's view shows of it: its ``index`` after the
+    legs', ``name``, ``model`` 'wrist', ``limited`` (0 or 1: a travel given) and ``travel_text``
+    (degrees, empty without travel)."""
+    wrist = robot.wrist
+    limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
+    return [{"index": robot.dof + index, "name": name, "model": "wrist", "limited": int(limited[index]),
+             "travel_text": f"[{np.degrees(wrist.lower[index]):.10g}, {np.degrees(wrist.upper[index]):.10g}] degrees"
+             if limited[index] else ""} for index, name in enumerate(wrist.names)]
+
+
 def whole_view(robot, parallel_view, build_info):
     """The shared view-model (kingen.hosts.render.robot_view) of ``robot`` (with a wrist) from its
     parallel part's ``parallel_view``: joints the legs' (their posture digits one up: the wrist's
@@ -81,18 +92,10 @@ def whole_view(robot, parallel_view, build_info):
     legs = [{**joint, "bit": joint["bit"] + 1 if joint["bit"] >= 0 else -1} for joint in parallel_view["joints"]]
     wrist = robot.wrist
     joints = legs + [{
-        "index": robot.dof + index,
-        "name": name,
-        "model": "wrist",
-        "units": "radians",
-        "bit": 0,
-        "limited": int(bool(limited)),
-        "lower": c_double(wrist.lower[index] if limited else 0.0),
-        "upper": c_double(wrist.upper[index] if limited else 0.0),
-        "travel_text": f"[{np.degrees(wrist.lower[index]):.10g}, {np.degrees(wrist.upper[index]):.10g}] degrees"
-        if limited else "",
-    } for index, name, limited in zip(range(len(wrist.names)), wrist.names,
-                                      np.isfinite(wrist.lower) | np.isfinite(wrist.upper))]
+        **row, "units": "radians", "bit": 0,
+        "lower": c_double(wrist.lower[index] if row["limited"] else 0.0),
+        "upper": c_double(wrist.upper[index] if row["limited"] else 0.0),
+    } for index, row in enumerate(wrist_joint_rows(robot))]
     wrist_terms = [f"joints[{joint['index']}].value[0] + joints[{joint['index']}].value[1]" for joint in joints[robot.dof:]]
     return {**parallel_view, "dof": robot.joint_count, "postures": robot.postures, "joints": joints,
             "two_branch_count": parallel_view["two_branch_count"] + 1,

@@ -11,7 +11,7 @@ import numpy as np
 
 from ...conventions import pose_from_t6, t6_from_pose
 from ...robot.limbs import c_double, c_vector
-from ..wrist import wrist_table
+from ..wrist import wrist_joint_rows, wrist_table
 
 COORDINATES = "XYZAC"
 """LinuxCNC's [TRAJ] COORDINATES of a five-axis module."""
@@ -91,9 +91,4 @@ def wrist_view(robot):
 def wrist_joints(robot):
     """The wrist's joints as the module view's joints (kingen.hosts.linuxcnc.render.view_model):
     index after the legs', degrees, travel from the robot file."""
-    wrist = robot.wrist
-    limited = np.isfinite(wrist.lower) | np.isfinite(wrist.upper)
-    return [{"index": robot.dof + index, "name": name, "model": "wrist", "unit": "degrees", "revolute": 1,
-             "limited": int(limited[index]),
-             "travel_text": f"[{np.degrees(wrist.lower[index]):.10g}, {np.degrees(wrist.upper[index]):.10g}] degrees"
-             if limited[index] else ""} for index, name in enumerate(wrist.names)]
+    return [{**row, "unit": "degrees", "revolute": 1} for row in wrist_joint_rows(robot)]
