@@ -73,3 +73,88 @@ def test_a_broken_anchor_fails_the_ci_build(site, tmp_path):
     said = done.stdout + done.stderr
     assert done.returncode != 0, f"CI's docs build passed with a broken anchor:\n{said}"
     assert "no-such-anchor" in said, f"the failing build does not name the anchor:\n{said}"
+
+
+def page_text(site, page):
+    """The built page's article as text: tags stripped, entities decoded, spaces collapsed."""
+    source = (site / page / "index.html").read_text(encoding="utf-8")
+    article = source[source.index("<article"):source.index("</article>")]
+    inline = re.sub(r"</?(code|a|span|em|strong)\b[^>]*>", "", article)
+    return " ".join(html.unescape(re.sub(r"<[^>]+>", " ", inline)).split())
+
+
+def command_paths():
+    """Every command path as typed after ``kingen`` ([] for kingen itself), hidden ones left out."""
+    import click
+
+    from kingen.cli import cli
+
+    def walk(command, path):
+        yield path
+        if isinstance(command, click.Group):
+            for name in command.list_commands(click.Context(command)):
+                child = command.get_command(click.Context(command), name)
+                if not child.hidden:
+                    yield from walk(child, [*path, name])
+
+    return list(walk(cli, []))
+
+
+def help_of(path):
+    """(description paragraphs, [(option and metavar, help)]) as ``kingen PATH --help`` prints
+    them on a terminal wide enough that no help wraps."""
+    from click.testing import CliRunner
+
+    from kingen.cli import cli
+
+    done = CliRunner().invoke(cli, [*path, "--help"], terminal_width=100000, max_content_width=100000)
+    assert done.exit_code == 0, done.output
+    head, _, options = done.output.partition("\nOptions:\n")
+    description = head.split("\n\n", 1)[1] if "\n\n" in head else ""
+    paragraphs = [" ".join(block.split()) for block in description.split("\n\n") if block.strip()]
+    rows = []
+    for line in options.split("\n\n")[0].splitlines():
+        if line.startswith("  -"):
+            names, _, text = line.strip().partition("  ")
+            rows.append([names, text.strip()])
+        elif line.strip():
+            rows[-1][1] = (rows[-1][1] + " " + line.strip()).strip()
+    return paragraphs, [(names, " ".join(text.split())) for names, text in rows]
+
+
+def test_the_command_reference_shows_each_option_as_help_prints_it(site):
+    text = page_text(site, "reference/commands")
+    assert "Sentinel" not in text and "UNSET" not in text
+    for path in command_paths():
+        command = " ".join(["kingen", *path])
+        start = text.index(f"{command}¶")
+        section = text[start:]
+        paragraphs, rows = help_of(path)
+        for paragraph in paragraphs:  # `code` in a help is shown as code, without the backticks
+            paragraph = paragraph.replace("`", "")
+            assert paragraph in section, f"{command}: the page lacks its help {paragraph!r}"
+        for names, help_text in rows:
+            assert f"{names} {help_text}" in section, f"{command}: the page lacks {names} {help_text!r}"
+    # Placeholders in angle brackets are shown, not swallowed as HTML tags.
+    assert "Output folder [default: build/<name>/analysis]." in text
+    assert "(kin_<name>.c for DELMIA)" in text
+
+
+def test_the_command_list_gives_whole_sentences(site):
+    source = (site / "reference" / "commands" / "index.html").read_text(encoding="utf-8")
+    items = re.findall(r'<li><a href="#(kingen-[\w-]+)">[\w-]+</a>: (.*?)</li>', source)
+    paths = {"-".join(["kingen", *path]): path for path in command_paths()}
+    assert sorted(anchor for anchor, _ in items) == sorted(paths)[1:], "one list entry per subcommand"
+    for anchor, summary in items:
+        summary = " ".join(html.unescape(re.sub(r"<[^>]+>", "", summary)).split())
+        paragraphs, _ = help_of(paths[anchor])
+        paragraphs = [paragraph.replace("`", "") for paragraph in paragraphs]
+        assert summary[-1] in ".?!", f"{anchor}: the summary {summary!r} stops mid-sentence"
+        assert paragraphs[0].startswith(summary), f"{anchor}: {summary!r} is not how its help begins"
+
+
+def test_the_api_page_shows_no_raw_roles(site):
+    text = page_text(site, "reference/python-api")
+    assert not re.search(r":(func|meth|class|mod|data|attr|exc|obj):", text), "a Sphinx role is shown raw"
+    source = (site / "reference" / "python-api" / "index.html").read_text(encoding="utf-8")
+    assert 'href="#kingen.load_robot"><code>load_robot</code></a>' in source, "a role links to what it names"
