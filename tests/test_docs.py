@@ -158,3 +158,18 @@ def test_the_api_page_shows_no_raw_roles(site):
     assert not re.search(r":(func|meth|class|mod|data|attr|exc|obj):", text), "a Sphinx role is shown raw"
     source = (site / "reference" / "python-api" / "index.html").read_text(encoding="utf-8")
     assert 'href="#kingen.load_robot"><code>load_robot</code></a>' in source, "a role links to what it names"
+
+
+# The elements the pages' Markdown and the theme put in an article; any other tag is text such
+# as <name> that Markdown took for HTML and swallowed.
+ELEMENTS = set("""a abbr article autoref b blockquote br button code col colgroup dd del details div
+dl dt em figcaption figure h1 h2 h3 h4 h5 h6 hr i img input ins kbd label li mark ol p path pre
+s small span strong sub summary sup svg table tbody td tfoot th thead tr u ul""".split())
+
+
+def test_no_page_swallows_a_placeholder(site):
+    for page in sorted(site.rglob("index.html")):
+        source = page.read_text(encoding="utf-8")
+        article = source[source.find("<article"):source.find("</article>")]
+        unknown = set(re.findall(r"</?([A-Za-z][\w-]*)", article)) - ELEMENTS
+        assert not unknown, f"{page.relative_to(site)}: text taken for HTML tags: {sorted(unknown)}"
