@@ -1,13 +1,19 @@
 """The reports' figures show what they are about: calibration's parameter chart draws each part
 and unit on its own scale (a limb's 0.5 mm change is not lost beside a measuring frame 1,200 mm
 away); check-path's figure keeps its legends off the data (a travel crossing stays visible) and
-labels every axis with its unit."""
+labels every axis with its unit; analyze's report says how it finds what it reports and why it
+skips what it skips."""
+
+import re
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from kingen.calibrate.parameters import Parameter
 from kingen.calibrate.report import parameter_chart
+from kingen.design.analysis import Settings as AnalysisSettings
+from kingen.design.analysis import analyze
+from kingen.design.figures import figures, report_html
 from kingen.paths.check import Settings, check_program
 from kingen.paths.page import figure
 from kingen.paths.report import report_json
@@ -81,3 +87,20 @@ def test_the_check_path_figure_keeps_its_legends_off_the_data_and_labels_its_uni
     low, high = position.get_ylim()
     highest = max(float(np.nanmax(line.get_ydata())) for line in position.get_lines() if len(line.get_ydata()) > 2)
     assert low < limit < highest <= high
+
+
+def test_analyze_says_how_it_finds_the_direct_singularities_it_reports_and_why_it_skips_a_part():
+    robot = load_robot("prs_head")
+    analysis = analyze(robot, None, AnalysisSettings(azimuth_step_deg=90.0, tilt_step_deg=1.0))
+    page = report_html(robot, analysis, figures(analysis), 1.0)
+    # No direct index, yet tilts stopped by a direct singularity: the page says what finds them.
+    assert analysis["available"]["direct_index"].startswith("not available: 3 limbs")
+    assert "direct_singularity" in {row["cause"] for row in analysis["tilt_limits"]}
+    index_row = re.search(r"<th>direct index</th><td>(.*?)</td>", page).group(1)
+    assert "found from the closure Jacobian instead" in index_row
+    singular_row = re.search(r"<th>direct singularity</th><td>(.*?)</td>", page).group(1)
+    assert "closure Jacobian over the free coordinates (z, roll, pitch) is singular" in singular_row
+    # Every part not analysed says why: here the slices, which need two free positions.
+    assert re.findall(r"<p>Not analysed: (.*?)</p>", page) == [
+        "fewer than two free position coordinates (free: z, roll, pitch)."]
+    assert "<th>slice</th>" not in page  # no empty table under it

@@ -347,7 +347,7 @@ def _tilt_summary(analysis, settings):
     if not limits:
         return f"tilt limits {analysis['available']['tilt_limits']}"
     least = min(limits, key=lambda row: row["max_tilt_deg"])
-    stopped = (f"stopped by {least['cause']}" if least["cause"] != "none"
+    stopped = (f"stopped by {least['cause'].replace('_', ' ')}" if least["cause"] != "none"
                else f"nothing stops it up to --tilt-max {settings.tilt_max_deg:g}")
     return (f"least tilt {least['max_tilt_deg']:g} deg towards azimuth {least['azimuth_deg']:g} ({stopped}); "
             f"{len(limits)} azimuths every {settings.azimuth_step_deg:g} deg, steps of {settings.tilt_step_deg:g} deg, "
