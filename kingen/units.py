@@ -87,6 +87,14 @@ def number_text(value, digits=3, zero=NEGLIGIBLE):
     return text.rstrip("0").rstrip(".") if "." in text else text
 
 
+def fixed_text(value, decimals, sign=False):
+    """``value`` with ``decimals`` decimals, for columns that line up; a value that rounds to
+    zero is written as zero, never ``-0.000000``; ``sign``: a ``+`` before positive values
+    and zero."""
+    rounded = round(float(value), decimals) + 0.0  # -0.0 + 0.0 is 0.0
+    return f"{rounded:{'+' if sign else ''}.{decimals}f}"
+
+
 def length_text(mm, digits=3):
     """A length given in mm, written for people with its unit: in the first of mm, um, nm and
     pm in which it reads at least 0.1 (0.5 mm, 7.28 um, 0.73 nm, 1235 mm), as number_text

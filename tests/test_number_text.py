@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from kingen.units import NEGLIGIBLE, length_text, number_text
+from kingen.units import NEGLIGIBLE, fixed_text, length_text, number_text
 
 MM_PER = {"mm": 1.0, "um": 1e-3, "nm": 1e-6, "pm": 1e-9}
 
@@ -30,6 +30,14 @@ def test_lengths_by_hand(mm, text):
 ])
 def test_numbers_by_hand(value, text):
     assert number_text(value) == text
+
+
+@pytest.mark.parametrize("value, decimals, sign, text", [
+    (-1e-7, 6, False, "0.000000"), (-0.0, 3, False, "0.000"), (-0.0004, 3, True, "+0.000"),
+    (-0.0006, 3, True, "-0.001"), (2040.3825494, 6, True, "+2040.382549"), (-4.5739212604, 9, False, "-4.573921260"),
+])
+def test_fixed_columns_never_show_minus_zero(value, decimals, sign, text):
+    assert fixed_text(value, decimals, sign) == text
 
 
 magnitudes = st.floats(min_value=-15, max_value=6).map(lambda power: 10.0 ** power)
