@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import skip_or_fail
+from conftest import require_tool, skip_or_fail
 
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.xdist_group("docs")
@@ -173,3 +173,31 @@ def test_no_page_swallows_a_placeholder(site):
         article = source[source.find("<article"):source.find("</article>")]
         unknown = set(re.findall(r"</?([A-Za-z][\w-]*)", article)) - ELEMENTS
         assert not unknown, f"{page.relative_to(site)}: text taken for HTML tags: {sorted(unknown)}"
+
+
+CHROMIUM = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def test_the_robot_file_tables_never_break_a_field_name(site, tmp_path):
+    """Chromium lays the page out at a laptop's width; each field name of a table's first column
+    must stand on one line (a name broken mid-word draws as two boxes)."""
+    require_tool("chromium", "chromium")
+    page = site / "reference" / "robot-file" / "index.html"
+    probe = page.with_name("probe.html")  # beside the page, so its stylesheets load
+    probe.write_text(page.read_text(encoding="utf-8").replace("</body>", """<script>
+window.addEventListener("load", function () {
+  var names = document.querySelectorAll(".md-typeset table td:first-child code");
+  var broken = Array.prototype.filter.call(names, function (code) {
+    return code.textContent.indexOf(" ") < 0 && code.getClientRects().length > 1; });
+  document.body.setAttribute("data-names", names.length + ":" + broken.map(function (code) {
+    return code.textContent; }).join(","));
+});
+</script></body>"""), encoding="utf-8")
+    dom = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--window-size=1280,900",
+                          "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()],
+                         capture_output=True, text=True, timeout=120)
+    found = re.search(r'data-names="(\d+):([^"]*)"', dom.stdout)
+    assert found, dom.stderr[-2000:]
+    assert int(found.group(1)) > 50, "the page's tables were not found"
+    assert found.group(2) == "", f"field names broken across lines: {found.group(2)}"
