@@ -42,6 +42,16 @@ def escape(text):
     return "`".join(parts)
 
 
+def paragraph(text):
+    """``text`` escaped as one Markdown paragraph: also what would open a heading, quote, list
+    or thematic break where it starts is escaped."""
+    text = escape(text)
+    number = re.match(r"\d+(?=[.)])", text)  # "1. " opens a numbered list: its point escaped
+    if number:
+        return text[:number.end()] + "\\" + text[number.end():]
+    return "\\" + text if re.match(r"[#>+-]", text) else text
+
+
 def cell(text):
     """``text`` escaped for one table cell: on one line, pipes outside code spans escaped."""
     parts = escape(" ".join(text.split())).split("`")
@@ -100,7 +110,7 @@ def section(ctx, depth):
     path = ctx.command_path
     anchor = path.replace(" ", "-")
     lines = [f"{'#' * depth} {path} {{ #{anchor} data-toc-label='{ctx.info_name}' }}", ""]
-    lines += [line for text in paragraphs(ctx.command.help) for line in (escape(text), "")]
+    lines += [line for text in paragraphs(ctx.command.help) for line in (paragraph(text), "")]
     lines += ["**Usage:**", "", "```text", usage(ctx), "```", ""]
     rows = option_rows(ctx)
     if rows:
