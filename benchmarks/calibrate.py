@@ -44,6 +44,7 @@ import numpy as np
 from kingen.calibrate import plan
 from kingen.calibrate.identification import identify, region_poses, validation_problem
 from kingen.calibrate.measurements import Measurements
+from kingen.calibrate.noise import Noise
 from kingen.calibrate.parameters import Parameters
 from kingen.calibrate.prediction import synthesize
 from kingen.conventions import t6_from_pose
@@ -89,7 +90,7 @@ def reachable_poses(robot, count, seed):
 
 
 def planned(parameters, count=30):
-    found = plan.candidates(parameters, parameters.selected("all"), NOISE_MM, math.degrees(NOISE_RAD))
+    found = plan.candidates(parameters, parameters.selected("all"), Noise(NOISE_MM, math.degrees(NOISE_RAD), JOINT_STEP))
     rows = plan.greedy(found.weighted, count, plan.limb_columns(found, parameters))
     return found, rows
 
