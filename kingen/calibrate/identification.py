@@ -128,6 +128,7 @@ class Fit:
     without redundancy), observability ``indices``, ``unidentifiable`` in words, ``converged``
     and ``message``, ``evaluations``, ``seconds``, the Problem it solved (without the outliers),
     the Noise ``stated``, the ``inference`` at the solution (kingen.calibrate.noise.Inference),
+    the identified parameters' ``covariance`` (mm and degrees, in the order of the parameters),
     the ``outliers`` left out (each {line, position_mm, angle_deg, noise_ratio}) and ``refusal``:
     why the result is not a calibration (None: it is)."""
 
@@ -145,6 +146,7 @@ class Fit:
     problem: Problem
     stated: noise.Noise
     inference: noise.Inference
+    covariance: np.ndarray
     outliers: list
     refusal: str = None
 
@@ -241,7 +243,7 @@ def identify(parameters, measurements, selected, stated=None, max_evaluations=No
     before = values.copy()
     order, _, taken, chosen = identifiable_columns(problem, values, parameters, selected)
     per_pose = residuals_per_pose(parameters.robot, parameters.measure)
-    outliers, refusal = [], None
+    whole, kept, left_out, refusal = problem, np.arange(len(measurements.joints)), [], None
     while True:
         values, result = least_squares_fit(problem, values, np.flatnonzero(chosen), max_evaluations)
         evaluations += result.nfev
@@ -250,16 +252,19 @@ def identify(parameters, measurements, selected, stated=None, max_evaluations=No
         found = noise.outlier(inference, per_pose) if result.status > 0 else None
         if found is None:
             break
-        if len(outliers) + 1 > MAX_OUTLIER_SHARE * len(measurements.joints):
+        if len(left_out) + 1 > MAX_OUTLIER_SHARE * len(measurements.joints):
             refusal = (f"more than {MAX_OUTLIER_SHARE:.0%} of the poses are outliers (the next: line "
                        f"{problem.measurements.lines[found[0]]}): the measurements do not fit one machine")
             break
-        outliers.append(_outlier(problem, values, *found, per_pose))
+        left_out.append((int(kept[found[0]]), found[1]))
+        kept = np.delete(kept, found[0])
         problem = problem.without(found[0])
     std = np.full(len(parameters), np.nan)
     identified = np.array(order)[taken]
+    sorting = np.argsort(identified)
+    covariance = inference.covariance[np.ix_(sorting, sorting)] * np.outer(*[parameters.step[identified[sorting]]] * 2)
     if inference.redundancy >= per_pose:
-        std[identified] = np.sqrt(np.diag(inference.covariance)) * parameters.step[identified]
+        std[identified[sorting]] = np.sqrt(np.diag(covariance))
     full = np.zeros((final.shape[0], len(parameters)))
     full[:, order] = final
     words += identifiability.combinations(full, parameters.names, chosen, selected)
@@ -271,16 +276,21 @@ def identify(parameters, measurements, selected, stated=None, max_evaluations=No
                indices=identifiability.indices(problem.unwhitened(final[:, taken])), unidentifiable=words,
                converged=bool(result.status > 0), message=result.message, evaluations=int(evaluations),
                seconds=time.perf_counter() - began, problem=problem, stated=stated, inference=inference,
-               outliers=outliers, refusal=refusal)
+               covariance=covariance,
+               outliers=_outliers(whole, values, left_out, per_pose), refusal=refusal)
 
 
-def _outlier(problem, values, row, statistic, per_pose):
-    """{line, position_mm, angle_deg, noise_ratio}: measurement ``row``'s line, its errors at
-    ``values`` and its leave-one-out residuals' RMS in stated standard deviations."""
+def _outliers(problem, values, left_out, per_pose):
+    """[{line, position_mm, angle_deg, noise_ratio}] of the measurements ``left_out`` ((row of
+    ``problem``, leave-one-out statistic) each): its line, its errors with the parameters
+    ``values`` identified without it, and its leave-one-out residuals' RMS in stated standard
+    deviations."""
+    if not left_out:
+        return []
     position, angle, _ = problem.errors(values)
-    return {"line": int(problem.measurements.lines[row]), "position_mm": float(position[row]),
-            "angle_deg": None if angle is None else float(angle[row]),
-            "noise_ratio": math.sqrt(max(statistic, 0.0) / per_pose)}
+    return [{"line": int(problem.measurements.lines[row]), "position_mm": float(position[row]),
+             "angle_deg": None if angle is None else float(angle[row]),
+             "noise_ratio": math.sqrt(max(statistic, 0.0) / per_pose)} for row, statistic in left_out]
 
 
 def _translating(parameters, selected):

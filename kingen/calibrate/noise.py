@@ -15,10 +15,11 @@ parameters the fit starts from) and S_m, S_q the diagonal variances: a pose's re
 correlated, different poses' are not. Each pose's residuals are whitened by L_i^-1 (C_i = L_i
 L_i^T), so that the least squares are generalised least squares and the whitened residuals are
 of unit variance when the stated noise is right. With the whitened Jacobian A (m equations, r
-identified parameters) at the fit, the parameters' covariance is s^2 (A^T A)^-1, s^2 the
-variance factor chi^2 / (m - r) (the residuals' sum of squares over the redundancy: 1 when the
-noise is as stated), and a standard deviation is reported only with redundancy (m - r at least
-one pose's k).
+identified parameters) at the fit, the parameters' covariance is max(1, s^2) (A^T A)^-1, s^2
+the variance factor chi^2 / (m - r) (the residuals' sum of squares over the redundancy: 1 when
+the noise is as stated): the stated noise's covariance, scaled up when the residuals say the
+noise is larger. A standard deviation is reported only with redundancy (m - r at least one
+pose's k).
 """
 
 import math
@@ -91,7 +92,7 @@ def whiten(whitener, residuals):
 class Inference:
     """What the whitened Jacobian ``jacobian`` (m, r) and residuals (m,) at a fit give:
     ``redundancy`` m - r, ``variance_factor`` s^2 (NaN without redundancy), ``covariance`` (r, r)
-    of the identified parameters in mm-equivalents (s^2 (A^T A)^-1), ``leave_out`` (n,) each
+    of the identified parameters in mm-equivalents (max(1, s^2) (A^T A)^-1), ``leave_out`` (n,) each
     pose's leave-one-out statistic (its whitened residuals e_i weighed by (I - H_ii)^-1, H the hat
     matrix: chi^2 with k degrees of freedom times s^2 when the pose fits the rest)."""
 
@@ -114,7 +115,7 @@ def infer(jacobian, residuals, per_pose):
     kept = np.eye(per_pose) - hat
     errors = residuals.reshape(-1, per_pose)
     solved = np.einsum("nij,nj->ni", np.linalg.pinv(kept, hermitian=True), errors)
-    return Inference(redundancy=redundancy, variance_factor=factor, covariance=factor * inverse,
+    return Inference(redundancy=redundancy, variance_factor=factor, covariance=max(1.0, factor) * inverse,
                      leave_out=np.einsum("ni,ni->n", errors, solved))
 
 

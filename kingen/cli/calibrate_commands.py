@@ -194,7 +194,8 @@ def _say_outcome(name, outcome, fit):
     if outcome["std_reported"]:
         say(f"  redundancy {outcome['redundancy']} of {outcome['equations']} equations; residuals "
             f"{math.sqrt(outcome['variance_factor']):.3g} times the stated noise (variance factor "
-            f"{outcome['variance_factor']:.3g}): standard deviations scaled by it")
+            f"{outcome['variance_factor']:.3g}): standard deviations from the stated noise"
+            f"{', scaled up by it' if outcome['variance_factor'] > 1 else ''}")
     else:
         say(f"  redundancy {outcome['redundancy']} of {outcome['equations']} equations: too little to state standard "
             "deviations (measure more poses)")
