@@ -182,6 +182,7 @@ def test_a_pose_10_mm_off_is_named_and_left_out(tmp_path, capsys, hexapod_truth,
     assert [row["line"] for row in result["outliers"]] == [14]  # the header, then row 12 (0-based) on line 14
     assert result["outliers"][0]["position_mm"] == pytest.approx(10.0, abs=0.5)
     assert f"outlier left out: {tmp_path / 'train.csv'}:14: error " in printed
+    assert "30 pose measurements (1 left out as outliers), after " in (out / "hexapod_calibrated.yaml").read_text()
     assert result["poses"] == 29 and result["validation"]["rms_mm"] < 0.05 < result["validation_nominal"]["rms_mm"]
 
 

@@ -119,8 +119,9 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
         return EXIT_FAILED
     text = json.dumps(finite(outcome), indent=1, allow_nan=False) + "\n"
     name = calibrated_name(model.name)
+    left_out = f" ({len(fit.outliers)} left out as outliers)" if fit.outliers else ""
     header = [f"kingen calibrate {model.name} from {measurements_path.name}: {len(measurements.joints)} {measure} "
-              f"measurements, after {outcome['residuals_after']['rms_mm']:.4g} mm RMS (before "
+              f"measurements{left_out}, after {outcome['residuals_after']['rms_mm']:.4g} mm RMS (before "
               f"{outcome['residuals_before']['rms_mm']:.4g} mm)."]
     robot_text = calibrated_yaml(data, parameters, fit.values, header)
     _check_loads(robot_text, model.path.parent / f"{name}.yaml")
