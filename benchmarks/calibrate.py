@@ -1,17 +1,14 @@
 """Calibration's goals, measured and printed as Markdown, and with --json written as plain data
 for benchmarks/run.py (the performance page's section).
 
-    python benchmarks/calibrate.py [--runs 100]
-                                   [--part hexapod|montecarlo|planning|positions|constrained|wrist|speed|all]
-                                   [--json FILE]
+    python benchmarks/calibrate.py [--part hexapod|planning|positions|constrained|wrist|speed|all] [--json FILE]
 
 - hexapod: the 42 limb parameters perturbed by up to 1 mm, the measuring frame unknown
   (25 degrees and 150 mm off), 6-D measurements with noise 10 um and 20 urad per coordinate,
   joints read to 1 um; 30 planned poses; the pose error on 200 held-out poses (measured
   exactly) before (nominal robot, frame and target fitted) and after.
-- montecarlo: the same with ``--runs`` noise draws: how often each identifiable parameter lies
-  within three of its stated standard deviations of the truth (the truth in the identified
-  parameters' gauge: the fit of the same poses without noise).
+  (How honest the stated deviations are over new machines, tracker poses and noise:
+  benchmarks/calibrate_montecarlo.py.)
 - planning: predicted parameter deviations of the 30 planned poses against 30 random
   reachable ones (median over the parameters).
 - positions: a reflector at an unknown point, positions only (noise 10 um), 30 planned poses,
@@ -44,6 +41,7 @@ import numpy as np
 from kingen.calibrate import plan
 from kingen.calibrate.identification import identify, region_poses, validation_problem
 from kingen.calibrate.measurements import Measurements
+from kingen.calibrate.noise import Noise
 from kingen.calibrate.parameters import Parameters
 from kingen.calibrate.prediction import synthesize
 from kingen.conventions import t6_from_pose
@@ -89,7 +87,7 @@ def reachable_poses(robot, count, seed):
 
 
 def planned(parameters, count=30):
-    found = plan.candidates(parameters, parameters.selected("all"), NOISE_MM, math.degrees(NOISE_RAD))
+    found = plan.candidates(parameters, parameters.selected("all"), Noise(NOISE_MM, math.degrees(NOISE_RAD), JOINT_STEP))
     rows = plan.greedy(found.weighted, count, plan.limb_columns(found, parameters))
     return found, rows
 
@@ -122,22 +120,6 @@ def hexapod():
             "after_urad": math.radians(after_angle) * 1e6, "converged": bool(fit.converged),
             "identified": int(fit.chosen.sum()), "condition_number": float(fit.indices["condition_number"]),
             "seconds": fit.seconds}
-
-
-def montecarlo(runs):
-    parameters, truth, poses, _, _, _ = hexapod_case()
-    selected = parameters.selected("all")
-    gauge = identify(parameters, measure(parameters, truth, poses, None, noisy=False), selected)
-    inside = []
-    started = time.perf_counter()
-    for run in range(runs):
-        fit = identify(parameters, measure(parameters, truth, poses, np.random.default_rng(100 + run)), selected)
-        chosen = fit.chosen & gauge.chosen
-        inside.append(np.where(chosen, np.abs(fit.values - gauge.values) <= 3.0 * fit.std, True))
-    coverage = np.mean(inside, axis=0)[gauge.chosen]
-    return {"runs": runs, "poses": len(poses), "seconds": time.perf_counter() - started,
-            "identifiable": int(gauge.chosen.sum()), "least": float(coverage.min()),
-            "median": float(np.median(coverage)), "at_95": int(np.sum(coverage >= 0.95))}
 
 
 def planning(draws=5):
@@ -283,14 +265,6 @@ def _hexapod_markdown(part):
     return "Hexapod, 6-D measurements", lines
 
 
-def _montecarlo_markdown(part):
-    return "Honest deviations (Monte-Carlo)", [
-        f"{part['runs']} noise draws on the same {part['poses']} planned poses ({part['seconds']:.0f} s): the share "
-        f"of runs in which each of the {part['identifiable']} identifiable parameters lies within 3 stated standard "
-        f"deviations of the truth (in the identified gauge): least {part['least'] * 100:.0f} %, median "
-        f"{part['median'] * 100:.0f} %; parameters at 95 % or more: {part['at_95']} of {part['identifiable']}."]
-
-
 def _planning_markdown(part):
     return "Planning pays", [
         f"Predicted standard deviations (noise {NOISE_MM * 1000:g} um, {NOISE_RAD * 1e6:g} urad) of the "
@@ -347,7 +321,7 @@ def _speed_markdown(part):
                      f"(best of {part['repeats']}); planning 30 of 5,000 candidates: {part['planning_s']:.2f} s."]
 
 
-MARKDOWN = {"hexapod": _hexapod_markdown, "montecarlo": _montecarlo_markdown, "planning": _planning_markdown,
+MARKDOWN = {"hexapod": _hexapod_markdown, "planning": _planning_markdown,
             "positions": _positions_markdown, "constrained": _constrained_markdown, "wrist": _wrist_markdown,
             "speed": _speed_markdown}
 
@@ -364,11 +338,10 @@ def markdown(figures):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=100)
     parser.add_argument("--part", choices=[*MARKDOWN, "all"], default="all")
     parser.add_argument("--json", type=Path, help="Also write the figures to this file as JSON.")
     arguments = parser.parse_args()
-    parts = {"hexapod": hexapod, "montecarlo": lambda: montecarlo(arguments.runs), "planning": planning,
+    parts = {"hexapod": hexapod, "planning": planning,
              "positions": positions, "constrained": constrained, "wrist": wrist, "speed": speed}
     figures = {name: part() for name, part in parts.items() if arguments.part in (name, "all")}
     print(markdown(figures))

@@ -24,7 +24,9 @@ HERE = Path(__file__).resolve().parent
 
 SECTIONS = {
     # name: (script in benchmarks/, its arguments, the page's heading)
-    "calibrate": ("calibrate.py", ["--runs", "100"], "Calibration"),
+    "calibrate": ("calibrate.py", [], "Calibration"),
+    "calibrate_montecarlo": ("calibrate_montecarlo.py", ["--seeds", "30", "--poses", "50"],
+                             "Calibration's stated deviations (Monte-Carlo)"),
     "c_host": ("c_host.py", [], "The C host"),
     "hybrid": ("hybrid.py", ["--calls", "200000", "--rounds", "5"], "Constrained machines"),
     "check_path": ("check_path.py", ["--samples", "1000000", "--moves", "100"], "Path checking"),

@@ -23,5 +23,9 @@ AZIMUTH_STEP_DEG = (0.5, 180.0)
 """(least, most) step between tilt azimuths in degrees: ``--azimuth-step`` and ``objective.azimuth_step``."""
 TILT_MAX_DEG = (0.1, 180.0)
 """(least, most) largest tilt tried in degrees: ``--tilt-max`` and ``objective.tilt_max``."""
+CALIBRATION_NOISE = {"device_mm": 0.01, "device_deg": 0.001, "joint_mm": 0.001, "joint_deg": 0.0001}
+"""calibrate's stated noise without options, one standard deviation per coordinate: the device's
+positions (mm) and angles (degrees), the joints read (mm, degrees): ``--noise-mm``, ``--noise-deg``,
+``--noise-joint-mm``, ``--noise-joint-deg`` (kingen.calibrate.noise.Noise)."""
 VERSION = "0.1.0"
 """kingen's version (``kingen.__version__``), written into generated files and snapshots."""

@@ -69,8 +69,6 @@ SECTION_FIGURES = {
     "calibrate": {
         "hexapod": {"poses": 30, "held_out": 200, "before_um": 1226.0, "before_urad": 3100.0, "after_um": 6.98,
                     "after_urad": 23.7, "converged": True, "identified": 42, "condition_number": 812.5, "seconds": 0.4},
-        "montecarlo": {"runs": 4, "poses": 30, "seconds": 2.0, "identifiable": 42, "least": 0.75, "median": 1.0,
-                       "at_95": 40},
         "planning": {"poses": 30, "parameters": 36, "planned_median_um": 3.1,
                      "draws": [{"random_median_um": 6.2, "ratio_of_medians": 2.0, "median_of_ratios": 1.94}]},
         "positions": [{"robot": "tau", "perturbed": "link lengths 1 mm", "poses": 30, "held_out": 200,
@@ -80,6 +78,11 @@ SECTION_FIGURES = {
                          "within_3_sigma": 29, "judged": 30, "converged": True, "seconds": 0.5,
                          "runs": 2, "least": 0.5, "median": 1.0}],
         "speed": {"poses": 50, "repeats": 3, "identify_s": 0.3, "planning_s": 2.6}},
+    "calibrate_montecarlo": {
+        "robot": "hexapod", "seeds": 3, "poses": 30, "parameters": 42, "draws": 126, "rms_z": 0.987,
+        "least_coverage": 2 / 3, "least_covered": "leg1.base_point.x", "beyond": 1, "beyond_expected": 0.34,
+        "beyond_likely": 3, "beyond_likely_independent": 2, "worst_z": 3.2, "parameter_rms_z": [0.5, 1.6],
+        "variance_factor": [0.9, 1.0, 1.1], "evaluations": [9, 12], "outliers": 0, "seconds": 20.0},
     "c_host": {
         "calls": 2000, "single_calls": 3000, "forward_poses": 100,
         "inverse": [{"robot": "tau", "postures": 8, "delmia": {"min": 40.0, "median": 50.0},
@@ -127,7 +130,7 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
         assert f"\n## {title}\n" in text
         assert f"`python benchmarks/{name}.py --small`, run on 2000-01-02 in 12 s; machine: machine of {name}." in text
     assert "| after | 6.98 | 23.70 |" in text and f"{100 * (1 - 6.98 / 1226):.2f} %" in text
-    assert "least 75 %, median 100 %; parameters at 95 % or more: 40 of 42" in text
+    assert "| 0.987 | 0.50, 1.60 | 66.7 % (leg1.base_point.x) | 1 (0.3, 3, 2) | 3.20 |" in text
     assert "| linuxcnc | exechon_wrist | 333.6 | 1.44 | 3.61 |" in text and "at the end: 1.50, 1.25, 1.00." in text
     assert f"| tau | 8 | 50.0 | 52.5 | {52.5 / 50:.3f} | {44 / 40:.3f} | 70 ns | 1,402 ns |" in text
     assert f"| tau | 84 | 400 | 300 | {300 / 400:.3f} | 0 | 1 |" in text

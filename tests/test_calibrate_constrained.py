@@ -127,8 +127,8 @@ def test_noise_free_measurements_recover_the_truth(tmp_path, name, change, poses
         for field in ("rail_point", "base_point", "platform_point"):
             for axis, value in zip("xyz", limb.get(field, ())):
                 row = identified[f"{limb['name']}.{field}.{axis}"]
-                if row["identifiable"]:
-                    assert row["identified"] == pytest.approx(value, abs=1e-6), row
+                if row["identifiable"]:  # the files' 12 digits (1e-9 mm) through a condition number of 3e4
+                    assert row["identified"] == pytest.approx(value, abs=5e-6), row
     for parameter, value in expected.items():
         assert identified[parameter]["identifiable"]
         assert identified[parameter]["identified"] == pytest.approx(value, abs=1e-6)

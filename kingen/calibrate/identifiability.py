@@ -1,6 +1,6 @@
 """What the measurements can tell apart: the identifiable parameters from the rank of the
 identification Jacobian, the combinations that cannot be identified (named in words), the
-observability indices and the parameters' standard deviations.
+observability indices and the standard deviations a plan predicts (a fit's: kingen.calibrate.noise).
 
 The Jacobian's columns are in mm-equivalents (kingen.calibrate.parameters), its rows the
 residuals' (mm-equivalents). Columns are taken in the parameters' order, the measuring frame
@@ -76,15 +76,6 @@ def indices(jacobian):
         return {"condition_number": float("inf"), "min_singular_value": 0.0, "noise_amplification": 0.0}
     return {"condition_number": float(values[0] / values[-1]), "min_singular_value": float(values[-1]),
             "noise_amplification": float(values[-1] ** 2 / values[0])}
-
-
-def deviations(jacobian, residuals):
-    """Standard deviations (r,) of the identified parameters (mm-equivalents) from the
-    Jacobian (m, r) and residuals (m,) at the fit: sqrt(diag(s^2 (J^T J)^-1)), s^2 the
-    residuals' variance over m - r degrees of freedom."""
-    rows, columns = jacobian.shape
-    variance = float(residuals @ residuals) / max(rows - columns, 1)
-    return np.sqrt(variance * np.diag(np.linalg.pinv(jacobian.T @ jacobian)))
 
 
 def predicted_deviations(jacobian, row_sigma):

@@ -3,67 +3,94 @@
 
 Residuals: with pose measurements, each limb's joint predicted at the measured pose (the
 limbs' closure there) minus the joint read, and for a machine with task coordinates its
-constraint equations' residuals there, each weighted by one over the deviation the measured
-pose's noise gives it (``pose_weights``); with positions, the point forward kinematics
-puts the target at for the read joints minus the measured point (mm). Steps:
+constraint equations' residuals there; with positions, the point forward kinematics puts the
+target at for the read joints minus the measured point (mm). Steps:
 
-1. the nominal robot's forward kinematics of every read joint set, in the working posture and
-   within forward kinematics' search region around the verification home (its failures, a spread of
-   positions that looks like metres or inches, a measured pose the nominal robot cannot
-   reach: KingenError naming file, line and column); the measuring frame's first estimate
-   fitted to those poses (rigid, closed form);
+1. the measurements checked against the nominal robot and the measuring frame's first estimate
+   (kingen.calibrate.alignment); each pose's residuals whitened by the covariance the stated
+   noise gives them (kingen.calibrate.noise: generalised least squares);
 2. the measuring frame and target alone by least squares: the residuals *before*;
 3. the Jacobian there; the identifiable parameters (kingen.calibrate.identifiability), the
    rest kept nominal; all of them by least squares: the residuals *after*, the standard
-   deviations and observability indices at the solution.
+   deviations (with redundancy), the variance factor and observability indices at the
+   solution; a pose the leave-one-out test marks an outlier is left out, named, and the fit
+   made again.
 """
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix, t6_from_pose
+from ..conventions import t6_from_matrix, t6_from_pose
 from ..errors import KingenError
-from ..kinematics.forward import assemblies, free_mask, poses_of, search_region
+from ..kinematics.forward import free_mask, poses_of
 from ..kinematics.parasitic import on_manifold
 from ..kinematics.poses import sample_poses
 from ..kinematics.reference import solve
-from ..kinematics.routine import SINGULAR_TOLERANCE
-from . import identifiability
+from . import identifiability, noise
 from .measurements import Measurements
-from .prediction import (CLOSED, errors, forward_poses, inverse_joints, joint_residuals, matrix_radians,
-                         measured_platform, predicted_measurements, residual_sigma, residuals_per_pose, synthesize)
-from .wrist import tool_of_platform
+from .prediction import (errors, joint_residuals, measured_platform, predicted_measurements, residuals_per_pose,
+                         synthesize)
+from .alignment import align
 
 STEP = 1e-4
 """Central differences' step, mm-equivalents."""
-MAX_EVALUATIONS = 100
+MAX_EVALUATIONS = 5000
+"""Residual evaluations a least-squares stage may take: far beyond what a fit that converges needs
+(tens to a few hundred)."""
+TOLERANCE = 1e-12
+"""Levenberg-Marquardt stops when a step changes the cost or the parameters by less than this share."""
+MAX_OUTLIER_SHARE = 0.2
+"""The share of the poses that may be left out as outliers; beyond it the fit is refused."""
+VARIANCE_LIMIT = 100.0
+"""A variance factor beyond this (residuals over ten times the stated noise) refuses the fit."""
 STRUCTURE_POSES = 60
 """Seeded poses of the verification region the structural rank (how many poses are needed) is taken on."""
-UNITS = {"metres": 1e-3, "inches": 1.0 / 25.4}
-"""Units measurements are mistaken for: their spread is this fraction of the poses' in mm."""
 
 
 class Problem:
     """The residuals and their Jacobian for Parameters ``parameters`` and Measurements
     ``measurements``; ``start`` (n, 6; mm, radians) the poses forward kinematics starts from
-    (position measurements), kept at the last solution; ``weights`` (m,) each pose residual's
-    weight (pose measurements; None: all 1)."""
+    (position measurements), kept at the last solution; ``whitener`` (n, k, k) each pose's
+    residuals' whitening (kingen.calibrate.noise; None: the residuals as they are)."""
 
-    def __init__(self, parameters, measurements, start, weights=None):
+    def __init__(self, parameters, measurements, start, whitener=None):
         self.parameters, self.measurements, self.start = parameters, measurements, start
-        self.weights = 1.0 if weights is None else weights
+        self.whitener = whitener
 
-    def residuals(self, values, keep=True):
-        """(m,) mm-equivalents (see the module docstring), pose residuals times their weights."""
+    def raw(self, values, measurements, keep=False):
+        """(n, k) each pose's residuals (see the module docstring) in mm-equivalents, unwhitened."""
         if self.parameters.measure == "pose":
-            return joint_residuals(self.parameters, values, self.measurements).ravel() * self.weights
-        predicted, poses, _ = predicted_measurements(self.parameters, values, self.measurements.joints, self.start)
+            return joint_residuals(self.parameters, values, measurements)
+        predicted, poses, _ = predicted_measurements(self.parameters, values, measurements.joints, self.start)
         if keep:
             self.start = poses
-        return (predicted - self.measurements.measured).ravel()
+        return predicted - measurements.measured
+
+    def residuals(self, values, keep=True):
+        """(m,) the residuals at ``values``, each pose's whitened."""
+        raw = self.raw(values, self.measurements, keep)
+        return raw.ravel() if self.whitener is None else noise.whiten(self.whitener, raw)
+
+    def whitened(self, values, stated):
+        """This Problem with each pose's residuals whitened by the covariance the Noise ``stated``
+        gives them at ``values`` (kingen.calibrate.noise.covariances)."""
+        def residual_of(measured, joints):
+            return self.raw(values, replace(self.measurements, measured=measured, joints=joints))
+
+        data = self.measurements
+        covariance = noise.covariances(residual_of, data.measured, data.joints, self.parameters.robot.revolute, stated)
+        return Problem(self.parameters, data, self.start, noise.whiteners(covariance))
+
+    def without(self, row):
+        """This Problem without measurement ``row`` (0-based)."""
+        keep = np.arange(len(self.measurements.joints)) != row
+        data = self.measurements
+        data = replace(data, joints=data.joints[keep], measured=data.measured[keep],
+                       lines=tuple(np.asarray(data.lines)[keep].tolist()))
+        return Problem(self.parameters, data, self.start[keep], None if self.whitener is None else self.whitener[keep])
 
     def jacobian(self, values, columns):
         """d(residuals)/dx (m, len(columns)) by central differences."""
@@ -74,6 +101,13 @@ class Problem:
             shift[column] = STEP * steps[column]
             out.append((self.residuals(values + shift, False) - self.residuals(values - shift, False)) / (2 * STEP))
         return np.column_stack(out) if out else np.zeros((len(self.residuals(values, False)), 0))
+
+    def unwhitened(self, jacobian):
+        """A whitened Jacobian (m, r) of this Problem's residuals back in mm-equivalents."""
+        if self.whitener is None:
+            return jacobian
+        blocks = jacobian.reshape(len(self.whitener), -1, jacobian.shape[1])
+        return np.einsum("nij,njc->nic", np.linalg.inv(self.whitener), blocks).reshape(jacobian.shape)
 
     def errors(self, values):
         """(position error (n,) mm, orientation error (n,) degrees or None, closed (n,)): what
@@ -90,9 +124,13 @@ class Problem:
 @dataclass
 class Fit:
     """An identification: ``values`` identified, ``before`` (frame and target fitted alone),
-    ``selected`` and ``chosen`` (identifiable) masks, ``std`` (NaN where not identified),
-    observability ``indices``, ``unidentifiable`` in words, ``converged`` and ``message``,
-    ``evaluations``, ``seconds``, and the Problem it solved."""
+    ``selected`` and ``chosen`` (identifiable) masks, ``std`` (NaN where not identified or
+    without redundancy), observability ``indices``, ``unidentifiable`` in words, ``converged``
+    and ``message``, ``evaluations``, ``seconds``, the Problem it solved (without the outliers),
+    the Noise ``stated``, the ``inference`` at the solution (kingen.calibrate.noise.Inference),
+    the identified parameters' ``covariance`` (mm and degrees, in the order of the parameters),
+    the ``outliers`` left out (each {line, position_mm, angle_deg, noise_ratio}) and ``refusal``:
+    why the result is not a calibration (None: it is)."""
 
     values: np.ndarray
     before: np.ndarray
@@ -106,109 +144,11 @@ class Fit:
     evaluations: int
     seconds: float
     problem: Problem
-
-
-def align(parameters, measurements):
-    """(values, start): the nominal values with the measuring frame fitted to the nominal
-    robot's forward kinematics of the read joints (rigid, closed form), and those poses (n, 6;
-    mm, radians). KingenError for joints the nominal robot cannot close, positions that look
-    like another unit, and measured poses it cannot reach. With a wrist: the parallel part's
-    forward kinematics of the legs' joints, the measurements on the tool (the wrist's forward)."""
-    whole = parameters.robot
-    robot, legs = whole.parallel, measurements.joints[:, :whole.dof]
-    home, half = search_region(robot)
-    poses, closed = forward_poses(robot, legs, np.tile(home, (len(legs), 1)))
-    closed &= _in_working_posture(robot, poses, legs) & np.all(np.abs(poses - home) <= half, axis=1)
-    for row in np.flatnonzero(~closed):
-        poses[row], closed[row] = _working_assembly(robot, legs[row], home, half)
-    if not np.all(closed):
-        row = int(np.flatnonzero(~closed)[0])
-        raise KingenError(f"{measurements.where(row, 'q1')}: the nominal robot reaches no pose "
-                          f"with these joints in its working posture (forward kinematics finds none)")
-    platform = matrix_radians(poses)
-    if whole.wrist is not None:
-        platform = tool_of_platform(whole, platform, measurements.joints)
-    _check_units(measurements, platform[:, :3, 3])
-    values = parameters.nominal.copy()
-    frame = _fitted_frame(parameters, values, measurements, platform)
-    values[parameters.groups == "frame"] = pose_from_t6(t6_from_matrix(frame))
-    if parameters.measure == "pose":
-        _check_reachable(parameters, values, measurements)
-    return values, poses
-
-
-def _in_working_posture(robot, poses, joints):
-    """(n,) bool: whether the reference's working posture at poses (n, 6; mm, radians) gives
-    the joints (n, dof): the assembly mode the machine is built in."""
-    platform = matrix_radians(poses)
-    branches, _ = inverse_joints(robot, platform)
-    chosen = np.take_along_axis(branches, np.array(robot.posture_branches(robot.working_posture))[None, :, None]
-                                .repeat(len(poses), 0), axis=2)[..., 0]
-    difference = np.abs(chosen - joints) * np.where(robot.revolute, robot.size_mm, 1.0)
-    return np.all(difference <= CLOSED * robot.size_mm, axis=1)
-
-
-def _working_assembly(robot, joints, home, half):
-    """(pose (6,), found): the assembly mode of ``joints`` (dof,) in the working posture within
-    ``half`` (6,) of ``home`` (forward kinematics' search region), nearest home first."""
-    for assembly in assemblies(robot, joints, home).found:
-        if (_in_working_posture(robot, assembly.pose[None], joints[None])[0]
-                and np.all(np.abs(assembly.pose - home) <= half)):
-            return assembly.pose, True
-    return home, False
-
-
-def _fitted_frame(parameters, values, measurements, platform):
-    """The measuring frame F (4, 4) that best maps the measurements onto the platform poses (for
-    positions on a line, its rotation is left to the least squares that follow: identity)."""
-    if parameters.measure == "pose":
-        each = platform @ parameters.target(values) @ np.linalg.inv(matrix_from_pose(measurements.measured))
-        rotation = _nearest_rotation(np.sum(each[:, :3, :3], axis=0))
-        translation = np.mean(each[:, :3, 3], axis=0)
-    else:
-        points = platform[:, :3, :3] @ parameters.target(values) + platform[:, :3, 3]
-        measured = measurements.measured
-        cross = (measured - measured.mean(0)).T @ (points - points.mean(0))
-        spread = np.linalg.svd(points - points.mean(0), compute_uv=False)
-        rotation = _nearest_rotation(cross.T) if spread[min(1, len(spread) - 1)] > 1e-3 * spread[0] else np.eye(3)
-        translation = points.mean(0) - rotation @ measured.mean(0)
-    frame = np.eye(4)
-    frame[:3, :3], frame[:3, 3] = rotation, translation
-    return frame
-
-
-def _nearest_rotation(matrix):
-    """The rotation nearest ``matrix`` (3, 3) (its polar factor, determinant +1)."""
-    left, _, right = np.linalg.svd(matrix)
-    return left @ np.diag([1.0, 1.0, np.sign(np.linalg.det(left @ right))]) @ right
-
-
-def _spread(points):
-    return float(np.sqrt(np.mean(np.sum((points - points.mean(0)) ** 2, axis=1))))
-
-
-def _check_units(measurements, positions):
-    """KingenError when the measured positions spread over a metre's or an inch's share of
-    what the joints' poses spread over (in mm)."""
-    expected = _spread(positions)
-    if len(positions) < 3 or expected < 1.0:
-        return
-    ratio = _spread(measurements.measured[:, :3]) / expected
-    for unit, share in UNITS.items():
-        if abs(math.log(ratio / share)) < math.log(1.5):
-            raise KingenError(f"{measurements.where(0, 'x')}: the measured positions spread over "
-                              f"{ratio * expected:.4g} against {expected:.4g} mm for the joints' poses: they look "
-                              f"like {unit}; give them in mm")
-
-
-def _check_reachable(parameters, values, measurements):
-    """KingenError at the first measured pose some limb of the nominal robot cannot reach."""
-    _, radicands = inverse_joints(parameters.robot.parallel, measured_platform(parameters, values, measurements)[1])
-    unreachable = radicands < -SINGULAR_TOLERANCE
-    if np.any(unreachable):
-        row, limb = (int(i) for i in np.argwhere(unreachable)[0])
-        raise KingenError(f"{measurements.where(row, 'x')}: the nominal robot cannot reach this measured pose "
-                          f"({parameters.robot.joint_names[limb]} has no solution there)")
+    stated: noise.Noise
+    inference: noise.Inference
+    covariance: np.ndarray
+    outliers: list
+    refusal: str = None
 
 
 def region_poses(robot, count, seed):
@@ -273,14 +213,19 @@ def least_squares_fit(problem, values, columns, max_evaluations):
 
     start = problem.parameters.deviations(values)[columns]
     result = least_squares(lambda x: problem.residuals(full(x)), start,
-                           jac=lambda x: problem.jacobian(full(x), columns), method="lm", max_nfev=max_evaluations)
+                           jac=lambda x: problem.jacobian(full(x), columns), method="lm", max_nfev=max_evaluations,
+                           xtol=TOLERANCE, ftol=TOLERANCE)
     return full(result.x), result
 
 
-def identify(parameters, measurements, selected, max_evaluations=None):
-    """The Fit of ``parameters`` to ``measurements`` over the ``selected`` (mask) parameters, each
-    least-squares stage stopped after ``max_evaluations`` (default MAX_EVALUATIONS)."""
+def identify(parameters, measurements, selected, stated=None, max_evaluations=None):
+    """The Fit of ``parameters`` to ``measurements`` over the ``selected`` (mask) parameters with
+    the Noise ``stated`` (default: kingen.calibrate.noise.Noise()), each least-squares stage
+    stopped after ``max_evaluations`` residual evaluations (default MAX_EVALUATIONS). A pose whose
+    leave-one-out statistic marks it an outlier (kingen.calibrate.noise.outlier) is left out and
+    the fit made again, the worst first, up to MAX_OUTLIER_SHARE of the poses."""
     began = time.perf_counter()
+    stated = stated or noise.Noise()
     max_evaluations = max_evaluations or MAX_EVALUATIONS
     values, start = align(parameters, measurements)
     selected, words = _translating(parameters, selected)
@@ -289,7 +234,7 @@ def identify(parameters, measurements, selected, max_evaluations=None):
         raise KingenError(f"{measurements.path}:{measurements.lines[-1]}: poses: {len(measurements.joints)} "
                           f"measurements for {rank} identifiable parameters: at least {needed} poses are needed "
                           f"(kingen calibrate plan chooses them)")
-    problem = Problem(parameters, measurements, start, pose_weights(parameters, values, measurements))
+    problem = Problem(parameters, measurements, start).whitened(values, stated)
     evaluations = 0
     frame_columns = np.flatnonzero(selected & np.isin(parameters.groups, ("frame", "target")))
     if len(frame_columns):
@@ -297,33 +242,55 @@ def identify(parameters, measurements, selected, max_evaluations=None):
         evaluations += result.nfev
     before = values.copy()
     order, _, taken, chosen = identifiable_columns(problem, values, parameters, selected)
-    columns = np.flatnonzero(chosen)
-    values, result = least_squares_fit(problem, values, columns, max_evaluations)
-    evaluations += result.nfev
-    final = problem.jacobian(values, order)
-    residuals = problem.residuals(values)
+    per_pose = residuals_per_pose(parameters.robot, parameters.measure)
+    whole, kept, left_out, refusal = problem, np.arange(len(measurements.joints)), [], None
+    while True:
+        values, result = least_squares_fit(problem, values, np.flatnonzero(chosen), max_evaluations)
+        evaluations += result.nfev
+        final = problem.jacobian(values, order)
+        inference = noise.infer(final[:, taken], problem.residuals(values), per_pose)
+        found = noise.outlier(inference, per_pose) if result.status > 0 else None
+        if found is None:
+            break
+        if len(left_out) + 1 > MAX_OUTLIER_SHARE * len(measurements.joints):
+            refusal = (f"more than {MAX_OUTLIER_SHARE:.0%} of the poses are outliers (the next: line "
+                       f"{problem.measurements.lines[found[0]]}): the measurements do not fit one machine")
+            break
+        left_out.append((int(kept[found[0]]), found[1]))
+        kept = np.delete(kept, found[0])
+        problem = problem.without(found[0])
     std = np.full(len(parameters), np.nan)
     identified = np.array(order)[taken]
-    std[identified] = identifiability.deviations(final[:, taken], residuals) * parameters.step[identified]
+    sorting = np.argsort(identified)
+    covariance = inference.covariance[np.ix_(sorting, sorting)] * np.outer(*[parameters.step[identified[sorting]]] * 2)
+    if inference.redundancy >= per_pose:
+        std[identified[sorting]] = np.sqrt(np.diag(covariance))
     full = np.zeros((final.shape[0], len(parameters)))
     full[:, order] = final
     words += identifiability.combinations(full, parameters.names, chosen, selected)
+    if refusal is None and inference.variance_factor > VARIANCE_LIMIT:
+        refusal = (f"the residuals are {math.sqrt(inference.variance_factor):.3g} times the stated noise: the model "
+                   "does not explain the measurements (or state the noise: --noise-mm, --noise-deg, --noise-joint-mm, "
+                   "--noise-joint-deg)")
     return Fit(values=values, before=before, selected=selected, chosen=chosen, std=std,
-               indices=identifiability.indices(final[:, taken]), unidentifiable=words,
+               indices=identifiability.indices(problem.unwhitened(final[:, taken])), unidentifiable=words,
                converged=bool(result.status > 0), message=result.message, evaluations=int(evaluations),
-               seconds=time.perf_counter() - began, problem=problem)
+               seconds=time.perf_counter() - began, problem=problem, stated=stated, inference=inference,
+               covariance=covariance,
+               outliers=_outliers(whole, values, left_out, per_pose), refusal=refusal)
 
 
-def pose_weights(parameters, values, measurements):
-    """(m,) each pose residual's weight, or None for positions: one over the standard deviation
-    the measured pose's noise gives it (prediction.residual_sigma at ``values``, the noise taken
-    alike in every coordinate in mm-equivalents: 1 mm, and 1 mm over the robot's size in
-    radians), so that residuals that move more with the measured pose (a steep rail's carriage)
-    count less and the deviations' pooled variance holds for every residual."""
-    if parameters.measure != "pose":
-        return None
-    sigma = residual_sigma(parameters, values, measurements, 1.0, math.degrees(1.0 / parameters.lever))
-    return 1.0 / sigma
+def _outliers(problem, values, left_out, per_pose):
+    """[{line, position_mm, angle_deg, noise_ratio}] of the measurements ``left_out`` ((row of
+    ``problem``, leave-one-out statistic) each): its line, its errors with the parameters
+    ``values`` identified without it, and its leave-one-out residuals' RMS in stated standard
+    deviations."""
+    if not left_out:
+        return []
+    position, angle, _ = problem.errors(values)
+    return [{"line": int(problem.measurements.lines[row]), "position_mm": float(position[row]),
+             "angle_deg": None if angle is None else float(angle[row]),
+             "noise_ratio": math.sqrt(max(statistic, 0.0) / per_pose)} for row, statistic in left_out]
 
 
 def _translating(parameters, selected):

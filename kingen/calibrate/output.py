@@ -6,14 +6,13 @@ constraint axes are written in its limbs, the passive leg's identified geometry 
 ``passive_leg``, and its verification home is moved onto the calibrated machine's manifold (its
 task coordinates kept), so that it is a pose the calibrated machine takes. A machine with a
 serial wrist keeps ``wrist`` and ``tool`` with the identified zero offsets, axes and the tool's
-origin moved along its z axis to the identified reach. The robot file's writer is the design
+origin moved along its z axis to the identified reach. A leg's reference length is written
+signed (an absolute-length strut's encoder offset may be below 0). The robot file's writer is the design
 optimiser's (kingen.design.problem)."""
 
 import copy
 import math
-from dataclasses import replace
 
-from ..errors import KingenError
 from ..kinematics.parasitic import on_manifold
 
 from ..design.problem import robot_yaml, suffixed_name
@@ -35,7 +34,6 @@ def calibrated_yaml(data, parameters, values, header):
     for key in ("layout", "golden", "optimize"):
         data.pop(key, None)
     robot = parameters.robot_of(values)
-    robot = replace(robot, limbs=tuple(_held(robot.path, name, limb) for name, limb in zip(robot.joint_names, robot.limbs)))
     limbs = scaled_limbs(robot.limbs, 1.0 / LENGTH_UNITS[robot.length_unit])
     data["limbs"] = [limb.model_dump(mode="json", exclude_defaults=True) | {"model": limb.model} for limb in limbs]
     if robot.parallel.task:
@@ -70,20 +68,3 @@ def _wrist(data, wrist):
         joint["zero_offset"] = math.degrees(zero)
     data["tool"] = [float(value) for value in wrist.tool[:3, 3]] + [float(value) for value in data["tool"][3:]]
 
-
-ROUNDING_MM = 1e-6
-"""A reference length this far below zero is zero (the fit's rounding about a nominal 0)."""
-
-
-def _held(path, name, limb):
-    """``limb`` with a reference length within ROUNDING_MM below zero set to 0; KingenError when
-    one is further below: a leg whose joint is its whole length (reference length 0) read with
-    an offset, which a robot file cannot hold."""
-    length = getattr(limb, "reference_length", None)
-    if length is None or length >= 0.0:
-        return limb
-    if length < -ROUNDING_MM:
-        raise KingenError(f"{path}: {name}.reference_length: identified as {length:.6g} mm, below the 0 a robot file "
-                          "allows: the joint reads the leg's whole length with an offset; fix the reference lengths "
-                          "(--identify -length) or give the leg a reference length")
-    return limb.model_copy(update={"reference_length": 0.0})

@@ -7,12 +7,14 @@ platform's pose the reference gives, the wrist's singularity by the same margin)
 working posture (reachable, within travel, away from singularities by the robot's
 ``direct_index_min``, and by MARGIN of the limbs' and forward kinematics' conditioning) and, where the robot file gives ``collision`` radii, whose links keep
 clear of each other. Each candidate's rows of the identification Jacobian (at the nominal
-parameters) are weighted by the standard deviation the measurement noise gives its residuals;
+parameters) are whitened by the covariance the stated noise gives its residuals
+(kingen.calibrate.noise), as identification whitens them;
 poses are then added one at a time: first each the one that most increases log det of the
 information matrix J^T W J over the identifiable parameters (D-optimal, until it is regular
 and a few poses beyond), then each the one that most decreases the sum of the logarithms of
 the limb parameters' variances (their geometric mean: each deviation counts by its ratio, so
-the typical one falls, by which a plan is judged). The predicted standard deviations are sqrt(diag((J^T W J)^-1)).
+the typical one falls, by which a plan is judged). The predicted standard deviations are sqrt(diag((J^T W J)^-1)). A plan's rows hold the pose the
+machine takes (with a two-axis wrist, its own turn about the tool axis), not the pose drawn.
 """
 
 from dataclasses import dataclass
@@ -28,7 +30,6 @@ from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from . import identifiability
 from .identification import identifiable_columns, region_poses, synthetic_problem
-from .prediction import residual_sigma
 
 CANDIDATES = 5000
 MARGIN = 0.01
@@ -40,21 +41,23 @@ crowd where the joints or the pose are ill-conditioned, and the fit with them.""
 
 @dataclass
 class Candidates:
-    """The candidate poses (n, 6; mm, degrees), their nominal joints (n, dof; mm, radians),
-    the weighted Jacobian blocks (n, rows per pose, identifiable parameters), the unweighted
-    ones, and which parameters are identifiable (``chosen``, a mask over all)."""
+    """The candidate poses drawn (n, 6; mm, degrees), their nominal joints (n, joint_count; mm,
+    radians), what the device measures there with the measuring frame and target at nominal
+    (``measured``, n, 6 or 3: the pose the machine takes, mm, degrees), the whitened Jacobian
+    blocks (n, rows per pose, identifiable parameters), the unwhitened ones, and which
+    parameters are identifiable (``chosen``, a mask over all)."""
 
     poses: np.ndarray
     joints: np.ndarray
+    measured: np.ndarray
     weighted: np.ndarray
     blocks: np.ndarray
     chosen: np.ndarray
 
 
-def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed=1):
+def candidates(parameters, selected, stated, count=CANDIDATES, seed=1):
     """The Candidates for Parameters ``parameters`` at their nominal values, ``selected``
-    (mask) the parameters to identify, the measurement noise ``noise_mm`` and ``noise_deg``
-    (one standard deviation per coordinate)."""
+    (mask) the parameters to identify, the Noise ``stated`` (kingen.calibrate.noise)."""
     robot = parameters.robot
     posture = robot.working_posture
     poses = region_poses(robot, count, seed)
@@ -75,8 +78,9 @@ def candidates(parameters, selected, noise_mm, noise_deg, count=CANDIDATES, seed
     problem, data = synthetic_problem(parameters, values, poses, posture)
     _, jacobian, taken, chosen = identifiable_columns(problem, values, parameters, selected)
     blocks = jacobian[:, taken].reshape(len(poses), -1, int(np.count_nonzero(taken)))
-    sigma = residual_sigma(parameters, values, data, noise_mm, noise_deg).reshape(len(poses), -1)
-    return Candidates(poses=poses, joints=data.joints, weighted=blocks / sigma[..., None], blocks=blocks, chosen=chosen)
+    whitener = problem.whitened(values, stated).whitener
+    return Candidates(poses=poses, joints=data.joints, measured=data.measured,
+                      weighted=np.einsum("nij,njc->nic", whitener, blocks), blocks=blocks, chosen=chosen)
 
 
 def _regular(robot, poses, joints):

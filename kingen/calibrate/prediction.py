@@ -8,8 +8,6 @@ the tool's pose, the platform's is T W(q)^-1 for the wrist's read joints q
 (kingen.calibrate.wrist), and the legs' closure and constraints are the parallel part's there.
 """
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..conventions import (matrix_from_pose, matrix_from_t6, pose_from_t6, rotation_from_rpy, t6_from_matrix,
@@ -19,8 +17,6 @@ from ..kinematics.parasitic import on_manifold, pose_constraint_residuals
 from ..kinematics.reference import platform_points_in_base, solve
 from .wrist import platform_of_tool, tool_of_platform
 
-STEP_MEASURED = 1e-4
-"""Central differences' step (mm, degrees) for the residuals' derivative by the measurement."""
 CLOSED = 1e-7
 """Forward kinematics reached the joints where no limb misses its length by more than this
 fraction of the robot's size."""
@@ -89,24 +85,6 @@ def joint_residuals(parameters, values, measurements):
     if not robot.task:
         return nearer
     return np.concatenate([nearer, pose_constraint_residuals(robot, t6_from_matrix(platform))], axis=1)
-
-
-def residual_sigma(parameters, values, measurements, noise_mm, noise_deg):
-    """(m,) the standard deviation of each residual the measurement noise gives with ``values``:
-    for positions, ``noise_mm``; for poses, the residuals' (joint_residuals) sensitivity to the
-    measured pose (central differences) times its noise ``noise_mm`` and ``noise_deg`` (one
-    standard deviation per coordinate, independent)."""
-    if parameters.measure == "position":
-        return np.full(measurements.measured.size, noise_mm)
-    variance = 0.0
-    for column, noise in enumerate([noise_mm] * 3 + [noise_deg] * 3):
-        shifted = []
-        for sign in (1.0, -1.0):
-            measured = measurements.measured.copy()
-            measured[:, column] += sign * STEP_MEASURED
-            shifted.append(joint_residuals(parameters, values, replace(measurements, measured=measured)).ravel())
-        variance += ((shifted[0] - shifted[1]) / (2 * STEP_MEASURED) * noise) ** 2
-    return np.sqrt(np.maximum(variance, 1e-30))
 
 
 def residuals_per_pose(robot, measure):

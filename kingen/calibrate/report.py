@@ -23,8 +23,12 @@ def summary(position, angle):
 
 def result(parameters, fit, before, after, validation, seconds):
     """calibration.json's content: ``before`` and ``after`` are (position, angle) per-pose
-    errors, ``validation`` the same on held-out measurements after (or None)."""
+    errors, ``validation`` a pair: the same on held-out measurements after, and of the nominal
+    robot (frame and target fitted) there (each None without them). A parameter's ``std`` is
+    null unless it was identified with redundancy (kingen.calibrate.noise)."""
     values = fit.values
+    inference = fit.inference
+    reported = bool(np.any(np.isfinite(fit.std)))
     return {
         "parameters": [{"name": entry.name, "nominal": entry.nominal, "identified": float(value),
                         "std": None if not np.isfinite(std) else float(std), "identifiable": bool(chosen)}
@@ -37,7 +41,14 @@ def result(parameters, fit, before, after, validation, seconds):
         "noise_amplification": fit.indices["noise_amplification"],
         "residuals_before": summary(*before),
         "residuals_after": summary(*after),
-        "validation": None if validation is None else summary(*validation),
+        "validation": None if validation[0] is None else summary(*validation[0]),
+        "validation_nominal": None if validation[1] is None else summary(*validation[1]),
+        "noise": fit.stated.as_dict(),
+        "equations": int(inference.redundancy + np.count_nonzero(fit.chosen)),
+        "redundancy": int(inference.redundancy),
+        "variance_factor": float(inference.variance_factor) if inference.redundancy > 0 else None,
+        "std_reported": reported,
+        "outliers": list(fit.outliers),
         "poses": int(len(before[0])),
         "seconds": float(seconds),
     }

@@ -50,8 +50,9 @@ UnitVec3 = Annotated[Vec3, AfterValidator(_check_unit)]
 Pose = Annotated[list[float], Field(min_length=6, max_length=6), AfterValidator(_check_pose)]
 SixAngles = Annotated[list[Angle], Field(min_length=6, max_length=6)]
 Length = Annotated[float, Field(ge=MIN_LENGTH_MM, le=MAX_MM)]
-ReferenceLength = Annotated[float, Field(ge=0, le=MAX_MM)]
-"""A leg's length at joint value 0 (mm): 0 makes the joint the leg's absolute length."""
+ReferenceLength = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]
+"""A leg's length at joint value 0 (mm), signed: 0 makes the joint the leg's absolute length, and
+near 0 it is that encoder's offset (a joint that reads 0.26 mm more than the length: -0.26)."""
 Travel = Annotated[list[Coordinate], Field(min_length=2, max_length=2), AfterValidator(_check_travel)]
 PositiveRate = Annotated[float, Field(gt=0, le=MAX_MM)]
 """A joint's top speed or acceleration: mm/s or degrees/s (per s for an acceleration), above 0."""
