@@ -58,8 +58,9 @@ def test_the_package_holds_what_the_issue_names(package):
 
 
 def test_cmake_builds_and_runs_the_example(package, tmp_path):
+    """A Release build (CMake's -O3) with every warning an error."""
     build = tmp_path / "build"
-    _run(["cmake", "-S", package, "-B", build])
+    _run(["cmake", "-S", package, "-B", build, "-DCMAKE_BUILD_TYPE=Release", "-DCMAKE_C_FLAGS=-Wall -Wextra -Werror"])
     _run(["cmake", "--build", build])
     printed = _run([build / "kingen_tau_example"])
     robot = load_robot(ROBOT)
