@@ -95,18 +95,40 @@ def test_a_cpp_project_links_it_through_add_subdirectory(package, tmp_path):
     _links_and_agrees(project, tmp_path / "build")
 
 
-def test_installed_it_is_found_by_find_package_and_pkg_config(package, tmp_path):
-    require_tool("g++", "g++")
-    build, prefix = tmp_path / "library-build", tmp_path / "prefix"
+@pytest.fixture(scope="module")
+def installed(package, tmp_path_factory):
+    """The package built by CMake (its default: a static library) and installed: the prefix."""
+    folder = tmp_path_factory.mktemp("c-install")
+    build, prefix = folder / "library-build", folder / "prefix"
     _run(["cmake", "-S", package, "-B", build])
     _run(["cmake", "--build", build])
     _run(["cmake", "--install", build, "--prefix", prefix])
+    return prefix
+
+
+def test_installed_it_is_found_by_find_package(installed, tmp_path):
+    require_tool("g++", "g++")
     project = _cpp_project(tmp_path / "app", "find_package(kingen_tau REQUIRED)\n")
-    _links_and_agrees(project, tmp_path / "app-build", f"-DCMAKE_PREFIX_PATH={prefix}")
+    _links_and_agrees(project, tmp_path / "app-build", f"-DCMAKE_PREFIX_PATH={installed}")
+
+
+def test_the_documented_pkg_config_line_links_a_c_program_to_the_static_library(installed, tmp_path):
+    """`cc main.c $(pkg-config --cflags --libs kingen_tau)`, as the page says, against the
+    installed static library: a C program (a C++ driver would bring libm itself) links, and its
+    inverse agrees with the reference."""
     require_tool("pkg-config", "pkg-config")
+    assert (installed / "lib" / "libkingen_tau.a").is_file()
     found = subprocess.run(["pkg-config", "--cflags", "--libs", "kingen_tau"], capture_output=True, text=True,
-                           env={**os.environ, "PKG_CONFIG_PATH": str(prefix / "lib" / "pkgconfig")})
-    assert found.returncode == 0 and "-lkingen_tau" in found.stdout and str(prefix / "lib" / "pkgconfig") in found.stdout
+                           env={**os.environ, "PKG_CONFIG_PATH": str(installed / "lib" / "pkgconfig")})
+    assert found.returncode == 0, found.stderr
+    (tmp_path / "main.c").write_text(CPP.replace("#include <cstdio>", "#include <stdio.h>").replace("std::printf", "printf")
+                                     .replace("int main()", "int main(void)"))
+    _run(["cc", "-std=c99", tmp_path / "main.c", "-o", tmp_path / "app", *found.stdout.split()])
+    returned, warning, joint = _run([tmp_path / "app"]).split()
+    robot = load_robot(ROBOT)
+    expected = solve(robot, t6_from_pose([robot.verification.home]))
+    assert (int(returned), int(warning)) == (0, 0)
+    assert float(joint) == pytest.approx(expected.joints[0, 0, 0], abs=1e-9)
 
 
 def test_a_constrained_machines_package_builds_and_its_example_comes_back(tmp_path):
