@@ -54,7 +54,9 @@ def test_every_shipped_robot_verifies(robot, tmp_path, capsys):
         words = line.split(None, 1)
         if len(words) == 2 and words[0] in ("ok", "FAILED") and ":" in words[1]:
             verdicts[words[1].split(":")[0]] = words[0]
-    expected = checks + (("c direct index",) if load_robot(robot).dof == 6 else ())
+    loaded = load_robot(robot)
+    expected = (checks + (("c direct index",) if loaded.dof == 6 else ())
+                + (("c machine pose",) if loaded.task and loaded.wrist is None else ()))
     assert {check: verdicts.get(check) for check in expected} == {check: "ok" for check in expected}
 
 
@@ -64,7 +66,8 @@ def test_a_constrained_machine_reads_the_whole_pose_and_its_forward_gives_the_ma
     then moved off it (1 mm in x for the planes' family, 1 degree of roll for the axes' and the
     tube's): the library answers the reference's joints and warnings on it and WARN_UNREACHABLE
     for every posture off it, with the same joints (the machine's pose's); its forward from
-    these joints, started at the pose off the manifold, returns the machine's pose."""
+    these joints, started at the pose off the manifold, returns the machine's pose; its machine
+    pose of either is the pose on the manifold (status good), and of a pose holding NaN -1."""
     robot = load_robot(name)
     on = on_manifold(robot, np.array([robot.verification.home], dtype=float))
     off = on.copy()
@@ -82,6 +85,12 @@ def test_a_constrained_machine_reads_the_whole_pose_and_its_forward_gives_the_ma
     found, _, returned = library.forward(joints[:1, :, posture], np.array([posture]), poses[1:])
     assert int(returned[0]) == 0
     assert found[0] == pytest.approx(poses[0], abs=1e-9)
+    not_finite = poses[1].copy()
+    not_finite[5] = np.nan
+    machines, statuses = library.machine_pose(np.vstack([poses, not_finite]))
+    assert list(statuses) == [WARNINGS["WARN_GOOD_SOLUTION"]] * 2 + [-1]
+    assert machines[0] == pytest.approx(poses[0], abs=1e-9) and machines[1] == pytest.approx(poses[0], abs=1e-9)
+    assert np.all(np.isnan(machines[2]))  # not written
 
 
 def _written(robot_file, folder):

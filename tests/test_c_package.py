@@ -134,8 +134,8 @@ def test_the_documented_pkg_config_line_links_a_c_program_to_the_static_library(
 def test_a_constrained_machines_package_builds_and_its_example_comes_back(tmp_path):
     """The 3-PRS head (task coordinates z, roll, pitch): CMake builds the example, whose inverse
     joints at the verification home are the reference's (its parasitic x, y, yaw solved by
-    kingen's numpy reference) and whose forward returns the whole pose (the example exits 0
-    only when every entry is within 1e-6)."""
+    kingen's numpy reference), whose forward returns the whole pose (the example exits 0
+    only when every entry is within 1e-6) and whose machine pose of the home is the home."""
     require_tool("cmake", "cmake")
     robot = load_robot("prs_head")
     folder = tmp_path / "kingen_prs_head"
@@ -149,6 +149,8 @@ def test_a_constrained_machines_package_builds_and_its_example_comes_back(tmp_pa
     shown = [float(line.split(":")[1]) for line in printed.splitlines() if line.strip().startswith("joint")]
     assert shown == pytest.approx(expected, abs=1e-6)
     assert "warning 0" in printed and "forward: returned 0" in printed
+    # The home is on the manifold: its machine pose is itself (the example exits 0 only then).
+    assert "machine pose for the task coordinates: status 0, largest difference from the pose: " in printed
 
 
 def test_a_folder_kingen_did_not_write_is_refused(tmp_path, capsys):
