@@ -58,8 +58,9 @@ def test_the_package_holds_what_the_issue_names(package):
 
 
 def test_cmake_builds_and_runs_the_example(package, tmp_path):
+    """A Release build (CMake's -O3) with every warning an error."""
     build = tmp_path / "build"
-    _run(["cmake", "-S", package, "-B", build])
+    _run(["cmake", "-S", package, "-B", build, "-DCMAKE_BUILD_TYPE=Release", "-DCMAKE_C_FLAGS=-Wall -Wextra -Werror"])
     _run(["cmake", "--build", build])
     printed = _run([build / "kingen_tau_example"])
     robot = load_robot(ROBOT)
@@ -94,25 +95,47 @@ def test_a_cpp_project_links_it_through_add_subdirectory(package, tmp_path):
     _links_and_agrees(project, tmp_path / "build")
 
 
-def test_installed_it_is_found_by_find_package_and_pkg_config(package, tmp_path):
-    require_tool("g++", "g++")
-    build, prefix = tmp_path / "library-build", tmp_path / "prefix"
+@pytest.fixture(scope="module")
+def installed(package, tmp_path_factory):
+    """The package built by CMake (its default: a static library) and installed: the prefix."""
+    folder = tmp_path_factory.mktemp("c-install")
+    build, prefix = folder / "library-build", folder / "prefix"
     _run(["cmake", "-S", package, "-B", build])
     _run(["cmake", "--build", build])
     _run(["cmake", "--install", build, "--prefix", prefix])
+    return prefix
+
+
+def test_installed_it_is_found_by_find_package(installed, tmp_path):
+    require_tool("g++", "g++")
     project = _cpp_project(tmp_path / "app", "find_package(kingen_tau REQUIRED)\n")
-    _links_and_agrees(project, tmp_path / "app-build", f"-DCMAKE_PREFIX_PATH={prefix}")
+    _links_and_agrees(project, tmp_path / "app-build", f"-DCMAKE_PREFIX_PATH={installed}")
+
+
+def test_the_documented_pkg_config_line_links_a_c_program_to_the_static_library(installed, tmp_path):
+    """`cc main.c $(pkg-config --cflags --libs kingen_tau)`, as the page says, against the
+    installed static library: a C program (a C++ driver would bring libm itself) links, and its
+    inverse agrees with the reference."""
     require_tool("pkg-config", "pkg-config")
+    assert (installed / "lib" / "libkingen_tau.a").is_file()
     found = subprocess.run(["pkg-config", "--cflags", "--libs", "kingen_tau"], capture_output=True, text=True,
-                           env={**os.environ, "PKG_CONFIG_PATH": str(prefix / "lib" / "pkgconfig")})
-    assert found.returncode == 0 and "-lkingen_tau" in found.stdout and str(prefix / "lib" / "pkgconfig") in found.stdout
+                           env={**os.environ, "PKG_CONFIG_PATH": str(installed / "lib" / "pkgconfig")})
+    assert found.returncode == 0, found.stderr
+    (tmp_path / "main.c").write_text(CPP.replace("#include <cstdio>", "#include <stdio.h>").replace("std::printf", "printf")
+                                     .replace("int main()", "int main(void)"))
+    _run(["cc", "-std=c99", tmp_path / "main.c", "-o", tmp_path / "app", *found.stdout.split()])
+    returned, warning, joint = _run([tmp_path / "app"]).split()
+    robot = load_robot(ROBOT)
+    expected = solve(robot, t6_from_pose([robot.verification.home]))
+    assert (int(returned), int(warning)) == (0, 0)
+    assert float(joint) == pytest.approx(expected.joints[0, 0, 0], abs=1e-9)
 
 
 def test_a_constrained_machines_package_builds_and_its_example_comes_back(tmp_path):
     """The 3-PRS head (task coordinates z, roll, pitch): CMake builds the example, whose inverse
     joints at the verification home are the reference's (its parasitic x, y, yaw solved by
-    kingen's numpy reference) and whose forward returns the whole pose (the example exits 0
-    only when every entry is within 1e-6)."""
+    kingen's numpy reference), whose forward returns the whole pose (the example exits 0
+    only when every entry is within 1e-6) and whose machine pose of the home is the home."""
     require_tool("cmake", "cmake")
     robot = load_robot("prs_head")
     folder = tmp_path / "kingen_prs_head"
@@ -126,6 +149,8 @@ def test_a_constrained_machines_package_builds_and_its_example_comes_back(tmp_pa
     shown = [float(line.split(":")[1]) for line in printed.splitlines() if line.strip().startswith("joint")]
     assert shown == pytest.approx(expected, abs=1e-6)
     assert "warning 0" in printed and "forward: returned 0" in printed
+    # The home is on the manifold: its machine pose is itself (the example exits 0 only then).
+    assert "machine pose for the task coordinates: status 0, largest difference from the pose: " in printed
 
 
 def test_a_folder_kingen_did_not_write_is_refused(tmp_path, capsys):

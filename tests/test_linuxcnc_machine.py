@@ -93,9 +93,9 @@ def linuxcnc_machine():
 
 
 def machine_ini(robot, folder, kins_ini, units):
-    """A simulated machine's .ini: kingen's [TRAJ] HOME, [KINS] and [JOINT_n] entries, with
-    homing at the HOME kingen wrote (home to the current position, which reads as HOME) and
-    velocities added."""
+    """A simulated machine's .ini: kingen's [TRAJ] HOME, [KINS] and [JOINT_n] entries (their
+    MAX_VELOCITY and MAX_ACCELERATION kingen's), with homing at the HOME kingen wrote (home to
+    the current position, which reads as HOME)."""
     joints, home = [], None
     for section in kins_ini.split("\n[")[1:]:
         header, _, body = section.partition("]\n")
@@ -104,7 +104,7 @@ def machine_ini(robot, folder, kins_ini, units):
             continue
         # HOME_OFFSET = HOME: the joint homes where it stands and reads HOME there, with no
         # move after homing (from 0 to a delta's 250 mm HOME that took 5 s).
-        extra = ("MAX_VELOCITY = 50\nMAX_ACCELERATION = 500\nHOME_SEQUENCE = 0\nHOME_SEARCH_VEL = 0\n"
+        extra = ("HOME_SEQUENCE = 0\nHOME_SEARCH_VEL = 0\n"
                  f"HOME_LATCH_VEL = 0\nHOME_OFFSET = {body.split('HOME = ')[1].splitlines()[0]}\n"
                  if header.startswith("JOINT") else "")
         joints.append(f"[{header}]\n{body.rstrip()}\n{extra}")

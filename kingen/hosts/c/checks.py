@@ -17,14 +17,19 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   rates per tool twist, :func:`kingen.kinematics.wrist_rates.tool_jacobian`).
 - ``c direct index``: for six-limb robots, the library's direct index against kingen's
   (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
+- ``c machine pose``: for a machine with task coordinates and no wrist, the library's machine
+  pose and its status against kingen's (:func:`kingen.kinematics.parasitic.solve_parasitic`) on
+  the sampled poses, those off the machine's manifold and those beside the warnings' boundaries
+  among them.
 """
 
 import numpy as np
 
 from ...conventions import matrix_from_t6, pose_from_t6, wrap_difference
 from ...kinematics.forward import free_mask, t6_of
+from ...kinematics.parasitic import solve_parasitic
 from ...kinematics.reference import solve
-from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNING_BAND, WARNINGS
 from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
 from ...kinematics.wrist_rates import tool_jacobian
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
@@ -197,6 +202,49 @@ class CDirectIndex(OnRegularPairs, name="c direct index", needs="compared poses"
                      judged=len(found))
 
 
+def constraint_statuses(radicand):
+    """(statuses (n,), judged (n,) bool) the WARN_* code of each constraint radicand D (n,), as the
+    library classifies it (unreachable below -SINGULAR_TOLERANCE or not a number, singular
+    within it), and whether D lies farther than WARNING_BAND from both thresholds (where
+    library and reference must agree)."""
+    statuses = np.where(~(radicand >= -SINGULAR_TOLERANCE), WARNINGS["WARN_UNREACHABLE"],
+                        np.where(radicand <= SINGULAR_TOLERANCE, WARNINGS["WARN_SINGULAR_SOLUTION"],
+                                 WARNINGS["WARN_GOOD_SOLUTION"]))
+    with np.errstate(invalid="ignore"):
+        edge = np.minimum(np.abs(radicand - SINGULAR_TOLERANCE), np.abs(radicand + SINGULAR_TOLERANCE))
+    return statuses, ~(edge <= WARNING_BAND)
+
+
+class CMachinePose(VerifyCheck, name="c machine pose", needs="compared poses"):
+    def run(self, context):
+        robot, library, tally = context.robot, context.routine, context.tally
+        if not robot.task or robot.wrist is not None:
+            return [not_exercised(self.name, f"{robot.name} has no task coordinates" if not robot.task else
+                                  f"{robot.name} has a wrist: its pose is the tool's")]
+        t6 = np.concatenate([tally.first[0][:FORWARD_POSES]]
+                            + ([tally.boundary_first[0]] if tally.boundary_first is not None else []))
+        t6 = t6[np.all(np.isfinite(t6), axis=(1, 2))]
+        found, statuses = library.machine_pose(matrix_from_t6(t6).reshape(-1, 16))
+        expected = solve_parasitic(robot, t6)
+        expected_statuses, judged = constraint_statuses(expected.radicand)
+        wrong = judged & (statuses != expected_statuses)
+        good = judged & (expected_statuses == WARNINGS["WARN_GOOD_SOLUTION"]) & ~wrong
+        found_t6 = np.swapaxes(found.reshape(-1, 4, 4), 1, 2)[good]
+        position = float(np.max(np.abs(found_t6[:, 3, :3] - expected.t6[good, 3, :3]), initial=0.0))
+        rotation = float(np.max(np.abs(found_t6[:, :3, :3] - expected.t6[good, :3, :3]), initial=0.0))
+        bound_mm = report_tolerance_mm(robot)
+        passed = not np.any(wrong) and position <= bound_mm and rotation <= VALUE_TOLERANCE_RAD
+        counts = ", ".join(f"{int(np.count_nonzero(expected_statuses[judged] == code))} {name[5:].lower().replace('_', ' ')}"
+                           for name, code in WARNINGS.items() if code != WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"])
+        return [Check(self.name, passed,
+                      f"the library's machine pose against kingen's (its parasitic coordinates in closed form) on "
+                      f"{len(t6)} poses, {int(np.count_nonzero(expected.off))} of them off the manifold: statuses "
+                      f"({counts}) {int(np.count_nonzero(wrong))} wrong, {int(np.count_nonzero(~judged))} within "
+                      f"{WARNING_BAND:g} of a threshold not judged; on the good ones max difference {position:.3g} mm "
+                      f"(at most {bound_mm:.3g}), {rotation:.3g} in the rotation (at most {VALUE_TOLERANCE_RAD:g})",
+                      judged=int(np.count_nonzero(judged)))]
+
+
 CHECKS = (Definition(), Values(), Warnings(), Closure(), Jacobian(), CJacobian(), CDirectIndex(), RoundTrip(),
-          Forward(), Determinism(), Machine(), Golden(), Snapshot())
+          Forward(), CMachinePose(), Determinism(), Machine(), Golden(), Snapshot())
 """Every check a C host library gets, in report order."""

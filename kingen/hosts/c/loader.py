@@ -22,13 +22,21 @@ from .checks import CHECKS
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
 ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "default_geometry")
-"""What the header declares for every robot (``<routine>_<name>``); six-limb robots add ``direct_index``."""
+"""What the header declares for every robot (``<routine>_<name>``); six-limb robots add
+``direct_index``, machines with task coordinates and no wrist ``machine_pose``."""
+
+
+def entry_points(robot):
+    """What ``robot``'s library exports (``<routine>_<name>``): :data:`ENTRY_POINTS` and its own."""
+    return (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ()),
+            *(("machine_pose",) if robot.task and robot.wrist is None else ()))
 _batch_ffi = cffi.FFI()
 _batch_ffi.cdef("""
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,
                             int joint_stride, int *warnings, int warning_stride, int *returns);
 void kingen_c_forward_batch(void *function, const void *geometry, int count, const double *joints, int dof,
                             const int *postures, const double *seeds, double *poses, int *iterations, int *returns);
+void kingen_c_machine_pose_batch(void *function, int count, const double *poses, double *machines, int *returns);
 void kingen_c_timed_batch(void *function, const void *geometry, int calls, int pool_count, const double *poses,
                           double *joints, int *warnings, double *ns);
 """)
@@ -79,6 +87,7 @@ class Library:
                               double *pose, int *iterations);
         int {routine}_jacobian(const void *geometry, const double *pose, int posture, double *jacobian);
         int {routine}_direct_index(const void *geometry, const double *pose, int posture, double *index);
+        int {routine}_machine_pose(const double *pose, double *machine);
         extern double {routine}_default_geometry;
         """)
         try:
@@ -86,7 +95,7 @@ class Library:
         except OSError as error:
             raise PluginDefect(f"the library cannot be loaded: {str(error).split('.  Additionally')[0]}") from None
         self.functions = {}
-        for name in (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ())):
+        for name in entry_points(robot):
             try:
                 self.functions[name] = (self.ffi.addressof(self.library, f"{routine}_{name}") if name == "default_geometry"
                                         else getattr(self.library, f"{routine}_{name}"))
@@ -139,6 +148,16 @@ class Library:
         warning = self.functions["jacobian"](self.geometry, self.ffi.from_buffer("double[]", pose), posture,
                                              self.ffi.from_buffer("double[]", rows))
         return rows, warning
+
+    def machine_pose(self, poses):
+        """A machine with task coordinates: the machine's pose for each row-major pose (n, 16):
+        (machine poses (n, 16), statuses (n,))."""
+        poses = np.ascontiguousarray(poses, dtype=float)
+        machines, returns = np.full((len(poses), 16), np.nan), np.empty(len(poses), dtype=np.intc)
+        self.driver.kingen_c_machine_pose_batch(self._function("machine_pose"), len(poses),
+                                                self._pointer("double *", poses), self._pointer("double *", machines),
+                                                self._pointer("int *", returns))
+        return machines, returns
 
     def direct_index(self, pose, posture):
         """(direct index mm, warning) of one row-major pose (16,) and posture (six-limb robots)."""

@@ -70,6 +70,7 @@ def view_model(robot):
         "free_count": int(free.sum()),
         "free_angles": bool(free[3:].any() or parallel.task),
         "task_words": ", ".join(parallel.task),
+        "parasitic_words": ", ".join(name for name in COORDINATES if name not in parallel.task),
         "parasitic_indices": [index for index, name in enumerate(COORDINATES) if name not in parallel.task],
         "closed_form": tuple(free) == (True, True, True, False, False, False) and robot.models == ("rail",)
         and robot.dof == 3,

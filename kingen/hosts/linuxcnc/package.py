@@ -1,6 +1,8 @@
 """Packaging for LinuxCNC: the module's source and built module, a ``.hal`` snippet (loadrt
-and the geometry's setp lines), an ``.ini`` snippet ([KINS], one [JOINT_n] per limb with the
-robot file's travel limits and the joints at the verification home) and a setup sheet."""
+and the geometry's setp lines), an ``.ini`` snippet ([TRAJ] with the units, the home and the
+path's top speed and acceleration; [KINS]; one [JOINT_n] per joint with the robot file's travel
+limits, the joint at the verification home and its top speed and acceleration, the robot file's
+or a stated default) and a setup sheet."""
 
 import math
 import shutil
@@ -31,6 +33,40 @@ def _number(value):
 def _exact(value):
     """A number as Python's shortest round-trip text: what LinuxCNC reads back is the module's double."""
     return repr(float(value))
+
+
+DEFAULT_PATH_SPEED_MM = 100.0
+"""[TRAJ] MAX_LINEAR_VELOCITY, the tool's top speed along its path: mm/s, written in the machine's
+units. A stated start, not a machine's: the ``.ini`` and the sheet say so."""
+DEFAULT_PATH_ACCELERATION_MM = 1000.0
+"""[TRAJ] MAX_LINEAR_ACCELERATION: mm/s^2, written in the machine's units."""
+DEFAULT_SPEED = {"LINEAR": 200.0, "ANGULAR": 180.0}
+"""A joint's MAX_VELOCITY in the ``.ini`` where the robot file gives it no ``max_speed`` (a wrist's
+joints never have one): mm/s (written in the machine's units) for a prismatic joint, degrees/s
+for a revolute one; twice the path's, so that a leg moving faster than the tool (an inclined
+rail) keeps up with the path's defaults."""
+DEFAULT_ACCELERATION = {"LINEAR": 2000.0, "ANGULAR": 1800.0}
+"""A joint's MAX_ACCELERATION where the robot file gives no ``max_acceleration``: mm/s^2 or
+degrees/s^2, twice the path's."""
+
+
+def _rates(machine, index, joint_type, units):
+    """The ``.ini``'s MAX_VELOCITY and MAX_ACCELERATION of joint ``index`` of ``machine`` (the
+    robot in the machine's ``units``): the robot file's ``max_speed`` and ``max_acceleration`` of
+    a leg, else the defaults. {speed, acceleration: the numbers as text, with " (default)" in
+    ``speed_shown`` and ``acceleration_shown`` for a default; defaulted: why a default stands, or ""}."""
+    limb = machine.limbs[index] if index < machine.dof else None
+    scale = 1.0 if joint_type == "ANGULAR" else 1.0 / LENGTH_UNITS[units]
+    rates, missing = {}, []
+    for key, field, defaults in (("speed", "max_speed", DEFAULT_SPEED),
+                                 ("acceleration", "max_acceleration", DEFAULT_ACCELERATION)):
+        given = getattr(limb, field) if limb is not None else None
+        rates[key] = _number(given if given is not None else defaults[joint_type] * scale)
+        rates[f"{key}_shown"] = rates[key] + (" (default)" if given is None else "")
+        missing += [field] if given is None else []
+    rates["defaulted"] = ("the robot file gives a wrist's joints no top speed or acceleration" if limb is None
+                          else f"the robot file gives this joint no {' or '.join(missing)}" if missing else "")
+    return rates
 
 
 STATUS_WORDS = {"WARN_GOOD_SOLUTION": "good", "WARN_JOINT_LIMITS_EXCEEDED": "a joint beyond its travel",
@@ -66,7 +102,8 @@ def sheet_view(robot, units="mm", compiled=True):
         index, revolute = joint["index"], joint["revolute"]
         scale = 180.0 / math.pi if revolute else 1.0
         limited = bool(joint["limited"])
-        ini.append({**joint, "type": "ANGULAR" if revolute else "LINEAR",
+        joint_type = "ANGULAR" if revolute else "LINEAR"
+        ini.append({**joint, **_rates(machine, index, joint_type, units), "type": joint_type,
                     "lower": _number(lower[index] * scale) if limited else "",
                     "upper": _number(upper[index] * scale) if limited else "",
                     "travel": f"[{_number(lower[index] * scale)}, {_number(upper[index] * scale)}]" if limited else "-",
@@ -85,6 +122,8 @@ def sheet_view(robot, units="mm", compiled=True):
             "joint_count": robot.joint_count, "coordinates": " ".join(coordinates(robot)) if robot.wrist is not None else None,
             "joint_meanings": joint_meanings(robot, units), "compiled": compiled,
             "home_text": " ".join(_exact(value) for value in world), "description": robot.description,
+            "units": units, "path_speed": _number(DEFAULT_PATH_SPEED_MM / LENGTH_UNITS[units]),
+            "path_acceleration": _number(DEFAULT_PATH_ACCELERATION_MM / LENGTH_UNITS[units]),
             "wrist_branch": _wrist_branch(robot)}
 
 

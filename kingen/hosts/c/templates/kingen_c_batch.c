@@ -7,6 +7,7 @@
 typedef int (*kingen_inverse_fn)(const void *geometry, const double *pose, double *joints, int *warnings);
 typedef int (*kingen_forward_fn)(const void *geometry, const double *joints, int posture, const double *seed,
                                  double *pose, int *iterations);
+typedef int (*kingen_machine_pose_fn)(const double *pose, double *machine);
 
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,
                             int joint_stride, int *warnings, int warning_stride, int *returns)
@@ -24,6 +25,15 @@ void kingen_c_forward_batch(void *function, const void *geometry, int count, con
     int n;
     for (n = 0; n < count; n++)
         returns[n] = forward(geometry, joints + dof * n, postures[n], seeds + 16 * n, poses + 16 * n, iterations + n);
+}
+
+/* A machine with task coordinates: its machine pose of each pose, returns[n] the status. */
+void kingen_c_machine_pose_batch(void *function, int count, const double *poses, double *machines, int *returns)
+{
+    kingen_machine_pose_fn machine_pose = (kingen_machine_pose_fn)function;
+    int n;
+    for (n = 0; n < count; n++)
+        returns[n] = machine_pose(poses + 16 * n, machines + 16 * n);
 }
 
 /* calls calls of the inverse over the pool of pool_count poses (taken in turn), the
