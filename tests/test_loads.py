@@ -3,7 +3,11 @@ the reference's inverse kinematics, and the payload's rate of change of momentum
 differences of its motion (Newton-Euler written nowhere in kingen). Neither uses force lines,
 transmissions or the loads module's wrench algebra."""
 
+import json
+import subprocess
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -225,3 +229,69 @@ def test_deflection_is_the_wrench_through_the_actuators_compliance():
     change = solve(robot, np.stack([t6_from_pose(home[None])[0], deflected])).joints[:, :, 0]
     expected = -result.forces[0, 0] / STIFF
     assert np.max(np.abs(change[1] - change[0] - expected)) <= 1e-3 * np.max(np.abs(expected))
+
+
+HEXAPOD = Path(__file__).parents[1] / "robots" / "hexapod.yaml"
+LEG1 = "reference_length: 399.413}"
+
+
+def loaded_hexapod(folder, leg_fields, payload="payload: {mass: 100, centre: [0, 0, 0]}\n"):
+    """robots/hexapod.yaml with ``leg_fields`` added to every leg and ``payload`` added, in ``folder``."""
+    text = HEXAPOD.read_text().replace(LEG1, "reference_length: 399.413, " + leg_fields + "}")
+    path = Path(folder) / "loaded.yaml"
+    path.write_text(text.replace("verification:", payload + "verification:", 1))
+    return path
+
+
+def test_kingen_loads_prints_and_writes_each_postures_loads_against_their_limits(tmp_path):
+    path = loaded_hexapod(tmp_path, "max_force: 170, joint_limits: {base: 4}")
+    report = tmp_path / "loads.json"
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "loads", str(path), "--pose", "0", "0", "465", "0", "0",
+                             "0", "--json", str(report)], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    cosine = 393.345 / 399.413  # each leg's vertical over its length at home
+    document = json.loads(report.read_text())
+    assert [entry["posture"] for entry in document["postures"]] == [0]
+    entry = document["postures"][0]
+    assert entry["units"] == ["N"] * 6
+    assert entry["forces"] == pytest.approx([100 * 9.81 / (6 * cosine)] * 6, rel=1e-5)
+    assert entry["joint_angles"]["base"] == pytest.approx([0.0] * 6, abs=1e-6)
+    assert "leg1" in result.stdout and "166.0" in result.stdout
+
+    tilted = subprocess.run([sys.executable, "-m", "kingen.cli", "loads", str(path), "--pose", "40", "0", "465", "0",
+                             "0", "0"], capture_output=True, text=True, timeout=120)
+    assert tilted.returncode == 1
+    assert "BEYOND LIMIT posture 0: leg" in tilted.stdout and "base joint" in tilted.stdout
+
+
+def test_verify_fails_a_payload_beyond_the_legs_max_force_naming_the_leg(tmp_path):
+    from kingen.verify.checks.machine import machine_check
+
+    held = machine_check(load_robot(loaded_hexapod(tmp_path, "max_force: 170")))
+    assert held.passed and "holds its payload (100 kg)" in held.detail
+    refused = machine_check(load_robot(loaded_hexapod(tmp_path, "max_force: 150")))
+    assert not refused.passed
+    assert "leg1 166.022 N (limit 150)" in refused.detail
+
+
+@pytest.mark.parametrize("leg_fields, payload, fragment", [
+    ("max_force: 0", "", "max_force: Input should be greater than 0"),
+    ("max_torque: 10", "", "a prismatic joint's actuator limit is max_force, not max_torque"),
+    ("joint_limits: {base: 180}", "", "less than 180"),
+    ("stiffness: .nan", "", "finite number"),
+    ("", "payload: {mass: -1}\n", "mass: Input should be greater than 0"),
+    ("", "payload: {mass: 1, inertia: [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]}\n", "must be symmetric"),
+    ("", "payload: {mass: 1, inertia: [1, -1, 1]}\n", "positive definite"),
+    ("", "gravity: [0, 0, 1e9]\n", "gravity's components must be within"),
+])
+def test_bad_load_fields_are_refused_in_one_line(tmp_path, capsys, leg_fields, payload, fragment):
+    from kingen.cli import main
+
+    text = HEXAPOD.read_text()
+    if leg_fields:
+        text = text.replace(LEG1, "reference_length: 399.413, " + leg_fields + "}", 1)
+    path = tmp_path / "bad.yaml"
+    path.write_text(text.replace("verification:", payload + "verification:", 1))
+    assert main(["loads", str(path)]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and fragment in error and str(path) in error

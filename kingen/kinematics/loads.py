@@ -233,3 +233,36 @@ def joint_angles(robot, t6, solution):
 def machine_pose(loads_result):
     """(n, 6) the machine's poses (mm, degrees) behind ``loads_result``."""
     return pose_from_t6(loads_result.machine)
+
+
+def held_problem(robot, posture):
+    """Why ``robot`` (no wrist) cannot hold its payload at the verification home in ``posture``,
+    in words naming each limb, or None: every actuator's static load within its max_force or
+    max_torque and every passive joint within its joint_limits."""
+    if not any(limb.max_force or limb.max_torque or limb.joint_limits for limb in robot.limbs):
+        return None
+    result = loads(robot, machine_t6(robot, np.asarray(robot.verification.home, dtype=float)[None]))
+    loaded, bent = [], []
+    for index, limb in enumerate(robot.limbs):
+        name = robot.joint_names[index]
+        limit, unit = (limb.max_torque, "N m") if limb.joint_type.wraps else (limb.max_force, "N")
+        force = result.forces[0, posture, index]
+        if limit is not None and not abs(force) <= limit:
+            loaded.append(f"{name} {force:.6g} {unit} (limit {limit:g})")
+        for side, angles in (("base", result.base_angles), ("platform", result.platform_angles)):
+            cone = getattr(limb.joint_limits, side) if limb.joint_limits is not None else None
+            angle = np.degrees(angles[0, posture, index])
+            if cone is not None and not angle <= cone:
+                bent.append(f"{name}'s {side} joint {angle:.6g} deg (limit {cone:g})")
+    held = f"the payload ({robot.payload.mass:g} kg)" if robot.payload is not None else "the unloaded platform"
+    problems = ([f"holding {held} at the verification home needs more than the actuators give: {', '.join(loaded)}"]
+                if loaded else []) + ([f"passive joints beyond their limits: {', '.join(bent)}"] if bent else [])
+    return "; ".join(problems) or None
+
+
+def held_text(robot):
+    """What verify's machine check says it judged of loads, or '' where the file states no limit."""
+    if not any(limb.max_force or limb.max_torque or limb.joint_limits for limb in robot.limbs):
+        return ""
+    held = f"holds its payload ({robot.payload.mass:g} kg)" if robot.payload is not None else "holds the unloaded platform"
+    return f", {held} within every stated force, torque and joint-angle limit"
