@@ -150,7 +150,7 @@ def _print(model, asked, at, postures, moving, wrench):
         for index, name in enumerate(names):
             limit = entry["limits"][index]
             cones = model.limbs[index].joint_limits
-            rows.append((name, f"{entry['forces'][index]:.6g} {entry['units'][index]}",
+            rows.append((name, f"{entry['forces'][index] + 0.0:.6g} {entry['units'][index]}",
                          f"{limit:g}" if limit is not None else "-",
                          _angle_text(entry["joint_angles"]["base"][index], cones, "base"),
                          _angle_text(entry["joint_angles"]["platform"][index], cones, "platform")))
@@ -168,4 +168,4 @@ def _print(model, asked, at, postures, moving, wrench):
 
 def _angle_text(angle, cones, side):
     cone = getattr(cones, side) if cones is not None else None
-    return f"{angle:.4f}" + (f" / {cone:g}" if cone is not None else "")
+    return f"{angle + 0.0:.4f}" + (f" / {cone:g}" if cone is not None else "")

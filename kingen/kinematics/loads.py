@@ -29,10 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import pose_from_t6, t6_from_pose
-from .parasitic import solve_parasitic, task_rows, task_twists
+from .parasitic import solve_parasitic, task_twists
 from .reference import solve
 from .routine import WARNINGS
-from .singularity import posture_wrenches
+from .singularity import branch_table, branch_values, limb_wrenches
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 MM_PER_M = 1000.0
@@ -77,8 +77,24 @@ def free_twists(robot, t6):
     if robot.task:
         return task_twists(robot, t6)
     free = robot.forward_free or COORDINATES
-    twists = np.linalg.inv(task_rows(t6, COORDINATES))
-    return twists[:, :, [COORDINATES.index(name) for name in free]]
+    return coordinate_twists(t6)[:, :, [COORDINATES.index(name) for name in free]]
+
+
+def coordinate_twists(t6):
+    """(n, 6, 6) the twist per unit rate of each pose coordinate (x, y, z in mm; roll, pitch, yaw
+    in rad) with the others held, at T6 (n, 4, 4): [e_k; 0] for a translation; for an angle,
+    omega = E_k (E's columns Rz Ry e_x, Rz e_y, e_z) and v = p x omega (the platform origin p held)."""
+    t6 = np.asarray(t6, dtype=float)
+    _, pitch, yaw = np.radians(pose_from_t6(t6)[:, 3:]).T
+    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+    zero, one = np.zeros_like(yaw), np.ones_like(yaw)
+    euler = np.stack([np.stack([cy * cp, sy * cp, -sp], -1), np.stack([-sy, cy, zero], -1),
+                      np.stack([zero, zero, one], -1)], axis=1)  # (n, column, 3)
+    twists = np.zeros((len(t6), 6, 6))
+    twists[:, :3, :3] = np.eye(3)
+    twists[:, 3:, 3:] = np.swapaxes(euler, 1, 2)
+    twists[:, :3, 3:] = np.swapaxes(np.cross(t6[:, None, 3, :3], euler), 1, 2)
+    return twists
 
 
 def payload_wrench(robot, t6, motion=None):
@@ -117,46 +133,74 @@ def external_wrench(t6, wrench):
     return np.concatenate([force, np.cross(t6[:, 3, :3], force) + wrench[3:] * MM_PER_M], axis=1)
 
 
-def loads(robot, t6, wrench=None, motion=None):
+BLOCK_POSTURES = 8192
+"""Poses times postures computed at once: their (n, p, m, 6) arrays stay within the cache."""
+
+
+def loads(robot, t6, wrench=None, motion=None, postures=None):
     """:class:`Loads` of ``robot`` (no serial wrist) at T6 (n, 4, 4): the payload (robot.payload)
     under gravity and ``motion`` (a :class:`Motion`, or None: at rest) and an external wrench
-    ``wrench`` (6,) [N, N m] at the platform origin, base frame."""
+    ``wrench`` (6,) [N, N m] at the platform origin, base frame; in ``postures`` (indices; None:
+    every posture), which the result's posture axis then follows."""
     if robot.wrist is not None:
         raise ValueError("loads of a machine with a serial wrist are not computed")
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
+    chosen = np.arange(robot.postures) if postures is None else np.asarray(postures, dtype=int)
+    step = max(1, BLOCK_POSTURES // len(chosen))
+    blocks = [_block_loads(robot, t6[start:start + step], wrench, motion, chosen) for start in range(0, len(t6), step)]
+    if len(blocks) == 1:
+        return blocks[0]
+    return Loads(**{field: (None if blocks[0].__dict__[field] is None
+                            else np.concatenate([block.__dict__[field] for block in blocks]))
+                    for field in blocks[0].__dict__})
+
+
+def _block_loads(robot, t6, wrench, motion, chosen):
+    """loads() over one block of poses."""
     machine = solve_parasitic(robot, t6).t6 if robot.task else t6
     solution = solve(robot, machine)
-    wrenches, transmissions = posture_wrenches(robot, solution.points, solution.joints)  # (n, p, m, 6), (n, p, m)
+    wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
+    table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
+    limbs = np.arange(robot.dof)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rows = wrenches / transmissions[..., None]
-    twists = free_twists(robot, machine)  # (n, 6, d)
-    reduced = np.einsum("npmk,nkd->npmd", rows, twists)  # joint rates per free coordinate rate
+        rows = wrenches[:, limbs, table] / transmissions[:, limbs, table][..., None]  # (n, p, m, 6)
     external = external_wrench(machine, wrench) if wrench is not None else 0.0
     static = payload_wrench(robot, machine) + external
     applied = static if motion is None else payload_wrench(robot, machine, motion) + external
-    generalized = -np.einsum("nkd,nk->nd", twists, applied)
+    twists = None if (not robot.task and len(robot.forward_free or COORDINATES) == 6) else free_twists(robot, machine)
+    if twists is None:  # six free coordinates: J^T tau = -W
+        reduced, generalized = rows, -applied
+    else:
+        reduced, generalized = rows @ twists[:, None], -np.einsum("nkd,nk->nd", twists, applied)
     forces = _solve_each(np.swapaxes(reduced, 2, 3), generalized[:, None, :])  # (n, p, m)
-    carried = -(applied[:, None, :] + np.einsum("npmk,npm->npk", rows, forces))
+    carried = -(applied[:, None, :] + (np.swapaxes(rows, 2, 3) @ forces[..., None])[..., 0])
     constraint = _about_origin(carried, machine)
     scale = np.where(np.array([t.wraps for t in robot.joint_types[:robot.dof]]), 1.0 / MM_PER_M, 1.0)
-    unreachable = solution.warnings == WARNINGS["WARN_UNREACHABLE"]
+    warnings = solution.warnings[:, chosen]
+    unreachable = warnings == WARNINGS["WARN_UNREACHABLE"]
     forces = np.where(unreachable[..., None], np.nan, forces * scale)
-    base_angles, platform_angles = joint_angles(robot, machine, solution)
+    directions = _link_directions(robot, solution, machine, chosen)
+    base_angles, platform_angles = _angles(robot, directions)
     return Loads(machine=machine, forces=forces, constraint=np.where(unreachable[..., None], np.nan, constraint),
                  base_angles=base_angles, platform_angles=platform_angles,
-                 deflection=_deflection(robot, machine, reduced, twists, static), warnings=solution.warnings)
+                 deflection=_deflection(robot, machine, reduced, twists, static), warnings=warnings)
+
+
+HADAMARD_FLOOR = 1e-13
+"""A matrix counts as singular (loads undefined, NaN) where |det| is at most this fraction of
+the product of its rows' norms (Hadamard's bound)."""
 
 
 def _solve_each(matrices, right):
-    """Solutions x of matrices (..., d, d) x = right (..., d), NaN where a matrix is singular."""
+    """Solutions x of matrices (..., d, d) x = right (..., d), NaN where a matrix is not finite
+    or singular (HADAMARD_FLOOR)."""
     matrices, right = np.broadcast_arrays(matrices, right[..., None])
     out = np.full(right.shape[:-1], np.nan)
-    finite = np.all(np.isfinite(matrices), axis=(-2, -1))
     if matrices.shape[-2] != matrices.shape[-1]:
         return out
-    condition = np.full(finite.shape, np.inf)
-    condition[finite] = np.linalg.cond(matrices[finite])
-    good = condition < 1e12
+    finite = np.all(np.isfinite(matrices), axis=(-2, -1))
+    bound = np.prod(np.linalg.norm(np.where(finite[..., None, None], matrices, 0.0), axis=-1), axis=-1)
+    good = finite & (np.abs(np.linalg.det(np.where(finite[..., None, None], matrices, 0.0))) > HADAMARD_FLOOR * bound)
     out[good] = np.linalg.solve(matrices[good], right[good])[..., 0]
     return out
 
@@ -179,21 +223,25 @@ def _stiffness(robot):
 
 def _deflection(robot, t6, reduced, twists, static):
     """(n, p, 6) the platform origin's displacement (mm) and rotation vector (rad) under the
-    static wrench (module docstring), or None without every limb's stiffness."""
+    static wrench (module docstring), or None without every limb's stiffness; ``twists`` None:
+    the six coordinates free (T the identity's change of basis, left out)."""
     stiffness = _stiffness(robot)
     if stiffness is None or reduced.shape[-1] != reduced.shape[-2]:
         return None
-    matrix = np.einsum("npmd,m,npme->npde", reduced, stiffness, reduced)
-    moves = _solve_each(matrix, np.einsum("nkd,nk->nd", twists, static)[:, None, :])  # (n, p, d)
-    twist = np.einsum("nkd,npd->npk", twists, moves)
+    matrix = np.swapaxes(reduced, 2, 3) @ (stiffness[:, None] * reduced)
+    if twists is None:
+        twist = _solve_each(matrix, static[:, None, :])  # (n, p, 6)
+    else:
+        moves = _solve_each(matrix, np.einsum("nkd,nk->nd", twists, static)[:, None, :])  # (n, p, d)
+        twist = np.einsum("nkd,npd->npk", twists, moves)
     displacement = twist[..., :3] + np.cross(twist[..., 3:], t6[:, None, 3, :3])
     return np.concatenate([displacement, twist[..., 3:]], axis=-1)
 
 
-def link_directions(robot, solution, t6):
-    """(n, p, m, 3) each limb's passive-link direction (base frame, unit, from the base side to
-    the platform point) in every posture, and the same in the platform frame."""
-    joints = solution.joints  # (n, m, p)
+def _link_directions(robot, solution, t6, postures):
+    """((n, p, m, 3), (n, p, m, 3)) each limb's passive-link direction (unit, from the base side
+    to the platform point) in ``postures``, in the base frame and in the platform frame."""
+    joints = solution.joints[:, :robot.dof][:, :, postures]  # (n, m, p)
     shape = joints.shape[:1] + joints.shape[2:] + (3,)
     directions = np.stack([np.broadcast_to(limb.force_direction(solution.points[:, None, index], joints[:, index, :]),
                                            shape) for index, limb in enumerate(robot.limbs)], axis=2)
@@ -206,11 +254,10 @@ def neutral_axes(robot):
     (platform frame): the file's ``base_axis``/``platform_axis``, else the link's direction at
     the verification home in the working posture."""
     at_home = machine_t6(robot, np.asarray(robot.verification.home, dtype=float)[None])
-    base, platform = link_directions(robot, solve(robot, at_home), at_home)
-    posture = robot.working_posture
-    bases = np.array([limb.base_axis if limb.base_axis is not None else base[0, posture, index]
+    base, platform = _link_directions(robot, solve(robot, at_home), at_home, [robot.working_posture])
+    bases = np.array([limb.base_axis if limb.base_axis is not None else base[0, 0, index]
                       for index, limb in enumerate(robot.limbs)], dtype=float)
-    platforms = np.array([limb.platform_axis if limb.platform_axis is not None else platform[0, posture, index]
+    platforms = np.array([limb.platform_axis if limb.platform_axis is not None else platform[0, 0, index]
                           for index, limb in enumerate(robot.limbs)], dtype=float)
     return bases, platforms
 
@@ -221,10 +268,10 @@ def machine_t6(robot, poses):
     return solve_parasitic(robot, t6).t6 if robot.task else t6
 
 
-def joint_angles(robot, t6, solution):
+def _angles(robot, directions):
     """((n, p, m), (n, p, m)) rad: each limb's base and platform passive joint's angle between
-    its link and its neutral axis (neutral_axes), at T6 (n, 4, 4) the machine takes."""
-    base, platform = link_directions(robot, solution, t6)
+    its link (``directions``: _link_directions) and its neutral axis (neutral_axes)."""
+    base, platform = directions
     base_axes, platform_axes = neutral_axes(robot)
     return (np.arccos(np.clip(np.einsum("npmi,mi->npm", base, base_axes), -1.0, 1.0)),
             np.arccos(np.clip(np.einsum("npmi,mi->npm", platform, platform_axes), -1.0, 1.0)))
