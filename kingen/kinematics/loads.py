@@ -155,10 +155,10 @@ def loads(robot, t6, wrench=None, motion=None, postures=None):
                     for field in blocks[0].__dict__})
 
 
-def _block_loads(robot, t6, wrench, motion, chosen):
-    """loads() over one block of poses."""
+def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
+    """loads() over one block of poses (``solution``: the reference's there, when the caller has it)."""
     machine = solve_parasitic(robot, t6).t6 if robot.task else t6
-    solution = solve(robot, machine)
+    solution = solution if solution is not None else solve(robot, machine)
     wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
     table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
     limbs = np.arange(robot.dof)
@@ -280,6 +280,12 @@ def _angles(robot, directions):
 def machine_pose(loads_result):
     """(n, 6) the machine's poses (mm, degrees) behind ``loads_result``."""
     return pose_from_t6(loads_result.machine)
+
+
+def static_loads_of(robot, t6, solution):
+    """Loads of ``robot`` in its posture 0 at rest (the payload under gravity) at T6 (n, 4, 4)
+    the machine takes, from the reference's ``solution`` there: what check-path judges per sample."""
+    return _block_loads(robot, np.asarray(t6, dtype=float), None, None, np.array([0]), solution)
 
 
 def held_problem(robot, posture):
