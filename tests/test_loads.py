@@ -295,3 +295,18 @@ def test_bad_load_fields_are_refused_in_one_line(tmp_path, capsys, leg_fields, p
     assert main(["loads", str(path)]) == 2
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and fragment in error and str(path) in error
+
+
+def test_the_python_api_gives_the_loads_and_checks_what_the_command_line_checks():
+    import kingen
+    from kingen.errors import KingenError
+
+    robot = with_payload("hexapod")
+    pose = np.array([10.0, -5.0, 470.0, 2.0, -1.0, 3.0])
+    result = kingen.loads(robot, [pose], wrench=[0, 0, -50, 0, 0, 0])
+    direct = loads(robot, t6_from_pose(pose[None]), wrench=np.array([0, 0, -50.0, 0, 0, 0]))
+    assert np.array_equal(result.forces, direct.forces)
+    for bad in ({"poses": [[0, 0, np.nan, 0, 0, 0]]}, {"poses": [pose], "wrench": [1, 2, 3]},
+                {"poses": [pose], "postures": [5]}):
+        with pytest.raises(KingenError):
+            kingen.loads(robot, **{"poses": bad.pop("poses"), **bad})

@@ -151,19 +151,31 @@ def _print(model, asked, at, postures, moving, wrench):
             limit = entry["limits"][index]
             cones = model.limbs[index].joint_limits
             rows.append((name, f"{entry['forces'][index] + 0.0:.6g} {entry['units'][index]}",
-                         f"{limit:g}" if limit is not None else "-",
+                         f"{limit:g} {entry['units'][index]}" if limit is not None else "-",
                          _angle_text(entry["joint_angles"]["base"][index], cones, "base"),
                          _angle_text(entry["joint_angles"]["platform"][index], cones, "platform")))
         print_table(rows)
         force, moment = entry["constraint"]["force"], entry["constraint"]["moment"]
-        say(f"  constraints carry {np.linalg.norm(force):.6g} N and {np.linalg.norm(moment):.6g} N m "
-            "(about the platform origin)")
+        if not model.task and len(model.forward_free or "xyzabc") == 6:
+            say("  constraints: none (six actuated directions)")
+        else:
+            scale = ROUNDING * (1.0 + max(abs(value) for value in entry["forces"]))
+            say(f"  constraints carry {_rounded(np.linalg.norm(force), scale):.6g} N and "
+                f"{_rounded(np.linalg.norm(moment), scale):.6g} N m (about the platform origin)")
         if entry["deflection"] is not None:
             move = entry["deflection"]
             say(f"  deflection: {np.linalg.norm(move[:3]) * 1000:.4g} um ({', '.join(f'{v * 1000:.4g}' for v in move[:3])}), "
                 f"{np.linalg.norm(move[3:]):.4g} deg")
         else:
             say("  deflection: not computed (a limb has no stiffness)")
+
+
+ROUNDING = 1e-9
+"""A constraint force or moment below this fraction of the largest actuator load (plus 1) is rounding: shown as 0."""
+
+
+def _rounded(value, scale):
+    return 0.0 if value <= scale else value
 
 
 def _angle_text(angle, cones, side):

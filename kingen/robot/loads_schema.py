@@ -51,14 +51,17 @@ Inertia = Annotated[Union[Annotated[list[InertiaEntry], Field(min_length=3, max_
 class PayloadFile(Strict):
     """``payload:`` in a robot file: the rigid body the platform carries."""
 
-    mass: Mass = Field(description="kg, above 0.")
-    centre: Vec3 = Field([0.0, 0.0, 0.0], description="Its centre of mass in the platform frame (the file's "
-                                                       "length unit).")
-    inertia: Optional[Inertia] = Field(None, description="kg m^2 about its centre along the platform axes: "
-                                                         "[Ixx, Iyy, Izz] or a 3 x 3 matrix; absent: a point mass.")
+    mass: Mass
+    """kg, above 0."""
+    centre: Vec3 = [0.0, 0.0, 0.0]
+    """Its centre of mass in the platform frame (in the file's length unit)."""
+    inertia: Optional[Inertia] = None
+    """kg m^2 about its centre along the platform axes: [Ixx, Iyy, Izz] or a symmetric positive-definite
+    3 x 3 matrix; absent: a point mass."""
 
 
 def _check_gravity(vector):
+    """each component within ±1000 m/s^2 (100 g)"""
     if any(abs(component) > MAX_GRAVITY for component in vector):
         raise ValueError(f"gravity's components must be within +/-{MAX_GRAVITY:g} m/s^2")
     return vector
@@ -73,7 +76,9 @@ class JointLimits(Strict):
     passive joint's neutral axis."""
 
     base: Optional[ConeAngle] = None
+    """The base-side passive joint's largest angle (degrees) from its neutral axis (``base_axis``)."""
     platform: Optional[ConeAngle] = None
+    """The platform joint's largest angle (degrees) from its neutral axis (``platform_axis``)."""
 
 
 @dataclass(frozen=True)
