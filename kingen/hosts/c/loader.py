@@ -19,10 +19,12 @@ from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, digest, write_atomic
 from ...defaults import DEFAULT_TIMEOUT, VERSION
 from .checks import CHECKS
+from .render import has_static_loads
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
 ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "default_geometry")
-"""What the header declares for every robot (``<routine>_<name>``); six-limb robots add ``direct_index``."""
+"""What the header declares for every robot (``<routine>_<name>``); six-limb robots add ``direct_index``,
+robots without a wrist or task coordinates ``static_loads`` (render.has_static_loads)."""
 _batch_ffi = cffi.FFI()
 _batch_ffi.cdef("""
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,
@@ -79,6 +81,8 @@ class Library:
                               double *pose, int *iterations);
         int {routine}_jacobian(const void *geometry, const double *pose, int posture, double *jacobian);
         int {routine}_direct_index(const void *geometry, const double *pose, int posture, double *index);
+        int {routine}_static_loads(const void *geometry, const double *pose, int posture, const double *payload,
+                                   double *forces);
         extern double {routine}_default_geometry;
         """)
         try:
@@ -86,7 +90,8 @@ class Library:
         except OSError as error:
             raise PluginDefect(f"the library cannot be loaded: {str(error).split('.  Additionally')[0]}") from None
         self.functions = {}
-        for name in (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ())):
+        for name in (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ()),
+                     *(("static_loads",) if has_static_loads(robot) else ())):
             try:
                 self.functions[name] = (self.ffi.addressof(self.library, f"{routine}_{name}") if name == "default_geometry"
                                         else getattr(self.library, f"{routine}_{name}"))
@@ -146,6 +151,16 @@ class Library:
         index = self.ffi.new("double *")
         warning = self.functions["direct_index"](self.geometry, self.ffi.from_buffer("double[]", pose), posture, index)
         return index[0], warning
+
+    def static_loads(self, pose, posture, payload):
+        """(forces (dof,) N or N m, return) of one row-major pose (16,) and posture holding
+        ``payload`` (7,): mass kg, centre (3,) mm in the platform frame, gravity (3,) m/s^2."""
+        pose, payload = np.ascontiguousarray(pose, dtype=float), np.ascontiguousarray(payload, dtype=float)
+        forces = np.full(self.dof, np.nan)
+        returned = self.functions["static_loads"](self.geometry, self.ffi.from_buffer("double[]", pose), posture,
+                                                  self.ffi.from_buffer("double[]", payload),
+                                                  self.ffi.from_buffer("double[]", forces))
+        return forces, returned
 
     def _function(self, name):
         return _batch_ffi.cast("void *", int(self.ffi.cast("uintptr_t", self.functions[name])))
