@@ -217,8 +217,8 @@ def loads(robot, poses, wrench=None, velocity=None, acceleration=None, postures=
     Parameters
     ----------
     robot : kingen.robot.model.Robot
-        From :func:`load_robot`, without a serial wrist; its ``payload`` and ``gravity`` are the
-        robot file's.
+        From :func:`load_robot`; its ``payload`` and ``gravity`` are the robot file's (with a serial
+        wrist the payload, the poses, the motion and the wrench are the tool's).
     poses : array_like, shape (n, 6)
         Platform poses (mm, degrees); a constrained machine takes its own pose for their task
         coordinates.
@@ -241,16 +241,13 @@ def loads(robot, poses, wrench=None, velocity=None, acceleration=None, postures=
     Raises
     ------
     kingen.errors.KingenError
-        A robot with a wrist, poses or vectors of the wrong shape or not finite, a posture that
-        does not exist.
+        Poses or vectors of the wrong shape or not finite, a posture that does not exist.
     """
     import numpy as np
 
     from .errors import KingenError
     from .kinematics.loads import Motion, loads as compute, machine_t6
 
-    if robot.wrist is not None:
-        raise KingenError(f"{robot.path}: wrist: loads of a machine with a serial wrist are not computed")
     poses = np.asarray(poses, dtype=float)
     if poses.ndim not in (1, 2) or poses.shape[-1] != 6 or not np.all(np.isfinite(poses)):
         raise KingenError("poses: (n, 6) finite numbers expected (mm, degrees)")

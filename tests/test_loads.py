@@ -330,3 +330,60 @@ def test_the_c_librarys_static_loads_are_held_to_the_reference_and_a_wrong_one_f
                                 capture_output=True, text=True, timeout=300)
         assert result.returncode == verdict, result.stdout + result.stderr
         assert ("FAILED c loads:" if verdict else "ok     c loads:") in result.stdout
+
+
+@pytest.mark.parametrize("name", ["tricept_wrist", "tricept_wrist3", "exechon_wrist"])
+def test_a_wrist_machines_loads_are_the_virtual_work_of_the_payload_on_its_tool(name):
+    """Coordinates: the wrist centre's x, y, z (the parallel part's task coordinates: its
+    platform the machine's pose there) and the wrist's readings. The legs' joints by central
+    differences of the parallel part's reference, the wrist's are the coordinates themselves;
+    the payload's weight does its work at its centre on the tool the wrist's forward gives."""
+    from kingen.kinematics.wrist import tool_t6
+
+    robot = replace(load_robot(name), payload=PAYLOAD)
+    parallel, dof = robot.parallel, robot.dof
+    home = np.array(robot.verification.home, dtype=float)
+    tool = t6_from_pose(home[None] + np.array([[12.0, -8.0, 15.0, 4.0, -3.0, 6.0]]))
+    result = loads(robot, tool)
+    solution = solve(robot, tool)
+    compared = 0
+    for posture in range(robot.postures):
+        if result.warnings[0, posture] != WARNINGS["WARN_GOOD_SOLUTION"]:
+            continue
+        start = np.concatenate([solution.platform[0, 3, :3], solution.joints[0, dof:, posture]])
+
+        def state(coordinates):
+            platform = solution.platform[0].copy()
+            platform[3, :3] = coordinates[:3]
+            platform = solve_parasitic(parallel, platform[None]).t6
+            legs = solve(parallel, platform).joints[0, :, posture // 2]
+            frame = tool_t6(robot, platform, coordinates[None, 3:])[0]
+            return np.concatenate([legs, coordinates[3:]]), frame[:3, :3].T @ PAYLOAD.centre + frame[3, :3]
+
+        rates, work = [], []
+        for axis in range(len(start)):
+            step = np.zeros(len(start))
+            step[axis] = STEP
+            (before, centre_before), (after, centre_after) = state(start - step), state(start + step)
+            rates.append((after - before) / (2 * STEP))
+            work.append(PAYLOAD.mass * np.dot(robot.gravity, centre_after - centre_before) / (2 * STEP))
+        expected = np.linalg.solve(np.array(rates), -np.array(work))
+        got = result.forces[0, posture] * np.r_[np.ones(dof), 1000.0 * np.ones(robot.joint_count - dof)]
+        assert np.max(np.abs(got - expected)) <= 1e-6 * np.max(np.abs(expected)), posture
+        compared += 1
+    assert compared >= 1
+
+
+def test_kingen_loads_answers_a_tricept_with_its_wrist_legs_then_wrist_torques(tmp_path):
+    source = Path(__file__).parents[1] / "robots" / "tricept_wrist.yaml"
+    path = tmp_path / "tricept_payload.yaml"
+    path.write_text(source.read_text().replace("verification:", "payload: {mass: 20, centre: [0, 0, 40]}\nverification:", 1))
+    report = tmp_path / "loads.json"
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "loads", str(path), "--pose", "60", "-40", "-1250",
+                             "170", "10", "30", "--json", str(report)], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    entries = json.loads(report.read_text())["postures"]
+    assert [entry["posture"] for entry in entries] == [0, 1]
+    assert entries[0]["units"] == ["N", "N", "N", "N m", "N m"]
+    expected = loads(load_robot(path), t6_from_pose(np.array([[60.0, -40, -1250, 170, 10, 30]]))).forces[0]
+    assert np.allclose([entry["forces"] for entry in entries], expected, rtol=1e-12, atol=0)

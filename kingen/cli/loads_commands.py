@@ -8,7 +8,6 @@ from pathlib import Path
 
 import click
 
-from ..errors import KingenError
 from .common import EXIT_FAILED, ROBOT, _output_file, _pose, cli, finite, load_model, print_table, say
 
 MAX_RATE = 1e9
@@ -57,9 +56,6 @@ def loads(robot, pose, velocity, acceleration, wrench, posture, json_path):
     from ..runtime.files import write_atomic
 
     model = load_model(robot)
-    if model.wrist is not None:
-        raise KingenError(f"{model.path}: wrist: loads of a machine with a serial wrist are not computed; "
-                          f"kingen loads answers its parallel part without the wrist")
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
     asked = np.array(pose if pose is not None else model.verification.home, dtype=float)
@@ -107,7 +103,7 @@ def _posture_loads(model, result, posture, warning_names):
     import numpy as np
 
     forces = result.forces[0, posture]
-    units = ["N m" if t.wraps else "N" for t in model.joint_types[:model.dof]]
+    units = ["N m" if t.wraps else "N" for t in model.joint_types]
     base = np.degrees(result.base_angles[0, posture])
     platform = np.degrees(result.platform_angles[0, posture])
     beyond = []
@@ -128,7 +124,8 @@ def _posture_loads(model, result, posture, warning_names):
     constraint = result.constraint[0, posture]
     return {"posture": posture, "warning": warning_names.get(int(result.warnings[0, posture]), "?"),
             "forces": forces.tolist(), "units": units,
-            "limits": [(limb.max_torque if limb.joint_type.wraps else limb.max_force) for limb in model.limbs],
+            "limits": [(limb.max_torque if limb.joint_type.wraps else limb.max_force) for limb in model.limbs]
+            + [None] * (model.joint_count - model.dof),
             "joint_angles": {"base": base.tolist(), "platform": platform.tolist()},
             "constraint": {"force": constraint[:3].tolist(), "moment": constraint[3:].tolist()},
             "deflection": deflection, "beyond": beyond}
@@ -140,23 +137,27 @@ def _print(model, asked, at, postures, moving, wrench):
     said = "moving" if moving else "at rest"
     payload = f"payload {model.payload.mass:g} kg" if model.payload is not None else "no payload"
     extra = ", external wrench at the platform origin" if wrench else ""
-    say(f"loads {model.name}: {payload}, {said}{extra}; gravity {', '.join(f'{g:g}' for g in model.gravity)} m/s^2")
-    if np.max(np.abs(at - asked)) > 1e-9:
+    where = " (on the tool; the pose, motion and wrench are the tool's)" if model.wrist is not None else ""
+    say(f"loads {model.name}: {payload}{where}, {said}{extra}; gravity {', '.join(f'{g:g}' for g in model.gravity)} m/s^2")
+    if model.wrist is not None:
+        say("the platform's pose: " + " ".join(f"{v:.6f}" for v in at))
+    elif np.max(np.abs(at - asked)) > 1e-9:
         say("the machine's pose for these task coordinates: " + " ".join(f"{v:.6f}" for v in at))
-    names = model.joint_names[:model.dof]
     for entry in postures:
         say(f"posture {entry['posture']} ({entry['warning']})")
         rows = [("joint", "load", "limit", "base joint (deg)", "platform joint (deg)")]
-        for index, name in enumerate(names):
+        for index, name in enumerate(model.joint_names):
             limit = entry["limits"][index]
-            cones = model.limbs[index].joint_limits
+            leg = index < model.dof  # a wrist joint has no passive joints of its own
+            cones = model.limbs[index].joint_limits if leg else None
             rows.append((name, f"{entry['forces'][index] + 0.0:.6g} {entry['units'][index]}",
                          f"{limit:g} {entry['units'][index]}" if limit is not None else "-",
-                         _angle_text(entry["joint_angles"]["base"][index], cones, "base"),
-                         _angle_text(entry["joint_angles"]["platform"][index], cones, "platform")))
+                         _angle_text(entry["joint_angles"]["base"][index], cones, "base") if leg else "-",
+                         _angle_text(entry["joint_angles"]["platform"][index], cones, "platform") if leg else "-"))
         print_table(rows)
         force, moment = entry["constraint"]["force"], entry["constraint"]["moment"]
-        if not model.task and len(model.forward_free or "xyzabc") == 6:
+        parallel = model.parallel
+        if not parallel.task and len(parallel.forward_free or "xyzabc") == 6:
             say("  constraints: none (six actuated directions)")
         else:
             scale = ROUNDING * (1.0 + max(abs(value) for value in entry["forces"]))

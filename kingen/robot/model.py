@@ -283,9 +283,6 @@ def robot_from_data(data, path, lines=None, raw=None):
                                       "computes in")
     check_coordinates(robot, locate)
     if document.wrist is not None or document.tool is not None:
-        if document.payload is not None:
-            raise locate.error(["payload"], "loads of a machine with a serial wrist are not computed: give the "
-                                            "payload without the wrist")
         robot = with_wrist(replace(robot, golden=()), document, locate)
     _check_golden(robot, locate)
     _check_postures(robot, document, locate)

@@ -4,6 +4,7 @@ nothing of a machine whose legs cannot reach home or whose design is singular th
 implausibly small or large across gets a notice naming the units its file was read in."""
 
 import math
+from dataclasses import replace
 
 from ...conventions import wrap_angle
 from ...kinematics.home import home_problem, judged_posture, scale_notice
@@ -19,8 +20,8 @@ def machine_check(robot):
     says why, in the robot file's units.
     A machine with a wrist is judged by its parallel part at the platform's home, and its wrist
     joints at 0 (the home's tool pose) within their travel."""
-    if robot.wrist is not None:
-        return _with_wrist(robot, machine_check(robot.parallel))
+    if robot.wrist is not None:  # the payload sits on the tool: kingen loads judges it, not the parallel part alone
+        return _with_wrist(robot, machine_check(replace(robot.parallel, payload=None)))
     home = judged_posture(robot)
     problem = home_problem(robot, home) or (held_problem(robot, home.posture) if home.reachable else None)
     if problem is not None:
