@@ -12,8 +12,8 @@ from .wrist_loads import wrist_loads
 
 __all__ = ["Loads", "Motion", "held_problem", "held_text", "loads", "machine_pose", "machine_t6", "static_loads_of"]
 
-BLOCK_POSTURES = 8192
-"""Poses times postures computed at once: their (n, p, m, 6) arrays stay within the cache."""
+BLOCK_POSTURES = 65536
+"""Poses times postures computed at once: their (n, p, m, 6) arrays about 20 MB each."""
 
 
 def loads(robot, t6, wrench=None, motion=None, postures=None):

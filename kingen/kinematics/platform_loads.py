@@ -141,7 +141,8 @@ def platform_loads(robot, machine, solution, chosen, static, applied):
     table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
     limbs = np.arange(robot.dof)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rows = wrenches[:, limbs, table] / transmissions[:, limbs, table][..., None]  # (n, p, m, 6)
+        lines = wrenches[:, limbs, table]  # (n, p, m, 6): each limb's unit force line [f; C x f]
+        rows = lines / transmissions[:, limbs, table][..., None]
     twists = None if (not robot.task and len(robot.forward_free or COORDINATES) == 6) else free_twists(robot, machine)
     if twists is None:  # six free coordinates: J^T tau = -W
         reduced, generalized = rows, -applied
@@ -154,8 +155,7 @@ def platform_loads(robot, machine, solution, chosen, static, applied):
     warnings = solution.warnings[:, chosen]
     unreachable = warnings == WARNINGS["WARN_UNREACHABLE"]
     forces = np.where(unreachable[..., None], np.nan, forces * scale)
-    directions = _link_directions(robot, solution, machine, chosen)
-    base_angles, platform_angles = _angles(robot, directions)
+    base_angles, platform_angles = _angles(robot, _in_both_frames(lines[..., :3], machine))
     return Loads(machine=machine, forces=forces, constraint=np.where(unreachable[..., None], np.nan, constraint),
                  base_angles=base_angles, platform_angles=platform_angles,
                  deflection=_deflection(robot, machine, reduced, twists, static), warnings=warnings)
@@ -213,13 +213,9 @@ def _deflection(robot, t6, reduced, twists, static):
     return np.concatenate([displacement, twist[..., 3:]], axis=-1)
 
 
-def _link_directions(robot, solution, t6, postures):
-    """((n, p, m, 3), (n, p, m, 3)) each limb's passive-link direction (unit, from the base side
-    to the platform point) in ``postures``, in the base frame and in the platform frame."""
-    joints = solution.joints[:, :robot.dof][:, :, postures]  # (n, m, p)
-    shape = joints.shape[:1] + joints.shape[2:] + (3,)
-    directions = np.stack([np.broadcast_to(limb.force_direction(solution.points[:, None, index], joints[:, index, :]),
-                                           shape) for index, limb in enumerate(robot.limbs)], axis=2)
+def _in_both_frames(directions, t6):
+    """(directions, the same in the platform frame): each limb's passive-link direction (n, p, m, 3)
+    (unit, from the base side to the platform point: its force line's, base frame) at T6 (n, 4, 4)."""
     rotation = np.swapaxes(np.asarray(t6, dtype=float)[:, :3, :3], 1, 2)
     return directions, np.einsum("nji,npmj->npmi", rotation, directions)
 
@@ -229,7 +225,10 @@ def neutral_axes(robot):
     (platform frame): the file's ``base_axis``/``platform_axis``, else the link's direction at
     the verification home in the working posture."""
     at_home = machine_t6(robot, np.asarray(robot.verification.home, dtype=float)[None])
-    base, platform = _link_directions(robot, solve(robot, at_home), at_home, [robot.working_posture])
+    solution = solve(robot, at_home)
+    wrenches, _ = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints), with_transmissions=False)
+    table = branch_table(robot)[[robot.working_posture], :robot.dof]
+    base, platform = _in_both_frames(wrenches[:, np.arange(robot.dof), table][..., :3], at_home)
     bases = np.array([limb.base_axis if limb.base_axis is not None else base[0, 0, index]
                       for index, limb in enumerate(robot.limbs)], dtype=float)
     platforms = np.array([limb.platform_axis if limb.platform_axis is not None else platform[0, 0, index]
