@@ -1,8 +1,10 @@
 """Lengths in other units than kingen's mm: a robot file written in inches (``units: inch``),
-read into mm once; and a machine whose controller works in inches (LinuxCNC's LINEAR_UNITS),
-whose module's tables hold the robot's lengths in its units. Angles stay degrees (files) and
-radians (inside)."""
+read into mm once; a machine whose controller works in inches (LinuxCNC's LINEAR_UNITS),
+whose module's tables hold the robot's lengths in its units; and numbers written for people
+(reports and terminal lines): lengths in mm, um, nm or pm, no exponent, no -0, zero as 0.
+Angles stay degrees (files) and radians (inside)."""
 
+import math
 from dataclasses import replace
 
 LENGTH_UNITS = {"mm": 1.0, "inch": 25.4}
@@ -60,3 +62,45 @@ def robot_in_units(robot, units):
         return robot
     minimum = robot.direct_index_min * scale if robot.direct_index_min is not None else None
     return replace(robot, limbs=tuple(scaled_limbs(robot.limbs, scale)), direct_index_min=minimum)
+
+
+NEGLIGIBLE = 1e-12
+"""Magnitudes at or below this (mm or degrees) are written as 0: a thousandth of a picometre,
+below the rounding of double precision on a metre-sized machine (about 1e-13 mm)."""
+
+LENGTH_STEPS = (("mm", 1.0), ("um", 1e-3), ("nm", 1e-6), ("pm", 1e-9))
+"""The units a length is written in, mm each: the first in which it reads at least 0.1."""
+
+
+def number_text(value, digits=3, zero=NEGLIGIBLE):
+    """``value`` written without an exponent: rounded to ``digits`` significant digits, or to a
+    whole number when it has more digits before the point (``0.000123``, ``7.3``, ``1235``),
+    trailing zeros dropped; ``0`` when its magnitude is at most ``zero`` (never ``-0``);
+    ``nan``, ``inf`` and ``-inf`` as such."""
+    value = float(value)
+    if not math.isfinite(value):
+        return str(value)
+    if abs(value) <= zero:
+        return "0"
+    decimals = max(digits - 1 - math.floor(math.log10(abs(value))), 0)
+    text = f"{round(value, decimals) + 0.0:.{decimals}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
+def fixed_text(value, decimals, sign=False):
+    """``value`` with ``decimals`` decimals, for columns that line up; a value that rounds to
+    zero is written as zero, never ``-0.000000``; ``sign``: a ``+`` before positive values
+    and zero."""
+    rounded = round(float(value), decimals) + 0.0  # -0.0 + 0.0 is 0.0
+    return f"{rounded:{'+' if sign else ''}.{decimals}f}"
+
+
+def length_text(mm, digits=3):
+    """A length given in mm, written for people with its unit: in the first of mm, um, nm and
+    pm in which it reads at least 0.1 (0.5 mm, 7.28 um, 0.73 nm, 1235 mm), as number_text
+    writes it; ``0 mm`` at or below NEGLIGIBLE."""
+    mm = float(mm)
+    if not math.isfinite(mm) or abs(mm) <= NEGLIGIBLE:
+        return f"{number_text(mm, digits)} mm"
+    unit, scale = next(((unit, scale) for unit, scale in LENGTH_STEPS if abs(mm) / scale >= 0.1), LENGTH_STEPS[-1])
+    return f"{number_text(mm / scale, digits)} {unit}"

@@ -177,6 +177,7 @@ def delta_like(data):
     shaped = copy.deepcopy(data)
     shaped["sweeps"] = {name: shaped["sweeps"][name] for name in ("x", "y", "z")}
     shaped["tilt_limits"] = []
+    shaped["available"]["tilt_limits"] = "not analysed: the platform cannot tilt (free: x, y, z)"
     shaped["settings"].update(azimuth_step_deg=15.0, new_setting="a value nobody planned for")
     for entry in shaped["slices"].values():
         entry["reaches_boundary"] = True
@@ -233,7 +234,7 @@ def test_the_figures_say_only_what_was_drawn(ceart_analysis):
     made = check_figures(shaped)
     assert set(made) == {"sweeps.png", "slices.png"} and len(made["sweeps.png"].axes) == 9
     page = report_html(load_model("ceart"), shaped, figures(shaped), 1.0)
-    assert "Not analysed: the platform cannot tilt." in page and "tilt_limits.png" not in page
+    assert "Not analysed: the platform cannot tilt (free: x, y, z)." in page and "tilt_limits.png" not in page
     assert all(f"<th>{key}</th>" in page for key in shaped["settings"]) and "a value nobody planned for" in page
     assert "no limit" not in page
 

@@ -5,6 +5,7 @@ combination is named; the calibrated robot file verifies; every bad input is one
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -134,7 +135,15 @@ def test_hexapod_pose_measurements_recover_the_truth(hexapod_case, joints_of, ca
             assert row["identified"] == pytest.approx(value["xyz".index(axis[0])] if axis else value, abs=1e-6)
     assert any(words.startswith("leg6.base_point.x moves together with measuring_frame.x")
                for words in result["unidentifiable"])
-    assert "not identifiable: leg6.base_point.x" in capsys.readouterr().out
+    said = capsys.readouterr().out
+    assert "not identifiable: leg6.base_point.x" in said
+    # The residuals are written for people: a number without exponent in the unit that suits it.
+    for key, words in (("residuals_before", "residuals before"), ("residuals_after", "; after"),
+                       ("validation", "held-out validation:")):
+        number, unit = re.search(words + r" (-?\d+(?:\.\d+)?) (mm|um|nm|pm) RMS", said).groups()
+        written = float(number) * {"mm": 1.0, "um": 1e-3, "nm": 1e-6, "pm": 1e-9}[unit]
+        assert written == pytest.approx(result[key]["rms_mm"], rel=5e-3, abs=1e-12), (key, number, unit)
+        assert 0.1 <= float(number) < 1000 or unit in ("mm", "pm") or float(number) == 0
     calibrated = out / "hexapod_calibrated.yaml"
     assert "source: 'kingen calibrate hexapod from train.csv" in calibrated.read_text()
     assert main(["verify", str(calibrated), "--samples", "300", "-o", str(out / "build")]) == 0

@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from ..design.figures import png
 from ..runtime.templates import template
+from ..units import length_text, number_text
 
 
 def summary(position, angle):
@@ -60,24 +61,52 @@ def residual_figure(before, after):
     return png(figure)
 
 
-def parameter_figure(outcome):
-    """PNG: identified minus nominal per identified parameter, one standard deviation as error bars."""
-    rows = [row for row in outcome["parameters"] if row["identifiable"]]
-    figure = Figure(figsize=(8.0, max(3.0, 0.16 * len(rows) + 1.2)), layout="constrained")
-    axes = figure.add_subplot()
-    positions = np.arange(len(rows))
-    axes.errorbar([row["identified"] - row["nominal"] for row in rows], positions,
-                  xerr=[row["std"] or 0.0 for row in rows], fmt="o", markersize=3, color="#1f77b4", ecolor="#555555")
-    axes.set_yticks(positions, [row["name"] for row in rows], fontsize=6)
-    axes.invert_yaxis()
-    axes.axvline(0.0, color="#222222", linewidth=0.8)
-    axes.set_xlabel("identified - nominal (mm or deg); bars: one standard deviation")
-    axes.grid(alpha=0.3)
-    return png(figure)
+PANELS = (("limbs", "mm"), ("limbs", "deg"), ("frames", "mm"), ("frames", "deg"))
+"""The parameter chart's panels, in order: the limbs' geometry (and a wrist's), then the
+measuring frame and the target, each in mm and in degrees."""
+
+PANEL_TITLES = {"limbs": "limb geometry", "frames": "measuring frame and target"}
+
+
+def _panel(entry):
+    """The (part, unit) panel of PANELS that ``entry`` (a calibrate.parameters.Parameter) is drawn in."""
+    return ("frames" if entry.group in ("frame", "target") else "limbs", entry.unit)
+
+
+def parameter_figure(outcome, entries):
+    """PNG of parameter_chart."""
+    return png(parameter_chart(outcome, entries))
+
+
+def parameter_chart(outcome, entries):
+    """Figure: identified minus nominal per identified parameter, one standard deviation as error
+    bars, in one panel per part and unit (PANELS: the limbs' geometry, then the measuring frame
+    and the target, in mm and in degrees), each on its own scale, so a limb's 0.5 mm change is
+    not drawn on the axis of a measuring frame 1,200 mm away. ``entries`` are the parameters
+    (calibrate.parameters.Parameter) in the order of ``outcome["parameters"]``."""
+    chosen = [(row, _panel(entry)) for row, entry in zip(outcome["parameters"], entries) if row["identifiable"]]
+    panels = [(key, [row for row, panel in chosen if panel == key]) for key in PANELS]
+    panels = [(key, rows) for key, rows in panels if rows] or [(PANELS[0], [])]
+    heights = [0.16 * len(rows) + 0.9 for _, rows in panels]
+    figure = Figure(figsize=(8.0, max(3.0, sum(heights) + 0.4)), layout="constrained")
+    for axes, ((part, unit), rows) in zip(figure.subplots(len(panels), 1, squeeze=False,
+                                                         gridspec_kw={"height_ratios": heights})[:, 0], panels):
+        positions = np.arange(len(rows))
+        axes.errorbar([row["identified"] - row["nominal"] for row in rows], positions,
+                      xerr=[row["std"] or 0.0 for row in rows], fmt="o", markersize=3, color="#1f77b4",
+                      ecolor="#555555")
+        axes.set_yticks(positions, [row["name"] for row in rows], fontsize=6)
+        axes.set_ylim(max(len(rows), 1) - 0.5, -0.5)
+        axes.axvline(0.0, color="#222222", linewidth=0.8)
+        axes.set_title(f"{PANEL_TITLES[part]} ({unit})", fontsize=9, loc="left")
+        axes.set_xlabel(f"identified - nominal ({unit}); bars: one standard deviation", fontsize=8)
+        axes.grid(alpha=0.3)
+    return figure
 
 
 def report_html(robot_name, outcome, pngs, settings):
-    """The self-contained report."""
+    """The self-contained report; residuals written for people (kingen.units: a length in the
+    unit that suits it, no exponent)."""
     images = {name: base64.b64encode(data).decode("ascii") for name, data in pngs.items()}
     return template("calibration_report.html.j2").render(robot=robot_name, result=outcome, images=images,
-                                                         settings=settings)
+                                                         settings=settings, length=length_text, number=number_text)

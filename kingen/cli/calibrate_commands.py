@@ -10,6 +10,7 @@ import click
 
 from .common import (EXIT_FAILED, ROBOT, FiniteRange, _out_folder, _output_file, cli, finite, load_model_and_data,
                      refuse_special_files, say)
+from ..units import length_text, number_text
 
 MEASURE = click.option("--measure", type=click.Choice(["pose", "position"]), default="pose", show_default=True,
                        help="What the device measures: the target's pose (x y z roll pitch yaw) or a reflector's "
@@ -85,11 +86,11 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     text = json.dumps(finite(outcome), indent=1, allow_nan=False) + "\n"
     name = calibrated_name(model.name)
     header = [f"kingen calibrate {model.name} from {measurements_path.name}: {len(measurements.joints)} {measure} "
-              f"measurements, after {outcome['residuals_after']['rms_mm']:.4g} mm RMS (before "
-              f"{outcome['residuals_before']['rms_mm']:.4g} mm)."]
+              f"measurements, after {length_text(outcome['residuals_after']['rms_mm'])} RMS (before "
+              f"{length_text(outcome['residuals_before']['rms_mm'])})."]
     robot_text = calibrated_yaml(data, parameters, fit.values, header)
     _check_loads(robot_text, model.path.parent / f"{name}.yaml")
-    pngs = {"residuals.png": report.residual_figure(before, after), "parameters.png": report.parameter_figure(outcome)}
+    pngs = {"residuals.png": report.residual_figure(before, after), "parameters.png": report.parameter_figure(outcome, parameters.entries)}
     settings = {"measure": measure, "measurements": str(measurements_path), "identify": spec}
     out_dir = out_dir or default_out_dir(model) / "calibrate"
     outputs = {f"{name}.yaml": robot_text, "calibration.json": text, **pngs,
@@ -105,15 +106,16 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
 
 
 def _deviations_text(std, entries):
-    """'median 0.012 mm, largest 0.03 mm (leg1.reference_length)' for each unit the identified
+    """'median 12 um, largest 30 um (leg1.reference_length)' for each unit the identified
     parameters (finite ``std``) have: mm, then degrees."""
     parts = []
     for unit in ("mm", "deg"):
         found = [(value, entry.name) for value, entry in zip(std, entries) if math.isfinite(value) and entry.unit == unit]
         if found:
             largest = max(found)
-            parts.append(f"median {statistics.median(value for value, _ in found):.3g} {unit}, largest {largest[0]:.3g} "
-                         f"{unit} ({largest[1]})")
+            written = length_text if unit == "mm" else (lambda value: f"{number_text(value)} deg")
+            parts.append(f"median {written(statistics.median(value for value, _ in found))}, largest "
+                         f"{written(largest[0])} ({largest[1]})")
     return "; ".join(parts)
 
 
@@ -128,8 +130,8 @@ def _check_loads(text, path):
 
 def _say_outcome(name, outcome, fit):
     def words(summary):
-        angle = f", {summary['rms_deg']:.3g} deg RMS" if summary["rms_deg"] is not None else ""
-        return f"{summary['rms_mm'] * 1000:.3g} um RMS (max {summary['max_mm'] * 1000:.3g} um){angle}"
+        angle = f", {number_text(summary['rms_deg'])} deg RMS" if summary["rms_deg"] is not None else ""
+        return f"{length_text(summary['rms_mm'])} RMS (max {length_text(summary['max_mm'])}){angle}"
 
     identified = int(sum(row["identifiable"] for row in outcome["parameters"]))
     say(f"calibrate {name}: {identified} parameters identified from {outcome['poses']} poses "

@@ -12,6 +12,7 @@ import click
 from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
 from ..errors import KingenError
 from ..runtime.text import counted, shorten
+from ..units import fixed_text, number_text
 from .common import (EXIT_FAILED, HOST, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _out_folder, _output_file, _pose,
                      _t6, calibration_options, cli, finite, in_child, load_model, output_width, print_table,
                      routine_to_check, say, say_fitted, solve_job, table_lines)
@@ -91,10 +92,10 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     for k in range(model.postures):
         wrist = str(k % 2) if model.wrist is not None else ""  # the wrist's branch: the posture's last bit
         branches = "".join(str(branch_of_posture(k // 2 if wrist else k, bit)) for bit in digits) + wrist or "-"
-        plugin = [f"{v:.9f}" for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k])]
+        plugin = [fixed_text(v, 9) for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k])]
         indices = [_index_text(direct[k]), inverse_text]
         difference = np.abs(calls.solutions[0, :, k] - expected.joints[0, :, k]) * scale
-        rows.append([str(k), branches] + plugin + ["|"] + [f"{v:.9f}" for v in expected.joints[0, :, k] * scale]
+        rows.append([str(k), branches] + plugin + ["|"] + [fixed_text(v, 9) for v in expected.joints[0, :, k] * scale]
                     + [_warning_name(expected.warnings[0, k])] + indices)
         compact_rows.append([str(k), branches] + plugin
                             + [f"{difference.max():.3g}" if np.isfinite(difference).all() else "n/a",
@@ -146,14 +147,14 @@ def _predict_switch(model, t6, expected, switch, scale, units, width):
     if predicted.modes is None:
         say_fitted(f"switch {first} -> {second}: forward kinematics not available ({model.dof} limbs; declare forward.free)", width)
         return
-    moved = ", ".join(f"{name} {value * s:+.6f} {unit}" for name, value, s, unit in
+    moved = ", ".join(f"{name} {fixed_text(value * s, 6, sign=True)} {unit}" for name, value, s, unit in
                       zip(model.joint_names, predicted.change, scale, units))
     say_fitted(f"switch {first} -> {second}: the joints move by {moved}", width)
     if not predicted.modes:
         say_fitted(f"  posture {second}'s joints admit no pose: the host cannot recompute the TCP", width, "    ")
         return
     for number, (mode, distance) in enumerate(zip(predicted.modes, predicted.distances_mm)):
-        pose = ", ".join(f"{v:.3f}" for v in np.concatenate([mode.pose[:3], np.degrees(mode.pose[3:])]))
+        pose = ", ".join(fixed_text(v, 3) for v in np.concatenate([mode.pose[:3], np.degrees(mode.pose[3:])]))
         say_fitted(f"  assembly mode {number}: pose ({pose}), {distance:.3f} mm from the commanded TCP", width, "    ")
     say_fitted(f"  a host that recomputes the TCP from posture {second}'s joints may jump up to {predicted.jump_mm:.3f} mm "
                f"({counted(len(predicted.modes), 'assembly mode')})", width, "    ")
@@ -173,7 +174,7 @@ def _manifold_note(model, matrix):
     from ..kinematics.routine import SINGULAR_TOLERANCE
 
     machine = solve_parasitic(model, matrix)
-    where = " ".join(f"{value:.9f}" for value in pose_from_t6(machine.t6)[0])
+    where = " ".join(fixed_text(value, 9) for value in pose_from_t6(machine.t6)[0])
     world = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), ("X", "Y", "Z", "A", "B", "C")))
     read = ", ".join(world[name] for name in world if name in model.task)
     solved = ", ".join(world[name] for name in world if name not in model.task)
@@ -197,7 +198,7 @@ def _turn_note(model, matrix, expected):
     for k in range(model.postures):
         if expected.warnings[0, k] != WARNINGS["WARN_UNREACHABLE"]:
             reached = tool_t6(model, expected.platform, expected.joints[:, model.dof:, k])
-            turns.append(f"posture {k} {np.degrees(tool_turn(matrix, reached)[0]):.6f}")
+            turns.append(f"posture {k} {fixed_text(np.degrees(tool_turn(matrix, reached)[0]), 6)}")
     turns = ", ".join(turns) or "no posture reaches it"
     return f"the turn of the asked tool frame about the tool axis from the machine's (degrees; ignored): {turns}"
 
@@ -262,7 +263,8 @@ def fk(robot, joints, more_joints, near, json_path, search):
         pose = np.concatenate([assembly.pose[:3], np.degrees(assembly.pose[3:])])
         distance = float(np.linalg.norm(assembly.pose[:3] - near_internal[:3]))
         solutions.append({"pose": pose.tolist(), "residual_mm": assembly.residual_mm, "distance_from_near_mm": distance})
-        rows.append((str(number), *(f"{v:.6f}" for v in pose), f"{assembly.residual_mm:.3g}", f"{distance:.3f}"))
+        rows.append((str(number), *(fixed_text(v, 6) for v in pose), number_text(assembly.residual_mm),
+                     fixed_text(distance, 3)))
     if json_path is not None:
         write_atomic(json_path, json.dumps({"robot": model.name, "joints": values, "exhaustive": modes.exhaustive,
                                             "method": modes.method, "solutions": solutions},
@@ -347,7 +349,7 @@ def _tilt_summary(analysis, settings):
     if not limits:
         return f"tilt limits {analysis['available']['tilt_limits']}"
     least = min(limits, key=lambda row: row["max_tilt_deg"])
-    stopped = (f"stopped by {least['cause']}" if least["cause"] != "none"
+    stopped = (f"stopped by {least['cause'].replace('_', ' ')}" if least["cause"] != "none"
                else f"nothing stops it up to --tilt-max {settings.tilt_max_deg:g}")
     return (f"least tilt {least['max_tilt_deg']:g} deg towards azimuth {least['azimuth_deg']:g} ({stopped}); "
             f"{len(limits)} azimuths every {settings.azimuth_step_deg:g} deg, steps of {settings.tilt_step_deg:g} deg, "

@@ -346,11 +346,17 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
     available = {
         "direct_index": "available" if robot.has_direct_index else
         f"not available: {robot.dof} limbs (the constraints that complete the platform are "
-        f"{'not in the index' if robot.task else 'not modelled'})",
-        "direct_singularity": "available" if robot.direct_index_min is not None else
-        "crossings only: no singularity: {direct_index_min} in the robot file",
+        f"{'not in the index' if robot.task else 'not modelled'}); a direct singularity is found from the "
+        "closure Jacobian instead (direct singularity below)",
+        "direct_singularity": ("available" if robot.direct_index_min is not None else
+                               f"crossings only: the direct index below {CROSSING:g} of home's or det J's sign "
+                               "differing from home's (the robot file sets no singularity: direct_index_min)")
+        if robot.has_direct_index else
+        f"no index, so no threshold: a pose is a direct singularity where the closure Jacobian over the free "
+        f"coordinates ({', '.join(free)}) is singular (scaled determinant at most {SINGULAR ** 2:g}) or its "
+        "determinant's sign differs from home's",
         "collision": "available" if robot.collision is not None else
-        "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file",
+        "not available: the robot file gives no collision radii (collision: leg_radius, rod_radius, crank_radius)",
         "tilt_limits": "available" if limits else
         f"not analysed: the platform's tilt is parasitic (task: {', '.join(free)})" if robot.task else
         f"not analysed: the platform cannot tilt (free: {', '.join(free)})",

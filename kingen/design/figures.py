@@ -367,6 +367,11 @@ def _setting_text(value):
     return str(value)
 
 
+def _reason(note):
+    """The reason of a ``not analysed: REASON`` note of analysis["available"] (else the note)."""
+    return note.split(": ", 1)[1] if note.startswith("not analysed: ") else note
+
+
 def report_html(robot, analysis, pngs, seconds):
     """The self-contained HTML report: summary, every setting, the counts behind each figure,
     the figures it is given embedded as data URIs (a missing one is said, not drawn empty)."""
@@ -376,4 +381,4 @@ def report_html(robot, analysis, pngs, seconds):
     missing = [" ".join(label.split()) for label, _ in QUANTITIES if " ".join(label.split()) not in drawn]
     return template("analysis_report.html.j2").render(
         robot=robot, analysis=analysis, images=images, labels=LABELS, colours=COLOURS, counts=counts(analysis),
-        settings=settings, drawn=drawn, missing=missing, seconds=f"{seconds:.1f}")
+        settings=settings, drawn=drawn, missing=missing, seconds=f"{seconds:.1f}", reason=_reason)

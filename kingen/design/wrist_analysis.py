@@ -85,14 +85,16 @@ def wrist_available(robot, free, swept, pole, tilted):
     unswept = [name for name in free if name not in swept]
     return {
         "poses": f"tool poses ({read}); joints: the legs', then the wrist's ({names})",
-        "direct_index": f"not available: the parallel part's {robot.dof} legs (its constraints are not in the index)",
+        "direct_index": f"not available: the parallel part's {robot.dof} legs (its constraints are not in the index); "
+                        "a direct singularity is found from its closure Jacobian instead (direct singularity below)",
         "direct_singularity": "crossings only: the sign of the parallel part's closure Jacobian over the wrist "
                               "centre's x, y, z at the platform pose the machine takes (the tool's motion moves "
                               "the wrist centre; the wrist's own determinant changes sign only where its radicand "
                               "D crosses 0, which stops a pose as unreachable)",
         "collision": ("legs only: the wrist and the tool have no collision geometry (not exercised)"
                       if robot.collision is not None else
-                      "not available: no collision: {leg_radius, rod_radius, crank_radius} in the robot file; "
+                      "not available: the robot file gives no collision radii (collision: leg_radius, rod_radius, "
+                      "crank_radius); "
                       "the wrist and the tool have no collision geometry (not exercised)"),
         "wrist_singularity": (f"stops a pose as unreachable: a wrist radicand within {SINGULAR_TOLERANCE:g} of 0 "
                               f"({aligned} along {robot.wrist.names[0]}'s axis, or the branches meeting)"

@@ -16,6 +16,7 @@ import numpy as np
 from ..conventions import matrix_from_pose, t6_from_matrix
 from ..hosts.linuxcnc.five_axis import COORDINATES, home_axis, world_of_t6
 from ..kinematics.wrist import rotation_about
+from ..units import number_text
 
 NOT_READ = "B, and the turn about the tool axis"
 """What of a pose a five-axis machine does not read."""
@@ -60,6 +61,6 @@ class FiveAxis:
         path (``peaks`` Findings.peaks in display units, ``names`` the robot's joint names)."""
         data = self.summary(gcode)
         used = {name: peaks[names.index(name)] for name in data["wrist_joints"]}
-        ranges = ", ".join(f"{name} {peak.low:.6g} .. {peak.high:.6g} deg" if peak.low <= peak.high else f"{name} -"
+        ranges = ", ".join(f"{name} {number_text(peak.low)} .. {number_text(peak.high)} deg" if peak.low <= peak.high else f"{name} -"
                            for name, peak in used.items())
         return f"five-axis: {data['read']} read; {data['not_read']} not read; wrist over the path: {ranges}"

@@ -26,6 +26,7 @@ from ..conventions import angle_difference, pose_from_t6, t6_from_pose
 from ..hosts.linuxcnc.render import WORLD_AXES
 from ..kinematics.forward import free_mask
 from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, solve_parasitic
+from ..units import number_text
 from .moves import Move
 from .program import POSE_COLUMNS
 
@@ -157,16 +158,16 @@ class Manifold:
         """The report's lines about the manifold (display text)."""
         ranges, data = self.summary()
         units = {name: "mm" if name in POSE_COLUMNS[:3] else "deg" for name in POSE_COLUMNS}
-        shown = ", ".join(f"{name} {values[0]:.6g} .. {values[1]:.6g} {units[name]}" if values else f"{name} -"
+        shown = ", ".join(f"{name} {number_text(values[0])} .. {number_text(values[1])} {units[name]}" if values else f"{name} -"
                           for name, values in ranges.items())
         said = [f"task coordinates {data['read']} read; {data['not_read']} not read: parasitic (over the path's reachable samples: {shown})"]
         if self.csv and self.rows:
-            worst = ", ".join(f"{name} {value:.3g} {units[name]}" for name, value in data["max_deviation"].items())
+            worst = ", ".join(f"{name} {number_text(value)} {units[name]}" for name, value in data["max_deviation"].items())
             said.append(f"rows against the machine's poses: {self.rows_off} of {self.rows} off the manifold "
                         f"(largest deviations: {worst})")
             if self.first_off is not None:
                 line, deviation = self.first_off
-                off = ", ".join(f"{POSE_COLUMNS[at]} {deviation[at]:.6g} {units[POSE_COLUMNS[at]]}" for at in self.parasitic)
+                off = ", ".join(f"{POSE_COLUMNS[at]} {number_text(deviation[at])} {units[POSE_COLUMNS[at]]}" for at in self.parasitic)
                 said.append(f"first row off the manifold: line {line} ({off})"
                             + ("; read as its task coordinates (--task-only)" if self.task_only else ""))
         return said

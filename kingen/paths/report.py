@@ -9,6 +9,7 @@ lines' determinant in mm and mm^3; clearances in mm.
 import numpy as np
 
 from ..runtime.text import counted, one_line
+from ..units import number_text
 from .manifold import OFF_MANIFOLD
 from .program import POSE_COLUMNS, is_gcode
 
@@ -98,8 +99,9 @@ def problem_rows(outcome):
     for place in outcome.findings.sorted_problems():
         units = _joint_units(outcome, place.joint, place.kind, place.between)
         extra = f" (fits at {place.override * 100:.0f}% feed)" if place.override is not None else ""
-        rows.append([str(place.line), place.kind, " ".join(filter(None, (place.joint, place.between))) or "-", f"{place.value:.6g} {units}".strip() + extra,
-                     f"{place.limit:.6g} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
+        rows.append([str(place.line), place.kind, " ".join(filter(None, (place.joint, place.between))) or "-",
+                     f"{number_text(place.value, 6)} {units}".strip() + extra,
+                     f"{number_text(place.limit, 6)} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
     return rows
 
 

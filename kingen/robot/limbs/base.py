@@ -97,7 +97,7 @@ class LimbModel(Strict):
     c_columns: ClassVar[str] = ""
     """The table columns of the C partial, in order, in words (shown above the table)."""
     partial: ClassVar[Optional[Path]] = None
-    """The template partial; None: templates/limbs/<model>.c.j2."""
+    """The template partial; None: ``templates/limbs/<model>.c.j2``."""
     joint_words: ClassVar[str] = ""
     """What the joint's value measures, in words, for the setup sheet's joints table: its zero
     and the direction of positive values."""
