@@ -75,3 +75,26 @@ def least_stiffness(robot, stiffness):
     to_origin = np.hstack([np.eye(3), -cross])  # twist -> velocity of the platform origin, v + omega x p
     translational = to_origin @ compliance @ to_wrench
     return 1.0 / np.max(np.linalg.eigvalsh(0.5 * (translational + translational.T)))
+
+
+def test_optimize_judges_designs_with_their_actuator_loads(tmp_path):
+    """A layout's max_torque reaches every crank; optimize's objective then stops tilts where the
+    payload's torque passes it, through analyze's tilt limits (the compiled judge leaves such
+    robots to them)."""
+    from kingen.design.problem import Problem, evaluate
+    from kingen.design.tilt_judge import judges
+    from kingen.robot.reading import read_robot_file
+
+    source = (Path(__file__).parents[1] / "robots" / "rus_optimized.yaml").read_text()
+    text = source.replace("layout:\n", "layout:\n  max_torque: 120\n", 1).replace(
+        "verification:", "payload: {mass: 300, centre: [0, 0, 50]}\nverification:", 1).replace(
+        "tilt_step: 1, azimuth_step: 1, tilt_max: 120", "tilt_step: 2, azimuth_step: 90, tilt_max: 40")
+    path = tmp_path / "rus_loaded.yaml"
+    path.write_text(text)
+    data, lines = read_robot_file(path)[:2]
+    problem = Problem(data, path, lines)
+    robot = problem.robot(problem.start())
+    assert not judges(robot) and all(limb.max_torque == 120 for limb in robot.limbs)
+    objective, table, _ = evaluate(problem, problem.start())
+    assert {cause for _, cause in table} == {"actuator_load"}
+    assert objective == min(tilt for tilt, _ in table) < 40

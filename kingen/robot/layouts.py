@@ -9,9 +9,10 @@ docs/explanation/conventions.md states the formulas.
 import math
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from .limbs import Crank, Leg, Rail, model_name
+from .loads_schema import ForceLimit, JointLimits
 from .schema import MAX_MM, Coordinate, CalibrationField, Length, ReferenceLength, SixAngles, Strict, Travel
 
 class _Layout(Strict):
@@ -19,7 +20,24 @@ class _Layout(Strict):
 
     travel: Optional[Travel] = None
     calibrate: dict[str, Annotated[list[CalibrationField], Field(min_length=6, max_length=6)]] = {}
+    max_force: Optional[ForceLimit] = None
+    """N: every limb's actuator force limit (prismatic joints; kingen loads)."""
+    max_torque: Optional[ForceLimit] = None
+    """N m: every limb's actuator torque limit (revolute joints)."""
+    stiffness: Optional[ForceLimit] = None
+    """Every limb's actuator stiffness: N/mm (prismatic) or N m/rad (revolute)."""
+    joint_limits: Optional[JointLimits] = None
+    """Every limb's passive joints' largest angles from their neutral axes (degrees)."""
     limb_class: ClassVar[type] = None
+
+    @model_validator(mode="after")
+    def _check_actuator_limit(self):
+        """A force limit for prismatic limbs, a torque limit for revolute ones."""
+        wrong = "max_force" if self.limb_class.joint_type.wraps else "max_torque"
+        if getattr(self, wrong) is not None:
+            right = "max_torque" if wrong == "max_force" else "max_force"
+            raise ValueError(f"this layout's limbs take {right}, not {wrong}")
+        return self
 
     @field_validator("calibrate")
     @classmethod
@@ -31,8 +49,11 @@ class _Layout(Strict):
         return calibrate
 
     def _shared(self, index):
-        """The keys every generated limb takes from the layout: travel and its calibration fields."""
-        return {"travel": self.travel,
+        """The keys every generated limb takes from the layout: travel, its calibration fields and
+        the load fields given."""
+        loads = {name: getattr(self, name) for name in ("max_force", "max_torque", "stiffness", "joint_limits")
+                 if getattr(self, name) is not None}
+        return {"travel": self.travel, **loads,
                 "calibrate": {parameter: fields[index] for parameter, fields in self.calibrate.items()}}
 
 
