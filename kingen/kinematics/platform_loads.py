@@ -29,12 +29,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import pose_from_t6, t6_from_pose
+from .forward import COORDINATES
 from .parasitic import solve_parasitic, task_twists
 from .reference import solve
 from .routine import WARNINGS
 from .singularity import branch_table, branch_values, limb_wrenches
 
-COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 MM_PER_M = 1000.0
 
 

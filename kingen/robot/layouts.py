@@ -20,14 +20,10 @@ class _Layout(Strict):
 
     travel: Optional[Travel] = None
     calibrate: dict[str, Annotated[list[CalibrationField], Field(min_length=6, max_length=6)]] = {}
-    max_force: Optional[ForceLimit] = None
-    """N: every limb's actuator force limit (prismatic joints; kingen loads)."""
-    max_torque: Optional[ForceLimit] = None
-    """N m: every limb's actuator torque limit (revolute joints)."""
-    stiffness: Optional[ForceLimit] = None
-    """Every limb's actuator stiffness: N/mm (prismatic) or N m/rad (revolute)."""
-    joint_limits: Optional[JointLimits] = None
-    """Every limb's passive joints' largest angles from their neutral axes (degrees)."""
+    max_force: Optional[ForceLimit] = Field(None, description="N: every limb's actuator force limit (prismatic).")
+    max_torque: Optional[ForceLimit] = Field(None, description="N m: every limb's actuator torque limit (revolute).")
+    stiffness: Optional[ForceLimit] = Field(None, description="Every limb's actuator stiffness: N/mm or N m/rad.")
+    joint_limits: Optional[JointLimits] = Field(None, description="Every limb's passive joints' limits (degrees).")
     limb_class: ClassVar[type] = None
 
     @model_validator(mode="after")
