@@ -12,7 +12,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import Field, field_validator, model_validator
 
 from .limbs import Crank, Leg, Rail, model_name
-from .loads_schema import ForceLimit, JointLimits
+from .loads_schema import ForceLimit, JointLimits, refuse_wrong_limit
 from .schema import MAX_MM, Coordinate, CalibrationField, Length, ReferenceLength, SixAngles, Strict, Travel
 
 class _Layout(Strict):
@@ -26,15 +26,6 @@ class _Layout(Strict):
     joint_limits: Optional[JointLimits] = Field(None, description="Every limb's passive joints' limits (degrees).")
     limb_class: ClassVar[type] = None
 
-    @model_validator(mode="after")
-    def _check_actuator_limit(self):
-        """A force limit for prismatic limbs, a torque limit for revolute ones."""
-        wrong = "max_force" if self.limb_class.joint_type.wraps else "max_torque"
-        if getattr(self, wrong) is not None:
-            right = "max_torque" if wrong == "max_force" else "max_force"
-            raise ValueError(f"this layout's limbs take {right}, not {wrong}")
-        return self
-
     @field_validator("calibrate")
     @classmethod
     def _check_calibratable(cls, calibrate):
@@ -43,6 +34,12 @@ class _Layout(Strict):
                 raise ValueError(f"'{parameter}' cannot be calibrated "
                                  f"(choose from {', '.join(cls.limb_class.calibratable)})")
         return calibrate
+
+    @model_validator(mode="after")
+    def _limbs_take_their_limit(self):
+        """Every limb of the layout takes the same limit: max_force (prismatic) or max_torque (revolute)."""
+        refuse_wrong_limit(self.limb_class.joint_type, self.max_force, self.max_torque)
+        return self
 
     def _shared(self, index):
         """The keys every generated limb takes from the layout: travel, its calibration fields and

@@ -48,6 +48,15 @@ Inertia = Annotated[Union[Annotated[list[InertiaEntry], Field(min_length=3, max_
                     AfterValidator(_inertia_matrix)]
 
 
+def refuse_wrong_limit(joint_type, max_force, max_torque):
+    """ValueError unless a prismatic joint's actuator limit is max_force and a revolute one's max_torque."""
+    wrong = "max_force" if joint_type.wraps else "max_torque"
+    if (max_force if joint_type.wraps else max_torque) is not None:
+        right = "max_torque" if joint_type.wraps else "max_force"
+        kind = "revolute" if joint_type.wraps else "prismatic"
+        raise ValueError(f"a {kind} joint's actuator limit is {right}, not {wrong}")
+
+
 class PayloadFile(Strict):
     """``payload:`` in a robot file: the rigid body the platform carries."""
 

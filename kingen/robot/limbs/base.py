@@ -16,7 +16,7 @@ from pydantic import field_validator, model_validator
 
 from ...conventions import PRISMATIC, JointType
 from ...runtime.resources import templates_dir
-from ..loads_schema import ForceLimit, JointLimits
+from ..loads_schema import ForceLimit, JointLimits, refuse_wrong_limit
 from ..schema import CalibrationField, Identifier, PositiveRate, Strict, Travel, UnitVec3, Vec3
 
 
@@ -104,12 +104,7 @@ class LimbModel(Strict):
 
     @model_validator(mode="after")
     def _check_actuator_limit(self):
-        """A force limit for a prismatic actuator, a torque limit for a revolute one."""
-        wrong = "max_force" if self.joint_type.wraps else "max_torque"
-        if getattr(self, wrong) is not None:
-            right = "max_torque" if self.joint_type.wraps else "max_force"
-            kind = "revolute" if self.joint_type.wraps else "prismatic"
-            raise ValueError(f"a {kind} joint's actuator limit is {right}, not {wrong}")
+        refuse_wrong_limit(self.joint_type, self.max_force, self.max_torque)
         return self
 
     @field_validator("calibrate")
