@@ -21,7 +21,7 @@ revolute joints.
 from .defaults import DEFAULT_HOST, VERSION
 
 __version__ = VERSION
-__all__ = ["analyze", "assembly_modes", "build", "load_robot", "shipped_robots", "solve", "verify_library"]
+__all__ = ["analyze", "assembly_modes", "build", "load_robot", "loads", "shipped_robots", "solve", "verify_library"]
 
 
 def shipped_robots():
@@ -208,3 +208,62 @@ def analyze(robot, posture=None, tilt_step=0.1, azimuth_step=15.0, tilt_max=90.0
     chosen = robot.working_posture if posture is None else posture
     return tilt_limits(robot, chosen, Settings(tilt_step_deg=tilt_step, azimuth_step_deg=azimuth_step,
                                                tilt_max_deg=tilt_max))
+
+
+def loads(robot, poses, wrench=None, velocity=None, acceleration=None, postures=None):
+    """What it takes to hold or move the payload at each pose: actuator forces and torques, what
+    the constraints carry, passive-joint angles and the deflection (docs/explanation/loads.md).
+
+    Parameters
+    ----------
+    robot : kingen.robot.model.Robot
+        From :func:`load_robot`; its ``payload`` and ``gravity`` are the robot file's (with a serial
+        wrist the payload, the poses, the motion and the wrench are the tool's).
+    poses : array_like, shape (n, 6)
+        Platform poses (mm, degrees); a constrained machine takes its own pose for their task
+        coordinates.
+    wrench : array_like, shape (6,), optional
+        An external wrench at the platform origin: N, N m, base frame.
+    velocity, acceleration : array_like, shape (6,), optional
+        The platform origin's velocity (mm/s, deg/s) and acceleration (mm/s^2, deg/s^2), base
+        frame; absent: at rest.
+    postures : sequence of int, optional
+        The postures to compute; every posture by default.
+
+    Returns
+    -------
+    kingen.kinematics.loads.Loads
+        ``forces`` (n, postures, dof): N (prismatic) or N m (revolute), positive where the
+        actuator pushes its joint to increase; ``constraint`` (n, postures, 6): N and N m about
+        the platform origin; ``base_angles``, ``platform_angles`` (n, postures, dof) in radians;
+        ``deflection`` (n, postures, 6) mm and radians, or None; ``machine`` the T6 poses taken.
+
+    Raises
+    ------
+    kingen.errors.KingenError
+        Poses or vectors of the wrong shape or not finite, a posture that does not exist.
+    """
+    import numpy as np
+
+    from .errors import KingenError
+    from .kinematics.loads import Motion, loads as compute, machine_t6
+
+    poses = np.asarray(poses, dtype=float)
+    if poses.ndim not in (1, 2) or poses.shape[-1] != 6 or not np.all(np.isfinite(poses)):
+        raise KingenError("poses: (n, 6) finite numbers expected (mm, degrees)")
+    vectors = {}
+    for name, value in (("wrench", wrench), ("velocity", velocity), ("acceleration", acceleration)):
+        if value is not None:
+            value = np.asarray(value, dtype=float)
+            if value.shape != (6,) or not np.all(np.isfinite(value)):
+                raise KingenError(f"{name}: six finite numbers expected")
+        vectors[name] = value
+    if postures is not None and not all(0 <= int(k) < robot.postures for k in postures):
+        raise KingenError(f"postures: {robot.name} has postures 0 to {robot.postures - 1}")
+    motion = None
+    if velocity is not None or acceleration is not None:
+        internal = [np.zeros(6) if v is None else np.r_[v[:3], np.radians(v[3:])]
+                    for v in (vectors["velocity"], vectors["acceleration"])]
+        motion = Motion(velocity=internal[0], acceleration=internal[1])
+    return compute(robot, machine_t6(robot, poses.reshape(-1, 6)), wrench=vectors["wrench"], motion=motion,
+                   postures=postures)

@@ -20,7 +20,8 @@ import traceback
 import click
 
 from ..errors import InternalError, KingenError, PluginDefect
-from . import calibrate_commands, design_commands, path_commands, routine_commands, solve_commands  # noqa: F401  (they register the commands)
+from . import (calibrate_commands, design_commands, loads_commands, path_commands, routine_commands,  # noqa: F401
+               solve_commands)  # (they register the commands)
 from .common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERNAL, cli, say
 
 EXIT_TERMINATED = 128 + signal.SIGTERM

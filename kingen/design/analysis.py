@@ -9,8 +9,9 @@ or without one, a singular pose (see SINGULAR) or a crossing: the index below ``
 of its value at home, or the sign of the closure Jacobian's determinant over the free
 coordinates differing from home's; a home that is itself singular stops every pose judged
 from it at home, and the crossing rules then do not apply),
-``collision`` (:mod:`kingen.kinematics.collision`, with the robot file's ``collision:`` radii), else
-``none``. Poses are mm and degrees. Everything is the numpy reference's: no plugin runs here.
+``collision`` (:mod:`kingen.kinematics.collision`, with the robot file's ``collision:`` radii),
+``actuator_load`` and ``joint_angle`` (:mod:`kingen.design.load_analysis`), else ``none`` (CAUSES:
+the compiled judge, kingen.design.tilt_judge, numbers the first five the same). Poses are mm and degrees. Everything is the numpy reference's: no plugin runs here.
 """
 
 from dataclasses import asdict, dataclass, replace
@@ -26,9 +27,10 @@ from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
 from ..kinematics.wrist import rotation_about
+from .load_analysis import load_limited, load_quantities, loads_available, stiffness_given
 from .wrist_analysis import at_pole, beyond_travel, radicand_stops, tool_moving, wrist_available
 
-CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none")
+CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none", "actuator_load", "joint_angle")
 TILT_CONVENTIONS = {
     "axis": "axis: the platform turned by the tilt about the horizontal axis (cos a, sin a, 0) through home",
     "euler": "euler: roll = tilt cos a, pitch = tilt sin a (R = Rz(yaw) Ry(pitch) Rx(roll)), "
@@ -127,7 +129,10 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
     threshold = robot.direct_index_min if robot.direct_index_min is not None else -1.0
     crossed = (index < CROSSING * home.index_mm) | ((home.det_sign != 0) & (sign != home.det_sign) & reachable)
     cause = np.full(len(t6), CAUSES.index("none"))
+    held = load_quantities(robot, t6, posture) if load_limited(robot) or stiffness_given(robot) else {}
     candidates = [
+        ("joint_angle", held.get("joint_angle", False)),
+        ("actuator_load", held.get("actuator_load", False)),
         ("collision", (rods < 0.0) | (cranks < 0.0)),
         ("direct_singularity", (index <= threshold) | crossed | singular),
         ("joint_limits", (warning == WARNINGS["WARN_JOINT_LIMITS_EXCEEDED"]) | beyond_travel(robot, joints)),
@@ -137,7 +142,8 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
         cause = np.where(mask, CAUSES.index(name), cause)
     return {"cause": cause, "warning": warning, "direct_index_mm": index, "det_sign": sign,
             "min_inverse_index": np.where(np.isfinite(expected.min_inverse_index), expected.min_inverse_index, np.nan),
-            "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints, "singular": singular}
+            "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints, "singular": singular,
+            **{key: held.get(key, np.full(len(t6), np.nan)) for key in ("load_fraction", "min_stiffness_n_per_mm")}}
 
 
 def _det_sign(robot, t6, points, joints):
@@ -265,7 +271,8 @@ def _entry(robot, value, evaluated, i):
     return {"value": value, "warning": int(evaluated["warning"][i]), "cause": CAUSES[evaluated["cause"][i]],
             "direct_index_mm": number("direct_index_mm"), "min_inverse_index": number("min_inverse_index"),
             "min_rod_distance_mm": number("min_rod_distance_mm"),
-            "min_crank_distance_mm": number("min_crank_distance_mm"),
+            "min_crank_distance_mm": number("min_crank_distance_mm"), "load_fraction": number("load_fraction"),
+            "min_stiffness_n_per_mm": number("min_stiffness_n_per_mm"),
             "joints": [float(v) for v in evaluated["joints"][i] * scale]}
 
 
@@ -360,6 +367,7 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
         "tilt_limits": "available" if limits else
         f"not analysed: the platform's tilt is parasitic (task: {', '.join(free)})" if robot.task else
         f"not analysed: the platform cannot tilt (free: {', '.join(free)})",
+        "loads": loads_available(robot),
         "slices": "available" if sliced else
         f"not analysed: fewer than two free position coordinates (free: {', '.join(free)})",
     }
@@ -371,7 +379,7 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
                  "sweep_angle_step_deg": SWEEP_STEP_DEG, "sweep_position_steps": SWEEP_STEPS,
                  "slice_cells": SLICE_CELLS, "slice_rays": SLICE_RAYS,
                  "crossing_fraction": CROSSING, "crossing_sign_of_det_j": True,
-                 "direct_index_at_home_mm": _finite_or_none(home.index_mm), "det_j_sign_at_home": home.det_sign,
+                 "direct_index_at_home_mm": float(home.index_mm) if np.isfinite(home.index_mm) else None, "det_j_sign_at_home": home.det_sign,
                  "singular_fraction": SINGULAR}
     return {"robot": robot.name, "posture": posture, "available": available, "settings": described,
             "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min,
@@ -387,7 +395,3 @@ def singular_at_home(robot, home):
                 f"{singular_index_mm(robot):.3g} mm ({SINGULAR:g} of the robot's size)")
     return (f"home is a direct singularity: the closure Jacobian over the free coordinates is singular there "
             f"(scaled determinant at most {SINGULAR ** 2:g})")
-
-
-def _finite_or_none(value):
-    return float(value) if np.isfinite(value) else None

@@ -19,9 +19,10 @@ from .analysis import CAUSES
 from ..runtime.templates import template
 
 COLOURS = {"unreachable": "#d62728", "joint_limits": "#ff7f0e", "direct_singularity": "#9467bd",
-           "collision": "#8c564b", "none": "#2ca02c"}
+           "collision": "#8c564b", "none": "#2ca02c", "actuator_load": "#e377c2", "joint_angle": "#7f7f7f"}
 LABELS = {"unreachable": "unreachable", "joint_limits": "joint limits", "direct_singularity": "direct singularity",
-          "collision": "collision", "none": "within limits"}
+          "collision": "collision", "none": "within limits", "actuator_load": "actuator load",
+          "joint_angle": "passive joint angle"}
 OUTSIDE = {"facecolor": "#eeeeee", "edgecolor": "#b0b0b0", "hatch": "///", "linewidth": 0.0}
 """How the part of a slice's axes outside the analysed window looks (and its legend swatch)."""
 OUTSIDE_LABEL = "not analysed (outside the window)"

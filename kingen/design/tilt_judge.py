@@ -16,6 +16,7 @@ import numpy as np
 
 from ..defaults import VERSION
 from .analysis import CAUSES, CROSSING, Settings, singular_index_mm
+from .load_analysis import load_limited
 from ..runtime.compiler import compile_c, compiler_command
 from ..runtime.files import cache_dir, cached, digest, write_atomic
 from ..robot.limbs.crank import Crank
@@ -34,8 +35,10 @@ COLLISION_MODELS = {"segments": 1, "thesis": 2}
 
 
 def judges(robot):
-    """Whether the compiled judge decides this robot: six cranks, no travel limits."""
-    return robot.dof == 6 and all(isinstance(limb, Crank) and limb.travel is None for limb in robot.limbs)
+    """Whether the compiled judge decides this robot: six cranks, no travel limits, no load limits
+    (kingen.design.load_analysis judges those)."""
+    return (robot.dof == 6 and all(isinstance(limb, Crank) and limb.travel is None for limb in robot.limbs)
+            and not load_limited(robot))
 
 
 @functools.lru_cache(maxsize=1)

@@ -17,7 +17,11 @@ Decision quantities (one column each), internal units:
   sign at the move's start: its sign changes where the platform changes assembly mode;
 - ``collision``: the least clearance (mm) between passive links, and between cranks, as
   cylinders of the robot file's ``collision`` radii (kingen.kinematics.collision, model
-  ``segments``): below 0 the cylinders overlap. Present only where the file gives radii.
+  ``segments``): below 0 the cylinders overlap. Present only where the file gives radii;
+- ``joint angle``: a limb's ``joint_limits`` minus its base or platform passive joint's angle
+  from its neutral axis (degrees; kingen.kinematics.loads), its ``part`` 'base' or 'platform';
+- ``actuator load``: a limb's max_force or max_torque minus the magnitude of the load that holds
+  the payload at rest (N or N m; kingen.kinematics.loads).
 """
 
 from dataclasses import dataclass
@@ -25,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.collision import clearances
+from ..kinematics.loads import static_loads_of
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from ..kinematics.singularity import limb_wrenches
@@ -104,7 +109,20 @@ class Evaluator:
             columns.append(Quantity("assembly change"))
         self.collisions = self._collision_pairs()
         columns += [Quantity("collision", part=pair) for pair in self.collisions]
+        columns += self._load_quantities()
         self.quantities = tuple(columns)
+        self.loads_judged = any(quantity.kind in LOAD_KINDS for quantity in columns)
+
+    def _load_quantities(self):
+        """The passive joints' angles and the actuators' loads that the robot file limits."""
+        columns = []
+        for joint, limb in enumerate(self.robot.limbs):
+            for side in ("base", "platform"):
+                if limb.joint_limits is not None and getattr(limb.joint_limits, side) is not None:
+                    columns.append(Quantity("joint angle", joint, True, part=side))
+            if (limb.max_torque if limb.joint_type.wraps else limb.max_force) is not None:
+                columns.append(Quantity("actuator load", joint, True))
+        return columns
 
     def _collision_pairs(self):
         """Which clearances the robot file's radii judge: 'rods' (passive links) when it gives
@@ -130,6 +148,7 @@ class Evaluator:
         clearance = dict(zip(("rods", "cranks"), clearances(self.robot, solution.points, joints))) \
             if self.collisions else {}
         index = solution.direct_index[:, 0] if solution.direct_index is not None else np.full(len(u), np.nan)
+        held = static_loads_of(self.robot, t6, solution) if self.loads_judged else None
         for column, quantity in enumerate(self.quantities):
             joint = quantity.joint
             if quantity.kind == "travel":
@@ -143,6 +162,8 @@ class Evaluator:
                 margins[:, column] = np.nan_to_num(solution.direct_index[:, 0] - self.threshold, nan=-np.inf)
             elif quantity.kind == "collision":
                 margins[:, column] = clearance[quantity.part]
+            elif quantity.kind in LOAD_KINDS:
+                margins[:, column] = self.limit_of(quantity) - _load_value(quantity, held)
             else:
                 margins[:, column] = determinant
         return Batch(np.asarray(piece), np.asarray(u, dtype=float), poses, joints, margins, np.min(radicands, axis=1),
@@ -168,6 +189,11 @@ class Evaluator:
             return SINGULAR_TOLERANCE
         if quantity.kind == "direct index":
             return self.threshold
+        if quantity.kind == "joint angle":
+            return getattr(self.robot.limbs[quantity.joint].joint_limits, quantity.part)
+        if quantity.kind == "actuator load":
+            limb = self.robot.limbs[quantity.joint]
+            return limb.max_torque if limb.joint_type.wraps else limb.max_force
         return 0.0
 
     def value_of(self, quantity, batch, row):
@@ -175,4 +201,20 @@ class Evaluator:
         if quantity.kind == "travel":
             return batch.joints[row, quantity.joint]
         column = self.quantities.index(quantity)
+        if quantity.kind in LOAD_KINDS:  # limits from above
+            return self.limit_of(quantity) - batch.margins[row, column]
         return batch.margins[row, column] + self.limit_of(quantity)
+
+
+LOAD_KINDS = ("joint angle", "actuator load")
+"""Decision quantities in display units (degrees, N or N m), limited from above."""
+
+
+def _load_value(quantity, held):
+    """(n,) a load quantity's value from kingen.kinematics.loads' Loads ``held`` (posture 0):
+    the passive joint's angle in degrees, or the actuator load's magnitude (NaN: unreachable or
+    singular, judged beyond)."""
+    if quantity.kind == "joint angle":
+        angles = held.base_angles if quantity.part == "base" else held.platform_angles
+        return np.degrees(angles[:, 0, quantity.joint])
+    return np.nan_to_num(np.abs(held.forces[:, 0, quantity.joint]), nan=np.inf)

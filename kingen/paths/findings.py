@@ -13,6 +13,8 @@ import numpy as np
 
 MAX_PROBLEMS = 1000
 TRACE_POINTS = 4000
+UNSCALED = ("unreachable", "limb singular", "joint angle", "actuator load")
+"""Kinds whose values are not the joint's (radicands; degrees, N or N m already in display units)."""
 """The figures' samples at most: the trace keeps every k-th sample, k doubling as it fills."""
 
 
@@ -79,7 +81,7 @@ class Findings:
     def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None, between=None):
         """A Place from internal units (joints in mm or rad) for joint index ``joint`` or None."""
         scale = self.display_scale
-        shown = float(scale[joint]) if joint is not None and kind not in ("unreachable", "limb singular") else 1.0
+        shown = float(scale[joint]) if joint is not None and kind not in UNSCALED else 1.0
         return Place(kind, None if joint is None else self.joint_names[joint], int(line),
                      [float(v) for v in pose], [float(v) for v in np.asarray(joints) * scale],
                      float(value) * shown, float(limit) * shown, float(margin), override, between)

@@ -32,6 +32,8 @@ def checks(outcome):
         "assembly change": "the robot has no six force lines",
         "collision": "the robot file gives no collision: radii (rod_radius, leg_radius, crank_radius)"
         if outcome.robot.collision is None else "the robot has fewer than two limbs",
+        "joint angle": "the robot file gives no limb joint_limits",
+        "actuator load": "the robot file gives no limb max_force or max_torque",
     }
     if findings.samples == 0:
         return {kind: "not exercised: the program has no move" for kind in list(reasons) + list(SPEED_KINDS)}
@@ -84,6 +86,10 @@ def _joint_units(outcome, joint, kind, between=None):
     base = "deg" if outcome.robot.revolute[index] else "mm"
     if kind in ("unreachable", "limb singular"):
         return ""
+    if kind == "joint angle":
+        return "deg"
+    if kind == "actuator load":
+        return "N m" if outcome.robot.revolute[index] else "N"
     return {"joint speed": f"{base}/s", "joint acceleration": f"{base}/s^2"}.get(kind, base)
 
 
@@ -93,7 +99,8 @@ def problem_rows(outcome):
     for place in outcome.findings.sorted_problems():
         units = _joint_units(outcome, place.joint, place.kind, place.between)
         extra = f" (fits at {place.override * 100:.0f}% feed)" if place.override is not None else ""
-        rows.append([str(place.line), place.kind, place.joint or place.between or "-", f"{number_text(place.value, 6)} {units}".strip() + extra,
+        rows.append([str(place.line), place.kind, " ".join(filter(None, (place.joint, place.between))) or "-",
+                     f"{number_text(place.value, 6)} {units}".strip() + extra,
                      f"{number_text(place.limit, 6)} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
     return rows
 

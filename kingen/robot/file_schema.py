@@ -9,6 +9,7 @@ from pydantic import AfterValidator, Field
 
 from .design_schema import Optimize
 from .layouts import Layout
+from .loads_schema import Gravity, PayloadFile
 from .limbs import MODELS
 from .passive_leg import PassiveLegFile
 from .schema import MAX_MM, Coordinate, Identifier, Length, Pose, Strict
@@ -119,5 +120,8 @@ def _schema_over(models):
         collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")
         units: Literal["mm", "inch"] = Field("mm", description="The file's length unit.")
         optimize: Optional[Optimize] = Field(None, description="The design problem `kingen optimize` searches.")
+        payload: Optional[PayloadFile] = Field(None, description="The rigid body the platform carries: `kingen loads` "
+                                                                 "and verify's machine check hold it.")
+        gravity: Gravity = Field([0.0, 0.0, -9.81], description="m/s^2 in the base frame.")
 
     return RobotFile

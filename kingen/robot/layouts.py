@@ -9,9 +9,10 @@ docs/explanation/conventions.md states the formulas.
 import math
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from .limbs import Crank, Leg, Rail, model_name
+from .loads_schema import ForceLimit, JointLimits, refuse_wrong_limit
 from .schema import MAX_MM, Coordinate, CalibrationField, Length, ReferenceLength, SixAngles, Strict, Travel
 
 class _Layout(Strict):
@@ -19,6 +20,10 @@ class _Layout(Strict):
 
     travel: Optional[Travel] = None
     calibrate: dict[str, Annotated[list[CalibrationField], Field(min_length=6, max_length=6)]] = {}
+    max_force: Optional[ForceLimit] = Field(None, description="N: every limb's actuator force limit (prismatic).")
+    max_torque: Optional[ForceLimit] = Field(None, description="N m: every limb's actuator torque limit (revolute).")
+    stiffness: Optional[ForceLimit] = Field(None, description="Every limb's actuator stiffness: N/mm or N m/rad.")
+    joint_limits: Optional[JointLimits] = Field(None, description="Every limb's passive joints' limits (degrees).")
     limb_class: ClassVar[type] = None
 
     @field_validator("calibrate")
@@ -30,9 +35,18 @@ class _Layout(Strict):
                                  f"(choose from {', '.join(cls.limb_class.calibratable)})")
         return calibrate
 
+    @model_validator(mode="after")
+    def _limbs_take_their_limit(self):
+        """Every limb of the layout takes the same limit: max_force (prismatic) or max_torque (revolute)."""
+        refuse_wrong_limit(self.limb_class.joint_type, self.max_force, self.max_torque)
+        return self
+
     def _shared(self, index):
-        """The keys every generated limb takes from the layout: travel and its calibration fields."""
-        return {"travel": self.travel,
+        """The keys every generated limb takes from the layout: travel, its calibration fields and
+        the load fields given."""
+        loads = {name: getattr(self, name) for name in ("max_force", "max_torque", "stiffness", "joint_limits")
+                 if getattr(self, name) is not None}
+        return {"travel": self.travel, **loads,
                 "calibrate": {parameter: fields[index] for parameter, fields in self.calibrate.items()}}
 
 

@@ -27,6 +27,7 @@ from .passive_leg import passive_leg_of
 from ..runtime.resources import robots_dir
 from .reading import read_robot_file
 from .file_schema import MAX_TWO_BRANCH_LIMBS, Region, robot_file_schema
+from .loads_schema import payload_of
 from .schema import MAX_MM, calibration_value
 from .wrist import with_wrist
 from ..units import LENGTH_UNITS, document_in_mm
@@ -71,6 +72,10 @@ class Robot:
     """With a wrist: the parallel part alone (its region the platform's), else None."""
     lines: tuple = ()
     """((field path, 1-based line) ...) of the robot file, for reports that point at it."""
+    payload: Optional[object] = None
+    """What the platform carries (kingen.robot.loads_schema.Payload: kg, mm, kg m^2), or None."""
+    gravity: tuple = (0.0, 0.0, -9.81)
+    """m/s^2, base frame."""
 
     def line_of(self, *path):
         """The robot file's line of the field at ``path`` (or of its nearest parent), else 1."""
@@ -270,6 +275,8 @@ def robot_from_data(data, path, lines=None, raw=None):
         length_unit=document.units,
         lines=tuple(lines.items()),
         passive_leg=passive_leg_of(document, locate),
+        payload=payload_of(document, LENGTH_UNITS[document.units]),
+        gravity=tuple(document.gravity),
     )
     if robot.size_mm > MAX_MM:
         raise locate.error(["units"], f"the robot measures {robot.size_mm:g} mm, beyond the {MAX_MM:g} mm kingen "

@@ -19,17 +19,20 @@ from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, digest, write_atomic
 from ...defaults import DEFAULT_TIMEOUT, VERSION
 from .checks import CHECKS
+from .render import has_static_loads
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
 ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "default_geometry")
 """What the header declares for every robot (``<routine>_<name>``); six-limb robots add
-``direct_index``, machines with task coordinates and no wrist ``machine_pose``."""
+``direct_index``, machines with task coordinates and no wrist ``machine_pose``, robots without a
+wrist or task coordinates ``static_loads`` (render.has_static_loads)."""
 
 
 def entry_points(robot):
     """What ``robot``'s library exports (``<routine>_<name>``): :data:`ENTRY_POINTS` and its own."""
     return (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ()),
-            *(("machine_pose",) if robot.task and robot.wrist is None else ()))
+            *(("machine_pose",) if robot.task and robot.wrist is None else ()),
+            *(("static_loads",) if has_static_loads(robot) else ()))
 _batch_ffi = cffi.FFI()
 _batch_ffi.cdef("""
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,
@@ -88,6 +91,8 @@ class Library:
         int {routine}_jacobian(const void *geometry, const double *pose, int posture, double *jacobian);
         int {routine}_direct_index(const void *geometry, const double *pose, int posture, double *index);
         int {routine}_machine_pose(const double *pose, double *machine);
+        int {routine}_static_loads(const void *geometry, const double *pose, int posture, const double *payload,
+                                   double *forces);
         extern double {routine}_default_geometry;
         """)
         try:
@@ -165,6 +170,16 @@ class Library:
         index = self.ffi.new("double *")
         warning = self.functions["direct_index"](self.geometry, self.ffi.from_buffer("double[]", pose), posture, index)
         return index[0], warning
+
+    def static_loads(self, pose, posture, payload):
+        """(forces (dof,) N or N m, return) of one row-major pose (16,) and posture holding
+        ``payload`` (7,): mass kg, centre (3,) mm in the platform frame, gravity (3,) m/s^2."""
+        pose, payload = np.ascontiguousarray(pose, dtype=float), np.ascontiguousarray(payload, dtype=float)
+        forces = np.full(self.dof, np.nan)
+        returned = self.functions["static_loads"](self.geometry, self.ffi.from_buffer("double[]", pose), posture,
+                                                  self.ffi.from_buffer("double[]", payload),
+                                                  self.ffi.from_buffer("double[]", forces))
+        return forces, returned
 
     def _function(self, name):
         return _batch_ffi.cast("void *", int(self.ffi.cast("uintptr_t", self.functions[name])))

@@ -12,11 +12,12 @@ from pathlib import Path
 from typing import ClassVar, Optional
 
 import numpy as np
-from pydantic import field_validator
+from pydantic import field_validator, model_validator
 
 from ...conventions import PRISMATIC, JointType
 from ...runtime.resources import templates_dir
-from ..schema import CalibrationField, Identifier, PositiveRate, Strict, Travel, Vec3
+from ..loads_schema import ForceLimit, JointLimits, refuse_wrong_limit
+from ..schema import CalibrationField, Identifier, PositiveRate, Strict, Travel, UnitVec3, Vec3
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,21 @@ class LimbModel(Strict):
     (``kingen check-path`` judges the speeds a program needs against it)."""
     max_acceleration: Optional[PositiveRate] = None
     """The joint's drive's top acceleration, mm/s^2 or degrees/s^2; absent: not limited."""
+    max_force: Optional[ForceLimit] = None
+    """N: a prismatic actuator's largest force either way; absent: not limited (``kingen loads``)."""
+    max_torque: Optional[ForceLimit] = None
+    """N m: a revolute actuator's largest torque either way; absent: not limited."""
+    stiffness: Optional[ForceLimit] = None
+    """The actuator's stiffness along its joint: N/mm (prismatic) or N m/rad (revolute); absent: rigid
+    is not assumed, and no deflection is computed."""
+    joint_limits: Optional[JointLimits] = None
+    """The passive joints' largest angles (degrees) between the passive link and each joint's neutral axis."""
+    base_axis: Optional[UnitVec3] = None
+    """The base-side passive joint's neutral axis (base frame); absent: the link's direction at the
+    verification home in the working posture."""
+    platform_axis: Optional[UnitVec3] = None
+    """The platform joint's neutral axis (platform frame); absent: the link's direction at the
+    verification home in the working posture."""
     calibrate: dict[str, CalibrationField] = {}
     """Parameter -> calibration field read at run time; a zero field keeps the built-in value."""
 
@@ -85,6 +101,11 @@ class LimbModel(Strict):
     joint_words: ClassVar[str] = ""
     """What the joint's value measures, in words, for the setup sheet's joints table: its zero
     and the direction of positive values."""
+
+    @model_validator(mode="after")
+    def _check_actuator_limit(self):
+        refuse_wrong_limit(self.joint_type, self.max_force, self.max_torque)
+        return self
 
     @field_validator("calibrate")
     @classmethod

@@ -4,22 +4,26 @@ nothing of a machine whose legs cannot reach home or whose design is singular th
 implausibly small or large across gets a notice naming the units its file was read in."""
 
 import math
+from dataclasses import replace
 
 from ...conventions import wrap_angle
 from ...kinematics.home import home_problem, judged_posture, scale_notice
+from ...kinematics.loads import held_problem, held_text
 from .base import Check, VerifyCheck
 
 
 def machine_check(robot):
     """``machine``: passes when the judged posture (the working posture when the file gives one,
     else some posture) can be the machine's home (:func:`kingen.kinematics.home.home_problem`:
-    reachable, within travel, not singular); the failure says why, in the robot file's units.
+    reachable, within travel, not singular, its payload held within every actuator's force limit
+    and every passive joint within its limit: kingen.kinematics.loads.held_problem); the failure
+    says why, in the robot file's units.
     A machine with a wrist is judged by its parallel part at the platform's home, and its wrist
     joints at 0 (the home's tool pose) within their travel."""
-    if robot.wrist is not None:
-        return _with_wrist(robot, machine_check(robot.parallel))
+    if robot.wrist is not None:  # the payload sits on the tool: kingen loads judges it, not the parallel part alone
+        return _with_wrist(robot, machine_check(replace(robot.parallel, payload=None)))
     home = judged_posture(robot)
-    problem = home_problem(robot, home)
+    problem = home_problem(robot, home) or (held_problem(robot, home.posture) if home.reachable else None)
     if problem is not None:
         if robot.working_posture_given:
             problem += " (the file's working_posture)"
@@ -27,7 +31,8 @@ def machine_check(robot):
             problem += f"; none of its {robot.postures} postures can be its home"
         return Check("machine", False, f"{problem}: the machine cannot work there")
     index = "" if math.isnan(home.direct_index) else f", direct index {home.direct_index:.3g} mm"
-    return Check("machine", True, f"posture {home.posture} reaches the verification home within travel{index}")
+    return Check("machine", True, f"posture {home.posture} reaches the verification home within travel{index}"
+                                  f"{held_text(robot)}")
 
 
 def _with_wrist(robot, parallel):

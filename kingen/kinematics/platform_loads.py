@@ -1,0 +1,251 @@
+"""Actuator loads, passive-joint angles and the platform's deflection at poses, in numpy
+(docs/explanation/loads.md derives them).
+
+Frames and units. Poses are T6 (n, 4, 4), base frame, mm. A twist t = [v; omega] is the
+velocity v of the platform point at the base origin (mm/s) and the angular velocity omega
+(rad/s), base frame; a wrench W = [F; M] is a force F (N) and its moment M about the base
+origin (N mm), base frame: W . t is a power (N mm/s). Limb i's row J_i = w_i / t_i (its unit
+force line over its transmission, kingen.kinematics.singularity) gives its joint rate per twist.
+
+The platform moves in d free directions, the columns of T (6, d): the twists per unit rate of
+each free coordinate (a constrained machine's task coordinates, kingen.kinematics.parasitic.
+task_twists; otherwise the robot's ``forward.free`` coordinates with the others held, all six
+for a six-limb machine). Virtual work over those motions gives the actuators' generalized forces
+tau (N for a prismatic joint; N mm per rad for a revolute one, reported in N m) that hold the
+platform against the wrench W applied to it (gravity on the payload, an external wrench, minus
+the payload's rate of change of momentum, d'Alembert):
+
+    (J T)^T tau = -T^T W.
+
+Positive tau is the force or torque the actuator exerts in the direction that increases its
+joint. The constraints (passive joints, a machine's held coordinates) carry the rest,
+-(W + J^T tau). With each actuator's stiffness k_i, the platform's deflection under W is
+T ds with ds = ((J T)^T K (J T))^-1 T^T W (the passive joints rigid). The limbs' own masses
+are not modelled.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..conventions import pose_from_t6, t6_from_pose
+from .forward import COORDINATES
+from .parasitic import solve_parasitic, task_twists
+from .reference import solve
+from .routine import WARNINGS
+from .singularity import branch_table, branch_values, limb_wrenches
+
+MM_PER_M = 1000.0
+
+
+@dataclass(frozen=True)
+class Motion:
+    """The platform frame origin's motion, base frame: ``velocity`` (6,) [mm/s, rad/s] and
+    ``acceleration`` (6,) [mm/s^2, rad/s^2]."""
+
+    velocity: np.ndarray
+    acceleration: np.ndarray
+
+
+@dataclass(frozen=True)
+class Loads:
+    """Loads over n poses and every posture (p postures, m limbs).
+
+    ``machine`` (n, 4, 4): the T6 the machine takes (a constrained machine's, on its manifold).
+    ``forces`` (n, p, m): each actuator's generalized force, N (prismatic) or N m (revolute);
+    NaN where the posture is singular for loads (J T not invertible) or the pose unreachable.
+    ``constraint`` (n, p, 6): the wrench the constraints carry, N and N m about the platform origin, base frame.
+    ``base_angles``, ``platform_angles`` (n, p, m): each passive joint's angle from its neutral axis, rad.
+    ``deflection`` (n, p, 6): the platform origin's displacement (mm) and rotation vector (rad) under
+    the static wrench (gravity and the external wrench), or None where a limb has no stiffness.
+    ``warnings`` (n, p): the reference's WARN_* codes at the machine's pose.
+    """
+
+    machine: np.ndarray
+    forces: np.ndarray
+    constraint: np.ndarray
+    base_angles: np.ndarray
+    platform_angles: np.ndarray
+    deflection: object
+    warnings: np.ndarray
+
+
+def free_twists(robot, t6):
+    """(n, 6, d) the twists per unit rate of each free coordinate at T6 (n, 4, 4) the machine
+    takes: its task coordinates (kingen.kinematics.parasitic.task_twists), else its ``forward.free``
+    coordinates (all six when none are declared) with the other pose coordinates held."""
+    if robot.task:
+        return task_twists(robot, t6)
+    free = robot.forward_free or COORDINATES
+    return coordinate_twists(t6)[:, :, [COORDINATES.index(name) for name in free]]
+
+
+def coordinate_twists(t6):
+    """(n, 6, 6) the twist per unit rate of each pose coordinate (x, y, z in mm; roll, pitch, yaw
+    in rad) with the others held, at T6 (n, 4, 4): [e_k; 0] for a translation; for an angle,
+    omega = E_k (E's columns Rz Ry e_x, Rz e_y, e_z) and v = p x omega (the platform origin p held)."""
+    t6 = np.asarray(t6, dtype=float)
+    _, pitch, yaw = np.radians(pose_from_t6(t6)[:, 3:]).T
+    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
+    zero, one = np.zeros_like(yaw), np.ones_like(yaw)
+    euler = np.stack([np.stack([cy * cp, sy * cp, -sp], -1), np.stack([-sy, cy, zero], -1),
+                      np.stack([zero, zero, one], -1)], axis=1)  # (n, column, 3)
+    twists = np.zeros((len(t6), 6, 6))
+    twists[:, :3, :3] = np.eye(3)
+    twists[:, 3:, 3:] = np.swapaxes(euler, 1, 2)
+    twists[:, :3, 3:] = np.swapaxes(np.cross(t6[:, None, 3, :3], euler), 1, 2)
+    return twists
+
+
+def payload_wrench(robot, t6, motion=None):
+    """(n, 6) the wrench [N; N mm about the base origin] the payload applies to the platform at
+    T6 (n, 4, 4): its weight, minus its rate of change of momentum when ``motion`` is given.
+    Zero without a payload."""
+    t6 = np.asarray(t6, dtype=float)
+    wrench = np.zeros((len(t6), 6))
+    payload = robot.payload
+    if payload is None:
+        return wrench
+    rotation, origin = np.swapaxes(t6[:, :3, :3], 1, 2), t6[:, 3, :3]
+    arm = rotation @ np.asarray(payload.centre, dtype=float)  # origin to centre, mm
+    force = payload.mass * np.broadcast_to(np.asarray(robot.gravity, dtype=float), arm.shape)
+    moment = np.zeros_like(arm)
+    if motion is not None:
+        velocity = np.broadcast_to(np.asarray(motion.velocity, dtype=float), (len(t6), 6))
+        acceleration = np.broadcast_to(np.asarray(motion.acceleration, dtype=float), (len(t6), 6))
+        omega, alpha = velocity[:, 3:], acceleration[:, 3:]
+        centre_acceleration = acceleration[:, :3] + np.cross(alpha, arm) + np.cross(omega, np.cross(omega, arm))
+        force = force - payload.mass * centre_acceleration / MM_PER_M
+        inertia = rotation @ payload.inertia_matrix @ np.swapaxes(rotation, 1, 2)  # kg m^2, base axes
+        spin = np.einsum("nij,nj->ni", inertia, omega)
+        moment = -(np.einsum("nij,nj->ni", inertia, alpha) + np.cross(omega, spin)) * MM_PER_M
+    wrench[:, :3] = force
+    wrench[:, 3:] = np.cross(origin + arm, force) + moment
+    return wrench
+
+
+def external_wrench(t6, wrench):
+    """(n, 6) [N; N mm about the base origin] of a wrench ``wrench`` (6,) [N; N m] applied at the
+    platform origin of T6 (n, 4, 4), base frame."""
+    t6 = np.asarray(t6, dtype=float)
+    wrench = np.asarray(wrench, dtype=float)
+    force = np.broadcast_to(wrench[:3], (len(t6), 3))
+    return np.concatenate([force, np.cross(t6[:, 3, :3], force) + wrench[3:] * MM_PER_M], axis=1)
+
+
+def platform_loads(robot, machine, solution, chosen, static, applied):
+    """:class:`Loads` of ``robot`` (no wrist) at the T6 ``machine`` (n, 4, 4) it takes, from the
+    reference's ``solution`` there, in postures ``chosen``, holding the wrenches ``static`` (at
+    rest) and ``applied`` (n, 6) [N; N mm about the base origin] applied to the platform."""
+    wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
+    table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
+    limbs = np.arange(robot.dof)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lines = wrenches[:, limbs, table]  # (n, p, m, 6): each limb's unit force line [f; C x f]
+        rows = lines / transmissions[:, limbs, table][..., None]
+    twists = None if (not robot.task and len(robot.forward_free or COORDINATES) == 6) else free_twists(robot, machine)
+    if twists is None:  # six free coordinates: J^T tau = -W
+        reduced, generalized = rows, -applied
+    else:
+        reduced, generalized = rows @ twists[:, None], -np.einsum("nkd,nk->nd", twists, applied)
+    forces = _solve_each(np.swapaxes(reduced, 2, 3), generalized[:, None, :])  # (n, p, m)
+    carried = -(applied[:, None, :] + (np.swapaxes(rows, 2, 3) @ forces[..., None])[..., 0])
+    constraint = _about_origin(carried, machine)
+    scale = np.where(np.array([t.wraps for t in robot.joint_types[:robot.dof]]), 1.0 / MM_PER_M, 1.0)
+    warnings = solution.warnings[:, chosen]
+    unreachable = warnings == WARNINGS["WARN_UNREACHABLE"]
+    forces = np.where(unreachable[..., None], np.nan, forces * scale)
+    base_angles, platform_angles = _angles(robot, _in_both_frames(lines[..., :3], machine))
+    return Loads(machine=machine, forces=forces, constraint=np.where(unreachable[..., None], np.nan, constraint),
+                 base_angles=base_angles, platform_angles=platform_angles,
+                 deflection=_deflection(robot, machine, reduced, twists, static), warnings=warnings)
+
+
+HADAMARD_FLOOR = 1e-13
+"""A matrix counts as singular (loads undefined, NaN) where |det| is at most this fraction of
+the product of its rows' norms (Hadamard's bound)."""
+
+
+def _solve_each(matrices, right):
+    """Solutions x of matrices (..., d, d) x = right (..., d), NaN where a matrix is not finite
+    or singular (HADAMARD_FLOOR)."""
+    matrices, right = np.broadcast_arrays(matrices, right[..., None])
+    out = np.full(right.shape[:-1], np.nan)
+    if matrices.shape[-2] != matrices.shape[-1]:
+        return out
+    finite = np.all(np.isfinite(matrices), axis=(-2, -1))
+    bound = np.prod(np.linalg.norm(np.where(finite[..., None, None], matrices, 0.0), axis=-1), axis=-1)
+    good = finite & (np.abs(np.linalg.det(np.where(finite[..., None, None], matrices, 0.0))) > HADAMARD_FLOOR * bound)
+    out[good] = np.linalg.solve(matrices[good], right[good])[..., 0]
+    return out
+
+
+def _about_origin(wrench, t6):
+    """Wrenches (n, p, 6) [N; N mm about the base origin] as [N; N m about the platform origin]."""
+    force = wrench[..., :3]
+    moment = wrench[..., 3:] - np.cross(t6[:, None, 3, :3], force)
+    return np.concatenate([force, moment / MM_PER_M], axis=-1)
+
+
+def _stiffness(robot):
+    """(m,) each actuator's stiffness in N/mm or N mm/rad, or None where a limb has none."""
+    values = [limb.stiffness for limb in robot.limbs]
+    if any(value is None for value in values):
+        return None
+    return np.array([value * (MM_PER_M if limb.joint_type.wraps else 1.0)
+                     for value, limb in zip(values, robot.limbs)])
+
+
+def _deflection(robot, t6, reduced, twists, static):
+    """(n, p, 6) the platform origin's displacement (mm) and rotation vector (rad) under the
+    static wrench (module docstring), or None without every limb's stiffness; ``twists`` None:
+    the six coordinates free (T the identity's change of basis, left out)."""
+    stiffness = _stiffness(robot)
+    if stiffness is None or reduced.shape[-1] != reduced.shape[-2]:
+        return None
+    matrix = np.swapaxes(reduced, 2, 3) @ (stiffness[:, None] * reduced)
+    if twists is None:
+        twist = _solve_each(matrix, static[:, None, :])  # (n, p, 6)
+    else:
+        moves = _solve_each(matrix, np.einsum("nkd,nk->nd", twists, static)[:, None, :])  # (n, p, d)
+        twist = np.einsum("nkd,npd->npk", twists, moves)
+    displacement = twist[..., :3] + np.cross(twist[..., 3:], t6[:, None, 3, :3])
+    return np.concatenate([displacement, twist[..., 3:]], axis=-1)
+
+
+def _in_both_frames(directions, t6):
+    """(directions, the same in the platform frame): each limb's passive-link direction (n, p, m, 3)
+    (unit, from the base side to the platform point: its force line's, base frame) at T6 (n, 4, 4)."""
+    rotation = np.swapaxes(np.asarray(t6, dtype=float)[:, :3, :3], 1, 2)
+    return directions, np.einsum("nji,npmj->npmi", rotation, directions)
+
+
+def neutral_axes(robot):
+    """((m, 3), (m, 3)): each limb's base joint axis (base frame) and platform joint axis
+    (platform frame): the file's ``base_axis``/``platform_axis``, else the link's direction at
+    the verification home in the working posture."""
+    at_home = machine_t6(robot, np.asarray(robot.verification.home, dtype=float)[None])
+    solution = solve(robot, at_home)
+    wrenches, _ = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints), with_transmissions=False)
+    table = branch_table(robot)[[robot.working_posture], :robot.dof]
+    base, platform = _in_both_frames(wrenches[:, np.arange(robot.dof), table][..., :3], at_home)
+    bases = np.array([limb.base_axis if limb.base_axis is not None else base[0, 0, index]
+                      for index, limb in enumerate(robot.limbs)], dtype=float)
+    platforms = np.array([limb.platform_axis if limb.platform_axis is not None else platform[0, 0, index]
+                          for index, limb in enumerate(robot.limbs)], dtype=float)
+    return bases, platforms
+
+
+def machine_t6(robot, poses):
+    """T6 (n, 4, 4) the machine takes for poses (n, 6) (mm, degrees)."""
+    t6 = t6_from_pose(poses)
+    return solve_parasitic(robot, t6).t6 if robot.task else t6
+
+
+def _angles(robot, directions):
+    """((n, p, m), (n, p, m)) rad: each limb's base and platform passive joint's angle between
+    its link (``directions``: _link_directions) and its neutral axis (neutral_axes)."""
+    base, platform = directions
+    base_axes, platform_axes = neutral_axes(robot)
+    return (np.arccos(np.clip(np.einsum("npmi,mi->npm", base, base_axes), -1.0, 1.0)),
+            np.arccos(np.clip(np.einsum("npmi,mi->npm", platform, platform_axes), -1.0, 1.0)))
