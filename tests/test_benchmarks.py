@@ -102,6 +102,9 @@ SECTION_FIGURES = {
                    "short_moves": {"samples": 401, "moves": 200, "seconds": 0.3, "problems": 0, "peak_mb": 91.7},
                    "long_routine": {"samples": 2573, "moves": 3, "seconds": 0.05, "problems": 0, "peak_mb": 95.0}}],
         "grazing": {"set up": 2, "found": 2, "more at finer chord": 0, "regular samples alone": 0}},
+    "loads": {"loads": [{"robot": "hexapod", "poses": 1000, "postures": 1, "reference_s": 0.01, "loads_s": 0.02,
+                         "ratio": 2.0}],
+              "check_path": {"rows": 100, "plain_s": 1.0, "loads_s": 1.1, "ratio": 1.1}},
 }
 """Small figures of every section of benchmarks/sections.py, in the shapes their scripts write."""
 
