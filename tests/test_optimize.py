@@ -130,26 +130,6 @@ def test_pool_workers_die_with_kingen_killed_by_sigkill(small_file, tmp_path):
     assert survivors == []
 
 
-def test_a_stopped_run_resumes_to_the_same_result(two_workers, small_file, tmp_path, monkeypatch):
-    result, _ = two_workers
-    calls = {"count": 0}
-    original = search.save
-
-    def stop_after_two(state, folder):
-        original(state, folder)
-        calls["count"] += 1
-        if calls["count"] == 2:
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(search, "save", stop_after_two)
-    assert main(["optimize", str(small_file), "-o", str(tmp_path), "--seed", "5", "--workers", "1"]) == 130
-    assert (tmp_path / search.CHECKPOINT).is_file() and not (tmp_path / "optimization.json").exists()
-    monkeypatch.setattr(search, "save", original)
-    resumed = _run(small_file, tmp_path, "--workers", "1", "--resume")
-    for key in ("objective_deg", "history", "variables", "evaluations"):
-        assert resumed[key] == result[key]
-
-
 def test_bad_input_is_one_line(small_file, tmp_path, capsys):
     assert main(["optimize", "hexapod", "-o", str(tmp_path / "a")]) == 2
     assert "optimize: no design problem in this robot file" in capsys.readouterr().err

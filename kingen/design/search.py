@@ -54,14 +54,17 @@ def fingerprint(problem):
 
 
 def new_state(problem, seed, fingerprint):
-    """A swarm of ``search.swarm`` particles for ``problem``, seeded."""
+    """A swarm of ``search.swarm`` particles for ``problem``, seeded. pymoo never ends it (its
+    own termination criteria would finish the algorithm, which a swarm rebuilt from a checkpoint
+    cannot do: run_swarm alone decides when the search stops)."""
     from pymoo.algorithms.soo.nonconvex.pso import PSO
     from pymoo.core.problem import Problem as PymooProblem
+    from pymoo.core.termination import NoTermination
 
     search = problem.section.search
     k = search.constriction
     algorithm = PSO(pop_size=search.swarm, w=k, c1=k * search.c1, c2=k * search.c2, adaptive=False,
-                    pertube_best=False, max_velocity_rate=1.0)
+                    pertube_best=False, max_velocity_rate=1.0, termination=NoTermination())
     bounds = PymooProblem(n_var=len(problem.names), n_obj=1, xl=problem.lower, xu=problem.upper)
     algorithm.setup(bounds, seed=seed, verbose=False)
     return SearchState(algorithm=algorithm, seed=seed, fingerprint=fingerprint)
