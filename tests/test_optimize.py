@@ -284,3 +284,42 @@ def test_a_checkpoint_another_user_could_have_written_is_refused(checkpointed, s
     code, error = _resume(small_file, tmp_path, capsys)
     assert code == 2 and len(error.splitlines()) == 1
     assert f"{path}: {expected}" in error
+
+
+@pytest.mark.parametrize("field, value, problem", [
+    ("c1", 1e308, "Input should be less than or equal to 100 (got 1e+308)"),
+    ("c2", 1e155, "Input should be less than or equal to 100 (got 1e+155)"),
+    ("c1", 0.0, "Input should be greater than 0 (got 0.0)")])
+def test_swarm_coefficients_that_would_make_the_search_non_finite_are_refused(small_file, tmp_path, capsys, field,
+                                                                              value, problem):
+    data = read_robot_file(small_file)[0]
+    data["optimize"]["search"][field] = value
+    bad = _dump(data, tmp_path / "bad.yaml")
+    assert main(["optimize", str(bad), "-o", str(tmp_path / "c")]) == 2
+    error = capsys.readouterr().err.strip()
+    found = re.fullmatch(rf"kingen: error: {re.escape(str(bad))}:(\d+): optimize\.search\.{field}: "
+                         rf"{re.escape(problem)}", error)
+    assert found and bad.read_text().splitlines()[int(found[1]) - 1].strip().startswith(f"{field}:")
+    assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("c1, c2", [(100.0, 100.0), (1e-300, 4.000000001), (100.0, 1e-300)])
+def test_the_extreme_coefficients_allowed_keep_the_swarm_finite(small_file, tmp_path, c1, c2):
+    """At the coefficients' bounds the constriction factor is finite and positive and every
+    position and velocity of a few iterations is finite (the checkpoint refuses anything else)."""
+    data = read_robot_file(small_file)[0]
+    data["optimize"]["search"].update(c1=c1, c2=c2, iterations=3)
+    problem = Problem(data, small_file)
+    k = problem.section.search.constriction
+    phi = c1 + c2
+    assert k == pytest.approx(2.0 / (phi - 2.0 + (phi * phi - 4.0 * phi) ** 0.5), rel=1e-12) and k > 0
+    state = search.run_swarm(problem, search.new_state(problem, 5, "x"), _Here, tmp_path)
+    assert state.iteration == 3
+    swarm = json.loads((tmp_path / search.CHECKPOINT).read_text())["swarm"]
+    assert all(abs(value) < 1e7 for name in ("x", "v") for row in swarm[name] for value in row)
+
+
+class _Here:
+    """An executor evaluating in this process."""
+
+    map = staticmethod(map)

@@ -44,13 +44,21 @@ class Objective(Strict):
     collision: Literal["segments", "thesis"] = "thesis"
 
 
+MAX_COEFFICIENT = 100.0
+"""c1 and c2 at most: phi = c1 + c2 and phi^2 stay far from overflow, so the constriction
+factor K and the swarm's coefficients K, K c1, K c2 are finite and positive (beyond about
+1e154, phi^2 overflows and K is 0 or NaN: a frozen swarm or NaN velocities)."""
+
+
 class Search(Strict):
     """The particle swarm (constriction form: v <- K [v + c1 r1 (p - x) + c2 r2 (g - x)])."""
 
     swarm: Annotated[int, Field(ge=2, le=1000)] = 30
     iterations: Annotated[int, Field(ge=1, le=100000)] = 3000
-    c1: Annotated[float, Field(gt=0)] = 2.8
-    c2: Annotated[float, Field(gt=0)] = 1.3
+    c1: Annotated[float, Field(gt=0, le=MAX_COEFFICIENT)] = 2.8
+    """The pull towards each particle's own best."""
+    c2: Annotated[float, Field(gt=0, le=MAX_COEFFICIENT)] = 1.3
+    """The pull towards the swarm's best."""
     patience: Annotated[int, Field(ge=1)] = 300
     """Stop when the best objective has not improved for this many iterations."""
 
