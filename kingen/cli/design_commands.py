@@ -44,7 +44,7 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     from ..runtime.executors import executor
     from ..design.problem import Problem, design_yaml, optimized_name
     from ..design.report import convergence, polar_comparison, report_html
-    from ..runtime.files import default_out_dir, write_atomic
+    from ..runtime.files import default_out_dir, write_files
 
     model, data, lines = load_model_and_data(robot)
     if not data.get("optimize"):
@@ -80,10 +80,8 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     pngs = {"polar.png": polar_comparison(outcome), "convergence.png": convergence(outcome)}
     outputs = {f"{name}.yaml": design_yaml(problem, choice.design, outcome["objective_deg"], header),
                "optimization.json": text, **pngs, "report.html": report_html(outcome, pngs)}
-    for file_name, content in outputs.items():
-        write_atomic(out_dir / file_name, content)
-    if json_path is not None:
-        write_atomic(json_path, text)
+    write_files({**{out_dir / file_name: content for file_name, content in outputs.items()},
+                 **({} if json_path is None else {json_path: text})})
     say(f"optimize {model.name}: {found}; {counted(outcome['iterations'], 'iteration')} "
         f"({outcome['stopped_by']}) and {counted(outcome['evaluations'], 'design')}, {seconds:.1f} s with {described}")
     for file_name in outputs:
