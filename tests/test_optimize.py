@@ -289,26 +289,31 @@ def test_a_checkpoint_another_user_could_have_written_is_refused(checkpointed, s
 @pytest.mark.parametrize("field, value, problem", [
     ("c1", 1e308, "Input should be less than or equal to 100 (got 1e+308)"),
     ("c2", 1e155, "Input should be less than or equal to 100 (got 1e+155)"),
-    ("c1", 0.0, "Input should be greater than 0 (got 0.0)")])
+    ("c1", 0.0, "Input should be greater than 0 (got 0.0)")] + [
+    (f"refine.{name}", value, f"Input should be greater than or equal to 0.000001 (got {value!r})")
+    for name, value in (("angle_step", 5e-324), ("length_step", 1e-9))])
 def test_swarm_coefficients_that_would_make_the_search_non_finite_are_refused(small_file, tmp_path, capsys, field,
                                                                               value, problem):
     data = read_robot_file(small_file)[0]
-    data["optimize"]["search"][field] = value
+    section, key = field.split(".") if "." in field else ("search", field)
+    data["optimize"][section][key] = value
     bad = _dump(data, tmp_path / "bad.yaml")
     assert main(["optimize", str(bad), "-o", str(tmp_path / "c")]) == 2
     error = capsys.readouterr().err.strip()
-    found = re.fullmatch(rf"kingen: error: {re.escape(str(bad))}:(\d+): optimize\.search\.{field}: "
+    found = re.fullmatch(rf"kingen: error: {re.escape(str(bad))}:(\d+): optimize\.{section}\.{key}: "
                          rf"{re.escape(problem)}", error)
-    assert found and bad.read_text().splitlines()[int(found[1]) - 1].strip().startswith(f"{field}:")
+    assert found and bad.read_text().splitlines()[int(found[1]) - 1].strip().startswith(f"{key}:")
     assert not (tmp_path / "c").exists()
 
 
-@pytest.mark.parametrize("c1, c2", [(100.0, 100.0), (1e-300, 4.000000001), (100.0, 1e-300)])
-def test_the_extreme_coefficients_allowed_keep_the_swarm_finite(small_file, tmp_path, c1, c2):
-    """At the coefficients' bounds the constriction factor is finite and positive and every
-    position and velocity of a few iterations is finite (the checkpoint refuses anything else)."""
+@pytest.mark.parametrize("c1, c2, step", [(100.0, 100.0, 1e-6), (1e-300, 4.000000001, 720.0), (100.0, 1e-300, 1.0)])
+def test_the_extreme_coefficients_allowed_keep_the_swarm_finite(small_file, tmp_path, c1, c2, step):
+    """At the coefficients' and steps' bounds the constriction factor is finite and positive,
+    every position and velocity of a few iterations is finite (the checkpoint refuses anything
+    else), and the refinement ends in a finite design within the bounds."""
     data = read_robot_file(small_file)[0]
     data["optimize"]["search"].update(c1=c1, c2=c2, iterations=3)
+    data["optimize"]["refine"].update(angle_step=step, length_step=step, iterations=1)
     problem = Problem(data, small_file)
     k = problem.section.search.constriction
     phi = c1 + c2
@@ -317,6 +322,8 @@ def test_the_extreme_coefficients_allowed_keep_the_swarm_finite(small_file, tmp_
     assert state.iteration == 3
     swarm = json.loads((tmp_path / search.CHECKPOINT).read_text())["swarm"]
     assert all(abs(value) < 1e7 for name in ("x", "v") for row in swarm[name] for value in row)
+    design, objective, _, _ = search.refine(problem, state, _Here)
+    assert all(problem.lower <= design) and all(design <= problem.upper) and objective >= state.best_objective
 
 
 class _Here:

@@ -7,8 +7,8 @@ from typing import Annotated, Literal, Optional
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
-from .schema import Coordinate, Strict
+from ..defaults import AZIMUTH_STEP_DEG, MAX_MM, TILT_MAX_DEG, TILT_STEP_DEG
+from .schema import MAX_DEGREES, Coordinate, Strict
 
 
 class Variable(Strict):
@@ -44,6 +44,9 @@ class Objective(Strict):
     collision: Literal["segments", "thesis"] = "thesis"
 
 
+MIN_STEP = 1e-6
+"""The refinement's difference steps at least (mm or degrees): a difference of objectives over
+a smaller one (down to 5e-324) could overflow the gradient to infinity."""
 MAX_COEFFICIENT = 100.0
 """c1 and c2 at most: phi = c1 + c2 and phi^2 stay far from overflow, so the constriction
 factor K and the swarm's coefficients K, K c1, K c2 are finite and positive (beyond about
@@ -80,8 +83,10 @@ class Refine(Strict):
     central differences of these absolute steps."""
 
     method: Literal["trust-constr", "none"] = "trust-constr"
-    angle_step: Annotated[float, Field(gt=0)] = 1.0
-    length_step: Annotated[float, Field(gt=0)] = 50.0
+    angle_step: Annotated[float, Field(ge=MIN_STEP, le=MAX_DEGREES)] = 1.0
+    """degrees"""
+    length_step: Annotated[float, Field(ge=MIN_STEP, le=MAX_MM)] = 50.0
+    """mm"""
     iterations: Annotated[int, Field(ge=1, le=10000)] = 20
 
 
