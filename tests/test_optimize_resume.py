@@ -102,11 +102,12 @@ class _Here:
     map = staticmethod(map)
 
 
-def test_a_search_resumed_at_any_iteration_boundary_ends_in_the_same_state(small_file, tmp_path):
-    """The checkpoint of every iteration, resumed, ends in the checkpoint the uninterrupted
-    search ends in (swarm, velocities, random generator, counters, history), but for the time."""
-    data = read_robot_file(small_file)[0]
-    problem = Problem(data, small_file)
+def test_a_search_resumed_at_any_iteration_boundary_continues_as_the_uninterrupted_one(small_file, tmp_path):
+    """The checkpoint of every iteration, resumed for one iteration, is the uninterrupted
+    search's next checkpoint (swarm, velocities, random generator, counters, history), but for
+    the time; so, step by step, a search resumed anywhere ends where the uninterrupted one
+    ends, which the search resumed at iteration 1 and run to the end shows directly."""
+    problem = Problem(read_robot_file(small_file)[0], small_file)
     fingerprint = search.fingerprint(problem)
     folder = tmp_path / "whole"
 
@@ -114,13 +115,16 @@ def test_a_search_resumed_at_any_iteration_boundary_ends_in_the_same_state(small
         shutil.copytree(folder, tmp_path / str(state.iteration))
 
     search.run_swarm(problem, search.new_state(problem, 5, fingerprint), _Here, folder, keep)
-    final = _without_time(folder)
     for iteration in range(1, ITERATIONS):
-        boundary = tmp_path / str(iteration)
+        boundary = tmp_path / f"from{iteration}"
+        shutil.copytree(tmp_path / str(iteration), boundary)
         state = search.load(boundary, problem, fingerprint)
         assert state.iteration == iteration
-        search.run_swarm(problem, state, _Here, boundary)
-        assert _without_time(boundary) == final, f"resumed at iteration {iteration}"
+        search.run_swarm(problem, state, _Here, boundary, stop=lambda: state.iteration > iteration)
+        assert _without_time(boundary) == _without_time(tmp_path / str(iteration + 1)), f"resumed at {iteration}"
+    state = search.load(tmp_path / "1", problem, fingerprint)
+    search.run_swarm(problem, state, _Here, tmp_path / "1")
+    assert _without_time(tmp_path / "1") == _without_time(folder)
 
 
 def _without_time(folder):
