@@ -52,13 +52,16 @@ def joint_columns(robot):
 
 
 def read_measurements(path, robot, measure):
-    """The Measurements in the CSV at ``path`` for ``robot`` (a Robot) and ``measure``."""
-    text = read_limited(path, MAX_BYTES, "a measurement file")
+    """The Measurements in the CSV at ``path`` for ``robot`` (a Robot) and ``measure``: at most
+    MAX_BYTES read, at most MAX_MEASUREMENTS rows (refused at the first beyond), every value
+    finite and within its column's bounds (_bounds); KingenError at file, line and column."""
+    data = read_limited(path, MAX_BYTES, "a measurement file")
     try:
-        text = text.decode("utf-8-sig")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         raise located(path, None, None, f"not UTF-8 text (byte {error.start})") from None
-    rows = ((number, row) for number, row in csv_rows(path, io.StringIO(text))
+    del data  # the text alone from here on: at most 64 MB, read line by line
+    rows = ((number, row) for number, row in csv_rows(path, _lines(text))
             if row and not row[0].lstrip().startswith("#"))
     header_line, header = next(rows, (None, None))
     if header is None:
@@ -82,6 +85,16 @@ def read_measurements(path, robot, measure):
     measured = values[:, order[robot.joint_count:]]
     measured[:, :3] *= LENGTH_UNITS[robot.length_unit]
     return Measurements(str(path), measure, joints, measured, tuple(lines), header)
+
+
+def _lines(text):
+    """The lines of ``text`` (each with its newline), one at a time: no copy of the whole (a
+    StringIO of 64 MB of text holds four bytes a character)."""
+    start = 0
+    while start < len(text):
+        end = text.find("\n", start) + 1 or len(text)
+        yield text[start:end]
+        start = end
 
 
 def _bounds(header, robot, measure):
