@@ -131,3 +131,27 @@ def _without_time(folder):
     data = json.loads((folder / search.CHECKPOINT).read_text())
     data.pop("seconds")
     return data
+
+
+def _signal_masks(pid):
+    """(ignored, blocked) signal sets of process ``pid``, from /proc."""
+    fields = dict(line.split(":\t", 1) for line in open(f"/proc/{pid}/status").read().splitlines() if ":\t" in line)
+    return tuple({number for number in range(1, 65) if int(fields[key], 16) >> (number - 1) & 1}
+                 for key in ("SigIgn", "SigBlk"))
+
+
+def test_the_pool_is_up_with_ctrl_c_ignored_before_the_first_particle():
+    """The executor starts its workers at once, SIGINT blocked while they fork: each worker
+    ignores SIGINT and no longer blocks it, and kingen's own mask is as it was, so a Ctrl-C at
+    any moment reaches kingen alone (never a worker not yet ignoring it: a broken pool)."""
+    from kingen.runtime.executors import executor
+    from test_hostile import _children
+
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, [])
+    with executor(2) as opened:
+        workers = sorted(set(_children(os.getpid())) & set(opened.pool._processes))
+        assert len(workers) == 2
+        for pid in workers:
+            ignored, blocked = _signal_masks(pid)
+            assert signal.SIGINT in ignored and signal.SIGINT not in blocked, pid
+        assert signal.pthread_sigmask(signal.SIG_BLOCK, []) == before

@@ -66,7 +66,8 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
                 search.run_swarm(problem, state, pool, out_dir, progress)
             except KeyboardInterrupt:
                 say(f"kingen: stopped at iteration {state.iteration} (best {state.best_objective:g} deg); "
-                    f"continue with --resume from {out_dir}", err=True)
+                    f"continue with --resume from {out_dir}" if state.iteration else
+                    "kingen: stopped before the first iteration ended: no checkpoint to resume from", err=True)
                 return 130
         started = time.perf_counter()
         best = search.refine(problem, state, pool)
