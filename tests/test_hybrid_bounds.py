@@ -1,7 +1,8 @@
 """A hybrid robot file that passes its schema ends in exit 0, 1 or 2, never an internal error:
 found by mutating the shipped hybrid machines' numbers to the geometry range's extremes
 (random mutations of exechon_wrist, tricept_wrist, tricept_wrist3, exechon_constrained, prs_head
-and tricept; 210 tried, verify --host c and solve each). Each shrunk failure is kept here."""
+and tricept; 330 tried with solve, verify (--host c and delmia) and analyze). Each failure
+found is kept here."""
 
 import io
 

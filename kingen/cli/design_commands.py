@@ -64,10 +64,10 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
         with _progress(problem.section.search.iterations, state) as progress:
             try:
                 search.run_swarm(problem, state, pool, out_dir, progress)
-            except KeyboardInterrupt:
-                say(f"kingen: stopped at iteration {state.iteration} (best {state.best_objective:g} deg); "
-                    f"continue with --resume from {out_dir}" if state.iteration else
-                    "kingen: stopped before the first iteration ended: no checkpoint to resume from", err=True)
+            except (KeyboardInterrupt, SystemExit) as stop:  # Ctrl-C; SIGTERM (kingen.cli raises SystemExit)
+                say(_stopped(state, out_dir), err=True)
+                if isinstance(stop, SystemExit):
+                    raise
                 return 130
         started = time.perf_counter()
         best = search.refine(problem, state, pool)
@@ -88,6 +88,15 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     for file_name in outputs:
         say(str(out_dir / file_name))
     return 0
+
+
+def _stopped(state, out_dir):
+    """What a search stopped by Ctrl-C or SIGTERM leaves, in one line: the iteration its
+    checkpoint holds and how to continue, or that it has none."""
+    if not state.iteration:
+        return "kingen: stopped before the first iteration ended: no checkpoint to resume from"
+    return (f"kingen: stopped at iteration {state.iteration} (best {state.best_objective:g} deg); "
+            f"continue with --resume from {out_dir}")
 
 
 def _found(outcome):
