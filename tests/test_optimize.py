@@ -245,6 +245,18 @@ TAMPERED = {
     "a particle less": (lambda data: data["swarm"]["x"].pop(), "swarm.x: not 6 particles of "),
     "a ragged swarm": (lambda data: data["swarm"]["v"][2].pop(), "swarm.v: not 6 particles of "),
     "another problem": (lambda data: data.update(fingerprint="0" * 64), "the checkpoint is of another design problem"),
+    "a random state beyond PCG64's": (lambda data: data["swarm"].update(random_state=2 ** 200),
+                                      "swarm.random_state: not within 0 to 340282366920938463463374607431768211455"),
+    "a position beyond the bounds": (lambda data: data["swarm"]["x"][0].__setitem__(0, 1e308),
+                                     "swarm.x: a value outside the variables' bounds, which no search of this problem"),
+    "a velocity beyond the cap": (lambda data: data["swarm"]["v"][1].__setitem__(2, -1e6),
+                                  "swarm.v: a value outside +/- the variables' widths"),
+    "an objective beyond the cap": (lambda data: data["swarm"]["f"].__setitem__(0, -1e308),
+                                    "swarm.f: a value outside -120 to 0"),
+    "a history of another length": (lambda data: data["history"].append(3.0), "history: 2 entries for 1 iterations"),
+    "a cause analyze never names": (lambda data: data["best_table"][0].__setitem__(1, "<script>"),
+                                    "best_table: not 45 rows of a tilt from 0 to 120 degrees and a cause"),
+    "a negative count": (lambda data: data.update(evaluations=-6), "evaluations: -6 below 0"),
 }
 
 
