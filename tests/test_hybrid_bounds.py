@@ -1,7 +1,7 @@
 """A hybrid robot file that passes its schema ends in exit 0, 1 or 2, never an internal error:
 found by mutating the shipped hybrid machines' numbers to the geometry range's extremes
 (random mutations of exechon_wrist, tricept_wrist, tricept_wrist3, exechon_constrained, prs_head
-and tricept; 330 tried with solve, verify (--host c and delmia) and analyze). Each failure
+and tricept; 430 tried with solve, verify (--host c, delmia and linuxcnc) and analyze). Each failure
 found is kept here."""
 
 import io
