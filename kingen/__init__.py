@@ -318,11 +318,13 @@ def _poses(name, poses, angle_unit):
     degrees, pi/180 for radians) as an (n, 6) array within the geometry range (_numbers)."""
     import numpy as np
 
+    from .errors import KingenError
     from .robot.schema import MAX_DEGREES
 
-    from .errors import KingenError
-
-    shape = np.shape(poses)
+    try:
+        shape = np.shape(poses)
+    except ValueError:  # ragged
+        raise KingenError(f"{name}: not an array of numbers") from None
     if shape != (6,) and (len(shape) != 2 or shape[1] != 6):
         raise KingenError(f"{name}: {shape} numbers, expected (6,) or (n, 6)")
     rows = (1, 6) if shape == (6,) else shape

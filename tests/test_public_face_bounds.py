@@ -35,6 +35,8 @@ REFUSED = {
     "a yaw of 721 degrees": (lambda robot: kingen.solve(robot, [[0, 0, 800, 0, 0, 0], [0, 0, 800, 0, 0, 721]]),
                              "solve: poses[1, 5]: 721 is not a finite number within +/-720 degrees"),
     "a pose of text": (lambda robot: kingen.solve(robot, "abc"), "solve: poses: () numbers, expected (6,) or (n, 6)"),
+    "ragged poses": (lambda robot: kingen.solve(robot, [[0, 0, 800, 0, 0, 0], [1, 2]]),
+                     "solve: poses: not an array of numbers"),
     "five dialog fields": (lambda robot: kingen.solve(robot, [0, 0, 800, 0, 0, 0], link_offsets=[1.0] * 5),
                            "solve: link_offsets: (5,) numbers, expected (6,)"),
     "no samples": (lambda robot: kingen.verify_library(robot, samples=0),
