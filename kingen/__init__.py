@@ -18,7 +18,7 @@ the angles of a pose (x y z roll pitch yaw, R = Rz(yaw) Ry(pitch) Rx(roll)), rad
 revolute joints.
 """
 
-from .defaults import DEFAULT_HOST, VERSION
+from .defaults import AZIMUTH_STEP_DEG, DEFAULT_HOST, MAX_MM, TILT_MAX_DEG, TILT_STEP_DEG, VERSION
 
 __version__ = VERSION
 __all__ = ["analyze", "assembly_modes", "build", "load_robot", "loads", "shipped_robots", "solve", "verify_library"]
@@ -82,13 +82,21 @@ def solve(robot, poses, link_lengths=None, link_offsets=None):
         ``joints`` (n, dof, postures): mm for prismatic, radians for revolute joints;
         ``warnings`` (n, postures): status codes (``kingen.kinematics.routine.WARNINGS``:
         0 good, 2 unreachable, ...); ``radicands`` (n, dof).
-    """
-    import numpy as np
 
+    Raises
+    ------
+    kingen.errors.KingenError
+        What ``kingen solve`` refuses: poses not of six finite numbers each, x y z beyond
+        +/-1,000,000 mm or angles beyond +/-720 degrees; dialog fields not six finite numbers
+        within +/-1,000,000 mm.
+    """
     from .conventions import t6_from_pose
     from .kinematics.reference import solve as reference
 
-    return reference(robot, t6_from_pose(np.asarray(poses, dtype=float).reshape(-1, 6)), link_lengths, link_offsets)
+    poses = _poses("solve: poses", poses, 1.0)
+    fields = [None if values is None else _numbers(f"solve: {name}", values, (6,), [(MAX_MM, "mm")] * 6)
+              for name, values in (("link_lengths", link_lengths), ("link_offsets", link_offsets))]
+    return reference(robot, t6_from_pose(poses), *fields)
 
 
 def assembly_modes(robot, joints, near=None, search=2.0):
@@ -113,15 +121,29 @@ def assembly_modes(robot, joints, near=None, search=2.0):
         ``found``: Assembly poses (6,) in mm and radians, nearest ``near`` first, each with
         its ``residual_mm``; ``exhaustive``: whether they are all of them; ``method``: how
         that is known, in one line.
+
+    Raises
+    ------
+    kingen.errors.KingenError
+        What ``kingen fk`` refuses: not ``joint_count`` finite joints (prismatic within
+        +/-1,000,000 mm, revolute within +/-720 degrees), ``near`` not six finite numbers
+        within the geometry range, ``search`` not within 0.1 to 1000, a robot without free
+        pose coordinates.
     """
     import numpy as np
 
+    from .errors import KingenError
     from .kinematics.forward import assemblies
 
+    if not robot.has_forward:
+        raise KingenError(f"assembly_modes: forward kinematics needs free pose coordinates for a robot with "
+                          f"{robot.dof} limbs (declare them in its file, for example forward: {{free: [x, y, z]}})")
+    joints = _numbers("assembly_modes: joints", joints, (robot.joint_count,), _joint_bounds(robot))
     if near is None:
         home = np.asarray(robot.verification.home, dtype=float)
         near = np.concatenate([home[:3], np.radians(home[3:])])
-    return assemblies(robot, joints, near, search)
+    near = _poses("assembly_modes: near", near, np.radians(1.0))[0]
+    return assemblies(robot, joints, near, _number("assembly_modes: search", search, 0.1, 1000.0, ""))
 
 
 def build(robot, host=DEFAULT_HOST, out_dir=None):
@@ -141,12 +163,22 @@ def build(robot, host=DEFAULT_HOST, out_dir=None):
     kingen.hosts.base.BuildResult
         ``library`` (the compiled file's path), ``routine`` (its entry point's name) and
         ``source``.
+
+    Raises
+    ------
+    kingen.errors.KingenError
+        What ``kingen build`` refuses: an unknown host, an output folder kingen could not
+        write or reached through another user's symbolic link.
     """
     from pathlib import Path
 
     from .hosts import get_host
+    from .runtime.files import writable_folder
 
-    return get_host(host).build(robot, None if out_dir is None else Path(out_dir))
+    chosen = get_host(host)
+    if out_dir is not None:
+        writable_folder(out_dir)
+    return chosen.build(robot, None if out_dir is None else Path(out_dir))
 
 
 def verify_library(robot, library=None, routine=None, host=DEFAULT_HOST, samples=10000, seed=0):
@@ -171,12 +203,19 @@ def verify_library(robot, library=None, routine=None, host=DEFAULT_HOST, samples
         ``passed``, ``checks`` (each with ``name``, ``passed``, ``detail``), the largest
         errors (``max_abs_error_mm``, ``max_abs_error_rad``) and ``as_json()``, the
         contract of ``kingen verify --json``.
+
+    Raises
+    ------
+    kingen.errors.KingenError
+        What ``kingen verify`` refuses: an unknown host, ``samples`` not a whole number of at
+        least 1, ``seed`` not one of at least 0.
     """
     from pathlib import Path
 
     from .hosts import get_host
     from .verify import VerifyOptions, verify_library as verify
 
+    samples, seed = _count("verify_library: samples", samples, 1), _count("verify_library: seed", seed, 0)
     chosen = get_host(host)
     if library is None:
         built = chosen.build(robot)
@@ -202,12 +241,23 @@ def analyze(robot, posture=None, tilt_step=0.1, azimuth_step=15.0, tilt_max=90.0
         One per azimuth: ``azimuth_deg``, ``max_tilt_deg`` (degrees), ``cause`` (what stops
         it: a singularity, a joint's travel, unreachability, or ``none``) and
         ``min_direct_index_mm``; empty when the platform cannot tilt.
+
+    Raises
+    ------
+    kingen.errors.KingenError
+        What ``kingen analyze`` refuses: a posture the robot does not have, a step or largest
+        tilt beyond the options' bounds (tilt step 0.001 to 90, azimuth step 0.5 to 180,
+        largest tilt 0.1 to 180 degrees).
     """
     from .design.analysis import Settings, tilt_limits
 
-    chosen = robot.working_posture if posture is None else posture
-    return tilt_limits(robot, chosen, Settings(tilt_step_deg=tilt_step, azimuth_step_deg=azimuth_step,
-                                               tilt_max_deg=tilt_max))
+    chosen = robot.working_posture if posture is None else _count("analyze: posture", posture, 0,
+                                                                   robot.postures - 1)
+    steps = [_number(f"analyze: {name}", value, *bounds, " degrees") for name, value, bounds in
+             (("tilt_step", tilt_step, TILT_STEP_DEG), ("azimuth_step", azimuth_step, AZIMUTH_STEP_DEG),
+              ("tilt_max", tilt_max, TILT_MAX_DEG))]
+    return tilt_limits(robot, chosen, Settings(tilt_step_deg=steps[0], azimuth_step_deg=steps[1],
+                                               tilt_max_deg=steps[2]))
 
 
 def loads(robot, poses, wrench=None, velocity=None, acceleration=None, postures=None):
@@ -245,25 +295,101 @@ def loads(robot, poses, wrench=None, velocity=None, acceleration=None, postures=
     """
     import numpy as np
 
-    from .errors import KingenError
     from .kinematics.loads import Motion, loads as compute, machine_t6
 
-    poses = np.asarray(poses, dtype=float)
-    if poses.ndim not in (1, 2) or poses.shape[-1] != 6 or not np.all(np.isfinite(poses)):
-        raise KingenError("poses: (n, 6) finite numbers expected (mm, degrees)")
-    vectors = {}
-    for name, value in (("wrench", wrench), ("velocity", velocity), ("acceleration", acceleration)):
-        if value is not None:
-            value = np.asarray(value, dtype=float)
-            if value.shape != (6,) or not np.all(np.isfinite(value)):
-                raise KingenError(f"{name}: six finite numbers expected")
-        vectors[name] = value
-    if postures is not None and not all(0 <= int(k) < robot.postures for k in postures):
-        raise KingenError(f"postures: {robot.name} has postures 0 to {robot.postures - 1}")
+    poses = _poses("loads: poses", poses, 1.0)
+    from .defaults import LOAD_RATE_MAX, LOAD_WRENCH_MAX
+
+    rates, forces = [(LOAD_RATE_MAX, "mm or deg per s or s^2")] * 6, [(LOAD_WRENCH_MAX, "N or N m")] * 6
+    vectors = {name: None if value is None else _numbers(f"loads: {name}", value, (6,), bounds)
+               for name, value, bounds in (("wrench", wrench, forces), ("velocity", velocity, rates),
+                                           ("acceleration", acceleration, rates))}
+    chosen = None if postures is None else [_count("loads: postures", k, 0, robot.postures - 1) for k in postures]
     motion = None
     if velocity is not None or acceleration is not None:
         internal = [np.zeros(6) if v is None else np.r_[v[:3], np.radians(v[3:])]
                     for v in (vectors["velocity"], vectors["acceleration"])]
         motion = Motion(velocity=internal[0], acceleration=internal[1])
-    return compute(robot, machine_t6(robot, poses.reshape(-1, 6)), wrench=vectors["wrench"], motion=motion,
-                   postures=postures)
+    return compute(robot, machine_t6(robot, poses), wrench=vectors["wrench"], motion=motion, postures=chosen)
+
+
+def _number(name, value, low, high, unit):
+    """``value`` as a float, finite and within ``low`` to ``high`` (``unit``); KingenError
+    naming the argument ``name`` otherwise (the bounds of the command line's option)."""
+    import math
+
+    from .errors import KingenError
+
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise KingenError(f"{name}: {value!r} is not a number") from None
+    if not (math.isfinite(number) and low <= number <= high):
+        raise KingenError(f"{name}: {number:g} is not within {low:g} to {high:g}{unit}")
+    return number
+
+
+def _count(name, value, least, most=None):
+    """``value``, a whole number (not a bool) from ``least`` to ``most`` (None: no most);
+    KingenError naming the argument ``name`` otherwise."""
+    import numbers
+
+    from .errors import KingenError
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least or (
+            most is not None and value > most):
+        span = f"from {least}" + ("" if most is None else f" to {most}")
+        raise KingenError(f"{name}: {value!r} is not a whole number {span}")
+    return int(value)
+
+
+def _numbers(name, values, shape, bounds):
+    """``values`` as a float array of ``shape``, its entry i along the last axis finite and
+    within +/- ``bounds[i][0]`` (unit ``bounds[i][1]``); KingenError naming the argument
+    ``name`` (and the entry) otherwise."""
+    import numpy as np
+
+    from .errors import KingenError
+
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise KingenError(f"{name}: not an array of numbers") from None
+    if array.shape != tuple(shape):
+        raise KingenError(f"{name}: {array.shape} numbers, expected {tuple(shape)}")
+    limits = np.array([limit for limit, _ in bounds])
+    bad = np.argwhere(~(np.abs(array) <= limits))
+    if len(bad):
+        where = tuple(int(index) for index in bad[0])
+        limit, unit = bounds[where[-1]]
+        raise KingenError(f"{name}{list(where)}: {array[where]:g} is not a finite number within +/-{limit:g} {unit}")
+    return array
+
+
+def _poses(name, poses, angle_unit):
+    """``poses`` ((6,) or (n, 6): x y z mm, three angles in degrees times ``angle_unit``, 1 for
+    degrees, pi/180 for radians) as an (n, 6) array within the geometry range (_numbers)."""
+    import numpy as np
+
+    from .errors import KingenError
+    from .robot.schema import MAX_DEGREES
+
+    try:
+        shape = np.shape(poses)
+    except ValueError:  # ragged
+        raise KingenError(f"{name}: not an array of numbers") from None
+    if shape != (6,) and (len(shape) != 2 or shape[1] != 6):
+        raise KingenError(f"{name}: {shape} numbers, expected (6,) or (n, 6)")
+    rows = (1, 6) if shape == (6,) else shape
+    bounds = [(MAX_MM, "mm")] * 3 + [(MAX_DEGREES * angle_unit, "radians" if angle_unit != 1.0 else "degrees")] * 3
+    return _numbers(name, np.reshape(poses, rows) if shape == (6,) else poses, rows, bounds)
+
+
+def _joint_bounds(robot):
+    """Per joint of ``robot`` (mm, radians): the geometry range, +/-MAX_MM mm for a prismatic
+    joint, +/-720 degrees for a revolute one, as _numbers takes it."""
+    import math
+
+    from .robot.schema import MAX_DEGREES
+
+    return [(math.radians(MAX_DEGREES), "radians") if revolute else (MAX_MM, "mm") for revolute in robot.revolute]

@@ -29,3 +29,7 @@ positions (mm) and angles (degrees), the joints read (mm, degrees): ``--noise-mm
 ``--noise-joint-mm``, ``--noise-joint-deg`` (kingen.calibrate.noise.Noise)."""
 VERSION = "0.1.0"
 """kingen's version (``kingen.__version__``), written into generated files and snapshots."""
+LOAD_RATE_MAX = 1e9
+"""kingen loads: |velocity| and |acceleration| components at most (mm, degrees per s or s^2)."""
+LOAD_WRENCH_MAX = 1e12
+"""kingen loads: |wrench| components at most (N, N m)."""

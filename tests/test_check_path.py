@@ -175,6 +175,11 @@ def test_a_crossing_grazed_between_two_samples_is_found_as_at_a_ten_times_finer_
     ("x,y,z,roll,pitch,yaw\n0,0,508,0,0,0\n1,two,508,0,0,0\n", ":3: y: 'two' is not a number"),
     ("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,100\n1,0,508,0,0,0,0\n", ":3: feed: 0 mm/min: a feed must be above 0"),
     ("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,100\n1,0,508,0,0,0,-5\n", ":3: feed: -5 mm/min: a feed must be above 0"),
+    ("x,y,z,roll,pitch,yaw\n0,0,508,0,0,0\n1e308,0,508,0,0,0\n", ":3: x: 1e+308 mm is not within -1e+06 to 1e+06"),
+    ("x,y,z,roll,pitch,yaw\n0,0,508,0,0,0\n0,0,508,0,-721,0\n", ":3: pitch: -721 degrees is not within -720 to 720"),
+    ("x,y,z,roll,pitch,yaw,t\n0,0,508,0,0,0,-1e308\n1,0,508,0,0,0,1\n", ":2: t: -1e+308 s is not within -1e+09 to 1e+09"),
+    ("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,100\n1,0,508,0,0,0,1e-300\n",
+     ":3: feed: 1e-300 mm/min is not within 1e-06 to 1e+09"),
     ("x,y,z,roll,pitch,yaw\n0,0,508,0,0,0\n" + "1" * 200000 + ",0,508,0,0,0\n",
      ":3: not CSV: field larger than field limit (131072)"),
 ])

@@ -130,26 +130,6 @@ def test_pool_workers_die_with_kingen_killed_by_sigkill(small_file, tmp_path):
     assert survivors == []
 
 
-def test_a_stopped_run_resumes_to_the_same_result(two_workers, small_file, tmp_path, monkeypatch):
-    result, _ = two_workers
-    calls = {"count": 0}
-    original = search.save
-
-    def stop_after_two(state, folder):
-        original(state, folder)
-        calls["count"] += 1
-        if calls["count"] == 2:
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(search, "save", stop_after_two)
-    assert main(["optimize", str(small_file), "-o", str(tmp_path), "--seed", "5", "--workers", "1"]) == 130
-    assert (tmp_path / search.CHECKPOINT).is_file() and not (tmp_path / "optimization.json").exists()
-    monkeypatch.setattr(search, "save", original)
-    resumed = _run(small_file, tmp_path, "--workers", "1", "--resume")
-    for key in ("objective_deg", "history", "variables", "evaluations"):
-        assert resumed[key] == result[key]
-
-
 def test_bad_input_is_one_line(small_file, tmp_path, capsys):
     assert main(["optimize", "hexapod", "-o", str(tmp_path / "a")]) == 2
     assert "optimize: no design problem in this robot file" in capsys.readouterr().err
@@ -265,6 +245,18 @@ TAMPERED = {
     "a particle less": (lambda data: data["swarm"]["x"].pop(), "swarm.x: not 6 particles of "),
     "a ragged swarm": (lambda data: data["swarm"]["v"][2].pop(), "swarm.v: not 6 particles of "),
     "another problem": (lambda data: data.update(fingerprint="0" * 64), "the checkpoint is of another design problem"),
+    "a random state beyond PCG64's": (lambda data: data["swarm"].update(random_state=2 ** 200),
+                                      "swarm.random_state: not within 0 to 340282366920938463463374607431768211455"),
+    "a position beyond the bounds": (lambda data: data["swarm"]["x"][0].__setitem__(0, 1e308),
+                                     "swarm.x: a value outside the variables' bounds, which no search of this problem"),
+    "a velocity beyond the cap": (lambda data: data["swarm"]["v"][1].__setitem__(2, -1e6),
+                                  "swarm.v: a value outside +/- the variables' widths"),
+    "an objective beyond the cap": (lambda data: data["swarm"]["f"].__setitem__(0, -1e308),
+                                    "swarm.f: a value outside -120 to 0"),
+    "a history of another length": (lambda data: data["history"].append(3.0), "history: 2 entries for 1 iterations"),
+    "a cause analyze never names": (lambda data: data["best_table"][0].__setitem__(1, "<script>"),
+                                    "best_table: not 45 rows of a tilt from 0 to 120 degrees and a cause"),
+    "a negative count": (lambda data: data.update(evaluations=-6), "evaluations: -6 below 0"),
 }
 
 
@@ -304,3 +296,49 @@ def test_a_checkpoint_another_user_could_have_written_is_refused(checkpointed, s
     code, error = _resume(small_file, tmp_path, capsys)
     assert code == 2 and len(error.splitlines()) == 1
     assert f"{path}: {expected}" in error
+
+
+@pytest.mark.parametrize("field, value, problem", [
+    ("c1", 1e308, "Input should be less than or equal to 100 (got 1e+308)"),
+    ("c2", 1e155, "Input should be less than or equal to 100 (got 1e+155)"),
+    ("c1", 0.0, "Input should be greater than 0 (got 0.0)")] + [
+    (f"refine.{name}", value, f"Input should be greater than or equal to 0.000001 (got {value!r})")
+    for name, value in (("angle_step", 5e-324), ("length_step", 1e-9))])
+def test_swarm_coefficients_that_would_make_the_search_non_finite_are_refused(small_file, tmp_path, capsys, field,
+                                                                              value, problem):
+    data = read_robot_file(small_file)[0]
+    section, key = field.split(".") if "." in field else ("search", field)
+    data["optimize"][section][key] = value
+    bad = _dump(data, tmp_path / "bad.yaml")
+    assert main(["optimize", str(bad), "-o", str(tmp_path / "c")]) == 2
+    error = capsys.readouterr().err.strip()
+    found = re.fullmatch(rf"kingen: error: {re.escape(str(bad))}:(\d+): optimize\.{section}\.{key}: "
+                         rf"{re.escape(problem)}", error)
+    assert found and bad.read_text().splitlines()[int(found[1]) - 1].strip().startswith(f"{key}:")
+    assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("c1, c2, step", [(100.0, 100.0, 1e-6), (1e-300, 4.000000001, 720.0), (100.0, 1e-300, 1.0)])
+def test_the_extreme_coefficients_allowed_keep_the_swarm_finite(small_file, tmp_path, c1, c2, step):
+    """At the coefficients' and steps' bounds the constriction factor is finite and positive,
+    every position and velocity of a few iterations is finite (the checkpoint refuses anything
+    else), and the refinement ends in a finite design within the bounds."""
+    data = read_robot_file(small_file)[0]
+    data["optimize"]["search"].update(c1=c1, c2=c2, iterations=3)
+    data["optimize"]["refine"].update(angle_step=step, length_step=step, iterations=1)
+    problem = Problem(data, small_file)
+    k = problem.section.search.constriction
+    phi = c1 + c2
+    assert k == pytest.approx(2.0 / (phi - 2.0 + (phi * phi - 4.0 * phi) ** 0.5), rel=1e-12) and k > 0
+    state = search.run_swarm(problem, search.new_state(problem, 5, "x"), _Here, tmp_path)
+    assert state.iteration == 3
+    swarm = json.loads((tmp_path / search.CHECKPOINT).read_text())["swarm"]
+    assert all(abs(value) < 1e7 for name in ("x", "v") for row in swarm[name] for value in row)
+    design, objective, _, _ = search.refine(problem, state, _Here)
+    assert all(problem.lower <= design) and all(design <= problem.upper) and objective >= state.best_objective
+
+
+class _Here:
+    """An executor evaluating in this process."""
+
+    map = staticmethod(map)

@@ -12,12 +12,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..defaults import MAX_MM
 from ..errors import located
+from ..robot.schema import MAX_DEGREES
 from ..runtime.file_gate import csv_rows, read_limited
 from ..units import LENGTH_UNITS
 from .parameters import POSE_NAMES
 
 MAX_BYTES = 64 * 1024 * 1024
+MAX_MEASUREMENTS = 10_000
+"""Measurement rows a file may hold at most (``calibrate plan --poses`` chooses at most as
+many): what calibration holds grows with the rows (its Jacobian and the fit's copies of it,
+some 16 kB a row: about 300 MB in all at this bound)."""
 MEASURED = {"pose": POSE_NAMES, "position": POSE_NAMES[:3]}
 """The measured columns of each kind of measurement."""
 
@@ -46,31 +52,60 @@ def joint_columns(robot):
 
 
 def read_measurements(path, robot, measure):
-    """The Measurements in the CSV at ``path`` for ``robot`` (a Robot) and ``measure``."""
-    text = read_limited(path, MAX_BYTES, "a measurement file")
+    """The Measurements in the CSV at ``path`` for ``robot`` (a Robot) and ``measure``: at most
+    MAX_BYTES read, at most MAX_MEASUREMENTS rows (refused at the first beyond), every value
+    finite and within its column's bounds (_bounds); KingenError at file, line and column."""
+    data = read_limited(path, MAX_BYTES, "a measurement file")
     try:
-        text = text.decode("utf-8-sig")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         raise located(path, None, None, f"not UTF-8 text (byte {error.start})") from None
-    rows = [(number, row) for number, row in csv_rows(path, io.StringIO(text)) if row and not row[0].lstrip().startswith("#")]
-    if not rows:
+    del data  # the text alone from here on: at most 64 MB, read line by line
+    rows = ((number, row) for number, row in csv_rows(path, _lines(text))
+            if row and not row[0].lstrip().startswith("#"))
+    header_line, header = next(rows, (None, None))
+    if header is None:
         raise located(path, 1, "header", "no header row (expected " + ", ".join(_expected(robot, measure)) + ")")
-    header_line, header = rows[0]
     header = tuple(name.strip() for name in header)
     order = _columns(path, header_line, header, robot, measure)
-    data = rows[1:]
-    if not data:
-        raise located(path, header_line + 1, None, "no measurements after the header")
-    values = np.empty((len(data), len(header)))
-    for row_index, (number, row) in enumerate(data):
+    bounds = _bounds(header, robot, measure)
+    values, lines = [], []
+    for number, row in rows:
+        if len(values) == MAX_MEASUREMENTS:
+            raise located(path, number, None, f"more than {MAX_MEASUREMENTS:,} measurements, which a measurement "
+                                              "file holds at most")
         if len(row) != len(header):
             raise located(path, number, None, f"{len(row)} values; the header has {len(header)} columns")
-        for column, (name, cell) in enumerate(zip(header, row)):
-            values[row_index, column] = _number(path, number, name, cell)
+        values.append([_number(path, number, name, cell, bound) for name, cell, bound in zip(header, row, bounds)])
+        lines.append(number)
+    if not values:
+        raise located(path, header_line + 1, None, "no measurements after the header")
+    values = np.array(values)
     joints = values[:, order[:robot.joint_count]] * _joint_scale(robot)
     measured = values[:, order[robot.joint_count:]]
     measured[:, :3] *= LENGTH_UNITS[robot.length_unit]
-    return Measurements(str(path), measure, joints, measured, tuple(number for number, _ in data), header)
+    return Measurements(str(path), measure, joints, measured, tuple(lines), header)
+
+
+def _lines(text):
+    """The lines of ``text`` (each with its newline), one at a time: no copy of the whole (a
+    StringIO of 64 MB of text holds four bytes a character)."""
+    start = 0
+    while start < len(text):
+        end = text.find("\n", start) + 1 or len(text)
+        yield text[start:end]
+        start = end
+
+
+def _bounds(header, robot, measure):
+    """Per column of ``header``: (the largest magnitude it may hold, its unit), in the robot
+    file's units: lengths (prismatic joints, x, y, z) within the geometry range of +/-MAX_MM mm,
+    angles (revolute joints, roll, pitch, yaw) within +/-MAX_DEGREES degrees."""
+    unit = robot.length_unit
+    length, angle = (MAX_MM / LENGTH_UNITS[unit], unit), (MAX_DEGREES, "degrees")
+    kinds = {**{name: angle if revolute else length for name, revolute in zip(joint_columns(robot), robot.revolute)},
+             **{name: length if name in POSE_NAMES[:3] else angle for name in MEASURED[measure]}}
+    return [kinds[name] for name in header]
 
 
 def _joint_scale(robot):
@@ -100,13 +135,17 @@ def _columns(path, line, header, robot, measure):
     return [header.index(name) for name in expected]
 
 
-def _number(path, line, column, cell):
+def _number(path, line, column, cell, bound):
+    """The number in ``cell``, within +/-``bound[0]`` (its unit ``bound[1]``): else KingenError at
+    file, line and column."""
     try:
         value = float(cell.strip())
     except ValueError:
         raise located(path, line, column, f"'{cell.strip()[:40]}' is not a number") from None
     if not math.isfinite(value):
-        raise located(path, line, column, f"{cell.strip()} is not a finite number")
+        raise located(path, line, column, f"{cell.strip()[:40]} is not a finite number")
+    if abs(value) > bound[0]:
+        raise located(path, line, column, f"{value:g} {bound[1]} is not within +/-{bound[0]:g} {bound[1]}")
     return value
 
 

@@ -93,7 +93,7 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     from ..calibrate.measurements import read_measurements
     from ..calibrate.output import calibrated_name, calibrated_yaml
     from ..calibrate.parameters import Parameters
-    from ..runtime.files import default_out_dir, write_atomic
+    from ..runtime.files import default_out_dir, write_files
 
     refuse_special_files(measurements_path, validate_path)
     model, data, _ = load_model_and_data(robot)
@@ -131,10 +131,8 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     out_dir = out_dir or default_out_dir(model) / "calibrate"
     outputs = {f"{name}.yaml": robot_text, "calibration.json": text, **pngs,
                "report.html": report.report_html(model.name, outcome, pngs, settings)}
-    for file_name, content in outputs.items():
-        write_atomic(out_dir / file_name, content)
-    if json_path is not None:
-        write_atomic(json_path, text)
+    write_files({**{out_dir / file_name: content for file_name, content in outputs.items()},
+                 **({} if json_path is None else {json_path: text})})
     _say_outcome(model.name, outcome, fit)
     for file_name in outputs:
         say(str(out_dir / file_name))

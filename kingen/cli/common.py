@@ -113,8 +113,12 @@ def _t6(context, parameter, values):
 def _output_file(context, parameter, path):
     """Report paths are checked before the run, not after it: a folder that exists and may be
     written, or an existing file that is not a regular one (/dev/stdout, a FIFO) and may be
-    written in place; a symbolic link is judged by its target."""
+    written in place; a symbolic link is judged by its target, and refused when another user
+    owns it (kingen.runtime.files.refuse_foreign)."""
+    from ..runtime.files import refuse_foreign
+
     if path is not None:
+        _checked(refuse_foreign, path)
         if path.is_dir():
             raise click.BadParameter(f"{path} is a folder")
         if path.exists() and not path.is_file():

@@ -44,7 +44,7 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     from ..runtime.executors import executor
     from ..design.problem import Problem, design_yaml, optimized_name
     from ..design.report import convergence, polar_comparison, report_html
-    from ..runtime.files import default_out_dir, write_atomic
+    from ..runtime.files import default_out_dir, write_files
 
     model, data, lines = load_model_and_data(robot)
     if not data.get("optimize"):
@@ -64,9 +64,10 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
         with _progress(problem.section.search.iterations, state) as progress:
             try:
                 search.run_swarm(problem, state, pool, out_dir, progress)
-            except KeyboardInterrupt:
-                say(f"kingen: stopped at iteration {state.iteration} (best {state.best_objective:g} deg); "
-                    f"continue with --resume from {out_dir}", err=True)
+            except (KeyboardInterrupt, SystemExit) as stop:  # Ctrl-C; SIGTERM (kingen.cli raises SystemExit)
+                say(_stopped(state, out_dir), err=True)
+                if isinstance(stop, SystemExit):
+                    raise
                 return 130
         started = time.perf_counter()
         best = search.refine(problem, state, pool)
@@ -80,15 +81,22 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
     pngs = {"polar.png": polar_comparison(outcome), "convergence.png": convergence(outcome)}
     outputs = {f"{name}.yaml": design_yaml(problem, choice.design, outcome["objective_deg"], header),
                "optimization.json": text, **pngs, "report.html": report_html(outcome, pngs)}
-    for file_name, content in outputs.items():
-        write_atomic(out_dir / file_name, content)
-    if json_path is not None:
-        write_atomic(json_path, text)
+    write_files({**{out_dir / file_name: content for file_name, content in outputs.items()},
+                 **({} if json_path is None else {json_path: text})})
     say(f"optimize {model.name}: {found}; {counted(outcome['iterations'], 'iteration')} "
         f"({outcome['stopped_by']}) and {counted(outcome['evaluations'], 'design')}, {seconds:.1f} s with {described}")
     for file_name in outputs:
         say(str(out_dir / file_name))
     return 0
+
+
+def _stopped(state, out_dir):
+    """What a search stopped by Ctrl-C or SIGTERM leaves, in one line: the iteration its
+    checkpoint holds and how to continue, or that it has none."""
+    if not state.iteration:
+        return "kingen: stopped before the first iteration ended: no checkpoint to resume from"
+    return (f"kingen: stopped at iteration {state.iteration} (best {state.best_objective:g} deg); "
+            f"continue with --resume from {out_dir}")
 
 
 def _found(outcome):

@@ -8,12 +8,9 @@ from pathlib import Path
 
 import click
 
+from ..defaults import LOAD_RATE_MAX, LOAD_WRENCH_MAX
 from .common import EXIT_FAILED, ROBOT, _output_file, _pose, cli, finite, load_model, print_table, say
 
-MAX_RATE = 1e9
-"""|mm/s|, |deg/s| (and per s for accelerations) a --velocity or --acceleration component may be."""
-MAX_WRENCH = 1e12
-"""|N|, |N m| a --wrench component may be."""
 
 
 def _bounded(limit, what):
@@ -30,13 +27,13 @@ def _bounded(limit, what):
               help="The platform's pose (mm, degrees) [default: the verification home]; a constrained machine "
                    "takes the pose its constraints give for its task coordinates.")
 @click.option("--velocity", nargs=6, type=float, default=None, metavar="VX VY VZ WX WY WZ",
-              callback=_bounded(MAX_RATE, "mm/s and deg/s"),
+              callback=_bounded(LOAD_RATE_MAX, "mm/s and deg/s"),
               help="The platform frame origin's velocity (mm/s) and angular velocity (deg/s), base frame.")
 @click.option("--acceleration", nargs=6, type=float, default=None, metavar="AX AY AZ ALPHAX ALPHAY ALPHAZ",
-              callback=_bounded(MAX_RATE, "mm/s^2 and deg/s^2"),
+              callback=_bounded(LOAD_RATE_MAX, "mm/s^2 and deg/s^2"),
               help="The platform frame origin's acceleration (mm/s^2) and angular acceleration (deg/s^2), base frame.")
 @click.option("--wrench", nargs=6, type=float, default=None, metavar="FX FY FZ MX MY MZ",
-              callback=_bounded(MAX_WRENCH, "N and N m"),
+              callback=_bounded(LOAD_WRENCH_MAX, "N and N m"),
               help="An external wrench applied at the platform origin (N, N m), base frame.")
 @click.option("--posture", type=click.IntRange(min=0), default=None,
               help="Only this posture [default: every posture that reaches the pose].")

@@ -310,7 +310,7 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
     from ..design.analysis import Settings
     from ..design.analysis import analyze as run_analysis
     from ..kinematics.collision import model_problem
-    from ..runtime.files import default_out_dir, write_atomic
+    from ..runtime.files import default_out_dir, write_files
     from ..design.figures import figures, report_html
 
     model = load_model(robot)
@@ -329,10 +329,8 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
     seconds = time.perf_counter() - start
     text = json.dumps(finite(analysis), indent=1, allow_nan=False) + "\n"
     outputs = {"analysis.json": text, **pngs, "report.html": report_html(model, analysis, pngs, seconds)}
-    for name, data in outputs.items():
-        write_atomic(out_dir / name, data)
-    if json_path is not None:
-        write_atomic(json_path, text)
+    write_files({**{out_dir / name: data for name, data in outputs.items()},
+                 **({} if json_path is None else {json_path: text})})
     say(f"analyze {model.name}, posture {analysis['posture']}: {_tilt_summary(analysis, settings)}")
     for name in outputs:
         say(str(out_dir / name))

@@ -54,14 +54,17 @@ def fingerprint(problem):
 
 
 def new_state(problem, seed, fingerprint):
-    """A swarm of ``search.swarm`` particles for ``problem``, seeded."""
+    """A swarm of ``search.swarm`` particles for ``problem``, seeded. pymoo never ends it (its
+    own termination criteria would finish the algorithm, which a swarm rebuilt from a checkpoint
+    cannot do: run_swarm alone decides when the search stops)."""
     from pymoo.algorithms.soo.nonconvex.pso import PSO
     from pymoo.core.problem import Problem as PymooProblem
+    from pymoo.core.termination import NoTermination
 
     search = problem.section.search
     k = search.constriction
     algorithm = PSO(pop_size=search.swarm, w=k, c1=k * search.c1, c2=k * search.c2, adaptive=False,
-                    pertube_best=False, max_velocity_rate=1.0)
+                    pertube_best=False, max_velocity_rate=1.0, termination=NoTermination())
     bounds = PymooProblem(n_var=len(problem.names), n_obj=1, xl=problem.lower, xu=problem.upper)
     algorithm.setup(bounds, seed=seed, verbose=False)
     return SearchState(algorithm=algorithm, seed=seed, fingerprint=fingerprint)
@@ -105,6 +108,9 @@ def load(folder, problem, expected):
             raise KingenError(f"{path}: swarm.{name}: not {particles} particles")
     if data.best_x is not None and len(data.best_x) != variables:
         raise KingenError(f"{path}: best_x: not {variables} variables")
+    problem_found = _out_of_range(data, problem)
+    if problem_found is not None:
+        raise KingenError(f"{path}: {problem_found}, which no search of this problem writes")
     state = new_state(problem, data.seed, expected)
     _restore_swarm(state.algorithm, swarm)
     best_x = None if data.best_x is None else np.array(data.best_x)
@@ -113,6 +119,52 @@ def load(folder, problem, expected):
                        evaluations=data.evaluations, poses=data.poses, best_x=best_x,
                        best_objective=data.best_objective, best_table=best_table, history=list(data.history),
                        since_improvement=data.since_improvement, seconds=data.seconds)
+
+
+GENERATOR_RANGES = {"random_state": 1 << 128, "random_increment": 1 << 128, "random_has_uint32": 2,
+                    "random_uinteger": 1 << 32}
+"""PCG64's state fields: each from 0 to below these."""
+COUNTERS = ("iteration", "evaluations", "poses", "since_improvement")
+
+
+def _out_of_range(data, problem):
+    """What in the checkpoint ``data`` (of the right shapes) lies outside what a search of
+    ``problem`` writes, or None: positions (swarm.x, swarm.best_x, best_x) within the variables'
+    bounds, velocities within +/- their widths (pymoo's velocity cap), objective values (swarm.f,
+    swarm.best_f negated; best_objective, history, best_table's tilts) within 0 to the
+    objective's tilt_max degrees (-1: none yet), the tilt table one row per azimuth with a cause
+    analyze names, counters from 0 and the history one entry per iteration, the random
+    generator's state within PCG64's ranges. A checkpoint so changed could steer the search
+    out of its problem or break it (exit 3) rather than continue it."""
+    from .analysis import CAUSES
+
+    swarm, lower, upper = data.swarm, problem.lower, problem.upper
+    most = problem.section.objective.tilt_max
+    bounds, widths, tilts = "the variables' bounds", "+/- the variables' widths", f"-1 to {most:g} degrees"
+    checks = [("swarm.x", swarm.x, lower, upper, bounds), ("swarm.best_x", swarm.best_x, lower, upper, bounds),
+              ("swarm.v", swarm.v, lower - upper, upper - lower, widths),
+              ("swarm.f", swarm.f, -most, 0.0, f"-{most:g} to 0"), ("swarm.best_f", swarm.best_f, -most, 0.0,
+                                                                  f"-{most:g} to 0"),
+              ("history", data.history, -1.0, most, tilts), ("best_objective", data.best_objective, -1.0, most, tilts),
+              ("seconds", data.seconds, 0.0, np.inf, "0 s or more")]
+    if data.best_x is not None:
+        checks.append(("best_x", data.best_x, lower, upper, bounds))
+    for name, values, low, high, words in checks:
+        if not np.all((low <= np.array(values)) & (np.array(values) <= high)):
+            return f"{name}: a value outside {words}"
+    azimuths = len(settings_of(problem.section.objective).azimuths)
+    if data.best_table is not None and (len(data.best_table) != azimuths or any(
+            not 0.0 <= tilt <= most or cause not in (*CAUSES, "invalid") for tilt, cause in data.best_table)):
+        return f"best_table: not {azimuths} rows of a tilt from 0 to {most:g} degrees and a cause"
+    for name in COUNTERS:
+        if getattr(data, name) < 0:
+            return f"{name}: {getattr(data, name)} below 0"
+    if len(data.history) != data.iteration:
+        return f"history: {len(data.history)} entries for {data.iteration} iterations"
+    for name, end in GENERATOR_RANGES.items():
+        if not 0 <= getattr(swarm, name) < end:
+            return f"swarm.{name}: not within 0 to {end - 1}"
+    return None
 
 
 def _restore_swarm(algorithm, swarm):

@@ -145,7 +145,9 @@ def task_twists(robot, t6):
     """(n, 6, 3) the platform twist [v; omega] (v: the velocity of the point at the base origin,
     mm; omega rad) per unit rate of each task coordinate (robot.task), moving on the manifold,
     at T6 (n, 4, 4) on it: the solution t of G t = 0 (each plane's row [a_i, C_i x a_i], or each
-    platform axis's, kingen.kinematics.parasitic_axes) and S t = e_k (S: task_rows)."""
+    platform axis's, kingen.kinematics.parasitic_axes) and S t = e_k (S: task_rows); NaN at a
+    pose where that system is singular (the constraints and the task coordinates dependent
+    there: the manifold has no tangent of the task's dimension)."""
     t6 = np.asarray(t6, dtype=float)
     rows = np.zeros((len(t6), 6, 6))
     if family(robot) in ("axes", "tube"):
@@ -158,7 +160,18 @@ def task_twists(robot, t6):
     rows[:, 3:] = task_rows(t6, robot.task)
     right = np.zeros((len(t6), 6, len(TASK)))
     right[:, 3:, :] = np.eye(len(TASK))
-    return np.linalg.solve(rows, right)
+    try:
+        return np.linalg.solve(rows, right)
+    except np.linalg.LinAlgError:  # some pose's system is singular: those answer NaN, the others as above
+        return np.array([_solved_or_nan(matrix, column) for matrix, column in zip(rows, right)])
+
+
+def _solved_or_nan(matrix, right):
+    """The solution x of ``matrix`` x = ``right``, or NaN of its shape when ``matrix`` is singular."""
+    try:
+        return np.linalg.solve(matrix, right)
+    except np.linalg.LinAlgError:
+        return np.full(right.shape, np.nan)
 
 
 def task_rows(t6, task=TASK):

@@ -11,13 +11,27 @@ from pathlib import Path
 
 import numpy as np
 
+from ..defaults import MAX_MM
 from ..errors import located
+from ..robot.schema import MAX_DEGREES
 from ..runtime.file_gate import csv_rows, refuse_special_file
 from .moves import Move
 
 GCODE_SUFFIXES = (".ngc", ".nc", ".gcode")
 POSE_COLUMNS = ("x", "y", "z", "roll", "pitch", "yaw")
 TIMING_COLUMNS = ("t", "feed")
+MAX_SECONDS = 1e9
+"""A CSV's ``t`` within +/- this many seconds (about 32 years)."""
+FEED_RANGE = (1e-6, 1e9)
+"""A CSV's ``feed`` within these mm/min: a move of the geometry range's length then lasts a
+finite time."""
+RANGES = {**{name: (-MAX_MM, MAX_MM) for name in POSE_COLUMNS[:3]},
+          **{name: (-MAX_DEGREES, MAX_DEGREES) for name in POSE_COLUMNS[3:]},
+          "t": (-MAX_SECONDS, MAX_SECONDS), "feed": FEED_RANGE}
+"""What each CSV column may hold (mm, degrees, s, mm/min), both ends included: the geometry
+range a robot file's poses have, so every length, turn and time computed from a row is finite."""
+UNITS = {"x": "mm", "y": "mm", "z": "mm", "roll": "degrees", "pitch": "degrees", "yaw": "degrees", "t": "s",
+         "feed": "mm/min"}
 
 
 def is_gcode(path):
@@ -32,6 +46,11 @@ def _number(text, path, line, column):
         raise located(path, line, column, f"{text.strip()!r} is not a number") from None
     if not math.isfinite(value):
         raise located(path, line, column, f"{text.strip()!r} is not a finite number")
+    low, high = RANGES[column]
+    if column == "feed" and value <= 0.0:
+        raise located(path, line, column, f"{value:g} mm/min: a feed must be above 0")
+    if not low <= value <= high:
+        raise located(path, line, column, f"{value:g} {UNITS[column]} is not within {low:g} to {high:g}")
     return value
 
 
@@ -65,7 +84,8 @@ def csv_moves(path):
     row a straight move to its pose. Columns x, y, z, roll, pitch, yaw (mm, degrees), in that
     order without a header, or named by a header row with optionally ``t`` (s, increasing:
     the row is reached at that time) or ``feed`` (mm/min, positive). KingenError (file:line)
-    on a missing or non-numeric value, a time that does not increase, a feed not above 0."""
+    on a missing or non-numeric value, a value outside its column's RANGES, a time that does
+    not increase."""
     refuse_special_file(path)
     with open(path, newline="", encoding="utf-8", errors="replace") as stream:
         pose_at, timing, timing_at = list(range(6)), None, None
@@ -83,8 +103,6 @@ def csv_moves(path):
                 raise located(path, line, "row", f"{len(row)} values, {width + 1} expected")
             pose = np.array([_number(row[index], path, line, name) for index, name in zip(pose_at, POSE_COLUMNS)])
             value = _number(row[timing_at], path, line, timing) if timing else None
-            if timing == "feed" and value <= 0.0:
-                raise located(path, line, "feed", f"{value:g} mm/min: a feed must be above 0")
             if previous is not None:
                 if timing == "t" and value <= previous_time:
                     raise located(path, line, "t", f"{value:g} s does not come after the previous row's "

@@ -7,8 +7,8 @@ from typing import Annotated, Literal, Optional
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..defaults import AZIMUTH_STEP_DEG, TILT_MAX_DEG, TILT_STEP_DEG
-from .schema import Coordinate, Strict
+from ..defaults import AZIMUTH_STEP_DEG, MAX_MM, TILT_MAX_DEG, TILT_STEP_DEG
+from .schema import MAX_DEGREES, Coordinate, Strict
 
 
 class Variable(Strict):
@@ -44,13 +44,24 @@ class Objective(Strict):
     collision: Literal["segments", "thesis"] = "thesis"
 
 
+MIN_STEP = 1e-6
+"""The refinement's difference steps at least (mm or degrees): a difference of objectives over
+a smaller one (down to 5e-324) could overflow the gradient to infinity."""
+MAX_COEFFICIENT = 100.0
+"""c1 and c2 at most: phi = c1 + c2 and phi^2 stay far from overflow, so the constriction
+factor K and the swarm's coefficients K, K c1, K c2 are finite and positive (beyond about
+1e154, phi^2 overflows and K is 0 or NaN: a frozen swarm or NaN velocities)."""
+
+
 class Search(Strict):
     """The particle swarm (constriction form: v <- K [v + c1 r1 (p - x) + c2 r2 (g - x)])."""
 
     swarm: Annotated[int, Field(ge=2, le=1000)] = 30
     iterations: Annotated[int, Field(ge=1, le=100000)] = 3000
-    c1: Annotated[float, Field(gt=0)] = 2.8
-    c2: Annotated[float, Field(gt=0)] = 1.3
+    c1: Annotated[float, Field(gt=0, le=MAX_COEFFICIENT)] = 2.8
+    """The pull towards each particle's own best."""
+    c2: Annotated[float, Field(gt=0, le=MAX_COEFFICIENT)] = 1.3
+    """The pull towards the swarm's best."""
     patience: Annotated[int, Field(ge=1)] = 300
     """Stop when the best objective has not improved for this many iterations."""
 
@@ -72,8 +83,10 @@ class Refine(Strict):
     central differences of these absolute steps."""
 
     method: Literal["trust-constr", "none"] = "trust-constr"
-    angle_step: Annotated[float, Field(gt=0)] = 1.0
-    length_step: Annotated[float, Field(gt=0)] = 50.0
+    angle_step: Annotated[float, Field(ge=MIN_STEP, le=MAX_DEGREES)] = 1.0
+    """degrees"""
+    length_step: Annotated[float, Field(ge=MIN_STEP, le=MAX_MM)] = 50.0
+    """mm"""
     iterations: Annotated[int, Field(ge=1, le=10000)] = 20
 
 

@@ -49,6 +49,20 @@ def _start_worker(parent):
     if os.getppid() != parent:
         os.kill(os.getpid(), signal.SIGKILL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # blocked while it was forked (_started)
+
+
+def _started(pool):
+    """``pool`` with its workers started now, SIGINT blocked while they fork (they inherit the
+    block and ignore SIGINT before lifting it): Ctrl-C during the start then neither kills a
+    worker before it ignores SIGINT (a broken pool, exit 3) nor is lost in the fork's own
+    handlers (the run went on to exit 0); it reaches kingen once the workers are up."""
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        pool.submit(int).result()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+    return pool
 
 
 def scheduler_address(address):
@@ -144,4 +158,4 @@ def executor(workers=None, scheduler=None):
 
     count = workers or usable_cores()
     with ProcessPoolExecutor(count, initializer=_start_worker, initargs=(os.getpid(),)) as pool:
-        yield Workers(pool, f"{count} worker process{'es' if count != 1 else ''}", count)
+        yield Workers(_started(pool), f"{count} worker process{'es' if count != 1 else ''}", count)

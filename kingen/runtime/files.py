@@ -36,17 +36,30 @@ def write_atomic(path, content, executable=False):
         stream.write(data)
 
 
+def write_files(files):
+    """Write ``files`` ({path: text or bytes}) each whole or not at all (:func:`write_atomic`),
+    none of them when any path would be written through another user's link
+    (:func:`refuse_foreign`, asked of every path before the first is written)."""
+    for path in files:
+        refuse_foreign(path)
+    for path, content in files.items():
+        write_atomic(path, content)
+
+
 @contextlib.contextmanager
 def atomic_file(path, executable=False):
     """A binary stream whose bytes reach ``path`` whole or not at all: written to a temporary
     file beside it that takes its place when the block ends normally; on any exception the
     temporary file and the folders made for it are removed and ``path`` is left as it was.
     The file gets the permissions the user's umask gives a new file (0644 under umask 022;
-    0755 when ``executable``), never the temporary file's 0600. A symbolic link is kept and
-    its target written. An existing file that is not a regular file (a device such as
-    /dev/null or /dev/stdout, a FIFO) is written in place, never replaced. KingenError names
-    ``path`` and the cause (a full disk, a folder without permission)."""
+    0755 when ``executable``), never the temporary file's 0600. A symbolic link of this user's
+    or root's is kept and its target written; one of another user's, on the path or met
+    resolving it, is refused (:func:`refuse_foreign`). An existing file that is not a regular
+    file (a device such as /dev/null or /dev/stdout, a FIFO) is written in place, never
+    replaced, unless another user owns it (refused: a FIFO nobody reads would hold kingen).
+    KingenError names ``path`` and the cause (a full disk, a folder without permission)."""
     path = Path(path)
+    refuse_foreign(path)
     try:
         status = os.stat(path)
     except (FileNotFoundError, NotADirectoryError):
@@ -56,6 +69,8 @@ def atomic_file(path, executable=False):
     if status is not None and stat.S_ISDIR(status.st_mode):
         raise KingenError(f"{path}: is a folder, not a file")
     if status is not None and not stat.S_ISREG(status.st_mode):
+        if not _trusted(status.st_uid):
+            raise KingenError(f"{path}: is a special file of another user (uid {status.st_uid}){NOT_THROUGH}")
         try:
             with open(path, "wb") as stream:
                 yield stream
@@ -83,6 +98,51 @@ def atomic_file(path, executable=False):
         raise
 
 
+NOT_THROUGH = ": kingen writes its outputs only through links and special files of your own or root's " \
+              "(remove it or choose another -o)"
+MAX_LINKS = 40
+"""Symbolic links followed in resolving one path at most (Linux's own limit)."""
+
+
+def _trusted(uid):
+    """Whether a link or special file of ``uid`` may steer kingen's writes: this user's or root's."""
+    return uid in (os.getuid(), 0)
+
+
+def refuse_foreign(path):
+    """Refuse (KingenError) to write at ``path`` when resolving it meets a symbolic link that
+    another user owns (neither this user nor root), in a folder of the path or at its end:
+    such a link, planted in a folder others may write, would turn an output into a write
+    outside the output folder (as Linux's protected_symlinks refuses in sticky folders). The
+    path is resolved component by component as the kernel does, following at most MAX_LINKS
+    links; the first missing component ends the walk (nothing beyond it exists to follow)."""
+    pending = list(Path(path).parts)
+    current = Path.cwd()
+    followed = 0
+    while pending:
+        part = pending.pop(0)
+        if part in ("", "."):
+            continue
+        if part == "..":
+            current = current.parent
+            continue
+        candidate = current / part
+        try:
+            status = os.lstat(candidate)
+        except OSError:
+            return
+        if not stat.S_ISLNK(status.st_mode):
+            current = candidate
+            continue
+        if not _trusted(status.st_uid):
+            raise KingenError(f"{path}: {candidate} is a symbolic link of another user (uid {status.st_uid})"
+                              f"{NOT_THROUGH}")
+        followed += 1
+        if followed > MAX_LINKS:
+            return
+        pending[:0] = Path(os.readlink(candidate)).parts
+
+
 def _missing_folders(folder):
     """The folders from the first missing ancestor of ``folder`` down to it, outermost first."""
     missing = []
@@ -97,6 +157,7 @@ def writable_folder(folder):
     folder, or its nearest existing ancestor that kingen would create it in, must be a
     writable folder; a symbolic link to nothing is refused (kingen cannot make a folder there)."""
     folder = Path(folder)
+    refuse_foreign(folder)
     missing = _missing_folders(folder)
     if missing and missing[0].is_symlink():
         raise KingenError(f"{folder}: {missing[0]} is a symbolic link to {os.readlink(missing[0])}, "
@@ -117,11 +178,18 @@ def write_folder(out_dir, fill, marker_text):
     """Write the folder ``out_dir`` whole or not at all: ``fill(staging)`` writes the files
     into a hidden sibling folder, which then takes ``out_dir``'s place, marked as kingen's
     (PACKAGE_MARKER holding ``marker_text``). An existing ``out_dir`` is replaced only if it
-    is empty or kingen wrote it; anything else is refused, never overwritten."""
-    out_dir = Path(out_dir)
+    is empty or kingen wrote it; anything else is refused, never overwritten, and so is the
+    current folder or one holding it (``-o .``), which cannot be replaced whole."""
+    given, out_dir = out_dir, Path(os.path.abspath(out_dir))
+    refuse_foreign(out_dir)
+    here = Path.cwd()
+    if out_dir == here or out_dir in here.parents:
+        raise KingenError(f"{given}: is the folder you are in{'' if out_dir == here else ' or holds it'}, which "
+                          "kingen cannot replace with the package folder; choose a folder of the package's own "
+                          "(-o NAME)")
     if out_dir.exists() and not (out_dir.is_dir() and (not any(out_dir.iterdir())
                                                        or (out_dir / PACKAGE_MARKER).is_file())):
-        raise KingenError(f"{out_dir}: exists and is not a kingen package folder; choose another -o")
+        raise KingenError(f"{given}: exists and is not a kingen package folder; choose another -o")
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
     try:
@@ -139,12 +207,13 @@ def _replace_folder(new, old):
         os.replace(new, old)
         return
     aside = Path(tempfile.mkdtemp(prefix=f".{old.name}.old.", dir=old.parent))
-    os.replace(old, aside / old.name)
     try:
-        os.replace(new, old)
-    except OSError:
-        os.replace(aside / old.name, old)
-        raise
+        os.replace(old, aside / old.name)
+        try:
+            os.replace(new, old)
+        except OSError:
+            os.replace(aside / old.name, old)
+            raise
     finally:
         shutil.rmtree(aside, ignore_errors=True)
 

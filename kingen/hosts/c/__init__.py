@@ -6,8 +6,25 @@ state, no I/O, only ``<math.h>``: for a controller's own real-time loop. Verifie
 (:mod:`.loader`), packaged with CMake and pkg-config files (:mod:`.package`).
 """
 
+import functools
+import re
+
 from ...defaults import DEFAULT_TIMEOUT
 from ..base import Host
+
+
+@functools.lru_cache(maxsize=1)
+def shared_names():
+    """The names the library's C uses besides its own (``kingen_...`` functions and tables,
+    ``KINGEN_...`` macros: the shared routine helpers, the limb partials, the batch driver), read
+    once from the templates that write them; a name ending in ``_`` is the start of names a
+    template completes (``kingen_solve_<model>``)."""
+    from pathlib import Path
+
+    from ...runtime.resources import templates_dir
+
+    files = [*templates_dir().rglob("*.c.j2"), *Path(__file__).with_name("templates").glob("*.c*")]
+    return frozenset(name for path in files for name in re.findall(r"\b(?:kingen|KINGEN)_\w+", path.read_text()))
 
 
 class CHost(Host):
@@ -20,6 +37,16 @@ class CHost(Host):
         from .checks import CHECKS
 
         return CHECKS
+
+    def name_problem(self, robot_name):
+        """The library's names are kingen_<name>_... and KINGEN_<NAME>_...: none may be the start
+        of a name its C uses besides (``solve`` would make kingen_solve_leg, a helper's name)."""
+        own = (f"kingen_{robot_name}_", f"KINGEN_{robot_name.upper()}_")
+        taken = sorted(name for name in shared_names() if name.startswith(own))
+        if taken:
+            return (f"gives the C library's names the prefix '{own[0]}' or '{own[1]}', which the C library's own "
+                    f"names start with ('{taken[0]}')")
+        return None
 
     def out_dir(self, robot):
         from .build import default_dir

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ...defaults import DEFAULT_TIMEOUT
 from ...runtime.compiler import CompileError, compile_c, compile_given_source
-from ...runtime.files import default_out_dir, write_atomic
+from ...runtime.files import default_out_dir, write_atomic, write_files
 from ..base import BuildResult
 from .render import file_names, prefix, render
 
@@ -22,8 +22,7 @@ def default_dir(robot):
 
 def write_source(robot, out_dir):
     """Write header and source into ``out_dir``; the source's path."""
-    for name, text in render(robot).items():
-        write_atomic(Path(out_dir) / name, text)
+    write_files({Path(out_dir) / name: text for name, text in render(robot).items()})
     return Path(out_dir) / file_names(robot)[1]
 
 

@@ -17,7 +17,8 @@ from ...runtime.compiler import CompileError, compile_c, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
 from ...errors import KingenError
 from ...runtime.file_gate import refuse_special_file
-from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
+from ...runtime.files import (cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic,
+                              write_files)
 from ..base import BuildResult
 from . import dialog
 from .pe import dll_exports
@@ -155,6 +156,5 @@ def build_legacy(source, out_dir, timeout=DEFAULT_TIMEOUT):
 
 def write_source(robot, out_dir):
     """Render ``robot`` and write ``kin_<name>.c`` into ``out_dir``; returns its path."""
-    for name, text in render(robot).items():
-        write_atomic(Path(out_dir) / name, text)
+    write_files({Path(out_dir) / name: text for name, text in render(robot).items()})
     return Path(out_dir) / source_name(robot)

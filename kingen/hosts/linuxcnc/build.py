@@ -11,7 +11,8 @@ from ...defaults import VERSION
 from ...runtime.compiler import CompileError, compile_c, compile_given_source, compiler_command
 from ...defaults import DEFAULT_TIMEOUT
 from ...errors import KingenError
-from ...runtime.files import cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic
+from ...runtime.files import (cache_dir, cached, default_out_dir, digest, file_digest, read_stamp, write_atomic,
+                              write_files)
 from ..base import BuildResult
 from .render import harness_source, module_name, render, source_name
 
@@ -98,6 +99,5 @@ def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
 
 
 def write_source(robot, out_dir, units="mm"):
-    for name, text in render(robot, units).items():
-        write_atomic(Path(out_dir) / name, text)
+    write_files({Path(out_dir) / name: text for name, text in render(robot, units).items()})
     return Path(out_dir) / source_name(robot)
