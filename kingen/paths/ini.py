@@ -1,8 +1,8 @@
 """A LinuxCNC ``.ini`` read as LinuxCNC reads it: through LinuxCNC's own reader (the ``ini``
 class of its Python module ``linuxcnc``, in a child process of the Python that has it) where it
 is installed, otherwise by :func:`read_ini`, which keeps the same rules: section and key names
-are case-sensitive, the first value of a key repeated in a section wins (a section repeated is
-one section), a line whose first character past its indentation is ``#`` or ``;`` is a comment,
+are case-sensitive, the first value of a key repeated in a section wins, a section repeated is
+read where it first stands only (the keys under its later headers are not read), a line whose first character past its indentation is ``#`` or ``;`` is a comment,
 a value runs from past the ``=`` to the end of its line (a ``#`` or ``;`` in it is part of it),
 trimmed, and an empty value is no value. Every line is accepted: one without ``=`` is no key.
 """
@@ -51,7 +51,8 @@ class Ini:
 
 def read_ini(text):
     """({(section, key): value}, {(section, key) or (section, None): line}) of an ``.ini``'s
-    ``text`` by LinuxCNC's rules (the module docstring); the first value of a key wins."""
+    ``text`` by LinuxCNC's rules (the module docstring): the first value of a key wins, a
+    section is read where its header first stands."""
     values, lines, section = {}, {}, None
     for number, raw in enumerate(text.splitlines(), start=1):
         stripped = raw.strip()
@@ -59,7 +60,10 @@ def read_ini(text):
             continue
         if stripped.startswith("[") and "]" in stripped:
             section = stripped[1:stripped.index("]")]
-            lines.setdefault((section, None), number)
+            if (section, None) in lines:
+                section = None  # a repeated header: what follows it is not read
+            else:
+                lines[section, None] = number
             continue
         if section is None or "=" not in stripped:
             continue

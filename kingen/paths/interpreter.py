@@ -45,6 +45,10 @@ PLANE_AXES = {1: (0, 1, 2), 2: (1, 2, 0), 3: (2, 0, 1)}
 """LinuxCNC's plane (G17 XY, G19 YZ, G18 XZ): the x, y, z indices of its first and second
 axis and of its normal."""
 KINDS = {"T": "rapid", "F": "feed", "A": "arc", "P": "probe", "R": "tap"}
+RS274_MOTIONS = (b"STRAIGHT_TRAVERSE(", b"STRAIGHT_FEED(", b"STRAIGHT_PROBE(", b"ARC_FEED(", b"RIGID_TAP(",
+                 b"NURBS_FEED(")
+"""The canonical calls ``rs274`` prints for a motion (a spline, G5 .. G5.2, is one NURBS_FEED;
+the gcode module cuts it into straight feeds)."""
 """The canon's motion letters and the Move kinds they become."""
 CLEAN_PATH = "/usr/local/bin:/usr/bin:/bin"
 
@@ -67,7 +71,9 @@ class Setup:
 @dataclass
 class Reading:
     """What reading a program showed besides its moves: ``motions`` the canonical motions the
-    interpreter emitted (a rigid tap one), ``zero_length`` those of them that go nowhere,
+    ``gcode`` module emitted (a rigid tap one; a spline as its straight pieces), ``zero_length``
+    those of them that go nowhere, ``rs274_motions`` the canonical motions ``rs274 -g`` printed
+    for the same program (a spline one; None: rs274 not run),
     ``files`` {number: path} the files it read, ``work_offset`` the work offsets it started
     with ({"system": "G54".., "g5x": [x y z a b c], "g92": [...], "rotation": deg}, mm and
     degrees), ``offset_from`` where that offset came from (in words), ``line`` the last (file,
@@ -75,6 +81,7 @@ class Reading:
 
     motions: int = 0
     zero_length: int = 0
+    rs274_motions: int = None
     files: dict = field(default_factory=dict)
     work_offset: dict = None
     offset_from: str = "none given: the machine's origin"
@@ -143,10 +150,9 @@ def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     reading = Reading() if reading is None else reading
     position = np.asarray(start, dtype=float)
     for kind, file, line, units, feed, end, arc in canonical_motions(path, start, setup, reading):
-        reading.motions += 1
         moves = _moves(kind, file, line, units, feed, position, end, arc)
-        if not moves:
-            reading.zero_length += 1
+        reading.motions += 1
+        reading.zero_length += not moves
         yield from moves
         position = end
 
@@ -155,7 +161,7 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     """Every canonical motion LinuxCNC's interpreter emits for the program at ``path`` (see
     gcode_moves), as (kind letter, file (None: the program), line, units word, feed in
     inches/min, end (6,) mm and degrees with every offset applied, arc (center (2,) mm, rotation,
-    plane) or None), in order; the start-up code's motions are not among them."""
+    plane) or None), in order; the start-up code's motion is not among them."""
     refuse_special_file(path)
     if not Path(path).is_file():
         raise KingenError(f"{path}: no such file")
@@ -189,7 +195,7 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
 
 def _read(lines, path, reading):
     """Yield the motions of the canon's ``lines``; True when the program was read to its end."""
-    files = {0: None}
+    files, started = {0: None}, False
     for text in lines:
         fields = text.split()
         if not fields:
@@ -207,7 +213,9 @@ def _read(lines, path, reading):
             message = " ".join(fields[3:])
             raise located(file or path, refused_line(file or path, line) if file is None else max(line, 1),
                           "G-code", message)
-        elif fields[0] == "M" and int(fields[1]) != 0 and int(fields[2]) != 0:  # not the start-up code's
+        elif fields[0] == "M" and not started:  # the start-up code's motion
+            started = True
+        elif fields[0] == "M":
             file, line = files.get(int(fields[1])), int(fields[2])
             reading.line = (file, line)
             yield _motion(fields, file, line)
@@ -240,22 +248,25 @@ def _stopped(path, code, said, reading, setup):
 
 def _rs274_errors(path, program, folder, environment, table, parameters, setup, reading):
     """Read the program again with ``rs274 -g`` (the tool table and a fresh copy of the
-    parameters): KingenError at the refused line when it raises an error."""
+    parameters), counting the motions it prints into ``reading``: KingenError at the refused
+    line when it raises an error."""
     if not os.access(RS274, os.X_OK):
         return
     variables = folder / "rs274.var"
     shutil.copyfile(setup.parameter_file, variables) if setup.parameter_file is not None else variables.write_text("")
-    try:
-        done = subprocess.run([RS274, "-g", "-t", str(table), "-v", str(variables), program],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-                              env=environment, cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
-    except OSError:
+    with open(folder / "rs274.err", "w+b") as errors:
+        child = subprocess.Popen([RS274, "-g", "-t", str(table), "-v", str(variables), program],
+                                 stdout=subprocess.PIPE, stderr=errors, stdin=subprocess.DEVNULL, env=environment,
+                                 cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
+        with child.stdout:
+            reading.rs274_motions = sum(1 for text in child.stdout if any(name in text for name in RS274_MOTIONS))
+        code = child.wait()
+        errors.seek(0)
+        said = [text.strip() for text in errors.read().decode("utf-8", "replace").splitlines()
+                if text.strip() and text.strip() != "executing"]
+    if code == 0:
         return
-    if done.returncode == 0:
-        return
-    said = [text.strip() for text in done.stderr.decode("utf-8", "replace").splitlines()
-            if text.strip() and text.strip() != "executing"]
-    if done.returncode < 0:
+    if code < 0:
         file, line = reading.line
         raise located(file or path, line, "G-code", f"rs274 ran out of its {setup.seconds:g} s of CPU time "
                                                     f"(--interpreter-seconds)")

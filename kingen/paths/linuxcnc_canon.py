@@ -37,6 +37,9 @@ ENTRY = struct.Struct("ii12di")
 """CANON_TOOL_TABLE's leading fields: tool number, pocket, offsets x y z a b c u v w, diameter,
 front angle, back angle, orientation (the comment after them is not read)."""
 EMPTY = (-1,) + (0.0,) * 12 + (0,)
+MM_UNITS = 210
+"""The interpreter's units word for mm (G21): the gcode module's positions are then in mm."""
+MM_PER_INCH = 25.4
 
 
 class Tools:
@@ -71,6 +74,24 @@ class Tools:
         return (values[0],) + values[2:]
 
 
+def arc_end_cells():
+    """The gcode module's own record of the machine's position (its static ``_pos_x`` ..
+    ``_pos_w``, what GET_EXTERNAL_POSITION_X .. W answer when the interpreter synchronises, as
+    after a tool change or a probe), found from those functions' code (``movsd disp(%rip),
+    %xmm0; ret``), as ctypes doubles; None when the code is not that. The module updates them
+    after straight motions only; the canon updates them after arcs, as LinuxCNC's motion
+    controller would report the arc's end."""
+    library = ctypes.CDLL(gcode.__file__)
+    cells = []
+    for axis in "XYZABCUVW":
+        address = ctypes.cast(getattr(library, f"_Z23GET_EXTERNAL_POSITION_{axis}v"), ctypes.c_void_p).value
+        code = ctypes.string_at(address, 9)
+        if code[:4] != b"\xf2\x0f\x10\x05" or code[8] != 0xC3:
+            return None
+        cells.append(ctypes.c_double.from_address(address + 8 + int.from_bytes(code[4:8], "little", signed=True)))
+    return cells
+
+
 class Canon(Translated):
     """LinuxCNC's canonical motions written to ``moves``; messages, spindle, coolant ignored."""
 
@@ -80,6 +101,7 @@ class Canon(Translated):
         self.units, self.feed, self.plane, self.sequence = 2, 0.0, 1, 0
         self.offset = (0.0,) * 6
         self.files, self.started = {"": 0}, False
+        self.positions = arc_end_cells()
 
     def __getattr__(self, name):
         if name.startswith("__"):
@@ -166,6 +188,13 @@ class Canon(Translated):
         center = self.rotate_and_translate(*center, a, b, c, u, v, w)
         centre = [center[index] + self.offset[index] for index in order[:2]]
         self._print("A", end, f"{centre[0]!r} {centre[1]!r} {rotation} {self.plane}")
+        if self.positions is not None:  # the arc's end in the program's units, before offsets
+            scale = MM_PER_INCH if self.units == MM_UNITS else 1.0
+            point = [0.0] * 3
+            for value, index in zip((first, second, axis), order):
+                point[index] = value * scale
+            for cell, value in zip(self.positions, point + [a, b, c, u * scale, v * scale, w * scale]):
+                cell.value = value
 
 
 def main(program, unit_code, start_code, moves_fd, table, parameter_file, length_units):

@@ -94,7 +94,8 @@ def reading_line(outcome):
         return None
     offset = reading.work_offset or {"system": "G54", "g5x": [0.0] * 6, "g92": [0.0] * 6}
     g92 = "" if not any(offset["g92"]) else f", G92 {' '.join(f'{value:g}' for value in offset['g92'])}"
-    return (f"G-code: {counted(reading.motions, 'motion')} from LinuxCNC's interpreter "
+    counts = "" if reading.rs274_motions is None else f", {reading.rs274_motions} as rs274 counts them"
+    return (f"G-code: {counted(reading.motions, 'motion')} from LinuxCNC's interpreter{counts} "
             f"({reading.zero_length} of length 0), {counted(outcome.findings.moves, 'move')} judged; work offset "
             f"{offset['system']} {' '.join(f'{value:g}' for value in offset['g5x'])}{g92} ({reading.offset_from})")
 
@@ -186,7 +187,8 @@ def report_json(outcome):
         document["five_axis"] = outcome.five_axis.summary(is_gcode(outcome.program))
     if outcome.reading is not None:
         reading = outcome.reading
-        document["gcode"] = {"motions": reading.motions, "zero_length": reading.zero_length,
+        document["gcode"] = {"motions": reading.motions, "rs274_motions": reading.rs274_motions,
+                             "zero_length": reading.zero_length,
                              "judged_moves": findings.moves, "files": sorted(set(reading.files.values())),
                              "work_offset": reading.work_offset, "offset_from": reading.offset_from}
     return document
