@@ -88,17 +88,20 @@ def ini_unit(ini):
 
 
 def ini_files(ini):
-    """{(section, key): absolute path} of the tool table and parameter file the ``.ini`` names,
-    relative names taken from its folder; KingenError (file:line) for one that is not a file."""
+    """{(section, key): path} of the tool table and parameter file the ``.ini`` names, relative
+    names taken from its folder. A parameter file that is not there yet is left out (LinuxCNC
+    starts without offsets and writes it); KingenError (file:line) for a tool table that is not
+    a file."""
     found = {}
     for section, key in FILE_KEYS:
         name = ini.get(section, key)
         if name is None:
             continue
         path = Path(ini.path).parent / name
-        if not path.is_file():
+        if path.is_file():
+            found[section, key] = path
+        elif key == "TOOL_TABLE":
             raise located(ini.path, ini.line(section, key), f"[{section}] {key}", f"{name!r}: no such file")
-        found[section, key] = path
     return found
 
 
