@@ -61,12 +61,13 @@ def markdown(figures):
     rows = figures["programs"]
     read = [row for row in rows if row["rs274"]]
     judged = [row for row in read if row["exit"] in (0, 1)]
-    lines = [f"On `{figures['robot']}`: {len(read)} of {len(rows)} programs read by rs274, {len(judged)} of them judged; "
-             f"{sum(row['seconds'] for row in rows):.0f} s in all.", "",
+    lines = [f"On `{figures['robot']}`: {len(read)} of {len(rows)} programs read by rs274, {len(judged)} of them "
+             f"judged; {sum(row['seconds'] for row in rows):.0f} s in all.", "",
              "| program | rs274 | exit | s | motions (rs274) | moves judged | samples |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
     for row in rows:
-        cells = [f"`{row['program']}`", "reads" if row["rs274"] else "refuses", str(row["exit"]), f"{row['seconds']:.2f}",
+        cells = [f"`{row['program']}`", "reads" if row["rs274"] else "refuses", str(row["exit"]),
+                 f"{row['seconds']:.2f}",
                  "-" if row["motions"] is None else str(row["motions"]),
                  "-" if row["moves"] is None else str(row["moves"]),
                  "-" if row["samples"] is None else str(row["samples"])]

@@ -2,9 +2,10 @@
 class of its Python module ``linuxcnc``, in a child process of the Python that has it) where it
 is installed, otherwise by :func:`read_ini`, which keeps the same rules: section and key names
 are case-sensitive, the first value of a key repeated in a section wins, a section repeated is
-read where it first stands only (the keys under its later headers are not read), a line whose first character past its indentation is ``#`` or ``;`` is a comment,
-a value runs from past the ``=`` to the end of its line (a ``#`` or ``;`` in it is part of it),
-trimmed, and an empty value is no value. Every line is accepted: one without ``=`` is no key.
+read where it first stands only (the keys under its later headers are not read), a line whose
+first character past its indentation is ``#`` or ``;`` is a comment, a value runs from past
+the ``=`` to the end of its line (a ``#`` or ``;`` in it is part of it), trimmed, and an
+empty value is no value. Every line is accepted: one without ``=`` is no key.
 """
 
 import json

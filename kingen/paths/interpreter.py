@@ -166,27 +166,26 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     if not Path(path).is_file():
         raise KingenError(f"{path}: no such file")
     reading = Reading() if reading is None else reading
-    program = os.path.abspath(path)
+    program, python = os.path.abspath(path), interpreter_python()
     with tempfile.TemporaryDirectory(prefix="kingen-interpreter-") as scratch:
         folder = Path(scratch)
         environment, table, parameters = _private(folder, setup)
         read_end, write_end = os.pipe()
-        with open(folder / "messages", "wb") as messages:
+        with open(read_end, encoding="utf-8", errors="replace") as lines, open(folder / "messages", "wb") as messages:
             try:
                 child = subprocess.Popen(
-                    [interpreter_python(), "-I", str(CANON), program, unit_code(setup.offset), start_code(start),
-                     str(write_end), str(table), str(parameters), repr(1.0 / setup.machine_unit)],
-                    stdout=messages, preexec_fn=_limit_cpu(setup.seconds), stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                    pass_fds=(write_end,), env=environment, cwd=os.path.dirname(program))
+                    [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start), str(write_end),
+                     str(table), str(parameters), repr(1.0 / setup.machine_unit)],
+                    stdout=messages, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, pass_fds=(write_end,),
+                    env=environment, cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
             finally:
                 os.close(write_end)
-            with open(read_end, encoding="utf-8", errors="replace") as lines:
-                try:
-                    finished = yield from _read(lines, path, reading)
-                finally:
-                    if child.poll() is None:
-                        child.kill()
-                    child.wait()
+            try:
+                finished = yield from _read(lines, path, reading)
+            finally:
+                if child.poll() is None:
+                    child.kill()
+                child.wait()
         said = " ".join((folder / "messages").read_bytes().decode("utf-8", "replace").split()[-40:])
         if not finished:
             _stopped(path, child.returncode, said, reading, setup)
