@@ -145,15 +145,17 @@ def test_print_and_debug_comments_change_no_verdict(tmp_path, capsys):
     assert [place["line"] - 4 for place in loud["problems"]] == [place["line"] for place in quiet["problems"]]
 
 
-def test_a_tool_change_applies_the_tools_length_offset_from_the_ini_tool_table(tmp_path, capsys):
-    """With T1 50 mm long (G43), the machine's controlled point is 50 mm above the programmed one."""
+@pytest.mark.parametrize("change", ["T1 M6", "M61 Q1"])
+def test_a_tool_change_applies_the_tools_length_offset_from_the_ini_tool_table(tmp_path, capsys, change):
+    """With T1 50 mm long (G43), the machine's controlled point is 50 mm above the programmed one,
+    whether the tool was changed (M6) or declared in the spindle (M61)."""
     needs_interpreter()
     (tmp_path / "tools.tbl").write_text("T1 P1 Z50 D6 ;a 6 mm end mill\n")
     ini = tmp_path / "machine.ini"
     ini.write_text("[EMCIO]\nTOOL_TABLE = tools.tbl\n" + "".join(
         f"[JOINT_{index}]\nMAX_VELOCITY = 500\nMAX_ACCELERATION = 5000\n" for index in range(3)))
     samples = tmp_path / "samples.csv"
-    code, out, err, document = check(capsys, tmp_path, "G21 G90\nT1 M6\nG43\nG1 X10 Y0 Z20 F600\nM2\n",
+    code, out, err, document = check(capsys, tmp_path, f"G21 G90\n{change}\nG43\nG1 X10 Y0 Z20 F600\nM2\n",
                                      "--ini", ini, "--csv", samples)
     assert code in (0, 1), err
     rows = np.genfromtxt(samples, delimiter=",", names=True)

@@ -134,10 +134,14 @@ class Canon(Translated):
         self.moves.write(" ".join(map(str, fields)) + "\n")
 
     def get_tool(self, pocket):
-        return self.tools.entry(pocket)
+        """The tool table's entry at ``pocket``; pocket 0 (the spindle) is the entry of the pocket
+        the interpreter has in the spindle (after M6, and after M61, which makes no canon call)."""
+        if pocket == 0:
+            import interpreter
 
-    def change_tool(self, pocket):
-        self.tools.spindle = pocket if pocket > 0 else None
+            current = interpreter.this.current_pocket
+            self.tools.spindle = current if current > 0 else None
+        return self.tools.entry(pocket)
 
     def tool_offset(self, *values):
         """The tool length offset (inches, degrees): x y z a b c of the nine values it is given."""
