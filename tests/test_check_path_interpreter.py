@@ -273,3 +273,25 @@ def test_a_duplicated_ini_key_is_read_as_linuxcnc_reads_it(tmp_path, capsys):
     code, out, err, document = check(capsys, tmp_path, "G21 G90\nG0 X0 Y0 Z15\nG1 X20 F600\nM2\n", "--ini", ini)
     assert code == 1, err
     assert {place["limit"] for place in document["problems"] if place["kind"] == "joint speed"} == {1.0}
+
+
+@pytest.mark.parametrize("reader", ["linuxcnc", "kingen"])
+def test_either_ini_reader_gives_the_same_limits(tmp_path, capsys, monkeypatch, reader):
+    """The first of a duplicated key, keys in their case, a repeated section read where it first
+    stands: 1 mm/s and 0 .. 300 mm, through LinuxCNC's reader or (no LinuxCNC Python) kingen's."""
+    if reader == "kingen":
+        monkeypatch.setenv("KINGEN_LINUXCNC_PYTHON", str(tmp_path / "no-python"))
+    elif linuxcnc_python() is None:
+        pytest.skip("LinuxCNC's linuxcnc module is not installed")
+    ini = tmp_path / "machine.ini"
+    ini.write_text("".join(f"[JOINT_{index}]\nMAX_VELOCITY = 1\nMAX_VELOCITY = 1000\nmax_acceleration = 1\n"
+                           f"MAX_ACCELERATION = 5000\nMIN_LIMIT = 0\nMAX_LIMIT = 300\n[JOINT_{index}]\nMAX_LIMIT = 9\n"
+                           for index in range(3)))
+    program = tmp_path / "path.csv"
+    program.write_text("x,y,z,roll,pitch,yaw,feed\n0,0,15,0,0,0,600\n20,0,15,0,0,0,600\n")
+    report = tmp_path / "report.json"
+    code, out, err = run(capsys, "check-path", "linear_delta", program, "--ini", ini, "--json", report)
+    assert code == 1, err
+    peaks = json.loads(report.read_text())["peaks"]
+    assert [(peak["speed_limit"], peak["acceleration_limit"], peak["travel_limits"]) for peak in peaks] == [
+        (1.0, 5000.0, [0.0, 300.0])] * 3
