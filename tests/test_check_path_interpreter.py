@@ -295,3 +295,17 @@ def test_either_ini_reader_gives_the_same_limits(tmp_path, capsys, monkeypatch, 
     peaks = json.loads(report.read_text())["peaks"]
     assert [(peak["speed_limit"], peak["acceleration_limit"], peak["travel_limits"]) for peak in peaks] == [
         (1.0, 5000.0, [0.0, 300.0])] * 3
+
+
+def test_a_subroutine_is_found_on_the_ini_subroutine_path(tmp_path, capsys):
+    needs_interpreter()
+    (tmp_path / "library").mkdir()
+    (tmp_path / "library" / "drop.ngc").write_text("o<drop> sub\nG1 X#1 F600\nG1 Z-900\no<drop> endsub\nM2\n")
+    ini = tmp_path / "machine.ini"
+    ini.write_text("[RS274NGC]\nSUBROUTINE_PATH = nowhere:library\n" + "".join(
+        f"[JOINT_{index}]\nMAX_VELOCITY = 500\nMAX_ACCELERATION = 5000\n" for index in range(3)))
+    (tmp_path / "cam").mkdir()
+    code, out, err, document = check(capsys, tmp_path / "cam", "G21 G90\nG0 X0 Y0 Z15\no<drop> call [5]\nM2\n",
+                                     "--ini", ini)
+    assert code == 1, err
+    assert {place["file"] for place in document["problems"]} == {str(tmp_path / "library" / "drop.ngc")}

@@ -24,7 +24,7 @@ from ..errors import located
 from .ini import load_ini
 from .interpreter import DEFAULT_INTERPRETER_SECONDS, Reading, Setup, gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
-from .limits import ini_files, ini_keys, ini_unit, limits_for
+from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
 from .manifold import Manifold
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
@@ -138,12 +138,12 @@ class _Checker:
                                      settings.timeout) if settings.routine else None
 
     def _setup(self, read):
-        """What LinuxCNC's interpreter starts with: the ``.ini``'s tool table, parameter file and
-        length unit, the settings' offset and time."""
+        """What LinuxCNC's interpreter starts with: the ``.ini``'s tool table, parameter file,
+        length unit and subroutine path, the settings' offset and time."""
         files = ini_files(read) if read is not None else {}
         return Setup(files.get(("EMCIO", "TOOL_TABLE")), files.get(("RS274NGC", "PARAMETER_FILE")),
                      self.settings.offset, ini_unit(read) if read is not None else 1.0,
-                     self.settings.interpreter_seconds)
+                     self.settings.interpreter_seconds, ini_subroutine_path(read) if read is not None else ())
 
     def add(self, index, move, program):
         """Cut a move into pieces and check them when a batch is full; KingenError at the move's

@@ -59,13 +59,16 @@ class Setup:
     at no offset), the parameter file whose work offsets it starts with (None: all zero),
     ``offset`` (x y z mm, a b c degrees; None: the parameter file's) the work offset of the
     coordinate system it starts in, the machine's length unit in mm (the ``.ini``'s
-    LINEAR_UNITS, which the tool table is written in), and the CPU seconds it may take."""
+    LINEAR_UNITS, which the tool table is written in), the CPU seconds it may take, and the
+    folders it looks for a subroutine called by name in besides the program's (the ``.ini``'s
+    SUBROUTINE_PATH, absolute)."""
 
     tool_table: object = None
     parameter_file: object = None
     offset: tuple = None
     machine_unit: float = 1.0
     seconds: float = DEFAULT_INTERPRETER_SECONDS
+    subroutine_path: tuple = ()
 
 
 @dataclass
@@ -113,7 +116,8 @@ def unit_code(offset):
 
 def _private(folder, setup):
     """Prepare the interpreter's private folder: its HOME, TMPDIR, tool table and parameter
-    file copies; (environment, tool table path, parameter file path)."""
+    file copies, and an ``.ini`` of its own holding only the subroutine path (so no other
+    ``.ini``'s Python or remaps apply); (environment, tool table path, parameter file path)."""
     home, scratch = folder / "home", folder / "tmp"
     home.mkdir()
     scratch.mkdir()
@@ -128,6 +132,10 @@ def _private(folder, setup):
     else:
         parameters.write_text("")
     environment = {"PATH": CLEAN_PATH, "HOME": str(home), "TMPDIR": str(scratch), "LANG": "C.UTF-8"}
+    if setup.subroutine_path:
+        ini = folder / "kingen.ini"
+        ini.write_text(f"[RS274NGC]\nSUBROUTINE_PATH = {':'.join(setup.subroutine_path)}\n")
+        environment["INI_FILE_NAME"] = str(ini)
     return environment, table, parameters
 
 
@@ -254,7 +262,8 @@ def _rs274_errors(path, program, folder, environment, table, parameters, setup, 
     variables = folder / "rs274.var"
     shutil.copyfile(setup.parameter_file, variables) if setup.parameter_file is not None else variables.write_text("")
     with open(folder / "rs274.err", "w+b") as errors:
-        child = subprocess.Popen([RS274, "-g", "-t", str(table), "-v", str(variables), program],
+        ini = ["-i", environment["INI_FILE_NAME"]] if "INI_FILE_NAME" in environment else []
+        child = subprocess.Popen([RS274, "-g", "-t", str(table), "-v", str(variables), *ini, program],
                                  stdout=subprocess.PIPE, stderr=errors, stdin=subprocess.DEVNULL, env=environment,
                                  cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
         with child.stdout:

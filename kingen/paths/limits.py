@@ -55,10 +55,21 @@ FILE_KEYS = (("EMCIO", "TOOL_TABLE"), ("RS274NGC", "PARAMETER_FILE"))
 """The files an ``.ini`` names that the interpreter starts with (relative to the ``.ini``'s folder)."""
 
 
+SUBROUTINE_PATH = ("RS274NGC", "SUBROUTINE_PATH")
+"""Where the interpreter looks for a subroutine called by name: folders separated by ``:``."""
+
+
 def ini_keys(joint_count):
     """Every (section, key) check-path reads from an ``.ini`` for a robot of ``joint_count`` joints."""
     return ([(f"JOINT_{index}", key) for index in range(joint_count) for key in JOINT_KEYS]
-            + [("TRAJ", key) for key in TRAJ_KEYS] + list(FILE_KEYS))
+            + [("TRAJ", key) for key in TRAJ_KEYS] + list(FILE_KEYS) + [SUBROUTINE_PATH])
+
+
+def ini_subroutine_path(ini):
+    """The folders of the ``.ini``'s [RS274NGC] SUBROUTINE_PATH, relative ones taken from its
+    folder, as absolute paths (a tuple; empty when it names none)."""
+    text = ini.get(*SUBROUTINE_PATH) or ""
+    return tuple(str((Path(ini.path).parent / name).resolve()) for name in text.split(":") if name.strip())
 
 
 def _number(ini, section, key):
