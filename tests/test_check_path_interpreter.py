@@ -309,3 +309,18 @@ def test_a_subroutine_is_found_on_the_ini_subroutine_path(tmp_path, capsys):
                                      "--ini", ini)
     assert code == 1, err
     assert {place["file"] for place in document["problems"]} == {str(tmp_path / "library" / "drop.ngc")}
+
+
+def test_a_program_without_units_is_read_in_the_machines_units(tmp_path, capsys):
+    """On an inch machine (LINEAR_UNITS = inch) X1 is an inch, as LinuxCNC reads it; without an
+    .ini, a millimetre (from the linear delta's home, Z 15 mm)."""
+    needs_interpreter()
+    ini = tmp_path / "machine.ini"
+    ini.write_text("[TRAJ]\nLINEAR_UNITS = inch\n" + "".join(
+        f"[JOINT_{index}]\nMAX_VELOCITY = 20\nMAX_ACCELERATION = 200\n" for index in range(3)))
+    samples = tmp_path / "samples.csv"
+    for options, x in ((["--ini", ini], 25.4), ([], 1.0)):
+        code, out, err, _ = check(capsys, tmp_path, "G90\nG1 X1 F10\nM2\n", "--csv", samples, *options)
+        assert code in (0, 1), err
+        end = np.genfromtxt(samples, delimiter=",", names=True)[-1]
+        assert (end["x"], end["z"]) == pytest.approx((x, 15.0))

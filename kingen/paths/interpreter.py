@@ -100,10 +100,15 @@ def interpreter_python():
     return python
 
 
-def start_code(start):
-    """The start-up code that puts the interpreter at pose ``start`` (mm, degrees) in mm and
-    absolute distances, as AXIS tells it the machine's position: G21 G90 G53 G0 X.. C.."""
-    return "G21 G90 G53 G0 " + " ".join(f"{axis}{value:.9f}" for axis, value in zip("XYZABC", start))
+def start_code(start, machine_unit=1.0):
+    """The start-up code that puts the interpreter at pose ``start`` (mm, degrees) in absolute
+    distances, as AXIS tells it the machine's position, in the machine's units (``machine_unit``
+    mm: 25.4 for an inch machine, whose programs without G20 or G21 are read in inches):
+    G21 (or G20) G90 G53 G0 X.. C.."""
+    inch = machine_unit == MM_PER_INCH
+    values = [value / MM_PER_INCH if inch and index < 3 else value for index, value in enumerate(start)]
+    words = " ".join(f"{axis}{value:.9f}" for axis, value in zip("XYZABC", values))
+    return f"G{20 if inch else 21} G90 G53 G0 {words}"
 
 
 def unit_code(offset):
@@ -151,7 +156,8 @@ def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     """The moves of the G-code program at ``path`` as LinuxCNC's interpreter makes them
     (mm, degrees; feeds in mm/min, or deg/min for moves that only turn), the machine standing
     at pose ``start`` (mm, degrees) when the program begins, with ``setup``; a program that
-    sets no units (G20, G21) is read in mm. A straight motion of length 0 is counted in
+    sets no units (G20, G21) is read in the machine's (``setup.machine_unit``: inches on an inch
+    machine, else mm). A straight motion of length 0 is counted in
     ``reading`` (a Reading, filled as the program is read) and not yielded; a rigid tap is two
     moves, down and back. KingenError ``path:line: G-code: <the interpreter's message>`` where
     it refuses the program or runs out of time."""
@@ -182,8 +188,8 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
         with open(read_end, encoding="utf-8", errors="replace") as lines, open(folder / "messages", "wb") as messages:
             try:
                 child = subprocess.Popen(
-                    [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start), str(write_end),
-                     str(table), str(parameters), repr(1.0 / setup.machine_unit)],
+                    [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start, setup.machine_unit),
+                     str(write_end), str(table), str(parameters), repr(1.0 / setup.machine_unit)],
                     stdout=messages, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, pass_fds=(write_end,),
                     env=environment, cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
             finally:
