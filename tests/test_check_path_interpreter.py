@@ -292,7 +292,10 @@ def test_either_ini_reader_gives_the_same_limits(tmp_path, capsys, monkeypatch, 
     report = tmp_path / "report.json"
     code, out, err = run(capsys, "check-path", "linear_delta", program, "--ini", ini, "--json", report)
     assert code == 1, err
-    peaks = json.loads(report.read_text())["peaks"]
+    document = json.loads(report.read_text())
+    assert document["settings"]["limits_from"][-1] == f"{ini} (read by " + (
+        "LinuxCNC's linuxcnc.ini reader)" if reader == "linuxcnc" else "kingen's reader)")
+    peaks = document["peaks"]
     assert [(peak["speed_limit"], peak["acceleration_limit"], peak["travel_limits"]) for peak in peaks] == [
         (1.0, 5000.0, [0.0, 300.0])] * 3
 

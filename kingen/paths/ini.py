@@ -31,7 +31,7 @@ class Ini:
     """An ``.ini``'s values: ``values`` {(section, key): value text} of the keys asked for
     (absent: not given), ``lines`` {(section, key) or (section, None): its line (1-based)} from
     kingen's reading, ``length`` its number of lines, ``reader`` whose reader gave the values
-    ("LinuxCNC's linuxcnc.ini" or "kingen's")."""
+    ("LinuxCNC's linuxcnc.ini" or "kingen's"), which check-path's report names."""
 
     path: str
     values: dict

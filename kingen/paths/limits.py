@@ -144,7 +144,8 @@ def ini_limits(robot, path, ini=None):
     return Limits(values["MIN_LIMIT"], values["MAX_LIMIT"], values["MAX_VELOCITY"], values["MAX_ACCELERATION"],
                   path_speed=path_speed * unit if path_speed else None,
                   path_acceleration=path_acceleration * unit if path_acceleration else None,
-                  rapid_speed=path_speed * unit if path_speed else None, sources=(str(path),))
+                  rapid_speed=path_speed * unit if path_speed else None,
+                  sources=(f"{path} (read by {ini.reader} reader)",))
 
 
 def combined(first, second):
