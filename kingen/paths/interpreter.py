@@ -144,12 +144,16 @@ def _private(folder, setup):
     return environment, table, parameters
 
 
-def _limit_cpu(seconds):
-    """A preexec function bounding the child's CPU time (SIGXCPU, then SIGKILL a second later)."""
+def _limit_cpu(child, seconds):
+    """Bound the CPU time of the started ``child`` (SIGXCPU past ``seconds``, SIGKILL a second
+    later); nothing when it has already ended."""
     import resource
 
     limit = max(1, math.ceil(seconds))
-    return lambda: resource.setrlimit(resource.RLIMIT_CPU, (limit, limit + 1))
+    try:
+        resource.prlimit(child.pid, resource.RLIMIT_CPU, (limit, limit + 1))
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
@@ -191,9 +195,10 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
                     [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start, setup.machine_unit),
                      str(write_end), str(table), str(parameters), repr(1.0 / setup.machine_unit)],
                     stdout=messages, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, pass_fds=(write_end,),
-                    env=environment, cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
+                    env=environment, cwd=os.path.dirname(program))
             finally:
                 os.close(write_end)
+            _limit_cpu(child, setup.seconds)
             try:
                 finished = yield from _read(lines, path, reading)
             finally:
@@ -271,7 +276,8 @@ def _rs274_errors(path, program, folder, environment, table, parameters, setup, 
         ini = ["-i", environment["INI_FILE_NAME"]] if "INI_FILE_NAME" in environment else []
         child = subprocess.Popen([RS274, "-g", "-t", str(table), "-v", str(variables), *ini, program],
                                  stdout=subprocess.PIPE, stderr=errors, stdin=subprocess.DEVNULL, env=environment,
-                                 cwd=os.path.dirname(program), preexec_fn=_limit_cpu(setup.seconds))
+                                 cwd=os.path.dirname(program))
+        _limit_cpu(child, setup.seconds)
         with child.stdout:
             reading.rs274_motions = sum(1 for text in child.stdout if any(name in text for name in RS274_MOTIONS))
         code = child.wait()
