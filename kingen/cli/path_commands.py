@@ -64,8 +64,9 @@ def _offset(context, parameter, value):
 @click.option("--chord", type=FiniteRange(min=1e-4, max=1000.0), default=0.1, show_default=True, metavar="MM",
               help="Largest distance between regular samples, mm (and degrees of orientation).")
 @click.option("--ini", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="A LinuxCNC .ini: its [JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION and "
-                   "[TRAJ] speed and acceleration are judged too.")
+              help="A LinuxCNC .ini, read as LinuxCNC reads it: its [JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, "
+                   "MAX_ACCELERATION and [TRAJ] speed and acceleration are judged too; G-code is read in its [TRAJ] "
+                   "LINEAR_UNITS with its [EMCIO] TOOL_TABLE, [RS274NGC] PARAMETER_FILE and SUBROUTINE_PATH.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write the report as JSON to this file.")
 @click.option("--html", "html_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
