@@ -20,7 +20,7 @@ class _Numbers(click.Option):
 
     def add_to_parser(self, parser, ctx):
         super().add_to_parser(parser, ctx)
-        option = parser._long_opt.get("--offset")
+        option = parser._long_opt.get(self.opts[0])
         original = option.process
 
         def process(value, state):
