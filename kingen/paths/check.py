@@ -37,7 +37,7 @@ CHUNK = 20000
 DEFAULT_CHORD = 0.1
 """mm and degrees between regular samples."""
 DEFAULT_MAX_SAMPLES = 100_000_000
-"""Regular samples a program may ask for (about ten minutes of checking on one core)."""
+"""Regular samples a program may ask for (five to fifteen minutes of checking on one core)."""
 
 
 @dataclass(frozen=True)
