@@ -35,8 +35,9 @@ T8 P8 Z0.8 D0.03
 T9 P9 Z0.9 D0.03
 T10 P10 Z1 X0.2 D0.03
 """
-"""The walk's tool table, in inches (rs274 reads a tool table in inches; kingen is told the
-machine's unit is the inch): lengths and diameters as the programs' comments ask."""
+"""The walk's tool table, in inches (rs274 reads a tool table in inches, and a program without
+G20 or G21 in mm): lengths and diameters as the programs' comments ask."""
+
 JUDGED_IN_CI = ("3dtest", "comp-g1", "gridprobe", "lathe_g7x_face_boring", "lathe_g7x_quadrants", "plasmatest",
                 "skeleton", "useful-subroutines", "threading", "systems")
 """The programs judged (check-path's exit) in CI; KINGEN_FULL_SWEEPS=1 judges every one."""
@@ -70,7 +71,8 @@ def test_every_sample_program_rs274_reads_is_followed_motion_for_motion(tmp_path
         pytest.skip(f"rs274 -g refuses {name}.ngc")
     table = tmp_path / "kingen.tbl"
     table.write_text(TABLE)
-    ours = list(canonical_motions(NCFILES / f"{name}.ngc", setup=Setup(tool_table=table, machine_unit=25.4)))
+    setup = Setup(tool_table=table, machine_unit=25.4, program_unit=1.0)  # rs274's: tools in inches, programs in mm
+    ours = list(canonical_motions(NCFILES / f"{name}.ngc", setup=setup))
     at, probed = 0, False
     for number, (call, end) in enumerate(expected):
         assert at < len(ours), f"{name}: rs274's motion {number} ({call}) is not among kingen's {len(ours)}"

@@ -59,9 +59,11 @@ class Setup:
     at no offset), the parameter file whose work offsets it starts with (None: all zero),
     ``offset`` (x y z mm, a b c degrees; None: the parameter file's) the work offset of the
     coordinate system it starts in, the machine's length unit in mm (the ``.ini``'s
-    LINEAR_UNITS, which the tool table is written in), the CPU seconds it may take, and the
+    LINEAR_UNITS, which the tool table is written in), the CPU seconds it may take, the
     folders it looks for a subroutine called by name in besides the program's (the ``.ini``'s
-    SUBROUTINE_PATH, absolute)."""
+    SUBROUTINE_PATH, absolute), and the unit in mm of a program that sets none (G20, G21;
+    None: the machine's, as LinuxCNC reads it; ``rs274`` reads one in mm whatever its tool
+    table's unit, the inch)."""
 
     tool_table: object = None
     parameter_file: object = None
@@ -69,6 +71,7 @@ class Setup:
     machine_unit: float = 1.0
     seconds: float = DEFAULT_INTERPRETER_SECONDS
     subroutine_path: tuple = ()
+    program_unit: float = None
 
 
 @dataclass
@@ -100,12 +103,12 @@ def interpreter_python():
     return python
 
 
-def start_code(start, machine_unit=1.0):
+def start_code(start, unit=1.0):
     """The start-up code that puts the interpreter at pose ``start`` (mm, degrees) in absolute
-    distances, as AXIS tells it the machine's position, in the machine's units (``machine_unit``
-    mm: 25.4 for an inch machine, whose programs without G20 or G21 are read in inches):
+    distances, as AXIS tells it the machine's position, in ``unit`` (mm: 25.4 for inches, in
+    which a program without G20 or G21 is then read):
     G21 (or G20) G90 G53 G0 X.. C.."""
-    inch = machine_unit == MM_PER_INCH
+    inch = unit == MM_PER_INCH
     values = [value / MM_PER_INCH if inch and index < 3 else value for index, value in enumerate(start)]
     words = " ".join(f"{axis}{value:.9f}" for axis, value in zip("XYZABC", values))
     return f"G{20 if inch else 21} G90 G53 G0 {words}"
@@ -160,8 +163,8 @@ def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     """The moves of the G-code program at ``path`` as LinuxCNC's interpreter makes them
     (mm, degrees; feeds in mm/min, or deg/min for moves that only turn), the machine standing
     at pose ``start`` (mm, degrees) when the program begins, with ``setup``; a program that
-    sets no units (G20, G21) is read in the machine's (``setup.machine_unit``: inches on an inch
-    machine, else mm). A straight motion of length 0 is counted in
+    sets no units (G20, G21) is read in ``setup.program_unit``, by default the machine's
+    (``setup.machine_unit``: inches on an inch machine, else mm). A straight motion of length 0 is counted in
     ``reading`` (a Reading, filled as the program is read) and not yielded; a rigid tap is two
     moves, down and back. KingenError ``path:line: G-code: <the interpreter's message>`` where
     it refuses the program or runs out of time."""
@@ -192,7 +195,8 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
         with open(read_end, encoding="utf-8", errors="replace") as lines, open(folder / "messages", "wb") as messages:
             try:
                 child = subprocess.Popen(
-                    [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start, setup.machine_unit),
+                    [python, "-I", str(CANON), program, unit_code(setup.offset),
+                     start_code(start, setup.machine_unit if setup.program_unit is None else setup.program_unit),
                      str(write_end), str(table), str(parameters), repr(1.0 / setup.machine_unit)],
                     stdout=messages, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, pass_fds=(write_end,),
                     env=environment, cwd=os.path.dirname(program))
