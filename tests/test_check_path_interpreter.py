@@ -35,8 +35,15 @@ T8 P8 Z0.8 D0.03
 T9 P9 Z0.9 D0.03
 T10 P10 Z1 X0.2 D0.03
 """
-"""The walk's tool table, in inches (rs274 reads a tool table in inches, and a program without
-G20 or G21 in mm): lengths and diameters as the programs' comments ask."""
+"""The walk's tool table, in inches (rs274 reads a tool table in inches): lengths and diameters
+as the programs' comments ask."""
+
+
+def in_mm(table):
+    """The tool table ``table`` (inches) in mm, for kingen on a machine in mm (whose programs
+    without G20 or G21 are read in mm, as rs274 reads them)."""
+    return "".join(" ".join(f"{word[0]}{float(word[1:]) * 25.4!r}" if word[0] in "XYZD" else word
+                            for word in line.split()) + "\n" for line in table.splitlines())
 
 JUDGED_IN_CI = ("3dtest", "comp-g1", "gridprobe", "lathe_g7x_face_boring", "lathe_g7x_quadrants", "plasmatest",
                 "skeleton", "useful-subroutines", "threading", "systems")
@@ -70,9 +77,8 @@ def test_every_sample_program_rs274_reads_is_followed_motion_for_motion(tmp_path
     if expected is None:
         pytest.skip(f"rs274 -g refuses {name}.ngc")
     table = tmp_path / "kingen.tbl"
-    table.write_text(TABLE)
-    setup = Setup(tool_table=table, machine_unit=25.4, program_unit=1.0)  # rs274's: tools in inches, programs in mm
-    ours = list(canonical_motions(NCFILES / f"{name}.ngc", setup=setup))
+    table.write_text(in_mm(TABLE))
+    ours = list(canonical_motions(NCFILES / f"{name}.ngc", setup=Setup(tool_table=table)))
     at, probed = 0, False
     for number, (call, end) in enumerate(expected):
         assert at < len(ours), f"{name}: rs274's motion {number} ({call}) is not among kingen's {len(ours)}"
@@ -98,10 +104,10 @@ def test_every_sample_program_rs274_reads_is_judged(tmp_path, capsys, name):
     expected = theirs(NCFILES / f"{name}.ngc", tmp_path)
     if expected is None:
         pytest.skip(f"rs274 -g refuses {name}.ngc")
-    (tmp_path / "kingen.tbl").write_text(TABLE)
+    (tmp_path / "kingen.tbl").write_text(in_mm(TABLE))
     ini = tmp_path / "machine.ini"
-    ini.write_text("[TRAJ]\nLINEAR_UNITS = inch\n[EMCIO]\nTOOL_TABLE = kingen.tbl\n" + "".join(
-        f"[JOINT_{index}]\nMAX_VELOCITY = 20\nMAX_ACCELERATION = 500\n" for index in range(3)))
+    ini.write_text("[TRAJ]\nLINEAR_UNITS = mm\n[EMCIO]\nTOOL_TABLE = kingen.tbl\n" + "".join(
+        f"[JOINT_{index}]\nMAX_VELOCITY = 500\nMAX_ACCELERATION = 12000\n" for index in range(3)))
     report = tmp_path / "report.json"
     code, out, err = run(capsys, "check-path", "linear_delta", NCFILES / f"{name}.ngc", "--json", report, "--ini", ini)
     assert code in (0, 1), err
@@ -329,3 +335,17 @@ def test_a_program_without_units_is_read_in_the_machines_units(tmp_path, capsys)
         assert code in (0, 1), err
         end = np.genfromtxt(samples, delimiter=",", names=True)[-1]
         assert (end["x"], end["z"]) == pytest.approx((x, 15.0))
+
+
+@pytest.mark.parametrize("unit, table", [(1.0, "T1 P1 D10 ;10 mm\n"), (25.4, f"T1 P1 D{10 / 25.4!r}\n")])
+def test_cutter_compensation_offsets_by_the_tools_radius_on_a_machine_in_mm_or_inches(tmp_path, unit, table):
+    """A 10 mm tool left of a square's corner (G41): entry on the 45-degree line 5 mm to its left,
+    the arc around the corner, then 5 mm inside each side, whatever the machine's unit."""
+    needs_interpreter()
+    (tmp_path / "tools.tbl").write_text(table)
+    program = tmp_path / "square.ngc"
+    program.write_text("G21 G90\nT1 M6\nG0 X-20 Y-20 Z0\nG41 D1\nG1 X0 Y0 F100\nG1 X50\nG1 Y50\nG40\nG0 X80\nM2\n")
+    ends = [motion[5][:2] for motion in canonical_motions(program, setup=Setup(tool_table=tmp_path / "tools.tbl",
+                                                                                machine_unit=unit))]
+    half = 5.0 / np.sqrt(2.0)
+    assert np.allclose(ends, [(-20, -20), (-half, half), (0, 5), (45, 5), (45, 50), (80, 50)], atol=1e-9)

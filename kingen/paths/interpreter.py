@@ -61,9 +61,7 @@ class Setup:
     coordinate system it starts in, the machine's length unit in mm (the ``.ini``'s
     LINEAR_UNITS, which the tool table is written in), the CPU seconds it may take, the
     folders it looks for a subroutine called by name in besides the program's (the ``.ini``'s
-    SUBROUTINE_PATH, absolute), and the unit in mm of a program that sets none (G20, G21;
-    None: the machine's, as LinuxCNC reads it; ``rs274`` reads one in mm whatever its tool
-    table's unit, the inch)."""
+    SUBROUTINE_PATH, absolute)."""
 
     tool_table: object = None
     parameter_file: object = None
@@ -71,7 +69,6 @@ class Setup:
     machine_unit: float = 1.0
     seconds: float = DEFAULT_INTERPRETER_SECONDS
     subroutine_path: tuple = ()
-    program_unit: float = None
 
 
 @dataclass
@@ -163,8 +160,8 @@ def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     """The moves of the G-code program at ``path`` as LinuxCNC's interpreter makes them
     (mm, degrees; feeds in mm/min, or deg/min for moves that only turn), the machine standing
     at pose ``start`` (mm, degrees) when the program begins, with ``setup``; a program that
-    sets no units (G20, G21) is read in ``setup.program_unit``, by default the machine's
-    (``setup.machine_unit``: inches on an inch machine, else mm). A straight motion of length 0 is counted in
+    sets no units (G20, G21) is read in the machine's (``setup.machine_unit``: inches on an
+    inch machine, else mm). A straight motion of length 0 is counted in
     ``reading`` (a Reading, filled as the program is read) and not yielded; a rigid tap is two
     moves, down and back. KingenError ``path:line: G-code: <the interpreter's message>`` where
     it refuses the program or runs out of time."""
@@ -195,8 +192,7 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
         with open(read_end, encoding="utf-8", errors="replace") as lines, open(folder / "messages", "wb") as messages:
             try:
                 child = subprocess.Popen(
-                    [python, "-I", str(CANON), program, unit_code(setup.offset),
-                     start_code(start, setup.machine_unit if setup.program_unit is None else setup.program_unit),
+                    [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start, setup.machine_unit),
                      str(write_end), str(table), str(parameters), repr(1.0 / setup.machine_unit)],
                     stdout=messages, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, pass_fds=(write_end,),
                     env=environment, cwd=os.path.dirname(program))
@@ -269,16 +265,18 @@ def _stopped(path, code, said, reading, setup):
 
 
 def _rs274_errors(path, program, folder, environment, table, parameters, setup, reading):
-    """Read the program again with ``rs274 -g`` (the tool table and a fresh copy of the
-    parameters), counting the motions it prints into ``reading``: KingenError at the refused
-    line when it raises an error."""
+    """Read the program again with ``rs274 -g`` (the tool table, in inches as rs274 reads one,
+    and a fresh copy of the parameters), counting the motions it prints into ``reading``:
+    KingenError at the refused line when it raises an error."""
     if not os.access(RS274, os.X_OK):
         return
     variables = folder / "rs274.var"
     shutil.copyfile(setup.parameter_file, variables) if setup.parameter_file is not None else variables.write_text("")
     with open(folder / "rs274.err", "w+b") as errors:
         ini = ["-i", environment["INI_FILE_NAME"]] if "INI_FILE_NAME" in environment else []
-        child = subprocess.Popen([RS274, "-g", "-t", str(table), "-v", str(variables), *ini, program],
+        inches = folder / "rs274.tbl"
+        inches.write_text(_in_inches(table.read_text(errors="replace"), setup.machine_unit))
+        child = subprocess.Popen([RS274, "-g", "-t", str(inches), "-v", str(variables), *ini, program],
                                  stdout=subprocess.PIPE, stderr=errors, stdin=subprocess.DEVNULL, env=environment,
                                  cwd=os.path.dirname(program))
         _limit_cpu(child, setup.seconds)
@@ -299,6 +297,28 @@ def _rs274_errors(path, program, folder, environment, table, parameters, setup, 
     message, block = said[-2], _squeezed(said[-1])
     matches = [number for number, text in _numbered(path) if _squeezed(text) == block]
     raise located(path, matches[0] if matches else reading.line[1], "G-code", message)
+
+
+def _in_inches(table, machine_unit):
+    """A tool table's text with its lengths (offsets X Y Z U V W, diameter D) in inches from the
+    machine's unit (``machine_unit`` mm), as ``rs274`` reads a tool table; comments kept."""
+    if machine_unit == MM_PER_INCH:
+        return table
+    scale = machine_unit / MM_PER_INCH
+    lines = []
+    for line in table.splitlines():
+        words, _, comment = line.partition(";")
+        words = [_scaled(word, scale) if word[:1].upper() in "XYZUVWD" else word for word in words.split()]
+        lines.append(" ".join(words) + (f" ;{comment}" if comment else ""))
+    return "\n".join(lines) + "\n"
+
+
+def _scaled(word, scale):
+    """A tool table word ``X1.5`` times ``scale`` (the word itself when its value is no number)."""
+    try:
+        return f"{word[0]}{float(word[1:]) * scale!r}"
+    except ValueError:
+        return word
 
 
 def _numbered(path):
