@@ -31,6 +31,7 @@ SECTIONS = {
     "hybrid": ("hybrid.py", ["--calls", "200000", "--rounds", "5"], "Constrained machines"),
     "check_path": ("check_path.py", ["--samples", "1000000", "--moves", "100"], "Path checking"),
     "loads": ("loads.py", ["--poses", "1000000", "--rows", "2000", "--rounds", "3"], "Loads"),
+    "ncfiles": ("ncfiles.py", [], "LinuxCNC's sample programs"),
 }
 
 

@@ -105,6 +105,11 @@ SECTION_FIGURES = {
     "loads": {"loads": [{"robot": "hexapod", "poses": 1000, "postures": 1, "reference_s": 0.01, "loads_s": 0.02,
                          "ratio": 2.0}],
               "check_path": {"rows": 100, "plain_s": 1.0, "loads_s": 1.1, "ratio": 1.1}},
+    "ncfiles": {"robot": "linear_delta", "programs": [
+        {"program": "arcspiral.ngc", "rs274": True, "exit": 0, "seconds": 1.25, "motions": 1005, "moves": 1004,
+         "samples": 61234},
+        {"program": "cone.ngc", "rs274": False, "exit": 2, "seconds": 0.5, "motions": None, "moves": None,
+         "samples": None}]},
 }
 """Small figures of every section of benchmarks/sections.py, in the shapes their scripts write."""
 
@@ -139,6 +144,8 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
     assert f"| tau | 84 | 400 | 300 | {300 / 400:.3f} | 0 | 1 |" in text
     assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
     assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
+    assert "| `arcspiral.ngc` | reads | 0 | 1.25 | 1005 | 1004 | 61234 |" in text
+    assert "| `cone.ngc` | refuses | 2 | 0.50 | - | - | - |" in text
     assert f"| hexapod | 2573 | 0.0 | {2573 / 0.02:,.0f} | 92 MB | 1002, 92 MB | 200 in 0.3 s | 0.1 |" in text
     assert "grazes set up: 2; seen by the regular samples alone: 0; found by check-path at the default chord: 2" in text
 

@@ -229,7 +229,8 @@ def test_an_ini_speed_or_acceleration_not_above_zero_is_bad_input(tmp_path, caps
     program = tmp_path / "p.csv"
     program.write_text("0,0,508,0,0,0\n1,0,508,0,0,0\n")
     code, out, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--ini", ini)
-    line = ini.read_text().splitlines().index("[JOINT_0]") + 1
+    lines = ini.read_text().splitlines()
+    line = lines.index(f"{key} = {velocity if key == 'MAX_VELOCITY' else acceleration!r}", lines.index("[JOINT_0]")) + 1
     assert (code, out) == (2, "") and err == f"kingen: error: {ini}:{line}: [JOINT_0] {key}: {text}: must be above 0\n"
 
 
@@ -279,12 +280,13 @@ def test_delmia_turns_the_orientation_about_one_axis_at_a_uniform_rate(tmp_path,
     assert np.max(np.abs(turned - u * turned[-1])) > 1e-4  # A, B, C linear: not uniform about one axis
 
 
-def test_a_program_without_a_move_exercises_nothing(tmp_path, capsys):
+def test_a_program_without_a_move_exercises_nothing_and_does_not_pass(tmp_path, capsys):
     program = tmp_path / "still.csv"
     program.write_text("0,0,508,0,0,0\n0,0,508,0,0,0\n")
     code, out, err = run(capsys, "check-path", "linuxcnc_hexapod", program, "--json", tmp_path / "r.json")
     document = json.loads((tmp_path / "r.json").read_text())
-    assert code == 0 and err == ""
+    assert code == 1 and err == "" and "judged nothing" in out and "runs" not in out
+    assert document["verdict"] == "judged nothing"
     assert set(document["checks"].values()) == {"not exercised: the program has no move"}
 
 

@@ -3,6 +3,7 @@ by LinuxCNC's own interpreter, or a CSV of poses, along its whole path)."""
 
 import contextlib
 import json
+import math
 import sys
 from pathlib import Path
 
@@ -11,6 +12,45 @@ import click
 from ..errors import KingenError
 from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model,
                      print_table, refuse_special_files, say)
+
+
+class _Numbers(click.Option):
+    """An option followed by three to six numbers (``--offset X Y Z [A B C]``): it takes the
+    numbers that follow it, up to six, as one value."""
+
+    def add_to_parser(self, parser, ctx):
+        super().add_to_parser(parser, ctx)
+        option = parser._long_opt.get(self.opts[0])
+        original = option.process
+
+        def process(value, state):
+            values = [value]
+            while state.rargs and len(values) < 6 and _is_number(state.rargs[0]):
+                values.append(state.rargs.pop(0))
+            original(" ".join(values), state)
+        option.process = process
+        return None
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _offset(context, parameter, value):
+    """The --offset numbers as a tuple of six (x y z mm, a b c degrees; a b c 0 when not given)."""
+    if value is None:
+        return None
+    numbers = value.split()
+    if not 3 <= len(numbers) <= 6 or not all(_is_number(number) for number in numbers):
+        raise click.BadParameter(f"{value!r}: three to six numbers expected (X Y Z [A B C])", param_hint="'--offset'")
+    offset = tuple(float(number) for number in numbers) + (0.0,) * (6 - len(numbers))
+    if not all(math.isfinite(number) for number in offset):
+        raise click.BadParameter(f"{value!r}: finite numbers expected", param_hint="'--offset'")
+    return offset
 
 
 @cli.command("check-path")
@@ -24,8 +64,9 @@ from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_
 @click.option("--chord", type=FiniteRange(min=1e-4, max=1000.0), default=0.1, show_default=True, metavar="MM",
               help="Largest distance between regular samples, mm (and degrees of orientation).")
 @click.option("--ini", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="A LinuxCNC .ini: its [JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION and "
-                   "[TRAJ] speed and acceleration are judged too.")
+              help="A LinuxCNC .ini, read as LinuxCNC reads it: its [JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, "
+                   "MAX_ACCELERATION and [TRAJ] speed and acceleration are judged too; G-code is read in its [TRAJ] "
+                   "LINEAR_UNITS with its [EMCIO] TOOL_TABLE, [RS274NGC] PARAMETER_FILE and SUBROUTINE_PATH.")
 @click.option("--json", "json_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=_output_file, help="Write the report as JSON to this file.")
 @click.option("--html", "html_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -39,10 +80,18 @@ from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_
 @click.option("--task-only", is_flag=True, default=False,
               help="A machine with task coordinates, CSV program: read each row's task coordinates and let the "
                    "parasitic ones follow (a row off the machine's manifold is a notice, not a failure).")
+@click.option("--offset", cls=_Numbers, callback=_offset, default=None, metavar="X Y Z [A B C]",
+              help="G-code: where the part is: the work offset of the coordinate system the program starts in (mm, "
+                   "degrees), in place of the .ini's parameter file's [default: the parameter file's, else none].")
+@click.option("--interpreter-seconds", type=FiniteRange(min=1.0, max=86400.0), default=60.0, show_default=True,
+              metavar="S", help="G-code: CPU seconds LinuxCNC's interpreter may take to read the program (an endless "
+                                "loop ends here, bad input at the line reached).")
+@click.option("--max-samples", type=click.IntRange(min=1), default=100_000_000, show_default=True, metavar="N",
+              help="Regular samples the program may ask for at --chord (more is bad input at the line that asks).")
 @OUT_DIR
 @TIMEOUT
 def check_path(robot, program, host_name, posture, chord, ini, json_path, html_path, csv_path, use_routine, task_only,
-               out_dir, timeout):
+               offset, interpreter_seconds, max_samples, out_dir, timeout):
     """Will PROGRAM run on ROBOT? PROGRAM is a G-code file (.ngc, .nc, .gcode), read by LinuxCNC's
     own interpreter, or a CSV of poses (x, y, z, roll, pitch, yaw in mm and degrees; optional t
     in s or feed in mm/min). The path between the points is sampled at most --chord apart and
@@ -61,11 +110,18 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     X Y Z A B C are the tool tip and its roll, pitch, yaw, as for a hexapod. The wrist's joints are
     judged with the legs'.
 
+    A G-code program is read by LinuxCNC's interpreter with the .ini's tool table ([EMCIO]
+    TOOL_TABLE; without one, tools 1 to 999 at no offset) and work offsets ([RS274NGC]
+    PARAMETER_FILE, or --offset); every motion it emits is followed: traverses, feeds, arcs and
+    full circles, probes (to their programmed end), rigid taps (down and back), the moves of canned
+    and lathe cycles, cutter compensation and subroutines, with the tool length offset applied.
+
     Prints a one-line verdict and the problems by line. Exit 0 when the program runs within
-    every limit judged, 1 when not, 2 bad input."""
+    every limit judged, 1 when not or when nothing was judged, 2 bad input (an error LinuxCNC's
+    interpreter raises included)."""
     from ..paths.check import Settings, check_program
     from ..paths.program import is_gcode
-    from ..paths.report import problem_rows, report_json, runs, verdict_line
+    from ..paths.report import problem_rows, reading_line, report_json, runs, verdict_line
     from ..runtime.files import write_atomic
 
     model = load_model(robot)
@@ -79,7 +135,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
         if given is not None and not given.is_file():
             raise KingenError(f"{given}: no such file")
     settings = Settings(host=host_name, posture=posture, chord=chord, ini=ini, routine=use_routine,
-                        out_dir=out_dir, timeout=timeout, task_only=task_only)
+                        out_dir=out_dir, timeout=timeout, task_only=task_only, offset=offset,
+                        interpreter_seconds=interpreter_seconds, max_samples=max_samples)
     with contextlib.ExitStack() as stack:
         sink = _csv_sink(stack, csv_path, model) if csv_path is not None else None
         progress = stack.enter_context(_progress())
@@ -92,6 +149,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
 
         write_atomic(html_path, page_html(outcome, document))
     say(verdict_line(outcome))
+    if outcome.reading is not None:
+        say(f"  {reading_line(outcome)}")
     for line in outcome.manifold.lines() if outcome.manifold is not None else ():
         say(f"  {line}")
     if outcome.five_axis is not None:

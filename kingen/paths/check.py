@@ -20,9 +20,11 @@ from ..kinematics.routine import WARNINGS
 from .evaluation import Evaluator
 from .findings import Findings
 from .five_axis import FiveAxis
-from .interpreter import gcode_moves
+from ..errors import located
+from .ini import load_ini
+from .interpreter import DEFAULT_INTERPRETER_SECONDS, Reading, Setup, gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
-from .limits import limits_for
+from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
 from .manifold import Manifold
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
@@ -34,6 +36,8 @@ CHUNK = 20000
 """Regular samples solved at once (a move longer than that is cut into pieces)."""
 DEFAULT_CHORD = 0.1
 """mm and degrees between regular samples."""
+DEFAULT_MAX_SAMPLES = 100_000_000
+"""Regular samples a program may ask for (five to fifteen minutes of checking on one core)."""
 
 
 @dataclass(frozen=True)
@@ -44,7 +48,9 @@ class Settings:
     come from the robot's routine for the host (:mod:`.routine`) rather than the reference,
     the routine's build folder (None: build/<name>) and timeout (s), and for a machine with task
     coordinates whether a CSV's rows off its manifold are read as their task coordinates
-    (a notice) rather than failed (:mod:`.manifold`)."""
+    (a notice) rather than failed (:mod:`.manifold`); for G-code, the work offset to place the
+    program with (x y z mm, a b c degrees; None: the ``.ini``'s parameter file's), the CPU
+    seconds each interpreter may take, and the regular samples the program may ask for."""
 
     host: str = "linuxcnc"
     posture: int = None
@@ -54,6 +60,9 @@ class Settings:
     out_dir: object = None
     timeout: float = DEFAULT_TIMEOUT
     task_only: bool = False
+    offset: tuple = None
+    interpreter_seconds: float = DEFAULT_INTERPRETER_SECONDS
+    max_samples: int = DEFAULT_MAX_SAMPLES
 
 
 @dataclass
@@ -62,7 +71,9 @@ class Outcome:
     findings, the source text of every line named, the seconds it took, and (with the routine)
     how its answers agreed with the reference's (routine.Agreement; None: not used), for a
     machine with task coordinates its manifold.Manifold and for one with a wrist its
-    five_axis.FiveAxis (None for other robots, a three-axis wrist's included)."""
+    five_axis.FiveAxis (None for other robots, a three-axis wrist's included), and for G-code
+    what reading it showed (interpreter.Reading: the motions emitted, the work offset; None
+    for a CSV)."""
 
     robot: object
     program: str
@@ -76,6 +87,7 @@ class Outcome:
     agreement: object = None
     manifold: object = None
     five_axis: object = None
+    reading: object = None
 
 
 @dataclass
@@ -115,16 +127,33 @@ class _Checker:
         self.world = self.five_axis is not None and not csv
         self.interpolation = "linuxcnc" if self.world else settings.host  # a five-axis world moves linearly
         self.posture = robot.working_posture if settings.posture is None else settings.posture
-        self.limits = limits_for(robot, settings.ini)
+        read = load_ini(settings.ini, ini_keys(robot.joint_count)) if settings.ini is not None else None
+        self.limits = limits_for(robot, settings.ini, read)
+        self.setup = self._setup(read)
+        self.total_samples = 0
         self.evaluator = Evaluator(robot, self.posture, self.limits)
         self.findings = Findings(robot.joint_names, np.where(robot.revolute, 180.0 / np.pi, 1.0))
         self.pieces, self.samples, self.move_sign = [], 0, 1.0
         self.routine = RoutineSolver(robot, settings.host, self.posture, settings.out_dir,
                                      settings.timeout) if settings.routine else None
 
-    def add(self, index, move):
-        """Cut a move into pieces and check them when a batch is full."""
+    def _setup(self, read):
+        """What LinuxCNC's interpreter starts with: the ``.ini``'s tool table, parameter file,
+        length unit and subroutine path, the settings' offset and time."""
+        files = ini_files(read) if read is not None else {}
+        return Setup(files.get(("EMCIO", "TOOL_TABLE")), files.get(("RS274NGC", "PARAMETER_FILE")),
+                     self.settings.offset, ini_unit(read) if read is not None else 1.0,
+                     self.settings.interpreter_seconds, ini_subroutine_path(read) if read is not None else ())
+
+    def add(self, index, move, program):
+        """Cut a move into pieces and check them when a batch is full; KingenError at the move's
+        line when the program asks for more regular samples than the settings allow."""
         count = sample_count(move, self.settings.chord)
+        self.total_samples += count
+        if self.total_samples > self.settings.max_samples:
+            raise located(move.file or program, move.line, "samples",
+                          f"the program asks for more than {self.settings.max_samples} samples at chord "
+                          f"{self.settings.chord:g} mm/deg by this line (--max-samples)")
         timing = profile(move, self.limits)
         self.findings.moves += 1
         self.findings.timed_moves += timing is not None
@@ -240,11 +269,12 @@ class _Checker:
         return speeds, accelerations
 
 
-def program_moves(path, start):
+def program_moves(path, start, setup=Setup(), reading=None):
     """The moves of the program at ``path``: a G-code file through LinuxCNC's interpreter, the
-    machine at world position ``start`` (mm, degrees) when it begins; any other file as a CSV of
-    poses (which starts at its first row)."""
-    return gcode_moves(path, start) if is_gcode(path) else csv_moves(path)
+    machine at world position ``start`` (mm, degrees) when it begins, with ``setup`` (its
+    Reading filled into ``reading``); any other file as a CSV of poses (which starts at its
+    first row)."""
+    return gcode_moves(path, start, setup, reading) if is_gcode(path) else csv_moves(path)
 
 
 def check_program(robot, program, settings=Settings(), sink=None, progress=None):
@@ -258,15 +288,30 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
     started = time.perf_counter()
     csv = not is_gcode(program)
     checker = _Checker(robot, settings, sink, progress, csv)
-    moves = program_moves(program, checker.five_axis.start() if checker.world else robot.verification.home)
+    reading = None if csv else Reading()
+    if reading is not None and settings.offset is not None:
+        reading.offset_from = "--offset"
+    elif reading is not None and checker.setup.parameter_file is not None:
+        reading.offset_from = f"{checker.setup.parameter_file}"
+    moves = program_moves(program, checker.five_axis.start() if checker.world else robot.verification.home,
+                          checker.setup, reading)
     if checker.manifold is not None and csv:
         moves = checker.manifold.moves(moves, checker.findings)
     for index, move in enumerate(moves):
-        checker.add(index, move)
+        checker.add(index, move, program)
     checker.flush()
     findings = checker.findings
-    named = {place.line for place in list(findings.problems.values()) + list(findings.first.values())
-             + list(findings.worst.values())}
     return Outcome(robot, str(program), settings, checker.posture, checker.limits, checker.evaluator, findings,
-                   source_lines(program, named), time.perf_counter() - started,
-                   None if checker.routine is None else checker.routine.agreement, checker.manifold, checker.five_axis)
+                   _sources(program, findings), time.perf_counter() - started,
+                   None if checker.routine is None else checker.routine.agreement, checker.manifold, checker.five_axis,
+                   reading)
+
+
+def _sources(program, findings):
+    """{(file, line): its text} of every place the findings name (file None: the program)."""
+    places = list(findings.problems.values()) + list(findings.first.values()) + list(findings.worst.values())
+    sources = {}
+    for file in {place.file for place in places}:
+        texts = source_lines(file or program, {place.line for place in places if place.file == file})
+        sources.update({(file, line): text for line, text in texts.items()})
+    return sources

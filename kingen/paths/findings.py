@@ -23,8 +23,9 @@ class Place:
     """One offending place: the check ``kind``, the joint's name (None: the platform's), the
     program line, the pose (mm, degrees), the joints (mm or degrees), the offending ``value``
     and its ``limit`` (the quantity's units), the ``margin`` (below 0: beyond the limit; the
-    smaller, the worse), for a joint speed the feed override at which it would fit, and for a
-    collision the links whose clearance it is ('rods' or 'cranks')."""
+    smaller, the worse), for a joint speed the feed override at which it would fit, for a
+    collision the links whose clearance it is ('rods' or 'cranks'), and the file ``line`` is in
+    when it is not the program's own (a G-code subroutine's; None: the program's)."""
 
     kind: str
     joint: str
@@ -36,6 +37,7 @@ class Place:
     margin: float
     override: float = None
     between: str = None
+    file: str = None
 
     def key(self):
         return self.kind, self.joint or self.between
@@ -78,13 +80,14 @@ class Findings:
     def __post_init__(self):
         self.peaks = [Peak() for _ in self.joint_names]
 
-    def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None, between=None):
-        """A Place from internal units (joints in mm or rad) for joint index ``joint`` or None."""
+    def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None, between=None, file=None):
+        """A Place from internal units (joints in mm or rad) for joint index ``joint`` or None,
+        on ``line`` of ``file`` (None: the program)."""
         scale = self.display_scale
         shown = float(scale[joint]) if joint is not None and kind not in UNSCALED else 1.0
         return Place(kind, None if joint is None else self.joint_names[joint], int(line),
                      [float(v) for v in pose], [float(v) for v in np.asarray(joints) * scale],
-                     float(value) * shown, float(limit) * shown, float(margin), override, between)
+                     float(value) * shown, float(limit) * shown, float(margin), override, between, file)
 
     def add(self, move_index, place):
         """Record ``place`` as its move's problem of its kind (the worst kept) and in the first
@@ -145,4 +148,6 @@ class Findings:
 
     def sorted_problems(self):
         """The kept problems by line, then kind."""
-        return sorted(self.problems.values(), key=lambda place: (place.line, place.kind, place.joint or ""))
+        return sorted(self.problems.values(),
+                      key=lambda place: (place.file is not None, place.file or "", place.line, place.kind,
+                                         place.joint or ""))

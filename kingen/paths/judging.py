@@ -26,7 +26,7 @@ def judge_margins(findings, evaluator, batch, pieces, lines):
                 findings.add(pieces[number].index, findings.place(
                     quantity.kind, quantity.joint, lines[number], batch.poses[row], batch.joints[row],
                     evaluator.value_of(quantity, batch, row), evaluator.limit_of(quantity), margins[row],
-                    between=quantity.part))
+                    between=quantity.part, file=pieces[number].move.file))
 
 
 def has_accelerations(move, timing):
@@ -51,7 +51,7 @@ def judge_rates(findings, limits, grid, speeds, accelerations, pieces, lines):
                 value, limit = size[row, joint], bounds[joint]
                 findings.add(pieces[number].index, findings.place(
                     kind, joint, lines[number], grid.poses[row], grid.joints[row], value, limit, (limit - value) / limit,
-                    float(limit / value) if kind == "joint speed" else None))
+                    float(limit / value) if kind == "joint speed" else None, file=pieces[number].move.file))
 
 
 def record(findings, batch, grid, speeds, accelerations, pieces, lines, sink):

@@ -3,21 +3,22 @@ from the robot file (``travel``, ``max_speed``, ``max_acceleration`` of each lim
 LinuxCNC ``.ini`` (``[JOINT_n] MIN_LIMIT, MAX_LIMIT, MAX_VELOCITY, MAX_ACCELERATION``; a wrist's
 joints after the legs', their speeds and accelerations from the ``.ini`` only), and
 the path's own speed and acceleration caps from the ``.ini``'s ``[TRAJ]`` (what LinuxCNC's
-planner moves the tool at).
+planner moves the tool at). The ``.ini`` is read as LinuxCNC reads it (:mod:`.ini`); it also
+names the tool table and parameter file the interpreter starts with (``[EMCIO] TOOL_TABLE``,
+``[RS274NGC] PARAMETER_FILE``).
 
 Internal units throughout: mm and radians for joints (per s, per s^2), mm/s and mm/s^2 for
 the path. Where both give a limit, the tighter one holds.
 """
 
-import configparser
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import located
-from ..runtime.file_gate import read_limited
+from .ini import load_ini
 
-INI_BYTES = 1 << 20
 INI_UNITS = {"mm": 1.0, "metric": 1.0, "millimeter": 1.0, "inch": 25.4, "in": 25.4, "imperial": 25.4}
 """[TRAJ] LINEAR_UNITS words LinuxCNC accepts, in mm."""
 
@@ -48,27 +49,33 @@ def robot_limits(robot):
     return Limits(lower, upper, *rates, sources=("the robot file",))
 
 
-def _ini(path):
-    text = read_limited(path, INI_BYTES, "LinuxCNC .ini").decode("utf-8", "replace")
-    parser = configparser.ConfigParser(strict=False, interpolation=None, comment_prefixes=("#", ";"),
-                                       inline_comment_prefixes=None)
-    parser.optionxform = str.upper
-    try:
-        parser.read_string(text, source=str(path))
-    except configparser.Error as error:
-        raise located(path, getattr(error, "lineno", None), "ini", " ".join(str(error.message).split())) from None
-    return parser, text.splitlines()
+JOINT_KEYS = ("MIN_LIMIT", "MAX_LIMIT", "MAX_VELOCITY", "MAX_ACCELERATION")
+TRAJ_KEYS = ("LINEAR_UNITS", "MAX_LINEAR_VELOCITY", "MAX_VELOCITY", "MAX_LINEAR_ACCELERATION", "MAX_ACCELERATION")
+FILE_KEYS = (("EMCIO", "TOOL_TABLE"), ("RS274NGC", "PARAMETER_FILE"))
+"""The files an ``.ini`` names that the interpreter starts with (relative to the ``.ini``'s folder)."""
 
 
-def _line_of(lines, section):
-    """The line of ``[section]`` in the file (1-based), or None."""
-    return next((number for number, text in enumerate(lines, start=1) if text.strip() == f"[{section}]"), None)
+SUBROUTINE_PATH = ("RS274NGC", "SUBROUTINE_PATH")
+"""Where the interpreter looks for a subroutine called by name: folders separated by ``:``."""
 
 
-def _number(parser, lines, path, section, key):
+def ini_keys(joint_count):
+    """Every (section, key) check-path reads from an ``.ini`` for a robot of ``joint_count`` joints."""
+    return ([(f"JOINT_{index}", key) for index in range(joint_count) for key in JOINT_KEYS]
+            + [("TRAJ", key) for key in TRAJ_KEYS] + list(FILE_KEYS) + [SUBROUTINE_PATH])
+
+
+def ini_subroutine_path(ini):
+    """The folders of the ``.ini``'s [RS274NGC] SUBROUTINE_PATH, relative ones taken from its
+    folder, as absolute paths (a tuple; empty when it names none)."""
+    text = ini.get(*SUBROUTINE_PATH) or ""
+    return tuple(str((Path(ini.path).parent / name).resolve()) for name in text.split(":") if name.strip())
+
+
+def _number(ini, section, key):
     """[section] key as a finite number (None when absent), above 0 for a speed or acceleration
     (a key other than MIN_LIMIT and MAX_LIMIT); KingenError otherwise."""
-    text = parser.get(section, key, fallback=None)
+    text = ini.get(section, key)
     if text is None:
         return None
     try:
@@ -76,45 +83,69 @@ def _number(parser, lines, path, section, key):
     except (ValueError, IndexError):
         value = float("nan")
     if not np.isfinite(value):
-        raise located(path, _line_of(lines, section), f"[{section}] {key}", f"{text!r} is not a number")
+        raise located(ini.path, ini.line(section, key), f"[{section}] {key}", f"{text!r} is not a number")
     if value <= 0.0 and key not in ("MIN_LIMIT", "MAX_LIMIT"):
-        raise located(path, _line_of(lines, section), f"[{section}] {key}", f"{text!r}: must be above 0")
+        raise located(ini.path, ini.line(section, key), f"[{section}] {key}", f"{text!r}: must be above 0")
     return value
 
 
-def ini_limits(robot, path):
+def ini_unit(ini):
+    """The ``.ini``'s [TRAJ] LINEAR_UNITS in mm (default mm); KingenError for another word."""
+    unit_word = (ini.get("TRAJ", "LINEAR_UNITS") or "mm").split()[0].lower()
+    if unit_word not in INI_UNITS:
+        raise located(ini.path, ini.line("TRAJ", "LINEAR_UNITS"), "[TRAJ] LINEAR_UNITS",
+                      f"{unit_word!r}: mm or inch expected")
+    return INI_UNITS[unit_word]
+
+
+def ini_files(ini):
+    """{(section, key): path} of the tool table and parameter file the ``.ini`` names, relative
+    names taken from its folder. A parameter file that is not there yet is left out (LinuxCNC
+    starts without offsets and writes it); KingenError (file:line) for a tool table that is not
+    a file."""
+    found = {}
+    for section, key in FILE_KEYS:
+        name = ini.get(section, key)
+        if name is None:
+            continue
+        path = Path(ini.path).parent / name
+        if path.is_file():
+            found[section, key] = path
+        elif key == "TOOL_TABLE":
+            raise located(ini.path, ini.line(section, key), f"[{section}] {key}", f"{name!r}: no such file")
+    return found
+
+
+def ini_limits(robot, path, ini=None):
     """The limits a LinuxCNC ``.ini`` gives ``robot``'s joints and path, in internal units: its
     [TRAJ] LINEAR_UNITS (mm or inch; default mm) for prismatic joints and the path, degrees for
     revolute joints. KingenError (file:line) when it lacks a [JOINT_n] of the robot's joints or
-    a joint lacks MAX_VELOCITY or MAX_ACCELERATION."""
-    parser, lines = _ini(path)
-    unit_word = parser.get("TRAJ", "LINEAR_UNITS", fallback="mm").split()[0].lower() if parser.has_section(
-        "TRAJ") else "mm"
-    if unit_word not in INI_UNITS:
-        raise located(path, _line_of(lines, "TRAJ"), "[TRAJ] LINEAR_UNITS", f"{unit_word!r}: mm or inch expected")
-    unit = INI_UNITS[unit_word]
+    a joint lacks MAX_VELOCITY or MAX_ACCELERATION. ``ini``: the file as read (load_ini), when
+    the caller has read it already."""
     count = robot.joint_count
-    missing = [index for index in range(count) if not parser.has_section(f"JOINT_{index}")]
+    ini = load_ini(path, ini_keys(count)) if ini is None else ini
+    unit = ini_unit(ini)
+    missing = [index for index in range(count) if not ini.has_section(f"JOINT_{index}")]
     if missing:
-        raise located(path, len(lines), f"[JOINT_{missing[0]}]", f"missing (the file ends here): the robot has "
+        raise located(path, ini.length, f"[JOINT_{missing[0]}]", f"missing (the file ends here): the robot has "
                                                                  f"{count} joints (JOINT_0 .. JOINT_{count - 1})")
     scale = np.where(robot.revolute, np.pi / 180.0, unit)
     values = {}
-    for key in ("MIN_LIMIT", "MAX_LIMIT", "MAX_VELOCITY", "MAX_ACCELERATION"):
-        column = [_number(parser, lines, path, f"JOINT_{index}", key) for index in range(count)]
+    for key in JOINT_KEYS:
+        column = [_number(ini, f"JOINT_{index}", key) for index in range(count)]
         for index, value in enumerate(column):
             if value is None and key.startswith("MAX_") and key != "MAX_LIMIT":
-                raise located(path, _line_of(lines, f"JOINT_{index}"), f"[JOINT_{index}] {key}", "missing")
+                raise located(path, ini.line(f"JOINT_{index}"), f"[JOINT_{index}] {key}", "missing")
         default = -np.inf if key == "MIN_LIMIT" else np.inf
         values[key] = np.array([default if value is None else value for value in column]) * scale
-    trajectory = {key: _number(parser, lines, path, "TRAJ", key) if parser.has_section("TRAJ") else None
-                  for key in ("MAX_LINEAR_VELOCITY", "MAX_VELOCITY", "MAX_LINEAR_ACCELERATION", "MAX_ACCELERATION")}
+    trajectory = {key: _number(ini, "TRAJ", key) for key in TRAJ_KEYS[1:]}
     path_speed = trajectory["MAX_LINEAR_VELOCITY"] or trajectory["MAX_VELOCITY"]
     path_acceleration = trajectory["MAX_LINEAR_ACCELERATION"] or trajectory["MAX_ACCELERATION"]
     return Limits(values["MIN_LIMIT"], values["MAX_LIMIT"], values["MAX_VELOCITY"], values["MAX_ACCELERATION"],
                   path_speed=path_speed * unit if path_speed else None,
                   path_acceleration=path_acceleration * unit if path_acceleration else None,
-                  rapid_speed=path_speed * unit if path_speed else None, sources=(str(path),))
+                  rapid_speed=path_speed * unit if path_speed else None,
+                  sources=(f"{path} (read by {ini.reader} reader)",))
 
 
 def combined(first, second):
@@ -127,8 +158,8 @@ def combined(first, second):
                   pick("path_speed"), pick("path_acceleration"), pick("rapid_speed"), first.sources + second.sources)
 
 
-def limits_for(robot, ini=None):
+def limits_for(robot, ini=None, read=None):
     """The limits a program on ``robot`` is checked against: the robot file's, tightened by the
-    ``.ini``'s when one is given."""
+    ``.ini``'s when one is given (``read``: that file as load_ini read it, when it has been)."""
     limits = robot_limits(robot)
-    return combined(limits, ini_limits(robot, ini)) if ini is not None else limits
+    return combined(limits, ini_limits(robot, ini, read)) if ini is not None else limits

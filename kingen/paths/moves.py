@@ -24,9 +24,11 @@ class Move:
     """One programmed motion from ``start`` to ``end`` (6 floats each, mm and degrees).
 
     line: the G-code line (1-based) or CSV row's line in the file; kind: "feed", "rapid",
-    "arc" (G-code) or "row" (CSV). feed: mm/min along the xyz path (deg/min for a move that
+    "arc", "probe" (to its programmed end), "tap" (a rigid tap's way down or back) (G-code) or
+    "row" (CSV). feed: mm/min along the xyz path (deg/min for a move that
     only turns), None when the program gives none (a rapid, a CSV without feed). duration: s
-    (a CSV with ``t``), else None. start_line: the CSV row ``start`` was read from (None for G-code)."""
+    (a CSV with ``t``), else None. start_line: the CSV row ``start`` was read from (None for G-code).
+    file: the file ``line`` is in when it is not the program's own (a G-code subroutine's), else None."""
 
     line: int
     kind: str
@@ -36,3 +38,4 @@ class Move:
     duration: float = None
     arc: Arc = None
     start_line: int = None
+    file: str = None

@@ -57,9 +57,17 @@ def checks(outcome):
 
 
 def runs(outcome):
-    """Whether the program runs within every limit that was judged (a program without a move
-    runs)."""
-    return not outcome.findings.worst
+    """Whether the program runs within every limit that was judged: something was judged (a
+    sample), and nothing beyond a limit."""
+    return outcome.findings.samples > 0 and not outcome.findings.worst
+
+
+def verdict(outcome):
+    """The verdict in words: "runs", "does not run", or "judged nothing" (no sample: the program
+    has no move, or only moves of length 0)."""
+    if outcome.findings.samples == 0:
+        return "judged nothing"
+    return "runs" if runs(outcome) else "does not run"
 
 
 def verdict_line(outcome):
@@ -68,13 +76,41 @@ def verdict_line(outcome):
     judged = [kind for kind, verdict in checks(outcome).items() if not verdict.startswith("not exercised")]
     where = (f"{counted(findings.moves, 'move')}, {counted(findings.samples, 'sample')} at chord {settings.chord:g} "
              f"mm/deg, posture {outcome.posture}, host {settings.host}")
+    if findings.samples == 0:
+        return (f"check-path {outcome.robot.name} {outcome.program}: judged nothing: the program has no move "
+                f"that goes anywhere ({where})")
     if runs(outcome):
         return f"check-path {outcome.robot.name} {outcome.program}: runs within every limit judged ({where}; " \
                f"judged: {', '.join(judged) or 'nothing'})"
-    lines = sorted({place.line for place in outcome.findings.problems.values()})
+    lines = sorted({(place.file is not None, place.file or "", place.line) for place in findings.problems.values()})
+    first = f"{lines[0][1]}:{lines[0][2]}" if lines and lines[0][0] else lines[0][2] if lines else "?"
     return (f"check-path {outcome.robot.name} {outcome.program}: does not run: "
             f"{counted(len(findings.problems) + findings.dropped, 'problem')} on {counted(len(lines), 'line')}, "
-            f"first at line {lines[0] if lines else '?'} ({where})")
+            f"first at line {first} ({where})")
+
+
+def reading_line(outcome):
+    """For G-code, what LinuxCNC's interpreter emitted and what was judged, and the work
+    offset the program started with; None for a CSV."""
+    reading = outcome.reading
+    if reading is None:
+        return None
+    offset = reading.work_offset or {"system": "G54", "g5x": [0.0] * 6, "g92": [0.0] * 6}
+    g92 = "" if not any(offset["g92"]) else f", G92 {' '.join(f'{value:g}' for value in offset['g92'])}"
+    counts = "" if reading.rs274_motions is None else f", {reading.rs274_motions} as rs274 counts them"
+    return (f"G-code: {counted(reading.motions, 'motion')} from LinuxCNC's interpreter{counts} "
+            f"({reading.zero_length} of length 0), {counted(outcome.findings.moves, 'move')} judged; work offset "
+            f"{offset['system']} {' '.join(f'{value:g}' for value in offset['g5x'])}{g92} ({reading.offset_from})")
+
+
+def place_line(place):
+    """A place's line as the report shows it: ``line``, or ``file:line`` in a subroutine's file."""
+    return f"{place.file}:{place.line}" if place.file is not None else str(place.line)
+
+
+def source_of(outcome, place):
+    """The text of a place's line."""
+    return outcome.sources.get((place.file, place.line), "")
 
 
 def _joint_units(outcome, joint, kind, between=None):
@@ -99,20 +135,22 @@ def problem_rows(outcome):
     for place in outcome.findings.sorted_problems():
         units = _joint_units(outcome, place.joint, place.kind, place.between)
         extra = f" (fits at {place.override * 100:.0f}% feed)" if place.override is not None else ""
-        rows.append([str(place.line), place.kind, " ".join(filter(None, (place.joint, place.between))) or "-",
+        rows.append([place_line(place), place.kind, " ".join(filter(None, (place.joint, place.between))) or "-",
                      f"{number_text(place.value, 6)} {units}".strip() + extra,
-                     f"{number_text(place.limit, 6)} {units}".strip(), one_line(outcome.sources.get(place.line, ""))[:60]])
+                     f"{number_text(place.limit, 6)} {units}".strip(), one_line(source_of(outcome, place))[:60]])
     return rows
 
 
 def _place_json(outcome, place):
-    data = {"kind": place.kind, "line": place.line, "source": outcome.sources.get(place.line, ""),
+    data = {"kind": place.kind, "line": place.line, "source": source_of(outcome, place),
             "joint": place.joint, "pose": place.pose, "joints": place.joints, "value": place.value,
             "limit": place.limit, "units": _joint_units(outcome, place.joint, place.kind, place.between)}
     if place.override is not None:
         data["override"] = place.override
     if place.between is not None:
         data["between"] = place.between
+    if place.file is not None:
+        data["file"] = place.file
     return data
 
 
@@ -133,7 +171,7 @@ def report_json(outcome):
                       "speed_limit": limits.speed[index] * scale,
                       "acceleration_limit": limits.acceleration[index] * scale})
     document = {
-        "verdict": "runs" if runs(outcome) else "does not run",
+        "verdict": verdict(outcome),
         "robot": outcome.robot.name, "program": outcome.program,
         "samples": findings.samples, "moves": findings.moves, "timed_moves": findings.timed_moves,
         "accelerated_moves": findings.accelerated_moves, "checks": checks(outcome),
@@ -154,6 +192,12 @@ def report_json(outcome):
         document["settings"]["task_only"] = outcome.settings.task_only
     if outcome.five_axis is not None:
         document["five_axis"] = outcome.five_axis.summary(is_gcode(outcome.program))
+    if outcome.reading is not None:
+        reading = outcome.reading
+        document["gcode"] = {"motions": reading.motions, "rs274_motions": reading.rs274_motions,
+                             "zero_length": reading.zero_length,
+                             "judged_moves": findings.moves, "files": sorted(set(reading.files.values())),
+                             "work_offset": reading.work_offset, "offset_from": reading.offset_from}
     return document
 
 
