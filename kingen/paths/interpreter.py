@@ -107,7 +107,7 @@ def start_code(start, unit=1.0):
     G21 (or G20) G90 G53 G0 X.. C.."""
     inch = unit == MM_PER_INCH
     values = [value / MM_PER_INCH if inch and index < 3 else value for index, value in enumerate(start)]
-    words = " ".join(f"{axis}{value:.9f}" for axis, value in zip("XYZABC", values))
+    words = " ".join(f"{axis}{value:.15f}" for axis, value in zip("XYZABC", values))
     return f"G{20 if inch else 21} G90 G53 G0 {words}"
 
 
@@ -168,6 +168,7 @@ def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     reading = Reading() if reading is None else reading
     position = np.asarray(start, dtype=float)
     for kind, file, line, units, feed, end, arc in canonical_motions(path, start, setup, reading):
+        end = _snapped(position, end)
         moves = _moves(kind, file, line, units, feed, position, end, arc)
         reading.motions += 1
         reading.zero_length += not moves
@@ -352,6 +353,19 @@ def _motion(fields, file, line):
     if kind == "A":
         arc = (np.array([float(fields[12]), float(fields[13])]) * MM_PER_INCH, int(fields[14]), int(fields[15]))
     return kind, file, line, units, numbers[0], end, arc
+
+
+ROUNDING_MM = 1e-9
+"""A motion's x, y, z within this fraction of the position's size (at least 1 mm) of where it
+starts are where it starts: the round trip through the interpreter's inches, not a move (a move
+that only turns stays one, timed on its turn)."""
+
+
+def _snapped(start, end):
+    """``end`` (6,) with its x, y, z replaced by ``start``'s where they differ by rounding alone (ROUNDING_MM)."""
+    if np.all(np.abs(end[:3] - start[:3]) <= ROUNDING_MM * max(1.0, float(np.max(np.abs(start[:3]))))):
+        return np.concatenate([start[:3], end[3:]])
+    return end
 
 
 def _moves(kind, file, line, units, feed, start, end, arc):
