@@ -5,7 +5,8 @@ bisected between its samples (:mod:`.refinement`), solved at once by the numpy r
 judged (:mod:`.judging`), and forgotten: memory does not grow with the program.
 
 Joint speeds and accelerations are judged at the regular samples (finite differences along
-the path, :mod:`.timing`); the boundaries of travel, reach, the singular bands, the direct
+the path, :mod:`.timing`, with the path's speed as LinuxCNC's planner moves a G-code program,
+:mod:`.planner`); the boundaries of travel, reach, the singular bands, the direct
 index and the assembly mode at every sample, refined ones included.
 """
 
@@ -24,6 +25,7 @@ from .interpreter import gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import limits_for
 from .manifold import Manifold
+from .planner import planned
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
 from .routine import RoutineSolver
@@ -122,10 +124,10 @@ class _Checker:
         self.routine = RoutineSolver(robot, settings.host, self.posture, settings.out_dir,
                                      settings.timeout) if settings.routine else None
 
-    def add(self, index, move):
-        """Cut a move into pieces and check them when a batch is full."""
+    def add(self, index, move, timing):
+        """Cut a move, timed by ``timing`` (a timing.Profile, planner.Plan or None), into pieces
+        and check them when a batch is full."""
         count = sample_count(move, self.settings.chord)
-        timing = profile(move, self.limits)
         self.findings.moves += 1
         self.findings.timed_moves += timing is not None
         self.findings.accelerated_moves += has_accelerations(move, timing)
@@ -139,13 +141,15 @@ class _Checker:
 
     def _tabulate(self):
         """The gathered pieces' moves as arrays, for evaluate: which are straight lines in the
-        host's interpolation, their start and end poses, their assembly signs."""
+        host's interpolation, their start and end poses, their assembly signs, which have stretches
+        on a blend arc (planner.Plan.blended)."""
         host = self.interpolation
         self.simple = np.array([p.straight and (host == "linuxcnc" or np.array_equal(p.move.start[3:], p.move.end[3:]))
                                 for p in self.pieces])
         self.starts = np.array([p.move.start for p in self.pieces])
         self.ends = np.array([p.move.end for p in self.pieces])
         self.signs = np.ones(len(self.pieces))
+        self.blended = np.array([getattr(p.timing, "arcs", False) for p in self.pieces])
 
     def evaluate(self, piece, u):
         """The Batch of pieces ``piece`` (indices into self.pieces) at their moves' parameters ``u``."""
@@ -158,6 +162,11 @@ class _Checker:
         for number in np.unique(piece[~simple]):
             rows = np.flatnonzero(piece == number)
             poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.interpolation)
+        for number in np.unique(piece[self.blended[piece]]):
+            rows = np.flatnonzero(piece == number)
+            on, xyz = self.pieces[number].timing.blended(u[rows] * self.pieces[number].length)
+            poses[rows[on], :3] = xyz
+            t6[rows[on]] = t6_from_pose(poses[rows[on]])
         if self.manifold is not None:
             poses, t6 = self.manifold.samples(poses)
         if self.world:
@@ -228,14 +237,18 @@ class _Checker:
 
     def _rates(self, grid):
         """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed)."""
-        timings = [piece.timing for piece in self.pieces]
-        timed = np.array([timing is not None for timing in timings])[grid.piece]
-        length, speed, acceleration = (np.array([np.nan if timing is None or getattr(timing, name) is None
-                                                 else getattr(timing, name) for timing in timings])[grid.piece]
-                                       for name in ("length", "speed", "acceleration"))
-        lengths_of_rows = np.array([piece.length for piece in self.pieces])[grid.piece]
-        speeds, accelerations = joint_rates(grid.joints, grid.u * lengths_of_rows, grid.piece, self.robot.revolute,
-                                            length, speed, acceleration)
+        rate, change = np.full(len(grid.u), np.nan), np.zeros(len(grid.u))
+        s = grid.u * np.array([piece.length for piece in self.pieces])[grid.piece]
+        bounds = np.searchsorted(grid.piece, np.arange(len(self.pieces) + 1))
+        runs = grid.piece * 4096  # a move's samples differenced within each planner segment it follows
+        for number, piece in enumerate(self.pieces):
+            rows = slice(bounds[number], bounds[number + 1])
+            if piece.timing is not None:
+                rate[rows], change[rows] = piece.timing.rates(s[rows])
+            if hasattr(piece.timing, "part"):
+                runs[rows] += piece.timing.part(s[rows])
+        speeds, accelerations = joint_rates(grid.joints, s, runs, self.robot.revolute, rate, change)
+        timed = np.isfinite(rate)
         speeds[~timed], accelerations[~timed] = np.nan, np.nan
         return speeds, accelerations
 
@@ -261,8 +274,9 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
     moves = program_moves(program, checker.five_axis.start() if checker.world else robot.verification.home)
     if checker.manifold is not None and csv:
         moves = checker.manifold.moves(moves, checker.findings)
-    for index, move in enumerate(moves):
-        checker.add(index, move)
+    timed = ((move, profile(move, checker.limits)) for move in moves) if csv else planned(moves, checker.limits)
+    for index, (move, timing) in enumerate(timed):
+        checker.add(index, move, timing)
     checker.flush()
     findings = checker.findings
     named = {place.line for place in list(findings.problems.values()) + list(findings.first.values())

@@ -29,6 +29,8 @@ the system's Python); ``KINGEN_LINUXCNC_PYTHON`` names another."""
 CANON = Path(__file__).with_name("linuxcnc_canon.py")
 RS274 = "/usr/bin/rs274"
 RS274_SECONDS = 60.0
+PATH_MODES = {610: "G61", 611: "G61.1", 640: "G64"}
+"""The interpreter's path control modes (an unset one, before the first block, is LinuxCNC's G64)."""
 PLANE_AXES = {1: (0, 1, 2), 2: (1, 2, 0), 3: (2, 0, 1)}
 """LinuxCNC's plane (G17 XY, G19 YZ, G18 XZ): the x, y, z indices of its first and second
 axis and of its normal."""
@@ -72,15 +74,19 @@ def gcode_moves(path, start=(0.0,) * 6):
 
 
 def _moves(lines, path, errors, position):
+    mode = ("G64", 0.0, 0.0)
     for text in lines:
         fields = text.split()
         if not fields:
             continue
         if fields[0] == "D":
             return
+        if fields[0] == "B":
+            mode = (PATH_MODES.get(int(fields[1]), "G64"), float(fields[2]), float(fields[3]))
+            continue
         if fields[0] == "E":
             raise located(path, refused_line(path, int(fields[1])), "G-code", " ".join(fields[2:]))
-        move = _move(fields, position)
+        move = _move(fields, position, mode)
         if move is not None and move.line > 0:
             yield move
         if move is not None:
@@ -113,9 +119,9 @@ def _squeezed(text):
     return "".join(text.split()).lower() or None
 
 
-def _move(fields, start):
+def _move(fields, start, mode):
     """The Move a canon line ``M line kind units feed x y z a b c [...]`` stands for, from
-    ``start``; None for a move of length 0."""
+    ``start``, made in path control mode ``mode`` (Move.path_mode); None for a move of length 0."""
     line, kind, units = int(fields[1]), fields[2], int(fields[3])
     numbers = [float(value) for value in fields[4:11]]
     end = np.array(numbers[1:7])
@@ -125,9 +131,10 @@ def _move(fields, start):
     turning_only = np.array_equal(end[:3], start[:3])
     feed = numbers[0] * (MM_PER_INCH if not turning_only or units != INCH_PROGRAM else 1.0)
     if kind == "T":
-        return Move(line, "rapid", start, end)
+        return Move(line, "rapid", start, end, path_mode=mode)
     arc = None
     if kind == "A":
         first, second = float(fields[11]) * MM_PER_INCH, float(fields[12]) * MM_PER_INCH
         arc = Arc(PLANE_AXES[int(fields[14])], (first, second), int(fields[13]))
-    return Move(line, "arc" if arc else "feed", start, end, feed=feed if math.isfinite(feed) else None, arc=arc)
+    return Move(line, "arc" if arc else "feed", start, end, feed=feed if math.isfinite(feed) else None, arc=arc,
+                path_mode=mode)

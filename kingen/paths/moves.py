@@ -26,7 +26,10 @@ class Move:
     line: the G-code line (1-based) or CSV row's line in the file; kind: "feed", "rapid",
     "arc" (G-code) or "row" (CSV). feed: mm/min along the xyz path (deg/min for a move that
     only turns), None when the program gives none (a rapid, a CSV without feed). duration: s
-    (a CSV with ``t``), else None. start_line: the CSV row ``start`` was read from (None for G-code)."""
+    (a CSV with ``t``), else None. start_line: the CSV row ``start`` was read from (None for G-code).
+    path_mode: the path control mode the move was made in, (code, P, Q): code "G61" (exact path),
+    "G61.1" (exact stop) or "G64" (blending), P and Q G64's tolerances in mm (0: none given); None
+    for a CSV row."""
 
     line: int
     kind: str
@@ -36,3 +39,4 @@ class Move:
     duration: float = None
     arc: Arc = None
     start_line: int = None
+    path_mode: tuple = None

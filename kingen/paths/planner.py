@@ -1,0 +1,201 @@
+"""A G-code program's moves timed as LinuxCNC's trajectory planner moves them (LinuxCNC 2.9's
+``src/emc/tp``), at 100 % feed override: each move's speed at every point of its path.
+
+The moves become the planner's segments and blends (:mod:`.blends`). Along a chain of segments
+that do not stop between them, the planner looks ahead: each segment ends no faster than the
+rest of the chain lets the tool stop by its end (``[TRAJ] ARC_BLEND_OPTIMIZATION_DEPTH``
+segments ahead, the chain's end taken as a stop beyond them), no faster than the junction allows
+(the two segments' top speeds, a kink's speed; 0 at a stop), and the tool speeds up from where
+the last segment left it. Within a segment the speed is the trapezoid (or triangle) of its
+tangential acceleration between its start and end speeds, capped by its top speed.
+
+A move's path coordinate s (mm, along its programmed xyz path) maps onto the segments that
+follow it: where a blend arc cuts the corner, the stretch of the move it replaces is followed on
+the arc (:meth:`Plan.blended`: the places checked there are the arc's), s mapped linearly onto
+the arc's half, and timed at the arc's speed (:meth:`Plan.rates`).
+
+What stays approximate: a parabolic blend (a move that turns A B C, ``ARC_BLEND_ENABLE = 0``,
+or where it is faster than a blend arc) is timed rest to rest at half acceleration, the two
+moves' overlap not summed; a corner between an arc and a move not tangent to it gets the tangent
+or parabolic treatment, not LinuxCNC's line-arc blend arc; G64's Q (naive CAM merging of short
+collinear moves) is not applied; the planner's velocity ramp for segments shorter than a few
+periods and its consumption of a very short move by a blend arc are not modelled; a lower feed
+ahead is slowed for in time (LinuxCNC may enter it faster and slow down inside).
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .blends import join, segment
+from .timing import profile
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One move's speed along its path as the planner moves it: ``length`` its xyz path (mm),
+    ``speed`` and ``acceleration`` the largest top speed (mm/s) and tangential acceleration
+    (mm/s^2) of the segments it follows; ``parts`` (k, 19) rows s0, s1 (the move's stretch, mm),
+    sigma0, sigma1 (the segment's, mm), the segment's length, top speed, tangential acceleration,
+    start and end speeds, and for a blend arc its circle (centre, unit vectors to its start and
+    along its start, radius; NaN for the programmed path)."""
+
+    length: float
+    speed: float
+    acceleration: float
+    parts: np.ndarray
+
+    def _rows(self, s):
+        """Each of path coordinates ``s`` (n,): its part's row and its place sigma on that part's segment."""
+        row = np.clip(np.searchsorted(self.parts[:, 1], s, side="left"), 0, len(self.parts) - 1)
+        s0, s1, sigma0, sigma1, length = self.parts[row, :5].T
+        span = np.where(s1 > s0, s1 - s0, 1.0)
+        return row, np.clip(sigma0 + (s - s0) * (sigma1 - sigma0) / span, 0.0, length)
+
+    def part(self, s):
+        """(n,) the part of the move each of path coordinates ``s`` (n,; mm) lies on: the
+        planner's segments, across whose ends the path's direction or parameter may turn."""
+        return self._rows(np.asarray(s, dtype=float))[0]
+
+    @property
+    def arcs(self):
+        """Whether a blend arc follows part of the move."""
+        return bool(np.any(np.isfinite(self.parts[:, 18])))
+
+    def blended(self, s):
+        """(mask (n,), xyz (m, 3) mm): which of path coordinates ``s`` (n,; mm) lie where a blend arc
+        replaces the programmed path, and the arc's points there."""
+        s = np.asarray(s, dtype=float)
+        row, sigma = self._rows(s)
+        circle = self.parts[row, 9:]
+        on = np.isfinite(circle[:, 9])
+        circle, angle = circle[on], sigma[on] / np.where(on, self.parts[row, 18], 1.0)[on]
+        xyz = circle[:, :3] + circle[:, 9:10] * (np.cos(angle)[:, None] * circle[:, 3:6]
+                                                   + np.sin(angle)[:, None] * circle[:, 6:9])
+        return on, xyz
+
+    def rates(self, s):
+        """(ds/dt mm/s, d2s/dt2 mm/s^2) (n,) at path coordinates ``s`` (n,; mm): the tool's speed
+        and its change along the path: the tool's speed and tangential acceleration divided by
+        d sigma/ds (1 on the programmed path, the arc's half over the stretch it replaces on a blend)."""
+        s = np.asarray(s, dtype=float)
+        row, sigma = self._rows(s)
+        s0, s1, sigma0, sigma1, length, top, accel, start, end = self.parts[row, :9].T
+        scale = np.where(s1 > s0, (sigma1 - sigma0) / np.where(s1 > s0, s1 - s0, 1.0), 1.0)
+        rising = np.sqrt(start ** 2 + 2.0 * accel * sigma)
+        falling = np.sqrt(end ** 2 + 2.0 * accel * (length - sigma))
+        rate = np.minimum(top, np.minimum(rising, falling))
+        change = np.where(rising < np.minimum(top, falling), accel, np.where(falling < np.minimum(top, rising),
+                                                                             -accel, 0.0))
+        return rate / scale, change / scale
+
+
+def _speeds(chain, start, depth, last):
+    """(start speeds, end speeds) (n,) of a chain of Segments (``start``: the first's start speed,
+    mm/s), each ending at rest after ``depth`` segments of look-ahead; ``last``: the chain ends the
+    program, its last segment never finalized (the planner lets the one before it end no faster
+    than the last's triangle, as if the last could be cut to half)."""
+    count = len(chain)
+    top = np.array([segment.target for segment in chain])
+    accel = np.array([segment.tangential for segment in chain])
+    length = np.array([segment.length for segment in chain])
+    junction = np.array([min(segment.end, top[index], top[index + 1]) if index + 1 < count and segment.end > 0.0
+                         else 0.0 for index, segment in enumerate(chain)])
+    finals = np.zeros(count)
+    for first in range(count):
+        final = 0.0
+        for index in range(min(count - 1, first + depth), first, -1):
+            reach = accel[index] * length[index] * (1.0 if last and index == count - 1 else 2.0)
+            final = min(junction[index - 1], math.sqrt(final ** 2 + reach))
+        finals[first] = final if first + 1 < count else 0.0
+    starts, ends = np.empty(count), np.empty(count)
+    speed = start
+    for index in range(count):
+        starts[index] = speed
+        speed = min(finals[index], math.sqrt(speed ** 2 + 2.0 * accel[index] * length[index]))
+        ends[index] = speed
+    return starts, ends
+
+
+class _Queue:
+    """The planner's queue between stops: Segments joined as they come, planned and handed out
+    move by move when the chain stops (or grows past twice the look-ahead)."""
+
+    def __init__(self, limits):
+        machine = limits.machine
+        self.machine = machine
+        speeds = machine.axis_speed.copy()
+        accelerations = machine.axis_acceleration.copy()
+        if limits.path_acceleration is not None:
+            accelerations[:3] = np.where(np.isfinite(accelerations[:3]), accelerations[:3], limits.path_acceleration)
+        self.speeds, self.accelerations = speeds, accelerations
+        self.bounds = (speeds[:3], accelerations[:3])
+        self.limit = limits.path_speed if limits.path_speed is not None else math.inf
+        self.chain, self.moves, self.start = [], {}, 0.0
+
+    def add(self, number, move):
+        """Queue ``move`` (the program's ``number``-th); False when the planner does not time it."""
+        new = segment(number, move, self.speeds, self.accelerations, self.limit, self.machine.cycle)
+        if new is None:
+            return False
+        if self.chain:
+            arc = join(self.chain[-1], new, self.machine, self.bounds)
+            if arc is not None:
+                self.chain.append(arc)
+        self.chain.append(new)
+        self.moves[number] = move
+        return True
+
+    def ready(self):
+        """Whether the queued chain ends at rest (its last junction made) or has grown long."""
+        return len(self.chain) > 1 and (self.chain[-2].end == 0.0 or len(self.chain) > 2 * self.machine.depth + 2)
+
+    def plans(self, final=False):
+        """(move, Plan) of the moves whose segments are all planned: every queued move when
+        ``final``; else those before the stop that ends the chain, or those more than the
+        look-ahead before its end (the rest stay queued, the tool's speed where they start kept)."""
+        chain = self.chain
+        if not chain:
+            return []
+        cut = len(chain) if final else len(chain) - 1 if chain[-2].end == 0.0 else len(chain) - self.machine.depth - 1
+        if final and chain[-1].mode == "G64":
+            chain[-1].halved = True  # its end still a parabolic blend: nothing follows to blend with
+        starts, ends = _speeds(chain, self.start, self.machine.depth, final)
+        parts, last = {}, {}
+        for index, piece in enumerate(chain):
+            row = [piece.length, piece.target, piece.tangential, starts[index], ends[index],
+                   *(piece.circle if piece.circle is not None else [np.nan] * 10)]
+            for number, s0, s1, sigma0, sigma1 in piece.parts:
+                parts.setdefault(number, []).append([s0, s1, sigma0, sigma1, *row])
+                last[number] = index
+        done = {number for number, index in last.items() if index < cut}
+        kept = [index for index, piece in enumerate(chain) if any(part[0] not in done for part in piece.parts)]
+        self.chain, self.start = chain[kept[0]:] if kept else [], starts[kept[0]] if kept else 0.0
+        if kept:
+            self.chain[0].parts = [part for part in self.chain[0].parts if part[0] not in done]
+        result = []
+        for number in sorted(done):
+            rows = np.array(sorted(parts[number]))
+            result.append((self.moves.pop(number), Plan(float(rows[-1, 1]), float(np.max(rows[:, 5])),
+                                                       float(np.max(rows[:, 6])), rows)))
+        return result
+
+
+def planned(moves, limits):
+    """(move, timing) of each of ``moves`` (G-code moves, in order) under ``limits``
+    (limits.Limits): a Plan for the moves LinuxCNC's planner times (an .ini's X Y Z accelerations,
+    or a [TRAJ] acceleration), else timing.profile's (a move that only turns; no .ini)."""
+    if limits.machine is None or not (np.all(np.isfinite(limits.machine.axis_acceleration[:3]))
+                                      or limits.path_acceleration is not None):
+        for move in moves:
+            yield move, profile(move, limits)
+        return
+    queue = _Queue(limits)
+    for number, move in enumerate(moves):
+        if not queue.add(number, move):
+            yield from queue.plans(final=True)
+            yield move, profile(move, limits)
+        elif queue.ready():
+            yield from queue.plans()
+    yield from queue.plans(final=True)
