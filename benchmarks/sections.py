@@ -28,6 +28,7 @@ SECTIONS = {
     "c_host": ("c_host.py", [], "The C host"),
     "hybrid": ("hybrid.py", ["--calls", "200000", "--rounds", "5"], "Constrained machines"),
     "check_path": ("check_path.py", ["--samples", "1000000", "--moves", "100"], "Path checking"),
+    "planner": ("planner.py", [], "Timing as LinuxCNC's planner moves"),
 }
 
 

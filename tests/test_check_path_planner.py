@@ -1,6 +1,7 @@
 """check-path's timing against LinuxCNC's own trajectory planner: a real, headless LinuxCNC
-(Debian's linuxcnc-uspace) runs kingen's module for the linear delta on three short programs (a
-polyline blended in G64, the same in exact stop G61, tangent lines and arcs in G64) with HAL's
+(Debian's linuxcnc-uspace) runs kingen's module for the linear delta on four short programs (a
+polyline blended in G64, the same with G64 P0.05 and in exact path G61, tangent lines and arcs in
+G64) with HAL's
 sampler recording every servo period's program line and joint velocities; each joint's largest
 speed on each line, as check-path's planner model times the program (its CSV of samples), lies
 within 5 % of LinuxCNC's. LinuxCNC runs a blend arc as part of the line after the corner, so a
@@ -22,7 +23,10 @@ from test_linuxcnc_machine import missing
 PROGRAMS = {
     # a polyline of 5 mm moves turning by 40 to 110 degrees: blend arcs at every corner
     "blends": "G21 G90 G64\nG1 X4 Y3 Z15 F4800\nG1 X8 Y0\nG1 X12 Y3\nG1 X16 Y0 Z18\nG1 X8 Y-4 Z18\nG1 X0 Y0 Z15\nM2\n",
-    # the same in exact stop: every move a triangle or trapezoid from rest to rest
+    # the same with G64 P0.05: arcs within 0.05 mm of each corner, slower through them
+    "tolerance": "G21 G90 G64 P0.05\nG1 X4 Y3 Z15 F4800\nG1 X8 Y0\nG1 X12 Y3\nG1 X16 Y0 Z18\nG1 X8 Y-4 Z18\n"
+                 "G1 X0 Y0 Z15\nM2\n",
+    # the same in exact path (G61): every move from rest to rest, its acceleration cut by the kink ratio
     "exact": "G21 G90 G61\nG1 X4 Y3 Z15 F4800\nG1 X8 Y0\nG1 X12 Y3\nG1 X16 Y0 Z18\nG1 X8 Y-4 Z18\nG1 X0 Y0 Z15\nM2\n",
     # lines and half circles of 4 mm radius meeting tangentially: the arcs' normal acceleration caps them
     "arcs": "G21 G90 G64\nG1 X4 Y0 Z15 F3000\nG3 X4 Y8 I0 J4\nG1 X-4 Y8\nG3 X-4 Y0 I0 J-4\nG1 X0 Y0\nM2\n",
@@ -42,7 +46,7 @@ def linuxcnc_machine():
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    """{program: (its file, LinuxCNC's run)} of one LinuxCNC running the three programs."""
+    """(the .ini, {program: (its file, LinuxCNC's run)}) of one LinuxCNC running the programs."""
     folder = tmp_path_factory.mktemp("planner")
     paths = {name: folder / f"{name}.ngc" for name in PROGRAMS}
     for name, path in paths.items():

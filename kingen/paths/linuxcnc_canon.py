@@ -11,8 +11,9 @@ rotation applied as AXIS applies them (rs274.interpret.Translated), in LinuxCNC'
 units (inches, degrees); feed as the interpreter hands it (inches/min); units the program's
 (1 inch, 2 mm, 3 cm) when the move was made. Before a block's moves, the path control mode they
 are made in when it differs from the last printed (the interpreter's state after the block when
-the gcode module hands it before the next block's first move, as a block's G61/G64 applies to its
-own motion; else the state before the block):
+the gcode module hands it with the next block's first move, as a block's G61/G64 applies to its
+own motion; else the state before the block: a G61/G64 on a moving line followed by a line
+that does not move takes effect from the next moving line):
 
     B <mode> <p> <q>    mode 610 (G61), 611 (G61.1) or 640 (G64); G64's P and Q in mm
 
