@@ -9,8 +9,6 @@ sample check-path places on the arc's first half (off its own line's programmed 
 middle) counts for the next line here. The machine is set up as in test_linuxcnc_machine.py (root, a private
 mount namespace); in CI (KINGEN_REQUIRE_TOOLCHAINS=1) a missing LinuxCNC fails."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 

@@ -13,6 +13,7 @@ from kingen.paths.interpreter import gcode_moves
 from kingen.paths.limits import Machine, limits_for
 from kingen.paths.planner import planned
 from kingen.robot.model import load_robot
+from test_check_path import needs_interpreter
 
 INI = """[TRAJ]
 LINEAR_UNITS = mm
@@ -30,22 +31,16 @@ MAX_ACCELERATION = 300
 """ + "".join(f"[JOINT_{index}]\nMAX_VELOCITY = 1000\nMAX_ACCELERATION = 5000\n" for index in range(3))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def interpreter():
-    try:
-        list(gcode_moves_text("G1 X1 F60\n", folder=None))
-    except Exception as error:  # noqa: BLE001 (LinuxCNC's interpreter absent: the reason)
-        pytest.skip(f"LinuxCNC's interpreter: {error}")
+    needs_interpreter()
 
 
-def gcode_moves_text(text, folder):
-    import tempfile
-    from pathlib import Path
-
-    with tempfile.TemporaryDirectory() as name:
-        path = Path(name) / "p.ngc"
-        path.write_text("G21 G90\n" + text + "M2\n")
-        return list(gcode_moves(path, (0.0, 0.0, 15.0, 0.0, 0.0, 0.0)))
+def program_moves(text, folder):
+    """The moves of G-code ``text`` (after G21 G90; M2 added) from the delta's home X0 Y0 Z15."""
+    path = folder / "p.ngc"
+    path.write_text("G21 G90\n" + text + "M2\n")
+    return list(gcode_moves(path, (0.0, 0.0, 15.0, 0.0, 0.0, 0.0)))
 
 
 def plans(text, tmp_path, traj=""):
@@ -53,12 +48,12 @@ def plans(text, tmp_path, traj=""):
     ini = tmp_path / "m.ini"
     ini.write_text(INI.format(traj=traj))
     limits = limits_for(load_robot("linear_delta"), ini)
-    return list(zip(*planned(gcode_moves_text(text, tmp_path), limits)))
+    return list(zip(*planned(program_moves(text, tmp_path), limits)))
 
 
-def test_each_move_carries_the_path_mode_it_was_made_in(interpreter):
-    moves = gcode_moves_text("G64 P0.05 Q0.02\nG1 X1 F600\nG61\nG1 X2\nG61.1 G1 X3\nG1 X3.5\nG64\nG1 X4\n"
-                             "G20 G64 P0.01\nG1 X0.2\n", None)
+def test_each_move_carries_the_path_mode_it_was_made_in(interpreter, tmp_path):
+    moves = program_moves("G64 P0.05 Q0.02\nG1 X1 F600\nG61\nG1 X2\nG61.1 G1 X3\nG1 X3.5\nG64\nG1 X4\n"
+                           "G20 G64 P0.01\nG1 X0.2\n", tmp_path)
     assert [move.path_mode for move in moves] == [
         ("G64", 0.05, 0.02), ("G61", 0.05, 0.02), ("G61.1", 0.05, 0.02), ("G61.1", 0.05, 0.02), ("G64", 0.0, 0.0),
         ("G64", pytest.approx(0.254), pytest.approx(0.254))]

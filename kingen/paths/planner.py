@@ -102,13 +102,15 @@ def _speeds(chain, start, depth, last):
     length = np.array([segment.length for segment in chain])
     junction = np.array([min(segment.end, top[index], top[index + 1]) if index + 1 < count and segment.end > 0.0
                          else 0.0 for index, segment in enumerate(chain)])
-    finals = np.zeros(count)
-    for first in range(count):
-        final = 0.0
-        for index in range(min(count - 1, first + depth), first, -1):
-            reach = accel[index] * length[index] * (1.0 if last and index == count - 1 else 2.0)
-            final = min(junction[index - 1], math.sqrt(final ** 2 + reach))
-        finals[first] = final if first + 1 < count else 0.0
+    reach = 2.0 * accel * length
+    if last:
+        reach[-1] /= 2.0
+    finals, first = np.zeros(count), np.arange(count)
+    for ahead in range(depth, 0, -1):  # every segment's window at once, from its far end back
+        index = first + ahead
+        within = index < count
+        index = np.minimum(index, count - 1)
+        finals = np.where(within, np.minimum(junction[index - 1], np.sqrt(finals ** 2 + reach[index])), finals)
     starts, ends = np.empty(count), np.empty(count)
     speed = start
     for index in range(count):
@@ -186,8 +188,7 @@ def planned(moves, limits):
     """(move, timing) of each of ``moves`` (G-code moves, in order) under ``limits``
     (limits.Limits): a Plan for the moves LinuxCNC's planner times (an .ini's X Y Z accelerations,
     or a [TRAJ] acceleration), else timing.profile's (a move that only turns; no .ini)."""
-    if limits.machine is None or not (np.all(np.isfinite(limits.machine.axis_acceleration[:3]))
-                                      or limits.path_acceleration is not None):
+    if limits.machine is None or not (limits.machine.accelerated or limits.path_acceleration is not None):
         for move in moves:
             yield move, profile(move, limits)
         return
