@@ -23,8 +23,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 ABOUT = ("How closely check-path's timing follows LinuxCNC's trajectory planner ([Timing](how-to/check-path.md#timing)): "
          "a real, headless LinuxCNC runs the linear delta on short programs (a polyline of 5 mm moves at 4800 mm/min "
-         "blended in G64, the same with G64 P0.05 and in exact path G61; lines and half circles of 4 mm radius meeting "
-         "tangentially in G64), HAL's sampler recording every servo period's line and joint velocities "
+         "blended in G64, the same with G64 P0.05 and in exact path G61; four nearly collinear moves that G64's Q merges "
+         "into one line; lines and half circles of 4 mm radius meeting tangentially in G64), HAL's sampler recording every servo period's line and joint velocities "
          "(`tests/test_check_path_planner.py` asserts the 5 % bound). Each joint's largest speed on each line, "
          "LinuxCNC's against check-path's planner model and against timing every move from rest to rest at [TRAJ]'s "
          "acceleration; the error is a joint's difference over LinuxCNC's peak (over the line's fastest joint's for "

@@ -1,7 +1,7 @@
 """check-path's timing against LinuxCNC's own trajectory planner: a real, headless LinuxCNC
-(Debian's linuxcnc-uspace) runs kingen's module for the linear delta on four short programs (a
-polyline blended in G64, the same with G64 P0.05 and in exact path G61, tangent lines and arcs in
-G64) with HAL's
+(Debian's linuxcnc-uspace) runs kingen's module for the linear delta on five short programs (a
+polyline blended in G64, the same with G64 P0.05 and in exact path G61, nearly collinear moves
+that G64's Q merges, tangent lines and arcs in G64) with HAL's
 sampler recording every servo period's program line and joint velocities; each joint's largest
 speed on each line, as check-path's planner model times the program (its CSV of samples), lies
 within 5 % of LinuxCNC's. LinuxCNC runs a blend arc as part of the line after the corner, so a
@@ -15,6 +15,7 @@ import pytest
 from conftest import skip_or_fail
 from kingen.cli import main
 from kingen.paths.interpreter import gcode_moves
+from kingen.paths.planner import merged
 from test_check_path_machine import ROBOTS, run_programs
 from test_linuxcnc_machine import missing
 
@@ -26,6 +27,8 @@ PROGRAMS = {
                  "G1 X0 Y0 Z15\nM2\n",
     # the same in exact path (G61): every move from rest to rest, its acceleration cut by the kink ratio
     "exact": "G21 G90 G61\nG1 X4 Y3 Z15 F4800\nG1 X8 Y0\nG1 X12 Y3\nG1 X16 Y0 Z18\nG1 X8 Y-4 Z18\nG1 X0 Y0 Z15\nM2\n",
+    # G64 P0.05 (and so Q0.05): lines 2 to 5 within 0.05 mm of one line, which LinuxCNC moves as line 5
+    "merged": "G21 G90 G64 P0.05\nG1 X2 Y0.02 Z15 F4800\nG1 X4 Y0\nG1 X6 Y0.03\nG1 X8 Y0\nG1 X8 Y4\nG1 X0 Y0\nM2\n",
     # lines and half circles of 4 mm radius meeting tangentially: the arcs' normal acceleration caps them
     "arcs": "G21 G90 G64\nG1 X4 Y0 Z15 F3000\nG3 X4 Y8 I0 J4\nG1 X-4 Y8\nG3 X-4 Y0 I0 J-4\nG1 X0 Y0\nM2\n",
 }
@@ -68,7 +71,8 @@ def model_peaks(program, ini, folder):
     speeds = np.column_stack([samples[name] for name in samples.dtype.names if name.endswith("_speed")])
     regular = np.all(np.isfinite(speeds), axis=1)
     lines = samples["line"].astype(int)
-    straight = {move.line: move for move in gcode_moves(program, (0.0, 0.0, 15.0, 0.0, 0.0, 0.0)) if move.arc is None}
+    moves = merged(gcode_moves(program, (0.0, 0.0, 15.0, 0.0, 0.0, 0.0)))  # the lines LinuxCNC's canon makes
+    straight = {move.line: move for move in moves if move.arc is None}
     following = dict(zip(sorted(straight), sorted(straight)[1:]))
     for row in np.flatnonzero(regular & (samples["u"] > 0.5)):
         move = straight.get(lines[row])

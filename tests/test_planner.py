@@ -11,7 +11,7 @@ import pytest
 
 from kingen.paths.interpreter import gcode_moves
 from kingen.paths.limits import Machine, limits_for
-from kingen.paths.planner import planned
+from kingen.paths.planner import merged, planned
 from kingen.robot.model import load_robot
 from test_check_path import needs_interpreter
 
@@ -122,3 +122,15 @@ def test_the_look_ahead_slows_a_chain_in_time_to_stop_at_its_end(interpreter, tm
         remaining = 10.0 - (index + 1)
         end = plan.rates(np.array([plan.length]))[0][0]
         assert end <= math.sqrt(2.0 * 300.0 * (remaining - 1.0) + 300.0 * 1.0) + 1e-9
+
+
+def test_g64_q_merges_nearly_collinear_moves_into_one_line_named_by_the_last(interpreter, tmp_path):
+    """Points 0.02 and 0.03 mm off the line from X0 to X8: within Q0.05 one move (line 5's, as
+    LinuxCNC's canon sends it), beyond Q0.01 four; a feed change or A motion ends a run."""
+    text = "G1 X2 Y0.02 Z15 F4800\nG1 X4 Y0\nG1 X6 Y0.03\nG1 X8 Y0\nG1 X8 Y4\n"
+    moves = list(merged(program_moves("G64 P0.05\n" + text, tmp_path)))
+    assert [move.line for move in moves] == [6, 7] and moves[0].start[:3].tolist() == [0.0, 0.0, 15.0]
+    assert moves[0].end[:3] == pytest.approx([8.0, 0.0, 15.0])
+    assert [move.line for move in merged(program_moves("G64 P0.01\n" + text, tmp_path))] == [3, 4, 5, 6, 7]
+    feed_change = "G64 P0.05\nG1 X2 Y0.02 Z15 F4800\nG1 X4 Y0 F3000\nG1 X6 Y0\n"
+    assert [move.line for move in merged(program_moves(feed_change, tmp_path))] == [3, 5]

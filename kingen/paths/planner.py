@@ -17,14 +17,14 @@ the arc's half, and timed at the arc's speed (:meth:`Plan.rates`).
 What stays approximate: a parabolic blend (a move that turns A B C, ``ARC_BLEND_ENABLE = 0``,
 or where it is faster than a blend arc) is timed rest to rest at half acceleration, the two
 moves' overlap not summed; a corner between an arc and a move not tangent to it gets the tangent
-or parabolic treatment, not LinuxCNC's line-arc blend arc; G64's Q (naive CAM merging of short
-collinear moves) is not applied; the planner's velocity ramp for segments shorter than a few
+or parabolic treatment, not LinuxCNC's line-arc blend arc; G64's Q merges straight moves
+(:func:`merged`) but does not turn arcs within Q of their chord into lines; the planner's velocity ramp for segments shorter than a few
 periods and its consumption of a very short move by a blend arc are not modelled; a lower feed
 ahead is slowed for in time (LinuxCNC may enter it faster and slow down inside).
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -184,10 +184,58 @@ class _Queue:
         return result
 
 
+CHAIN = 100
+"""The most points LinuxCNC's canon merges into one line before it starts another (emccanon.cc)."""
+
+
+def merged(moves):
+    """``moves`` as LinuxCNC's canon hands them to the planner: in G64 with Q (its naive CAM
+    detector), a run of straight feeds at one feed and path mode, without A B C motion, whose
+    programmed points all lie within Q (mm) of the line from the run's start to its last point
+    becomes that one line, named by its last move's line; any other move passes unchanged."""
+    chain = []
+    for move in moves:
+        if chain and not _linkable(chain, move):
+            yield _joined(chain)
+            chain = []
+        mode = move.path_mode
+        if (move.kind == "feed" and move.arc is None and mode is not None and mode[0] == "G64" and mode[2] > 0.0
+                and np.array_equal(move.start[3:], move.end[3:])):
+            chain.append(move)
+        else:
+            yield from ([_joined(chain)] if chain else [])
+            chain = []
+            yield move
+    if chain:
+        yield _joined(chain)
+
+
+def _linkable(chain, move):
+    """Whether ``move`` extends the run ``chain`` (the canon's ``linkable``)."""
+    first = chain[0]
+    if (move.kind != "feed" or move.arc is not None or move.feed != first.feed or move.path_mode != first.path_mode
+            or len(chain) > CHAIN or not np.array_equal(move.start[3:], move.end[3:])):
+        return False
+    start, step = first.start[:3], move.end[:3] - first.start[:3]
+    size = float(np.dot(step, step))
+    if size == 0.0:
+        return False
+    points = np.array([link.end[:3] for link in chain])
+    along = np.clip((points - start) @ step / size, 0.0, 1.0)
+    return bool(np.all(np.linalg.norm(start + along[:, None] * step - points, axis=1) <= move.path_mode[2]))
+
+
+def _joined(chain):
+    """The one line a run of moves becomes (itself for a run of one)."""
+    return chain[0] if len(chain) == 1 else replace(chain[-1], start=chain[0].start)
+
+
 def planned(moves, limits):
     """(move, timing) of each of ``moves`` (G-code moves, in order) under ``limits``
-    (limits.Limits): a Plan for the moves LinuxCNC's planner times (an .ini's X Y Z accelerations,
-    or a [TRAJ] acceleration), else timing.profile's (a move that only turns; no .ini)."""
+    (limits.Limits), G64's Q runs merged into one move each (:func:`merged`): a Plan for the moves
+    LinuxCNC's planner times (an .ini's X Y Z accelerations, or a [TRAJ] acceleration), else
+    timing.profile's (a move that only turns; no .ini)."""
+    moves = merged(moves)
     if limits.machine is None or not (limits.machine.accelerated or limits.path_acceleration is not None):
         for move in moves:
             yield move, profile(move, limits)
