@@ -45,7 +45,8 @@ class Segment:
     ``maxvel`` the axes' and the arc's cap (mm/s), ``limit`` [TRAJ] MAX_LINEAR_VELOCITY (inf: none);
     ``accel`` the path acceleration (mm/s^2) before the planner's reductions: ``ratio`` (an arc's
     tangential share), ``reduce_start`` and ``reduce_end`` (the kinks' where it starts and ends),
-    ``halved`` (a parabolic blend's); ``end`` the speed allowed where it ends (0: at rest); ``mode``
+    ``halved`` (a parabolic blend's); ``start`` and ``finish`` its unit directions (3 floats) where
+    it starts and ends; ``end`` the speed allowed where it ends (0: at rest); ``mode``
     and ``tolerance`` its path control mode (Move.path_mode's code) and G64's P (mm); ``corner`` the
     programmed end of its move (mm); ``circle`` a blend arc's centre, unit vectors to its start and
     along its start, radius (10,; None for a programmed move); ``parts`` the (move number, s0, s1, sigma0, sigma1) it
@@ -55,8 +56,8 @@ class Segment:
     reqvel: float
     maxvel: float
     accel: float
-    start: np.ndarray
-    finish: np.ndarray
+    start: tuple
+    finish: tuple
     kind: str = "line"
     traverse: bool = False
     rotary: bool = False
@@ -90,18 +91,22 @@ class Segment:
 
 def _axis_times(delta, caps):
     """The longest time any axis needs for its share ``delta`` (6,) at rates ``caps`` (6,)."""
-    moving = (delta > 1e-9) & np.isfinite(caps)
-    return float(np.max(delta[moving] / caps[moving])) if np.any(moving) else 0.0
+    return max((share / cap for share, cap in zip(delta, caps) if share > 1e-9 and cap < math.inf), default=0.0)
+
+
+def _unit(vector):
+    size = math.sqrt(sum(value * value for value in vector))
+    return tuple(value / size for value in vector)
 
 
 def _direction(move, at):
-    """The unit tangent (3,) of ``move``'s xyz path at u = ``at`` (0 or 1)."""
+    """The unit tangent (3 floats) of ``move``'s xyz path at u = ``at`` (0 or 1)."""
     if move.arc is None:
         step = move.end[:3] - move.start[:3]
     else:
         du = 1e-7 if at == 0 else -1e-7
         step = (positions(move, [at + du])[0] - positions(move, [at])[0]) * (1.0 if at == 0 else -1.0)
-    return step / np.linalg.norm(step)
+    return _unit(step.tolist())
 
 
 def segment(number, move, speeds, accelerations, limit, cycle):
@@ -111,8 +116,8 @@ def segment(number, move, speeds, accelerations, limit, cycle):
     distance, _ = lengths(move)
     if distance == 0.0 or (move.kind != "rapid" and move.feed is None):
         return None
-    delta = np.abs(move.end - move.start)
-    chord = float(np.linalg.norm(delta[:3]))
+    delta = np.abs(move.end - move.start).tolist()
+    chord = math.sqrt(sum(value * value for value in delta[:3]))
     t_speed, t_accel = _axis_times(delta, speeds), _axis_times(delta, accelerations)
     maxvel = chord / t_speed if t_speed > 0.0 else math.inf
     accel = chord / t_accel if t_accel > 0.0 else math.inf
@@ -124,7 +129,7 @@ def segment(number, move, speeds, accelerations, limit, cycle):
     maxvel = min(maxvel, distance / cycle)
     mode, tolerance, _ = move.path_mode if move.path_mode is not None else ("G61.1", 0.0, 0.0)
     return Segment(distance, reqvel, maxvel, accel, _direction(move, 0), _direction(move, 1), kind,
-                   traverse=move.kind == "rapid", rotary=bool(np.any(delta[3:] > 0.0)), limit=limit, ratio=ratio,
+                   traverse=move.kind == "rapid", rotary=any(value > 0.0 for value in delta[3:]), limit=limit, ratio=ratio,
                    mode=mode, tolerance=tolerance, nominal=distance, corner=move.end[:3].copy(),
                    parts=[[number, 0.0, distance, 0.0, distance]])
 
@@ -150,11 +155,10 @@ def _arc_caps(move, speeds, accelerations, t_speed, t_accel, distance):
 
 
 def _inscribed(binormal, bounds):
-    """The largest rate (of ``bounds`` (3,) per axis) any direction in the plane normal to
+    """The largest rate (of ``bounds``, 3 per axis) any direction in the plane normal to the unit
     ``binormal`` can have (blendmath's calculateInscribedDiameter)."""
-    scales = np.sqrt(np.clip(1.0 - binormal ** 2, 1e-12, None))
-    active = np.isfinite(bounds) & (bounds > 0.0)
-    return float(np.min(bounds[active] / scales[active])) if np.any(active) else math.inf
+    return min((bound / math.sqrt(max(1.0 - normal * normal, 1e-12)) for normal, bound in zip(binormal, bounds)
+                if 0.0 < bound < math.inf), default=math.inf)
 
 
 def _stop(previous):
@@ -165,7 +169,7 @@ def _stop(previous):
 
 def join(previous, current, machine, bounds):
     """Join ``current`` to the ``previous`` Segment as the planner does (``machine``:
-    limits.Machine; ``bounds`` ((3,), (3,)): the X Y Z speed and acceleration caps): sets
+    limits.Machine; ``bounds`` (3 floats, 3 floats): the X Y Z speed and acceleration caps): sets
     previous.end and the reductions; the blend arc Segment between them when one is made (the
     two trimmed), else None."""
     if previous.mode == "G61.1" or previous.traverse != current.traverse:
@@ -176,12 +180,12 @@ def join(previous, current, machine, bounds):
     if previous.rotary or current.rotary:
         return _stop(previous)
     u1, u2 = previous.finish, current.start
-    dot = float(np.clip(np.dot(u1, u2), -1.0, 1.0))
+    dot = min(max(sum(a * b for a, b in zip(u1, u2)), -1.0), 1.0)
     if 2.0 + 2.0 * dot < SHARP_CORNER:
         return _stop(previous)
     top = min(previous.top(machine.feed_scale), current.top(machine.feed_scale))
-    jump = (top / machine.cycle + current.accel) * np.abs(u2 - u1)
-    scale = float(np.max(jump / bounds[1]))
+    jump = top / machine.cycle + current.accel
+    scale = max(jump * abs(b - a) / bound for a, b, bound in zip(u1, u2, bounds[1]))
     if "arc" in (previous.kind, current.kind):
         scale /= ACC_RATIO_TANGENTIAL
     if scale < machine.kink_ratio:
@@ -234,8 +238,8 @@ def _blend_arc(previous, current, machine, bounds, dot):
     tolerances = [segment_.tolerance if segment_.tolerance > 0.0 else segment_.nominal * TOLERANCE_RATIO
                   for segment_ in (previous, current)]
     tolerance = min(min(tolerances), previous.nominal * TOLERANCE_RATIO, current.nominal * TOLERANCE_RATIO)
-    binormal = np.cross(previous.finish, current.start)
-    binormal /= np.linalg.norm(binormal)
+    (x1, y1, z1), (x2, y2, z2) = previous.finish, current.start
+    binormal = _unit((y1 * z2 - z1 * y2, z1 * x2 - x1 * z2, x1 * y2 - y1 * x2))
     a_max = _inscribed(binormal, bounds[1])
     a_normal = a_max * ACC_RATIO_NORMAL
     v_req = max(previous.top(1.0), current.top(1.0))
@@ -243,7 +247,7 @@ def _blend_arc(previous, current, machine, bounds, dot):
     phi_effective = min(phi, math.pi * 0.49)
     v1 = min(previous.maxvel, current.maxvel / math.cos(phi_effective))
     v2 = min(current.maxvel, previous.maxvel / math.cos(phi_effective))
-    base = np.linalg.norm(current.start * v2 - previous.finish * v1)
+    base = math.sqrt(sum((b * v2 - a * v1) ** 2 for a, b in zip(previous.finish, current.start)))
     altitude = v1 * v2 * math.sin(phi) / base if base > 0.0 else math.inf
     v_goal = min(v_goal, max(altitude, _inscribed(binormal, bounds[0])))
     d_tol = math.cos(theta) * tolerance / (1.0 - math.sin(theta))
@@ -256,9 +260,9 @@ def _blend_arc(previous, current, machine, bounds, dot):
     if radius < 1e-12 or radius * phi < 1e-6:
         return None
     trim = radius / math.tan(theta)
-    inward = (current.start - previous.finish) / np.linalg.norm(current.start - previous.finish)
+    inward = np.array(_unit([b - a for a, b in zip(previous.finish, current.start)]))
     center = previous.corner + inward * radius / math.sin(theta)
-    start = previous.corner - previous.finish * trim
+    start = previous.corner - np.array(previous.finish) * trim
     arc = Segment(radius * phi, v_req, v_plan, a_max, previous.finish, current.start, "blend",
                   traverse=current.traverse, limit=current.limit, ratio=ACC_RATIO_TANGENTIAL, mode=current.mode,
                   tolerance=current.tolerance, nominal=radius * phi,
@@ -273,6 +277,7 @@ def _trim(segment_, trim, arc, at_end):
     """Shorten ``segment_`` by ``trim`` mm at its end (or start); that stretch of its move is
     followed by half the blend ``arc``."""
     half = arc.length / 2.0
+    trim = min(trim, segment_.length)  # a blend may take all that is left of a move (rounding aside)
     if at_end:
         number, s0, s1, sigma0, sigma1 = segment_.parts[-1]
         segment_.parts[-1] = [number, s0, s1 - trim, sigma0, sigma1 - trim]

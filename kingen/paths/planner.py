@@ -132,7 +132,7 @@ class _Queue:
         if limits.path_acceleration is not None:
             accelerations[:3] = np.where(np.isfinite(accelerations[:3]), accelerations[:3], limits.path_acceleration)
         self.speeds, self.accelerations = speeds, accelerations
-        self.bounds = (speeds[:3], accelerations[:3])
+        self.bounds = (speeds[:3].tolist(), accelerations[:3].tolist())
         self.limit = limits.path_speed if limits.path_speed is not None else math.inf
         self.chain, self.moves, self.start = [], {}, 0.0
 
