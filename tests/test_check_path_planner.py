@@ -16,6 +16,7 @@ from conftest import skip_or_fail
 from kingen.cli import main
 from kingen.paths.interpreter import gcode_moves
 from kingen.paths.planner import merged
+from kingen.robot.model import load_robot
 from test_check_path_machine import ROBOTS, run_programs
 from test_linuxcnc_machine import missing
 
@@ -61,17 +62,19 @@ def peaks(lines, speeds):
     return {int(line): np.max(np.abs(speeds[lines == line]), axis=0) for line in np.unique(lines) if line > 0}
 
 
-def model_peaks(program, ini, folder):
-    """check-path's per-line joint peaks (mm/s) on ``program`` under ``ini``, from its CSV of samples,
-    a sample on a blend arc's first half counted for the next line (as LinuxCNC counts it)."""
-    code = main(["check-path", str(ROBOTS / "linear_delta.yaml"), str(program), "--ini", str(ini),
+def model_peaks(program, ini, folder, robot="linear_delta", home=(0.0, 0.0, 15.0)):
+    """check-path's per-line joint peaks (the .ini's units per s) on ``program`` under ``ini`` for
+    shipped ``robot`` at ``home`` (mm), from its CSV of samples, a sample on a blend arc's first half
+    counted for the next line (as LinuxCNC counts it)."""
+    code = main(["check-path", str(ROBOTS / f"{robot}.yaml"), str(program), "--ini", str(ini),
                  "--csv", str(folder / "samples.csv")])
     assert code in (0, 1)
     samples = np.genfromtxt(folder / "samples.csv", delimiter=",", names=True)
-    speeds = np.column_stack([samples[name] for name in samples.dtype.names if name.endswith("_speed")])
+    scale = 25.4 if load_robot(robot).length_unit == "inch" else 1.0
+    speeds = np.column_stack([samples[name] for name in samples.dtype.names if name.endswith("_speed")]) / scale
     regular = np.all(np.isfinite(speeds), axis=1)
     lines = samples["line"].astype(int)
-    moves = merged(gcode_moves(program, (0.0, 0.0, 15.0, 0.0, 0.0, 0.0)))  # the lines LinuxCNC's canon makes
+    moves = merged(gcode_moves(program, (*home, 0.0, 0.0, 0.0)))  # the lines LinuxCNC's canon makes
     straight = {move.line: move for move in moves if move.arc is None}
     following = dict(zip(sorted(straight), sorted(straight)[1:]))
     for row in np.flatnonzero(regular & (samples["u"] > 0.5)):
@@ -84,7 +87,8 @@ def model_peaks(program, ini, folder):
 
 
 def linuxcnc_peaks(run):
-    """LinuxCNC's per-line joint peaks (mm/s) from its servo-period samples (line, velocities...)."""
+    """LinuxCNC's per-line joint peaks (the .ini's units per s) from its servo-period samples (line,
+    velocities...)."""
     servo = np.array(run["servo"])
     assert len(servo) > 1000, "the sampler recorded too little"
     return peaks(servo[:, 0].astype(int), servo[:, 1:])
