@@ -135,7 +135,7 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
     assert f"| tau | 84 | 400 | 300 | {300 / 400:.3f} | 0 | 1 |" in text
     assert "| total | 2.50 |" in text and "no compiler" in text and f"| {760 / 800:.3f} |" in text
     assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
-    assert "| blends | 2 | 20.59 | 20.56 | 21.82 | 0.2 % | 6.0 % |" in text
+    assert "| blends | 2 | 20.6 | 20.6 | 21.8 | 0.2 % | 6.0 % |" in text and "the planner model's 0.2 %" in text
     assert f"| hexapod | 2573 | 0.0 | {2573 / 0.02:,.0f} | 92 MB | 1002, 92 MB | 200 in 0.3 s | 0.1 |" in text
     assert "grazes set up: 2; seen by the regular samples alone: 0; found by check-path at the default chord: 2" in text
 
