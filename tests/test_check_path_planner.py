@@ -15,7 +15,8 @@ import pytest
 from conftest import skip_or_fail
 from kingen.cli import main
 from kingen.paths.interpreter import gcode_moves
-from kingen.paths.planner import merged
+from kingen.paths.limits import limits_for
+from kingen.paths.planner import planned
 from kingen.robot.model import load_robot
 from test_check_path_machine import ROBOTS, run_programs
 from test_linuxcnc_machine import missing
@@ -64,25 +65,31 @@ def peaks(lines, speeds):
 
 def model_peaks(program, ini, folder, robot="linear_delta", home=(0.0, 0.0, 15.0)):
     """check-path's per-line joint peaks (the .ini's units per s) on ``program`` under ``ini`` for
-    shipped ``robot`` at ``home`` (mm), from its CSV of samples, a sample on a blend arc's first half
-    counted for the next line (as LinuxCNC counts it)."""
+    shipped ``robot`` at ``home`` (mm), from its CSV of samples, each sample counted for the line
+    LinuxCNC shows there: the next line's on a blend arc's first half (off its own line's
+    programmed path, past its middle) and where, in a parabolic blend, the next move already
+    moves faster than this one (the planner model's speeds, planner.Plan.overlap)."""
     code = main(["check-path", str(ROBOTS / f"{robot}.yaml"), str(program), "--ini", str(ini),
                  "--csv", str(folder / "samples.csv")])
     assert code in (0, 1)
     samples = np.genfromtxt(folder / "samples.csv", delimiter=",", names=True)
-    scale = 25.4 if load_robot(robot).length_unit == "inch" else 1.0
+    model = load_robot(robot)
+    scale = 25.4 if model.length_unit == "inch" else 1.0
     speeds = np.column_stack([samples[name] for name in samples.dtype.names if name.endswith("_speed")]) / scale
     regular = np.all(np.isfinite(speeds), axis=1)
     lines = samples["line"].astype(int)
-    moves = merged(gcode_moves(program, (*home, 0.0, 0.0, 0.0)))  # the lines LinuxCNC's canon makes
-    straight = {move.line: move for move in moves if move.arc is None}
-    following = dict(zip(sorted(straight), sorted(straight)[1:]))
+    timed = dict((move.line, (move, plan)) for move, plan in planned(
+        gcode_moves(program, (*home, 0.0, 0.0, 0.0)), limits_for(model, ini)))  # the lines LinuxCNC's canon makes
+    following = dict(zip(sorted(timed), sorted(timed)[1:]))
     for row in np.flatnonzero(regular & (samples["u"] > 0.5)):
-        move = straight.get(lines[row])
-        if move is not None and lines[row] in following:
-            on_line = move.start[:3] + samples["u"][row] * (move.end[:3] - move.start[:3])
-            if np.linalg.norm(on_line - [samples[axis][row] for axis in "xyz"]) > 1e-6:
-                lines[row] = following[lines[row]]
+        move, plan = timed.get(lines[row], (None, None))
+        if move is None or lines[row] not in following:
+            continue
+        s = samples["u"][row] * plan.length
+        on_line = move.start[:3] + samples["u"][row] * (move.end[:3] - move.start[:3])
+        arc = move.arc is None and np.linalg.norm(on_line - [samples[axis][row] for axis in "xyz"]) > 1e-6
+        if arc or plan.overlap([s])[0] > plan.rates([s])[0][0]:
+            lines[row] = following[lines[row]]
     return peaks(lines[regular], speeds[regular])
 
 

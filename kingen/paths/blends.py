@@ -10,7 +10,8 @@ of it for the tangent), and ``[TRAJ] MAX_LINEAR_VELOCITY`` over all.
 Where two segments meet (:func:`join`): in exact stop (G61.1), between a rapid and a feed, at a
 reversal and where the planner blends parabolically (G64 with a move that turns A B C, or
 ``ARC_BLEND_ENABLE = 0``) the first ends at rest, both accelerations halved where the blend is
-parabolic (this model does not overlap the two: it times them rest to rest). Moves whose
+parabolic (each timed rest to rest, the next one started while the first slows, the two
+moving at once: :func:`overlap`). Moves whose
 directions nearly agree (the change of direction within one period needs less than
 ``ARC_BLEND_KINK_RATIO`` of the axes' acceleration) run through at their top speed in G61 and
 G64. At any other corner in exact path (G61) the first ends at rest and both lose that ratio of
@@ -49,7 +50,8 @@ class Segment:
     it starts and ends; ``end`` the speed allowed where it ends (0: at rest); ``mode``
     and ``tolerance`` its path control mode (Move.path_mode's code) and G64's P (mm); ``corner`` the
     programmed end of its move (mm); ``circle`` a blend arc's centre, unit vectors to its start and
-    along its start, radius (10,; None for a programmed move); ``parts`` the (move number, s0, s1, sigma0, sigma1) it
+    along its start, radius (10,; None for a programmed move); ``overlap`` where it ends in a
+    parabolic blend, the cosine between its direction and the next's (None: no such blend); ``parts`` the (move number, s0, s1, sigma0, sigma1) it
     follows: the move's path coordinate s0..s1 (mm) is the segment's sigma0..sigma1."""
 
     length: float
@@ -72,6 +74,7 @@ class Segment:
     nominal: float = 0.0
     corner: np.ndarray = None
     circle: np.ndarray = None
+    overlap: float = None
     parts: list = field(default_factory=list)
 
     @property
@@ -174,14 +177,11 @@ def join(previous, current, machine, bounds):
     two trimmed), else None."""
     if previous.mode == "G61.1" or previous.traverse != current.traverse:
         return _stop(previous)
-    if previous.mode == "G64" and (previous.rotary or current.rotary or not machine.arc_blends):
-        previous.halved = current.halved = True
-        return _stop(previous)
-    if previous.rotary or current.rotary:
-        return _stop(previous)
     u1, u2 = previous.finish, current.start
     dot = min(max(sum(a * b for a, b in zip(u1, u2)), -1.0), 1.0)
-    if 2.0 + 2.0 * dot < SHARP_CORNER:
+    if previous.mode == "G64" and (previous.rotary or current.rotary or not machine.arc_blends):
+        return _parabolic_blend(previous, current, dot)
+    if previous.rotary or current.rotary or 2.0 + 2.0 * dot < SHARP_CORNER:
         return _stop(previous)
     top = min(previous.top(machine.feed_scale), current.top(machine.feed_scale))
     jump = top / machine.cycle + current.accel
@@ -196,7 +196,7 @@ def join(previous, current, machine, bounds):
         previous.reduce_end, current.reduce_start = machine.kink_ratio, machine.kink_ratio
         return _stop(previous)
     kink = top * machine.kink_ratio / scale
-    parabolic = _parabolic(previous, current, dot) / 2.0
+    parabolic = _parabolic(previous, current, dot, 0.5)[2] / 2.0
     arc = _blend_arc(previous, current, machine, bounds, dot) if previous.kind == current.kind == "line" else None
     best = max(parabolic, kink, arc.maxvel if arc is not None else 0.0)
     if arc is not None and arc.maxvel == best:
@@ -205,19 +205,35 @@ def join(previous, current, machine, bounds):
         previous.end = kink
         previous.reduce_end, current.reduce_start = machine.kink_ratio, machine.kink_ratio
         return None
+    return _parabolic_blend(previous, current, dot)
+
+
+def _parabolic_blend(previous, current, dot):
+    """A parabolic blend: both accelerations halved, ``previous`` ending at rest as its own
+    profile, its ``overlap`` the cosine between the two directions (:func:`overlap` times the
+    next move's start while the first slows down)."""
     previous.halved = current.halved = True
+    previous.overlap = dot
     return _stop(previous)
 
 
-def _parabolic(previous, current, dot):
-    """The speed a parabolic blend keeps through the corner (tp.c's tpComputeBlendVelocity, as
-    estimateParabolicBlendPerformance calls it: both accelerations halved, each move up to half
-    consumed)."""
+def overlap(previous, current, last):
+    """(the first's speed below which the next starts, the next's speed when the first ends at
+    that speed) of the parabolic blend between two Segments as LinuxCNC runs it (``last``: the
+    second is the program's last, whose length the planner never finalizes)."""
+    return _parabolic(previous, current, previous.overlap, 1.0, 0.5 if last else 1.0)[:2]
+
+
+def _parabolic(previous, current, dot, fraction, next_fraction=None):
+    """(the first's, the second's, the net) speed of a parabolic blend (tp.c's
+    tpComputeBlendVelocity: both accelerations halved; each move's triangle over ``fraction`` of
+    it, the second's over ``next_fraction`` (default the same): 0.5 as the planner estimates a
+    blend or for a move not finalized, 1 as it runs one)."""
     theta = math.acos(-dot) / 2.0
     speeds = []
-    for segment_, length in ((previous, previous.length / 2.0), (current, current.length / 2.0)):
+    for segment_, share in ((previous, fraction), (current, fraction if next_fraction is None else next_fraction)):
         accel = segment_.accel * segment_.ratio * 0.5
-        speeds.append((min(math.sqrt(accel * length), segment_.target), accel))
+        speeds.append((min(math.sqrt(accel * segment_.length * share), segment_.target), accel))
     t_reach = min(previous.length / speeds[0][0], current.length / speeds[1][0])
     t_blend = min(t_reach, max(speed / accel for speed, accel in speeds))
     blend = [min(speed, t_blend * accel) for speed, accel in speeds]
@@ -225,7 +241,7 @@ def _parabolic(previous, current, dot):
     if tolerance > 0.0 and math.cos(theta) > math.cos(math.pi / 2.0 - 1e-3):
         cap = 2.0 * math.sqrt(speeds[0][1] * tolerance / math.cos(theta))
         blend = [min(value, cap) for value in blend]
-    return math.sin(theta) * sum(blend) / 2.0
+    return blend[0], blend[1], math.sin(theta) * sum(blend) / 2.0
 
 
 def _blend_arc(previous, current, machine, bounds, dot):

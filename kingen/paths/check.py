@@ -248,9 +248,28 @@ class _Checker:
             if hasattr(piece.timing, "part"):
                 runs[rows] += piece.timing.part(s[rows])
         speeds, accelerations = joint_rates(grid.joints, s, runs, self.robot.revolute, rate, change)
+        for number, piece in enumerate(self.pieces):
+            if getattr(piece.timing, "tail", None) is not None:
+                rows = slice(bounds[number], bounds[number + 1])
+                speeds[rows] += piece.timing.overlap(s[rows])[:, None] * self._slope(piece.timing.following)
         timed = np.isfinite(rate)
         speeds[~timed], accelerations[~timed] = np.nan, np.nan
         return speeds, accelerations
+
+
+    def _slope(self, move):
+        """(dof,) the joints' derivative along ``move``'s path at its start (per mm), the reference's
+        joints 0.01 mm apart (the routine is not asked)."""
+        length = lengths(move)[0]
+        u = np.array([0.0, min(1.0, 0.01 / length)])
+        poses, t6 = poses_and_t6(move, u, self.interpolation)
+        if self.manifold is not None:
+            poses, t6 = self.manifold.samples(poses)
+        if self.world:
+            t6 = self.five_axis.t6(poses)
+        joints = self.evaluator.evaluate(np.zeros(2, dtype=int), u, poses, t6).joints
+        step = np.where(self.robot.revolute, np.angle(np.exp(1j * (joints[1] - joints[0]))), joints[1] - joints[0])
+        return step / (u[1] * length)
 
 
 def program_moves(path, start):

@@ -15,8 +15,9 @@ the arc (:meth:`Plan.blended`: the places checked there are the arc's), s mapped
 the arc's half, and timed at the arc's speed (:meth:`Plan.rates`).
 
 What stays approximate: a parabolic blend (a move that turns A B C, ``ARC_BLEND_ENABLE = 0``,
-or where it is faster than a blend arc) is timed rest to rest at half acceleration, the two
-moves' overlap not summed; a corner between an arc and a move not tangent to it gets the tangent
+or where it is faster than a blend arc) times each move rest to rest at half acceleration and
+adds, where the next move has started (:meth:`Plan.overlap`), the joints' speeds along the next
+move at its start, not along the path the overlap cuts; a corner between an arc and a move not tangent to it gets the tangent
 or parabolic treatment, not LinuxCNC's line-arc blend arc; G64's Q merges straight moves
 (:func:`merged`) but does not turn arcs within Q of their chord into lines; the planner's velocity ramp for segments shorter than a few
 periods and its consumption of a very short move by a blend arc are not modelled; a lower feed
@@ -28,7 +29,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .blends import join, segment
+from .blends import join, overlap, segment
 from .timing import profile
 
 
@@ -39,12 +40,33 @@ class Plan:
     (mm/s^2) of the segments it follows; ``parts`` (k, 19) rows s0, s1 (the move's stretch, mm),
     sigma0, sigma1 (the segment's, mm), the segment's length, top speed, tangential acceleration,
     start and end speeds, and for a blend arc its circle (centre, unit vectors to its start and
-    along its start, radius; NaN for the programmed path)."""
+    along its start, radius; NaN for the programmed path); where the move ends in a parabolic
+    blend, ``tail`` (its speed below which the next move starts, the next's speed when this one
+    ends from that speed, this move's and the next's tangential acceleration, the next's top
+    speed; mm/s, mm/s^2) and ``following`` the next Move."""
 
     length: float
     speed: float
     acceleration: float
     parts: np.ndarray
+    tail: tuple = None
+    following: object = None
+
+    def overlap(self, s):
+        """(n,) the next move's speed (mm/s) while the tool passes path coordinates ``s`` (n,; mm)
+        of this move's end in a parabolic blend (0 elsewhere): the next move starts when this one,
+        slowing down, passes below the blend's speed (below its own peak for a move that never
+        reaches it) and speeds up while this one slows to its end, its speed the blend's share of
+        this one's loss, at most what its acceleration allows (tp.c's tpUpdateBlend)."""
+        if self.tail is None:
+            return np.zeros(len(s))
+        blend, reached, own, accel, top = self.tail
+        _, _, _, _, length, cap, tangential, first, last = self.parts[-1, :9]
+        start = min(blend, cap, math.sqrt((first ** 2 + last ** 2) / 2.0 + tangential * length))
+        rate, change = self.rates(s)
+        slowing = (change < 0.0) & (rate < start) & (np.asarray(s) > self.parts[-1, 0])
+        lost = start - rate
+        return np.where(slowing, np.minimum(np.minimum(lost * reached / blend, accel * lost / own), top), 0.0)
 
     def _rows(self, s):
         """Each of path coordinates ``s`` (n,): its part's row and its place sigma on that part's segment."""
@@ -150,8 +172,19 @@ class _Queue:
         return True
 
     def ready(self):
-        """Whether the queued chain ends at rest (its last junction made) or has grown long."""
-        return len(self.chain) > 1 and (self.chain[-2].end == 0.0 or len(self.chain) > 2 * self.machine.depth + 2)
+        """Whether the queued chain ends at rest (its last junction made; one segment more after
+        a parabolic blend, whose overlap depends on whether the next is the program's last) or
+        has grown long."""
+        return self._cut() is not None or len(self.chain) > 2 * self.machine.depth + 2
+
+    def _cut(self):
+        """The number of queued segments before a stop that may be planned now, or None."""
+        chain = self.chain
+        if len(chain) > 1 and chain[-2].end == 0.0 and chain[-2].overlap is None:
+            return len(chain) - 1
+        if len(chain) > 2 and chain[-3].end == 0.0 and chain[-3].overlap is not None:
+            return len(chain) - 2
+        return None
 
     def plans(self, final=False):
         """(move, Plan) of the moves whose segments are all planned: every queued move when
@@ -160,7 +193,7 @@ class _Queue:
         chain = self.chain
         if not chain:
             return []
-        cut = len(chain) if final else len(chain) - 1 if chain[-2].end == 0.0 else len(chain) - self.machine.depth - 1
+        cut = len(chain) if final else self._cut() or len(chain) - self.machine.depth - 1
         if final and chain[-1].mode == "G64":
             chain[-1].halved = True  # its end still a parabolic blend: nothing follows to blend with
         starts, ends = _speeds(chain, self.start, self.machine.depth, final)
@@ -172,15 +205,21 @@ class _Queue:
                 parts.setdefault(number, []).append([s0, s1, sigma0, sigma1, *row])
                 last[number] = index
         done = {number for number, index in last.items() if index < cut}
+        tails = {piece.parts[-1][0]: (*overlap(piece, chain[index + 1], final and index + 2 == len(chain)),
+                                      piece.tangential, chain[index + 1].tangential, chain[index + 1].target,
+                                      chain[index + 1].parts[0][0])
+                 for index, piece in enumerate(chain[:-1]) if piece.overlap is not None}
         kept = [index for index, piece in enumerate(chain) if any(part[0] not in done for part in piece.parts)]
         self.chain, self.start = chain[kept[0]:] if kept else [], starts[kept[0]] if kept else 0.0
         if kept:
             self.chain[0].parts = [part for part in self.chain[0].parts if part[0] not in done]
-        result = []
+        result, moves = [], dict(self.moves)
         for number in sorted(done):
             rows = np.array(sorted(parts[number]))
-            result.append((self.moves.pop(number), Plan(float(rows[-1, 1]), float(np.max(rows[:, 5])),
-                                                       float(np.max(rows[:, 6])), rows)))
+            tail = tails.get(number)
+            result.append((self.moves.pop(number), Plan(
+                float(rows[-1, 1]), float(np.max(rows[:, 5])), float(np.max(rows[:, 6])), rows,
+                None if tail is None else tail[:5], None if tail is None else moves.get(tail[5]))))
         return result
 
 
