@@ -134,3 +134,20 @@ def test_g64_q_merges_nearly_collinear_moves_into_one_line_named_by_the_last(int
     assert [move.line for move in merged(program_moves("G64 P0.01\n" + text, tmp_path))] == [3, 4, 5, 6, 7]
     feed_change = "G64 P0.05\nG1 X2 Y0.02 Z15 F4800\nG1 X4 Y0 F3000\nG1 X6 Y0\n"
     assert [move.line for move in merged(program_moves(feed_change, tmp_path))] == [3, 5]
+
+
+def test_a_parabolic_blend_starts_the_next_move_while_the_first_slows(interpreter, tmp_path):
+    """Moves turning A blend parabolically in G64: each at half acceleration, ending at rest on its
+    own, and the next move already moving over the first's last stretch, faster the nearer the end,
+    never above its own top speed; nothing overlaps in exact stop."""
+    program = "G1 X5 Z15 A1 F3000\nG1 X10 Y3 A0\n"
+    _, (first, second) = plans("G64\n" + program, tmp_path)
+    assert first.tail is not None and first.following is not None and second.tail is None
+    s = np.linspace(0.0, first.length, 501)
+    rate, _ = first.rates(s)
+    assert rate[-1] == 0.0 and max(rate) == pytest.approx(math.sqrt(0.5 * 300.0 * 5.0), rel=1e-3)  # X at half 300 mm/s^2
+    speed = first.overlap(s)
+    assert speed[0] == 0.0 and speed[-1] > 0.0 and np.all(np.diff(speed[speed > 0]) >= -1e-12)
+    assert speed[-1] <= second.speed
+    _, (stopping, _) = plans("G61.1\n" + program, tmp_path)
+    assert stopping.tail is None
