@@ -48,9 +48,9 @@ HEXAPOD = {
     "hexapod turning (parabolic)": "G21 G90 G64\nG1 X5 Y0 Z508 A1 F3000\nG1 X10 Y3 B-0.5\nG1 X5 Y5 A0\n"
                                    "G1 X0 Y0 Z508 B0\nM2\n",
 }
-"""The sample hexapod's programs (its .ini in inches, X Y Z at most 20 in/s^2): a polyline blended
-in G64 and in G61, and moves turning A and B, which LinuxCNC blends parabolically (what the model
-times from rest to rest at half acceleration)."""
+"""The sample hexapod's programs (its .ini in inches, X Y Z at most 20 in/s^2, A B C 20 deg/s^2): a
+polyline blended in G64 and in G61, and moves turning A and B, which LinuxCNC blends parabolically
+(the model's approximation: kingen.paths.planner)."""
 MACHINES = {"linear_delta": (0.0, 0.0, 15.0), "linuxcnc_hexapod": (0.0, 0.0, 508.0)}
 """Each robot run and its home (mm), where its programs start and end."""
 
@@ -110,11 +110,12 @@ def markdown(figures):
               f"{100 * max(r['planner_error'] for r in followed):.1f} %, rest to rest's "
               f"{100 * max(r['rest_to_rest_error'] for r in followed):.1f} %."]
     if parabolic:
-        lines.append(f"Where LinuxCNC blends parabolically (moves turning A and B) the model, timing the moves rest "
-                     f"to rest at half acceleration without their overlap, is off by up to "
-                     f"{100 * max(r['planner_error'] for r in parabolic):.0f} % (rest to rest at full acceleration: "
-                     f"{100 * max(r['rest_to_rest_error'] for r in parabolic):.0f} %): during the overlap LinuxCNC "
-                     f"already moves along the next line, which adds to some joints' speeds.")
+        lines.append(f"Where LinuxCNC blends parabolically (moves turning A and B) the model (each move at half "
+                     f"acceleration, the next one's joint speeds at its start added where it has started) is off by "
+                     f"up to {100 * max(r['planner_error'] for r in parabolic):.0f} % of a joint's peak, the fastest "
+                     f"joint of each line by up to "
+                     f"{100 * max(abs(r['planner'] / r['linuxcnc'] - 1) for r in parabolic):.0f} % (rest to rest at "
+                     f"full acceleration: {100 * max(r['rest_to_rest_error'] for r in parabolic):.0f} %).")
     return "\n".join(lines) + "\n"
 
 
