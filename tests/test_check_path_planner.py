@@ -4,9 +4,10 @@ polyline blended in G64, the same with G64 P0.05 and in exact path G61, nearly c
 that G64's Q merges, tangent lines and arcs in G64) with HAL's
 sampler recording every servo period's program line and joint velocities; each joint's largest
 speed on each line, as check-path's planner model times the program (its CSV of samples), lies
-within 5 % of LinuxCNC's. LinuxCNC runs a blend arc as part of the line after the corner, so a
+within 5 % of LinuxCNC's. LinuxCNC shows a blend arc as part of the line after the corner, so a
 sample check-path places on the arc's first half (off its own line's programmed path, past its
-middle) counts for the next line here. The machine is set up as in test_linuxcnc_machine.py (root, a private
+middle) counts for the next line here (benchmarks/planner.py compares more programs, a parabolic
+blend's among them, the same way). The machine is set up as in test_linuxcnc_machine.py (root, a private
 mount namespace); in CI (KINGEN_REQUIRE_TOOLCHAINS=1) a missing LinuxCNC fails."""
 
 import numpy as np

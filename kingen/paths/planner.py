@@ -98,9 +98,9 @@ class Plan:
         return on, xyz
 
     def rates(self, s):
-        """(ds/dt mm/s, d2s/dt2 mm/s^2) (n,) at path coordinates ``s`` (n,; mm): the tool's speed
-        and its change along the path: the tool's speed and tangential acceleration divided by
-        d sigma/ds (1 on the programmed path, the arc's half over the stretch it replaces on a blend)."""
+        """(ds/dt mm/s, d2s/dt2 mm/s^2) (n,) at path coordinates ``s`` (n,; mm): the tool's speed and
+        tangential acceleration divided by d sigma/ds (1 on the programmed path; on a blend, the
+        arc's half over the stretch of the move it replaces)."""
         s = np.asarray(s, dtype=float)
         row, sigma = self._rows(s)
         s0, s1, sigma0, sigma1, length, top, accel, start, end = self.parts[row, :9].T
