@@ -25,12 +25,12 @@ from .interpreter import gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import limits_for
 from .manifold import Manifold
-from .planner import planned
+from .planner import Plan, Stack, planned
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
 from .routine import RoutineSolver
 from .sampling import lengths, poses_and_t6, sample_count
-from .timing import joint_rates, profile
+from .timing import Profile, joint_rates, path_rates, profile
 
 CHUNK = 20000
 """Regular samples solved at once (a move longer than that is cut into pieces)."""
@@ -149,7 +149,12 @@ class _Checker:
         self.starts = np.array([p.move.start for p in self.pieces])
         self.ends = np.array([p.move.end for p in self.pieces])
         self.signs = np.ones(len(self.pieces))
-        self.blended = np.array([getattr(p.timing, "arcs", False) for p in self.pieces])
+        planned_pieces = [number for number, p in enumerate(self.pieces) if isinstance(p.timing, Plan)]
+        self.stack = Stack([self.pieces[number].timing for number in planned_pieces])
+        self.plan_of = np.full(len(self.pieces), -1)
+        self.plan_of[planned_pieces] = np.arange(len(planned_pieces))
+        self.blended = np.array([isinstance(p.timing, Plan) and p.timing.arcs for p in self.pieces])
+        self.lengths = np.array([p.length for p in self.pieces])
 
     def evaluate(self, piece, u):
         """The Batch of pieces ``piece`` (indices into self.pieces) at their moves' parameters ``u``."""
@@ -162,11 +167,12 @@ class _Checker:
         for number in np.unique(piece[~simple]):
             rows = np.flatnonzero(piece == number)
             poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.interpolation)
-        for number in np.unique(piece[self.blended[piece]]):
-            rows = np.flatnonzero(piece == number)
-            on, xyz = self.pieces[number].timing.blended(u[rows] * self.pieces[number].length)
-            poses[rows[on], :3] = xyz
-            t6[rows[on]] = t6_from_pose(poses[rows[on]])
+        rows = np.flatnonzero(self.blended[piece])
+        if len(rows):
+            on, xyz = self.stack.blended(self.plan_of[piece[rows]], u[rows] * self.lengths[piece[rows]])
+            rows = rows[on]
+            poses[rows, :3] = xyz
+            t6[rows] = t6_from_pose(poses[rows])
         if self.manifold is not None:
             poses, t6 = self.manifold.samples(poses)
         if self.world:
@@ -237,16 +243,19 @@ class _Checker:
 
     def _rates(self, grid):
         """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed)."""
-        rate, change = np.full(len(grid.u), np.nan), np.zeros(len(grid.u))
-        s = grid.u * np.array([piece.length for piece in self.pieces])[grid.piece]
+        s = grid.u * self.lengths[grid.piece]
+        profiles = [piece.timing if isinstance(piece.timing, Profile) else None for piece in self.pieces]
+        length, speed, acceleration = (np.array([np.nan if timing is None or getattr(timing, name) is None
+                                                 else getattr(timing, name) for timing in profiles])[grid.piece]
+                                       for name in ("length", "speed", "acceleration"))
+        rate, change = path_rates(s, length, speed, acceleration)
+        rate = np.where(np.isfinite(speed), rate, np.nan)
+        runs = grid.piece * 1024  # a move's samples differenced within each planner segment it follows
+        planned = np.flatnonzero(self.plan_of[grid.piece] >= 0)
+        if len(planned):
+            rate[planned], change[planned], part = self.stack.rates(self.plan_of[grid.piece[planned]], s[planned])
+            runs[planned] += part
         bounds = np.searchsorted(grid.piece, np.arange(len(self.pieces) + 1))
-        runs = grid.piece * 4096  # a move's samples differenced within each planner segment it follows
-        for number, piece in enumerate(self.pieces):
-            rows = slice(bounds[number], bounds[number + 1])
-            if piece.timing is not None:
-                rate[rows], change[rows] = piece.timing.rates(s[rows])
-            if hasattr(piece.timing, "part"):
-                runs[rows] += piece.timing.part(s[rows])
         speeds, accelerations = joint_rates(grid.joints, s, runs, self.robot.revolute, rate, change)
         for number, piece in enumerate(self.pieces):
             if getattr(piece.timing, "tail", None) is not None:

@@ -69,16 +69,13 @@ class Plan:
         return np.where(slowing, np.minimum(np.minimum(lost * reached / blend, accel * lost / own), top), 0.0)
 
     def _rows(self, s):
-        """Each of path coordinates ``s`` (n,): its part's row and its place sigma on that part's segment."""
-        row = np.clip(np.searchsorted(self.parts[:, 1], s, side="left"), 0, len(self.parts) - 1)
-        s0, s1, sigma0, sigma1, length = self.parts[row, :5].T
-        span = np.where(s1 > s0, s1 - s0, 1.0)
-        return row, np.clip(sigma0 + (s - s0) * (sigma1 - sigma0) / span, 0.0, length)
+        """Each of path coordinates ``s`` (n,): the row of the part it lies on."""
+        return np.minimum(np.searchsorted(self.parts[:, 1], s, side="left"), len(self.parts) - 1)
 
     def part(self, s):
         """(n,) the part of the move each of path coordinates ``s`` (n,; mm) lies on: the
         planner's segments, across whose ends the path's direction or parameter may turn."""
-        return self._rows(np.asarray(s, dtype=float))[0]
+        return self._rows(np.asarray(s, dtype=float))
 
     @property
     def arcs(self):
@@ -89,28 +86,70 @@ class Plan:
         """(mask (n,), xyz (m, 3) mm): which of path coordinates ``s`` (n,; mm) lie where a blend arc
         replaces the programmed path, and the arc's points there."""
         s = np.asarray(s, dtype=float)
-        row, sigma = self._rows(s)
-        circle = self.parts[row, 9:]
-        on = np.isfinite(circle[:, 9])
-        circle, angle = circle[on], sigma[on] / np.where(on, self.parts[row, 18], 1.0)[on]
-        xyz = circle[:, :3] + circle[:, 9:10] * (np.cos(angle)[:, None] * circle[:, 3:6]
-                                                   + np.sin(angle)[:, None] * circle[:, 6:9])
-        return on, xyz
+        return _arc_points(self.parts[self._rows(s)], s)
 
     def rates(self, s):
         """(ds/dt mm/s, d2s/dt2 mm/s^2) (n,) at path coordinates ``s`` (n,; mm): the tool's speed and
         tangential acceleration divided by d sigma/ds (1 on the programmed path; on a blend, the
         arc's half over the stretch of the move it replaces)."""
         s = np.asarray(s, dtype=float)
-        row, sigma = self._rows(s)
-        s0, s1, sigma0, sigma1, length, top, accel, start, end = self.parts[row, :9].T
-        scale = np.where(s1 > s0, (sigma1 - sigma0) / np.where(s1 > s0, s1 - s0, 1.0), 1.0)
-        rising = np.sqrt(start ** 2 + 2.0 * accel * sigma)
-        falling = np.sqrt(end ** 2 + 2.0 * accel * (length - sigma))
-        rate = np.minimum(top, np.minimum(rising, falling))
-        change = np.where(rising < np.minimum(top, falling), accel, np.where(falling < np.minimum(top, rising),
-                                                                             -accel, 0.0))
-        return rate / scale, change / scale
+        return _path_rates(self.parts[self._rows(s)], s)
+
+
+def _sigma(rows, s):
+    """The place on each part's segment (mm) of path coordinates ``s`` (n,) on parts ``rows`` (n, 19)."""
+    s0, s1, sigma0, sigma1, length = rows[:, :5].T
+    span = np.where(s1 > s0, s1 - s0, 1.0)
+    return np.minimum(np.maximum(sigma0 + (s - s0) * (sigma1 - sigma0) / span, 0.0), length)
+
+
+def _path_rates(rows, s):
+    """Plan.rates of path coordinates ``s`` (n,) on parts ``rows`` (n, 19)."""
+    sigma = _sigma(rows, s)
+    s0, s1, sigma0, sigma1, length, top, accel, start, end = rows[:, :9].T
+    scale = np.where(s1 > s0, (sigma1 - sigma0) / np.where(s1 > s0, s1 - s0, 1.0), 1.0)
+    rising = np.sqrt(start ** 2 + 2.0 * accel * sigma)
+    falling = np.sqrt(end ** 2 + 2.0 * accel * (length - sigma))
+    rate = np.minimum(top, np.minimum(rising, falling))
+    change = np.where(rising < np.minimum(top, falling), accel, np.where(falling < np.minimum(top, rising), -accel, 0.0))
+    return rate / scale, change / scale
+
+
+def _arc_points(rows, s):
+    """Plan.blended of path coordinates ``s`` (n,) on parts ``rows`` (n, 19)."""
+    on = np.isfinite(rows[:, 18])
+    circle = rows[on, 9:]
+    angle = _sigma(rows[on], s[on]) / circle[:, 9]
+    xyz = circle[:, :3] + circle[:, 9:10] * (np.cos(angle)[:, None] * circle[:, 3:6]
+                                             + np.sin(angle)[:, None] * circle[:, 6:9])
+    return on, xyz
+
+
+class Stack:
+    """Many Plans' parts stacked, to look up many moves' samples at once: ``which`` (n,) the
+    plan of each sample (index into the plans given), ``s`` (n,) its path coordinate (mm)."""
+
+    def __init__(self, plans):
+        counts = [len(plan.parts) for plan in plans]
+        self.parts = np.concatenate([plan.parts for plan in plans]) if plans else np.zeros((0, 19))
+        self.offsets = np.concatenate([[0], np.cumsum(counts)]).astype(int)
+        self.scale = np.array([1.0 / (plan.length * (1.0 + 1e-12)) for plan in plans])
+        owner = np.repeat(np.arange(len(plans)), counts)
+        self.keys = owner + self.parts[:, 1] * self.scale[owner]
+
+    def rows(self, which, s):
+        """(n,) the stacked row of the part each sample lies on."""
+        row = np.searchsorted(self.keys, which + s * self.scale[which], side="left")
+        return np.minimum(np.maximum(row, self.offsets[which]), self.offsets[which + 1] - 1)
+
+    def rates(self, which, s):
+        """(ds/dt, d2s/dt2, the part's index within its plan) (n,) of the samples (Plan.rates)."""
+        row = self.rows(which, s)
+        return (*_path_rates(self.parts[row], s), row - self.offsets[which])
+
+    def blended(self, which, s):
+        """Plan.blended of the samples."""
+        return _arc_points(self.parts[self.rows(which, s)], s)
 
 
 def _speeds(chain, start, depth, last):
@@ -175,7 +214,7 @@ class _Queue:
         """Whether the queued chain ends at rest (its last junction made; one segment more after
         a parabolic blend, whose overlap depends on whether the next is the program's last) or
         has grown long."""
-        return self._cut() is not None or len(self.chain) > 2 * self.machine.depth + 2
+        return self._cut() is not None or len(self.chain) > 4 * self.machine.depth + 2
 
     def _cut(self):
         """The number of queued segments before a stop that may be planned now, or None."""
