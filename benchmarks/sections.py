@@ -32,6 +32,7 @@ SECTIONS = {
     "check_path": ("check_path.py", ["--samples", "1000000", "--moves", "100"], "Path checking"),
     "loads": ("loads.py", ["--poses", "1000000", "--rows", "2000", "--rounds", "3"], "Loads"),
     "ncfiles": ("ncfiles.py", [], "LinuxCNC's sample programs"),
+    "planner": ("planner.py", [], "Timing as LinuxCNC's planner moves"),
 }
 
 

@@ -110,6 +110,8 @@ SECTION_FIGURES = {
          "samples": 61234},
         {"program": "cone.ngc", "rs274": False, "exit": 2, "seconds": 0.5, "motions": None, "moves": None,
          "samples": None}]},
+    "planner": {"blends": [{"line": 2, "linuxcnc": 20.59, "planner": 20.56, "rest_to_rest": 21.82,
+                            "planner_error": 0.002, "rest_to_rest_error": 0.06}]},
 }
 """Small figures of every section of benchmarks/sections.py, in the shapes their scripts write."""
 
@@ -146,6 +148,7 @@ def test_render_only_renders_every_section_from_saved_figures(tmp_path):
     assert f"{saved['floors'][0]['ratio_min']:.2f}" in text
     assert "| `arcspiral.ngc` | reads | 0 | 1.25 | 1005 | 1004 | 61234 |" in text
     assert "| `cone.ngc` | refuses | 2 | 0.50 | - | - | - |" in text
+    assert "| blends | 2 | 20.6 | 20.6 | 21.8 | 0.2 % | 6.0 % |" in text and "the planner model's 0.2 %" in text
     assert f"| hexapod | 2573 | 0.0 | {2573 / 0.02:,.0f} | 92 MB | 1002, 92 MB | 200 in 0.3 s | 0.1 |" in text
     assert "grazes set up: 2; seen by the regular samples alone: 0; found by check-path at the default chord: 2" in text
 

@@ -85,7 +85,7 @@ def test_every_sample_program_rs274_reads_is_followed_motion_for_motion(tmp_path
         if call == "NURBS_FEED":
             while at + 1 < len(ours) and ours[at + 1][1:3] == ours[at][1:3]:
                 at += 1
-        kind, _, line, _, _, position, _ = ours[at]
+        kind, _, line, _, _, position, _, _ = ours[at]
         assert kind == {"STRAIGHT_TRAVERSE": "T", "STRAIGHT_FEED": "F", "NURBS_FEED": "F", "STRAIGHT_PROBE": "P",
                         "ARC_FEED": "A", "RIGID_TAP": "R"}[call], f"{name}: motion {number}: {call} at line {line}"
         if end is not None and not probed:

@@ -48,6 +48,14 @@ struts are 29.75 in at home), every joint's MAX_VELOCITY in the .ini (machine un
 three programs: "clean" runs within every limit, "travel" leaves a joint's travel at line 4,
 "speed" asks more joint speed than allowed at line 3, which LinuxCNC's planner, judging only
 world coordinates, commands all the same."""
+SAMPLER = """loadrt sampler depth=120000 cfg={types}
+addf sampler.0 servo-thread
+setp sampler.0.enable 0
+net kingen-line motion.program-line => sampler.0.pin.0
+{nets}
+"""
+"""HAL's sampler recording, every servo period, the line motion executes and each joint's commanded
+velocity (program_driver.py enables it while a program runs and reads it after)."""
 CASES_IN_ORDER = ("clean", "speed", "travel")
 """The order LinuxCNC runs them in, one after the other: the first two end where they start."""
 CASES = [(robot, case) for robot in sorted(MACHINES) for case in CASES_IN_ORDER]
@@ -73,9 +81,11 @@ def robot_file(name, folder):
     return path
 
 
-def run_programs(robot_path, programs, joint_speed, folder):
+def run_programs(robot_path, programs, joint_speed, folder, sampled=False, blending=""):
     """Run ``programs`` one after the other in one LinuxCNC on kingen's module for the robot file
-    at ``robot_path``, every joint at most ``joint_speed``: (the .ini, each program's run)."""
+    at ``robot_path``, every joint at most ``joint_speed``, X Y Z at most [TRAJ]'s acceleration:
+    (the .ini, each program's run). ``sampled``: each run also holds every servo period's program
+    line and joint velocities (HAL's sampler, program_driver.py); ``blending``: [TRAJ] lines added."""
     robot = load_robot(str(robot_path))
     units = robot.length_unit
     host = get_host("linuxcnc")
@@ -88,13 +98,21 @@ def run_programs(robot_path, programs, joint_speed, folder):
                                    f"MAX_VELOCITY = {joint_speed}\nMAX_ACCELERATION = 500\nHOME_SEQUENCE")
     text = text.replace(f"DISPLAY = {Path(__file__).parent / 'linuxcnc' / 'driver.py'}", f"DISPLAY = {DRIVER}")
     acceleration = 20 if units == "inch" else 300
-    text = text.replace("[TRAJ]\n", f"[TRAJ]\nMAX_LINEAR_ACCELERATION = {acceleration}\n", 1)
+    text = text.replace("[TRAJ]\n", f"[TRAJ]\nMAX_LINEAR_ACCELERATION = {acceleration}\n{blending}", 1)
+    text = text.replace("MAX_VELOCITY = 50\nMAX_ACCELERATION = 500\n", f"MAX_VELOCITY = 50\nMAX_ACCELERATION = {acceleration}\n")
+    if sampled:
+        (folder / "sampler.hal").write_text(SAMPLER.format(
+            types="s" + "f" * robot.joint_count,
+            nets="\n".join(f"net kingen-v{joint} joint.{joint}.vel-cmd => sampler.0.pin.{joint + 1}"
+                           for joint in range(robot.joint_count))))
+        text = text.replace("HALFILE = LIB:basic_sim.tcl\n", "HALFILE = LIB:basic_sim.tcl\nHALFILE = sampler.hal\n")
     ini.write_text(text)
     fifo = Path(tempfile.mkdtemp(prefix="kingen-rtapi-"))
     fifo.chmod(0o777)
     result = folder / "result.json"
     environment = {**os.environ, "RTAPI_UID": "65534", "RTAPI_FIFO_PATH": str(fifo / "rtapi_fifo"),
-                   "KINGEN_RESULT": str(result), "KINGEN_PROGRAMS": json.dumps([str(path) for path in programs])}
+                   "KINGEN_RESULT": str(result), "KINGEN_PROGRAMS": json.dumps([str(path) for path in programs]),
+                   "KINGEN_SAMPLER": "1" if sampled else ""}
     with open("/tmp/kingen-linuxcnc-test.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         run = subprocess.run(["unshare", "-m", "sh", "-c",

@@ -98,7 +98,8 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
     refined until no boundary can hide between two samples; each sample is checked for reach,
     joint travel, the limb singular band, the direct index, a change of assembly mode, collisions
     between links (where the robot file gives radii), and the joint speed and acceleration its
-    feed asks for (each move timed from rest to rest: blending is not modelled).
+    feed asks for (a G-code program timed as LinuxCNC's trajectory planner moves it: G61, G61.1,
+    G64 with its blend arcs, look-ahead, the .ini's axis limits; a CSV's rows from rest to rest).
 
     A machine with task coordinates (robot file ``task``) is followed along its manifold: each
     sample is the machine's pose at its task coordinates (the G-code words its LinuxCNC module

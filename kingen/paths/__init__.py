@@ -6,7 +6,8 @@ Modules: :mod:`.moves` (what a program is made of), :mod:`.program` (moves from 
 :mod:`.interpreter` and the canon script :mod:`.linuxcnc_canon` (moves from G-code),
 :mod:`.sampling` (the path between the points), :mod:`.limits` (robot file and LinuxCNC
 .ini), :mod:`.evaluation` (the decision quantities), :mod:`.refinement` (samples between
-samples), :mod:`.timing` (trapezoidal exact-stop timing), :mod:`.judging` (a batch's samples
+samples), :mod:`.timing` (a move timed on its own; joint rates), :mod:`.planner` with :mod:`.blends`
+(G-code timed as LinuxCNC's trajectory planner moves it), :mod:`.judging` (a batch's samples
 judged), :mod:`.findings` (what was found, in constant memory), :mod:`.check` (the whole
 program, in batches), :mod:`.report` and :mod:`.page` (text, JSON, CSV, HTML).
 """

@@ -5,7 +5,8 @@ bisected between its samples (:mod:`.refinement`), solved at once by the numpy r
 judged (:mod:`.judging`), and forgotten: memory does not grow with the program.
 
 Joint speeds and accelerations are judged at the regular samples (finite differences along
-the path, :mod:`.timing`); the boundaries of travel, reach, the singular bands, the direct
+the path, :mod:`.timing`, with the path's speed as LinuxCNC's planner moves a G-code program,
+:mod:`.planner`); the boundaries of travel, reach, the singular bands, the direct
 index and the assembly mode at every sample, refined ones included.
 """
 
@@ -26,11 +27,12 @@ from .interpreter import DEFAULT_INTERPRETER_SECONDS, Reading, Setup, gcode_move
 from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
 from .manifold import Manifold
+from .planner import Plan, Stack, planned
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
 from .routine import RoutineSolver
 from .sampling import lengths, poses_and_t6, sample_count
-from .timing import joint_rates, profile
+from .timing import Profile, joint_rates, path_rates, profile
 
 CHUNK = 20000
 """Regular samples solved at once (a move longer than that is cut into pieces)."""
@@ -145,16 +147,16 @@ class _Checker:
                      self.settings.offset, ini_unit(read) if read is not None else 1.0,
                      self.settings.interpreter_seconds, ini_subroutine_path(read) if read is not None else ())
 
-    def add(self, index, move, program):
-        """Cut a move into pieces and check them when a batch is full; KingenError at the move's
-        line when the program asks for more regular samples than the settings allow."""
+    def add(self, index, move, timing, program):
+        """Cut a move, timed by ``timing`` (a timing.Profile, planner.Plan or None), into pieces
+        and check them when a batch is full; KingenError at the move's line when the program asks
+        for more regular samples than the settings allow."""
         count = sample_count(move, self.settings.chord)
         self.total_samples += count
         if self.total_samples > self.settings.max_samples:
             raise located(move.file or program, move.line, "samples",
                           f"the program asks for more than {self.settings.max_samples} samples at chord "
                           f"{self.settings.chord:g} mm/deg by this line (--max-samples)")
-        timing = profile(move, self.limits)
         self.findings.moves += 1
         self.findings.timed_moves += timing is not None
         self.findings.accelerated_moves += has_accelerations(move, timing)
@@ -168,13 +170,20 @@ class _Checker:
 
     def _tabulate(self):
         """The gathered pieces' moves as arrays, for evaluate: which are straight lines in the
-        host's interpolation, their start and end poses, their assembly signs."""
+        host's interpolation, their start and end poses, their assembly signs, which have stretches
+        on a blend arc (planner.Plan.blended)."""
         host = self.interpolation
         self.simple = np.array([p.straight and (host == "linuxcnc" or np.array_equal(p.move.start[3:], p.move.end[3:]))
                                 for p in self.pieces])
         self.starts = np.array([p.move.start for p in self.pieces])
         self.ends = np.array([p.move.end for p in self.pieces])
         self.signs = np.ones(len(self.pieces))
+        planned_pieces = [number for number, p in enumerate(self.pieces) if isinstance(p.timing, Plan)]
+        self.stack = Stack([self.pieces[number].timing for number in planned_pieces])
+        self.plan_of = np.full(len(self.pieces), -1)
+        self.plan_of[planned_pieces] = np.arange(len(planned_pieces))
+        self.blended = np.array([isinstance(p.timing, Plan) and p.timing.arcs for p in self.pieces])
+        self.lengths = np.array([p.length for p in self.pieces])
 
     def evaluate(self, piece, u):
         """The Batch of pieces ``piece`` (indices into self.pieces) at their moves' parameters ``u``."""
@@ -187,6 +196,12 @@ class _Checker:
         for number in np.unique(piece[~simple]):
             rows = np.flatnonzero(piece == number)
             poses[rows], t6[rows] = poses_and_t6(self.pieces[number].move, u[rows], self.interpolation)
+        rows = np.flatnonzero(self.blended[piece])
+        if len(rows):
+            on, xyz = self.stack.blended(self.plan_of[piece[rows]], u[rows] * self.lengths[piece[rows]])
+            rows = rows[on]
+            poses[rows, :3] = xyz
+            t6[rows] = t6_from_pose(poses[rows])
         if self.manifold is not None:
             poses, t6 = self.manifold.samples(poses)
         if self.world:
@@ -257,16 +272,42 @@ class _Checker:
 
     def _rates(self, grid):
         """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed)."""
-        timings = [piece.timing for piece in self.pieces]
-        timed = np.array([timing is not None for timing in timings])[grid.piece]
+        s = grid.u * self.lengths[grid.piece]
+        profiles = [piece.timing if isinstance(piece.timing, Profile) else None for piece in self.pieces]
         length, speed, acceleration = (np.array([np.nan if timing is None or getattr(timing, name) is None
-                                                 else getattr(timing, name) for timing in timings])[grid.piece]
+                                                 else getattr(timing, name) for timing in profiles])[grid.piece]
                                        for name in ("length", "speed", "acceleration"))
-        lengths_of_rows = np.array([piece.length for piece in self.pieces])[grid.piece]
-        speeds, accelerations = joint_rates(grid.joints, grid.u * lengths_of_rows, grid.piece, self.robot.revolute,
-                                            length, speed, acceleration)
+        rate, change = path_rates(s, length, speed, acceleration)
+        rate = np.where(np.isfinite(speed), rate, np.nan)
+        runs = grid.piece * 1024  # a move's samples differenced within each planner segment it follows
+        planned = np.flatnonzero(self.plan_of[grid.piece] >= 0)
+        if len(planned):
+            rate[planned], change[planned], part = self.stack.rates(self.plan_of[grid.piece[planned]], s[planned])
+            runs[planned] += part
+        bounds = np.searchsorted(grid.piece, np.arange(len(self.pieces) + 1))
+        speeds, accelerations = joint_rates(grid.joints, s, runs, self.robot.revolute, rate, change)
+        for number, piece in enumerate(self.pieces):
+            if getattr(piece.timing, "tail", None) is not None:
+                rows = slice(bounds[number], bounds[number + 1])
+                speeds[rows] += piece.timing.overlap(s[rows])[:, None] * self._slope(piece.timing.following)
+        timed = np.isfinite(rate)
         speeds[~timed], accelerations[~timed] = np.nan, np.nan
         return speeds, accelerations
+
+
+    def _slope(self, move):
+        """(dof,) the joints' derivative along ``move``'s path at its start (per mm), the reference's
+        joints 0.01 mm apart (the routine is not asked)."""
+        length = lengths(move)[0]
+        u = np.array([0.0, min(1.0, 0.01 / length)])
+        poses, t6 = poses_and_t6(move, u, self.interpolation)
+        if self.manifold is not None:
+            poses, t6 = self.manifold.samples(poses)
+        if self.world:
+            t6 = self.five_axis.t6(poses)
+        joints = self.evaluator.evaluate(np.zeros(2, dtype=int), u, poses, t6).joints
+        step = np.where(self.robot.revolute, np.angle(np.exp(1j * (joints[1] - joints[0]))), joints[1] - joints[0])
+        return step / (u[1] * length)
 
 
 def program_moves(path, start, setup=Setup(), reading=None):
@@ -297,8 +338,9 @@ def check_program(robot, program, settings=Settings(), sink=None, progress=None)
                           checker.setup, reading)
     if checker.manifold is not None and csv:
         moves = checker.manifold.moves(moves, checker.findings)
-    for index, move in enumerate(moves):
-        checker.add(index, move, program)
+    timed = ((move, profile(move, checker.limits)) for move in moves) if csv else planned(moves, checker.limits)
+    for index, (move, timing) in enumerate(timed):
+        checker.add(index, move, timing, program)
     checker.flush()
     findings = checker.findings
     return Outcome(robot, str(program), settings, checker.posture, checker.limits, checker.evaluator, findings,

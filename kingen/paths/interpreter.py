@@ -41,6 +41,8 @@ DEFAULT_INTERPRETER_SECONDS = 60.0
 """CPU seconds each interpreter (the ``gcode`` module's child, then ``rs274``) may take."""
 DEFAULT_TOOLS = 999
 """Without a tool table, tools 1 .. DEFAULT_TOOLS exist, with no offsets and no diameter."""
+PATH_MODES = {610: "G61", 611: "G61.1", 640: "G64"}
+"""The interpreter's path control modes (an unset one, before the first block, is LinuxCNC's G64)."""
 PLANE_AXES = {1: (0, 1, 2), 2: (1, 2, 0), 3: (2, 0, 1)}
 """LinuxCNC's plane (G17 XY, G19 YZ, G18 XZ): the x, y, z indices of its first and second
 axis and of its normal."""
@@ -167,9 +169,9 @@ def gcode_moves(path, start=(0.0,) * 6, setup=Setup(), reading=None):
     it refuses the program or runs out of time."""
     reading = Reading() if reading is None else reading
     position = np.asarray(start, dtype=float)
-    for kind, file, line, units, feed, end, arc in canonical_motions(path, start, setup, reading):
+    for kind, file, line, units, feed, end, arc, mode in canonical_motions(path, start, setup, reading):
         end = _snapped(position, end)
-        moves = _moves(kind, file, line, units, feed, position, end, arc)
+        moves = _moves(kind, file, line, units, feed, position, end, arc, mode)
         reading.motions += 1
         reading.zero_length += not moves
         yield from moves
@@ -214,7 +216,7 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
 
 def _read(lines, path, reading):
     """Yield the motions of the canon's ``lines``; True when the program was read to its end."""
-    files, started = {0: None}, False
+    files, started, mode = {0: None}, False, ("G64", 0.0, 0.0)
     for text in lines:
         fields = text.split()
         if not fields:
@@ -223,6 +225,8 @@ def _read(lines, path, reading):
             number, name = int(fields[1]), text.split(None, 2)[2].strip()
             files[number] = None if os.path.abspath(name) == os.path.abspath(path) or number == 1 else name
             reading.files[number] = name
+        elif fields[0] == "B":
+            mode = (PATH_MODES.get(int(fields[1]), "G64"), float(fields[2]), float(fields[3]))
         elif fields[0] == "W":
             reading.work_offset = _work_offset(fields)
         elif fields[0] == "D":
@@ -237,7 +241,7 @@ def _read(lines, path, reading):
         elif fields[0] == "M":
             file, line = files.get(int(fields[1])), int(fields[2])
             reading.line = (file, line)
-            yield _motion(fields, file, line)
+            yield _motion(fields, file, line, mode)
     return False
 
 
@@ -342,9 +346,9 @@ def _squeezed(text):
     return "".join(text.split()).lower() or None
 
 
-def _motion(fields, file, line):
-    """A canon line ``M file line kind units feed x y z a b c [...]`` as (kind, file, line,
-    units, feed, end (mm, degrees), arc)."""
+def _motion(fields, file, line, mode):
+    """A canon line ``M file line kind units feed x y z a b c [...]`` made in path control mode
+    ``mode`` as (kind, file, line, units, feed, end (mm, degrees), arc, mode)."""
     kind, units = fields[3], int(fields[4])
     numbers = [float(value) for value in fields[5:12]]
     end = np.array(numbers[1:7])
@@ -352,7 +356,7 @@ def _motion(fields, file, line):
     arc = None
     if kind == "A":
         arc = (np.array([float(fields[12]), float(fields[13])]) * MM_PER_INCH, int(fields[14]), int(fields[15]))
-    return kind, file, line, units, numbers[0], end, arc
+    return kind, file, line, units, numbers[0], end, arc, mode
 
 
 ROUNDING_MM = 1e-9
@@ -368,22 +372,23 @@ def _snapped(start, end):
     return end
 
 
-def _moves(kind, file, line, units, feed, start, end, arc):
-    """The Moves a canonical motion from ``start`` makes: none for a straight one of length 0,
-    two for a rigid tap (down to ``end``'s x y z and back; the orientation stays)."""
+def _moves(kind, file, line, units, feed, start, end, arc, mode):
+    """The Moves a canonical motion from ``start`` makes in path control mode ``mode``
+    (Move.path_mode): none for a straight one of length 0, two for a rigid tap (down to
+    ``end``'s x y z and back; the orientation stays)."""
     if kind == "R":
         bottom = np.concatenate([end[:3], start[3:]])
         if np.array_equal(bottom, start):
             return []
         rate = feed * MM_PER_INCH if math.isfinite(feed) else None
-        return [Move(line, "tap", start, bottom, feed=rate, file=file),
-                Move(line, "tap", bottom, start.copy(), feed=rate, file=file)]
+        return [Move(line, "tap", start, bottom, feed=rate, file=file, path_mode=mode),
+                Move(line, "tap", bottom, start.copy(), feed=rate, file=file, path_mode=mode)]
     if np.array_equal(end, start) and arc is None:
         return []
     turning_only = np.array_equal(end[:3], start[:3])
     rate = feed * (MM_PER_INCH if not turning_only or units != INCH_PROGRAM else 1.0)
     rate = rate if math.isfinite(rate) else None
     if kind == "T":
-        return [Move(line, "rapid", start, end, file=file)]
+        return [Move(line, "rapid", start, end, file=file, path_mode=mode)]
     shape = None if arc is None else Arc(PLANE_AXES[arc[2]], tuple(arc[0]), arc[1])
-    return [Move(line, KINDS[kind], start, end, feed=rate, arc=shape, file=file)]
+    return [Move(line, KINDS[kind], start, end, feed=rate, arc=shape, file=file, path_mode=mode)]

@@ -5,7 +5,9 @@ joints after the legs', their speeds and accelerations from the ``.ini`` only), 
 the path's own speed and acceleration caps from the ``.ini``'s ``[TRAJ]`` (what LinuxCNC's
 planner moves the tool at). The ``.ini`` is read as LinuxCNC reads it (:mod:`.ini`); it also
 names the tool table and parameter file the interpreter starts with (``[EMCIO] TOOL_TABLE``,
-``[RS274NGC] PARAMETER_FILE``).
+``[RS274NGC] PARAMETER_FILE``), and what LinuxCNC's trajectory planner (:mod:`.planner`) moves the tool
+with: each axis's ``[AXIS_L] MAX_VELOCITY`` and ``MAX_ACCELERATION``, ``[TRAJ] ARC_BLEND_*``,
+``[EMCMOT] SERVO_PERIOD`` and ``[DISPLAY] MAX_FEED_OVERRIDE``.
 
 Internal units throughout: mm and radians for joints (per s, per s^2), mm/s and mm/s^2 for
 the path. Where both give a limit, the tighter one holds.
@@ -27,7 +29,8 @@ INI_UNITS = {"mm": 1.0, "metric": 1.0, "millimeter": 1.0, "inch": 25.4, "in": 25
 class Limits:
     """(dof,) arrays lower, upper (mm or rad; -inf/+inf: none), speed (per s), acceleration
     (per s^2; inf: none); path_speed and path_acceleration (mm/s, mm/s^2, None: not given),
-    rapid_speed (mm/s, None: rapids are not timed); sources: where they came from, in words."""
+    rapid_speed (mm/s, None: rapids are not timed); sources: where they came from, in words;
+    machine: the .ini's Machine (None: no .ini)."""
 
     lower: np.ndarray
     upper: np.ndarray
@@ -37,6 +40,38 @@ class Limits:
     path_acceleration: float = None
     rapid_speed: float = None
     sources: tuple = ()
+    machine: object = None
+
+
+AXES = "XYZABC"
+PLANNER_KEYS = {"ARC_BLEND_ENABLE": 1.0, "ARC_BLEND_OPTIMIZATION_DEPTH": 50.0, "ARC_BLEND_KINK_RATIO": 0.1}
+MACHINE_KEYS = (("EMCMOT", "SERVO_PERIOD"), ("DISPLAY", "MAX_FEED_OVERRIDE"))
+"""[TRAJ] settings of LinuxCNC's planner that kingen follows, with LinuxCNC's defaults."""
+
+
+@dataclass(frozen=True)
+class Machine:
+    """What LinuxCNC's trajectory planner moves the tool with, from an .ini: axis_speed and
+    axis_acceleration (6,) the [AXIS_X] .. [AXIS_C] MAX_VELOCITY and MAX_ACCELERATION (mm/s, mm/s^2
+    for X Y Z; deg/s, deg/s^2 for A B C; inf where the axis has no section or key);
+    arc_blends ([TRAJ] ARC_BLEND_ENABLE), depth (ARC_BLEND_OPTIMIZATION_DEPTH, segments looked
+    ahead), kink_ratio (ARC_BLEND_KINK_RATIO), cycle (s: [EMCMOT] SERVO_PERIOD, the planner's
+    period), feed_scale ([DISPLAY] MAX_FEED_OVERRIDE, the largest feed override the blends are
+    planned for)."""
+
+    axis_speed: np.ndarray
+    axis_acceleration: np.ndarray
+    arc_blends: bool = True
+    depth: int = 50
+    kink_ratio: float = 0.1
+    cycle: float = 0.001
+    feed_scale: float = 1.0
+
+    @property
+    def accelerated(self):
+        """Whether the .ini gives an acceleration for every one of X, Y, Z (then the planner's
+        timing applies)."""
+        return bool(np.all(np.isfinite(self.axis_acceleration[:3])))
 
 
 def robot_limits(robot):
@@ -62,7 +97,9 @@ SUBROUTINE_PATH = ("RS274NGC", "SUBROUTINE_PATH")
 def ini_keys(joint_count):
     """Every (section, key) check-path reads from an ``.ini`` for a robot of ``joint_count`` joints."""
     return ([(f"JOINT_{index}", key) for index in range(joint_count) for key in JOINT_KEYS]
-            + [("TRAJ", key) for key in TRAJ_KEYS] + list(FILE_KEYS) + [SUBROUTINE_PATH])
+            + [("TRAJ", key) for key in TRAJ_KEYS] + list(FILE_KEYS) + [SUBROUTINE_PATH]
+            + [(f"AXIS_{axis}", key) for axis in AXES for key in ("MAX_VELOCITY", "MAX_ACCELERATION")]
+            + [("TRAJ", key) for key in PLANNER_KEYS] + list(MACHINE_KEYS))
 
 
 def ini_subroutine_path(ini):
@@ -73,8 +110,9 @@ def ini_subroutine_path(ini):
 
 
 def _number(ini, section, key):
-    """[section] key as a finite number (None when absent), above 0 for a speed or acceleration
-    (a key other than MIN_LIMIT and MAX_LIMIT); KingenError otherwise."""
+    """[section] key as a finite number (None when absent), above 0 for a speed, acceleration or
+    planner setting (a key other than MIN_LIMIT, MAX_LIMIT and the switch ARC_BLEND_ENABLE);
+    KingenError otherwise."""
     text = ini.get(section, key)
     if text is None:
         return None
@@ -84,7 +122,7 @@ def _number(ini, section, key):
         value = float("nan")
     if not np.isfinite(value):
         raise located(ini.path, ini.line(section, key), f"[{section}] {key}", f"{text!r} is not a number")
-    if value <= 0.0 and key not in ("MIN_LIMIT", "MAX_LIMIT"):
+    if value <= 0.0 and key not in ("MIN_LIMIT", "MAX_LIMIT", "ARC_BLEND_ENABLE"):
         raise located(ini.path, ini.line(section, key), f"[{section}] {key}", f"{text!r}: must be above 0")
     return value
 
@@ -145,7 +183,22 @@ def ini_limits(robot, path, ini=None):
                   path_speed=path_speed * unit if path_speed else None,
                   path_acceleration=path_acceleration * unit if path_acceleration else None,
                   rapid_speed=path_speed * unit if path_speed else None,
-                  sources=(f"{path} (read by {ini.reader} reader)",))
+                  sources=(f"{path} (read by {ini.reader} reader)",), machine=_machine(ini, unit))
+
+
+def _machine(ini, unit):
+    """The .ini's Machine: axis limits in mm (``unit``: mm per the .ini's linear unit) and degrees."""
+    def number(section, key, default):
+        value = _number(ini, section, key)
+        return default if value is None else value
+
+    rates = [np.array([number(f"AXIS_{axis}", key, np.inf) for axis in AXES]) * np.r_[[unit] * 3, [1.0] * 3]
+             for key in ("MAX_VELOCITY", "MAX_ACCELERATION")]
+    settings = {key: number("TRAJ", key, default) for key, default in PLANNER_KEYS.items()}
+    period = number("EMCMOT", "SERVO_PERIOD", 1e6)
+    return Machine(*rates, arc_blends=settings["ARC_BLEND_ENABLE"] != 0.0,
+                   depth=int(settings["ARC_BLEND_OPTIMIZATION_DEPTH"]), kink_ratio=settings["ARC_BLEND_KINK_RATIO"],
+                   cycle=period * 1e-9, feed_scale=number("DISPLAY", "MAX_FEED_OVERRIDE", 1.0))
 
 
 def combined(first, second):
@@ -155,7 +208,8 @@ def combined(first, second):
 
     return Limits(np.maximum(first.lower, second.lower), np.minimum(first.upper, second.upper),
                   np.minimum(first.speed, second.speed), np.minimum(first.acceleration, second.acceleration),
-                  pick("path_speed"), pick("path_acceleration"), pick("rapid_speed"), first.sources + second.sources)
+                  pick("path_speed"), pick("path_acceleration"), pick("rapid_speed"), first.sources + second.sources,
+                  pick("machine"))
 
 
 def limits_for(robot, ini=None, read=None):

@@ -14,7 +14,15 @@ R (rigid tap: down to its end and back); file 0 is the start-up code (not the pr
 positions with the program's work offsets, rotation and tool length offset applied (what
 LinuxCNC's motion controller is asked for), in LinuxCNC's internal units (inches, degrees);
 feed as the interpreter hands it (inches/min); units the program's (1 inch, 2 mm, 3 cm) when
-the motion was made. The end, after the last motion:
+the motion was made. Before a block's motions, the path control mode they are made in when it
+differs from the last written (the interpreter's state after the block when the gcode module
+hands it with the next block's first motion, as a block's G61/G64 applies to its own motion;
+else the state before the block: a G61/G64 on a moving line followed by a line that does not
+move takes effect from the next moving line):
+
+    B <mode> <p> <q>    mode 610 (G61), 611 (G61.1) or 640 (G64); G64's P and Q in mm
+
+The end, after the last motion:
 
     E <file> <line> <message>   the interpreter refused the program: where it stood
     D                           the program was read to its end
@@ -40,6 +48,12 @@ EMPTY = (-1,) + (0.0,) * 12 + (0,)
 MM_UNITS = 210
 """The interpreter's units word for mm (G21): the gcode module's positions are then in mm."""
 MM_PER_INCH = 25.4
+SETTINGS = 16
+"""Where the interpreter's active settings (sequence number, feed, speed, G64 P, G64 Q: five
+doubles) start in the gcode module's line-code object, after the object's header (64-bit CPython);
+the module exposes the first three only, which tell whether the offset holds."""
+UNITS_MM = {200: 25.4, 210: 1.0}
+"""mm per program unit, by the interpreter's units word (G20, G21)."""
 
 
 class Tools:
@@ -102,6 +116,7 @@ class Canon(Translated):
         self.offset = (0.0,) * 6
         self.files, self.started = {"": 0}, False
         self.positions = arc_end_cells()
+        self.block, self.mode, self.printed, self.after, self.tolerances = [], None, None, -1, (None, None)
 
     def __getattr__(self, name):
         if name.startswith("__"):
@@ -109,8 +124,31 @@ class Canon(Translated):
         return lambda *arguments: None
 
     def next_line(self, state):
-        self.sequence, self.units = state.sequence_number, state.units
+        mode = self.mode_of(state)
+        self.flush(mode if state.sequence_number and self.after == self.sequence else self.mode)
+        self.sequence, self.units, self.mode = state.sequence_number, state.units, mode
         self.where()
+
+    def mode_of(self, state):
+        """(path mode, P mm, Q mm) the interpreter's ``state`` holds; notes in self.after the block
+        it holds them after (the gcode module hands the state after the last block executed)."""
+        sequence, feed, speed, p, q = struct.unpack("5d", ctypes.string_at(id(state) + SETTINGS, 40))
+        if (feed, speed) != (state.feed_rate, state.speed):
+            sequence, p, q = -1, 0.0, 0.0  # not the layout expected: G64 without tolerances
+        self.after = int(sequence)
+        if (p, q) != self.tolerances[:2]:
+            scale = UNITS_MM.get(state.units, 1.0)
+            self.tolerances = (p, q, p * scale, q * scale)
+        return (state.path_mode, *self.tolerances[2:])
+
+    def flush(self, mode):
+        """Write the last block's motions after the path control mode they were made in."""
+        if self.block and mode != self.printed:
+            self.write("B", *map(repr, mode))
+            self.printed = mode
+        for fields in self.block:
+            self.write(*fields)
+        self.block = []
 
     def where(self):
         """(file number, line) of the block being executed (file 0: the start-up code)."""
@@ -168,7 +206,7 @@ class Canon(Translated):
     def _print(self, kind, position, extra=""):
         where = self.where()
         shifted = [value + offset for value, offset in zip(position[:6], self.offset)]
-        self.write("M", *where, kind, self.units, repr(self.feed), *map(repr, shifted), extra)
+        self.block.append(("M", *where, kind, self.units, repr(self.feed), *map(repr, shifted), extra))
 
     def straight_traverse_translated(self, *position):
         self._print("T", position)
@@ -205,6 +243,7 @@ def main(program, unit_code, start_code, moves_fd, table, parameter_file, length
     with os.fdopen(int(moves_fd), "w", buffering=1 << 16) as moves:
         canon = Canon(parameter_file, moves, Tools(table), float(length_units))
         result, _ = gcode.parse(program, canon, unit_code, start_code)
+        canon.flush(canon.mode)
         if result > gcode.MIN_ERROR:
             file, line = canon.where()
             canon.write("E", file, line, " ".join(gcode.strerror(result).split()))

@@ -28,7 +28,10 @@ class Move:
     "row" (CSV). feed: mm/min along the xyz path (deg/min for a move that
     only turns), None when the program gives none (a rapid, a CSV without feed). duration: s
     (a CSV with ``t``), else None. start_line: the CSV row ``start`` was read from (None for G-code).
-    file: the file ``line`` is in when it is not the program's own (a G-code subroutine's), else None."""
+    file: the file ``line`` is in when it is not the program's own (a G-code subroutine's), else None.
+    path_mode: the path control mode the move was made in, (code, P, Q): code "G61" (exact path),
+    "G61.1" (exact stop) or "G64" (blending), P and Q G64's tolerances in mm (0: none given); None
+    for a CSV row."""
 
     line: int
     kind: str
@@ -39,3 +42,4 @@ class Move:
     arc: Arc = None
     start_line: int = None
     file: str = None
+    path_mode: tuple = None

@@ -13,8 +13,8 @@ from ..units import number_text
 from .manifold import OFF_MANIFOLD
 from .program import POSE_COLUMNS, is_gcode
 
-BLENDING = ("each move is timed from rest to rest (exact stop, G61); blending of consecutive moves (G64) is not "
-            "modelled")
+BLENDING = ("G-code timed as LinuxCNC's trajectory planner moves it (G61, G61.1, G64 blend arcs, look-ahead, the "
+            ".ini's axis limits; parabolic blends rest to rest at half acceleration); a CSV's rows from rest to rest")
 SPEED_KINDS = ("joint speed", "joint acceleration")
 
 

@@ -16,7 +16,7 @@ from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 TWO_PI = 2.0 * math.pi
 
 
-def _arc_frame(move):
+def arc_frame(move):
     """(r0, r1, theta0, sweep) of an arc move in its plane: start and end radii (mm), the start
     angle and the signed swept angle (radians), as LinuxCNC sweeps it: ``rotation``'s sign the
     sense, |rotation| - 1 full turns more; a start equal to the end is a full turn."""
@@ -38,7 +38,7 @@ def lengths(move):
     turn = float(np.max(np.abs(move.end[3:] - move.start[3:])))
     if move.arc is None:
         return float(np.linalg.norm(move.end[:3] - move.start[:3])), turn
-    r0, r1, _, sweep = _arc_frame(move)
+    r0, r1, _, sweep = arc_frame(move)
     normal = move.arc.axes[2]
     return float(math.hypot(0.5 * (r0 + r1) * abs(sweep), move.end[normal] - move.start[normal])), turn
 
@@ -56,7 +56,7 @@ def positions(move, u):
     if move.arc is None:
         return move.start[:3] + u * (move.end[:3] - move.start[:3])
     first, second, normal = move.arc.axes
-    r0, r1, theta0, sweep = _arc_frame(move)
+    r0, r1, theta0, sweep = arc_frame(move)
     angle = theta0 + u[:, 0] * sweep
     radius = r0 + u[:, 0] * (r1 - r0)
     xyz = np.empty((len(u), 3))

@@ -1,11 +1,12 @@
-"""How fast a move goes along its path, and what that asks of the joints.
+"""How fast a move goes along its path when it is timed on its own, and what the path's speed
+asks of the joints.
 
-Each move is timed on its own, starting and ending at rest, with a trapezoidal speed profile:
-the path accelerates at the ``.ini``'s [TRAJ] acceleration to the programmed feed (capped by
-[TRAJ] MAX_LINEAR_VELOCITY), cruises, and decelerates to a stop at the move's end (a triangle
-when the move is too short to reach the feed), as LinuxCNC's planner times exact-stop moves
-(G61). Blending of consecutive moves (G64) is not modelled: a blended corner keeps some speed
-and turns the path's velocity instead, which this timing does not see.
+A move timed on its own starts and ends at rest, with a trapezoidal speed profile: the path
+accelerates at the ``.ini``'s [TRAJ] acceleration to the programmed feed (capped by [TRAJ]
+MAX_LINEAR_VELOCITY), cruises, and decelerates to a stop at the move's end (a triangle when the
+move is too short to reach the feed). G-code moves that LinuxCNC's planner times are timed by
+:mod:`.planner` instead (blends, look-ahead, axis limits); this is what is left: a CSV's rows, a
+move that only turns, a program checked without an ``.ini``.
 
 The path coordinate s is the xyz length (mm), or the largest orientation change (degrees) of
 a move that only turns. A CSV row with ``t`` is traversed at the uniform speed that reaches
@@ -28,6 +29,11 @@ class Profile:
     length: float
     speed: float
     acceleration: float = None
+
+    def rates(self, s):
+        """(ds/dt, d2s/dt2) (n,) at path coordinates ``s`` (n,) of this move (see path_rates)."""
+        s = np.asarray(s, dtype=float)
+        return path_rates(s, self.length, self.speed, np.nan if self.acceleration is None else self.acceleration)
 
 
 def path_rates(s, length, speed, acceleration):
@@ -81,15 +87,14 @@ def _along(values, s, same):
     return np.where(np.isnan(behind), np.nan_to_num(start), np.where(np.isnan(ahead), end, 0.5 * (ahead + behind)))
 
 
-def joint_rates(joints, s, run, revolute, length, speed, acceleration):
+def joint_rates(joints, s, run, revolute, rate, change):
     """(speeds, accelerations) (n, dof) of the joints (n, dof; mm or rad) sampled at path
     coordinates ``s`` (n,), equally spaced within each run of samples of one move (``run``
     (n,): which), revolute joints unwrapped: by finite differences along the path and the
-    chain rule, dq/dt = q' ds/dt, d2q/dt2 = q'' (ds/dt)^2 + q' d2s/dt2, with each sample's
-    move's ``length``, top ``speed`` and path ``acceleration`` (n,; see path_rates)."""
+    chain rule, dq/dt = q' ds/dt, d2q/dt2 = q'' (ds/dt)^2 + q' d2s/dt2, with the path's speed
+    ``rate`` = ds/dt and its change ``change`` = d2s/dt2 at each sample (n,; a timing's rates)."""
     joints = np.where(revolute, np.unwrap(joints, axis=0), joints) if np.any(revolute) else joints
     same = run[1:] == run[:-1]
     first = _along(joints, s, same)
     second = _along(first, s, same)
-    rate, change = path_rates(s, length, speed, acceleration)
     return first * rate[:, None], second * (rate ** 2)[:, None] + first * change[:, None]

@@ -4,11 +4,13 @@
 paths; each ends where it started) in AUTO mode, every 10 ms recording the line motion is
 executing, the world position and each joint's velocity as motion computes it (per servo
 period, so independent of how late a loaded machine runs it), and keeping every message of
-LinuxCNC's error channel; it writes everything as JSON to $KINGEN_RESULT, then exits, and
-LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
+LinuxCNC's error channel; with $KINGEN_SAMPLER set, also every servo period's line and joint
+velocities that HAL's sampler recorded while the program ran ("servo"); it writes everything as
+JSON to $KINGEN_RESULT, then exits, and LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
 
 import json
 import os
+import subprocess
 import time
 
 import linuxcnc
@@ -25,6 +27,9 @@ def run(program):
     interpreter idle again and motion with no segment left and in position (a loaded machine's
     motion can lag the interpreter by many polls); a program not started within 5 s is an error."""
     run = {"errors": [], "samples": []}
+    sampled = bool(os.environ.get("KINGEN_SAMPLER"))
+    if sampled:
+        subprocess.run(["halcmd", "setp", "sampler.0.enable", "1"], check=True)
     command.mode(linuxcnc.MODE_AUTO)
     command.wait_complete()
     command.program_open(program)
@@ -53,9 +58,24 @@ def run(program):
             break
         run["errors"].append({"kind": message[0], "text": message[1]})
     run["finished"] = not run["errors"]
+    if sampled:
+        run["servo"] = servo_samples()
     command.abort()
     command.wait_complete()
     return run
+
+
+def servo_samples():
+    """Stop HAL's sampler and read what it holds: [line, joint velocities...] per servo period."""
+    subprocess.run(["halcmd", "setp", "sampler.0.enable", "0"], check=True)
+    depth = int(subprocess.run(["halcmd", "-s", "getp", "sampler.0.curr-depth"], check=True, capture_output=True,
+                               text=True).stdout.split()[0])
+    if depth == 0:
+        return []
+    text = subprocess.run(["halsampler", "-n", str(depth)], check=True, capture_output=True, text=True,
+                          timeout=60).stdout
+    rows = [line.split() for line in text.splitlines()]  # "overrun" marks a gap (none expected): not a sample
+    return [[float(value) for value in row] for row in rows if row and row[0] != "overrun"]
 
 
 try:
