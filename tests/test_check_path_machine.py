@@ -94,8 +94,8 @@ def run_programs(robot_path, programs, joint_speed, folder, sampled=False, blend
     shutil.copytree(MODULES, modules, symlinks=True)
     shutil.copy2(built.library, modules / built.library.name)
     ini = machine_ini(robot, folder, render_package(robot, units)[f"{built.routine}.ini"], units)
-    text = ini.read_text().replace("MAX_VELOCITY = 50\nMAX_ACCELERATION = 500\nHOME_SEQUENCE",
-                                   f"MAX_VELOCITY = {joint_speed}\nMAX_ACCELERATION = 500\nHOME_SEQUENCE")
+    text = re.sub(r"(\[JOINT_\d+\][^\[]*?)MAX_VELOCITY = [^\n]*\nMAX_ACCELERATION = [^\n]*\n",
+                  rf"\g<1>MAX_VELOCITY = {joint_speed}\nMAX_ACCELERATION = 500\n", ini.read_text())
     text = text.replace(f"DISPLAY = {Path(__file__).parent / 'linuxcnc' / 'driver.py'}", f"DISPLAY = {DRIVER}")
     acceleration = 20 if units == "inch" else 300
     text = text.replace("[TRAJ]\n", f"[TRAJ]\nMAX_LINEAR_ACCELERATION = {acceleration}\n{blending}", 1)

@@ -254,12 +254,18 @@ def test_forward_results_are_values_that_cannot_change():
 
 def test_a_singular_leading_minor_is_not_positive_definite_whatever_the_last_rounds_to():
     """A = [[1, 1, 1], [1, 1, 2], [1, 2, 1e17]]: its leading 2 x 2 minor is 1 - 1 = 0 exactly, so
-    A is not positive definite (LAPACK: a negative eigenvalue), although the expanded 3 x 3
-    determinant rounds to +1 (1e17 - 4 and 1e17 - 2 both round to 1e17; exactly it is -1)."""
+    A is not positive definite (exactly, its determinant is -1: a negative eigenvalue; LAPACK's
+    eigenvalues of the rounded matrix may say either), although the expanded 3 x 3 determinant
+    rounds to +1 (1e17 - 4 and 1e17 - 2 both round to 1e17)."""
+    from fractions import Fraction
+
     from kingen.kinematics.singularity import _positive_definite, _shifted
 
     matrix = np.array([[1.0, 1.0, 1.0], [1.0, 1.0, 2.0], [1.0, 2.0, 1e17]])
-    assert np.linalg.eigvalsh(matrix)[0] < 0
+    a = [[Fraction(value) for value in row] for row in matrix]
+    exact = (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+             + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
+    assert exact == -1
     entries = as_entries(matrix[None])
     assert _shifted(entries, 0.0)[1] > 0  # the rounded determinant alone would say positive
     assert not _positive_definite(entries, 0.0)[0]
