@@ -61,14 +61,15 @@ class Household:
     def clear(self, child, grace):
         """After ``child`` ended and was reaped: kill its group and every orphan it left, reap
         them (for at most ``grace`` seconds), remove the temporary folder, and stop being a
-        subreaper unless this process was one before."""
+        subreaper unless this process was one before. Returns how many orphans were killed."""
         if child.pid is not None:
             with suppress(OSError):
                 os.killpg(child.pid, signal.SIGKILL)
-        _kill_orphans(self._known, time.monotonic() + grace)
+        orphans = _kill_orphans(self._known, time.monotonic() + grace)
         if not self._was_subreaper:
             _subreaper(False)
         shutil.rmtree(self.folder, ignore_errors=True)
+        return orphans
 
 
 def _hosted(folder, job, channel, *arguments):
@@ -109,17 +110,21 @@ def children(pid):
 
 def _kill_orphans(known, deadline):
     """SIGKILL and reap every child of this process not in ``known``, again for the children
-    each kill hands over, until none is left or ``deadline`` (time.monotonic()) has passed."""
+    each kill hands over, until none is left or ``deadline`` (time.monotonic()) has passed;
+    return how many were killed."""
+    killed = set()
     while time.monotonic() < deadline:
         orphans = [pid for pid in children(os.getpid()) if pid not in known]
         if not orphans:
-            return
+            break
+        killed.update(orphans)
         for pid in orphans:
             with suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
         for pid in orphans:
             with suppress(OSError):
                 os.waitpid(pid, 0)
+    return len(killed)
 
 
 def die_with_parent():

@@ -95,23 +95,30 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
     context = Context(robot=robot, options=options, library=library)
     checks = [result for check in by_need(host.checks, "library") for result in check.run(context)]
     on_file = len(checks)
+    isolation = []
 
     def on_message(kind, value):
         if kind == "progress" and progress is not None:
             progress(value)
         elif kind == "check":
             checks.append(value)
+        elif kind == "isolation":
+            isolation.append(value)
 
+    host.prepare_load()
     try:
         report, failure = run_in_child(_verify_job, (robot, library, routine, host, options), options.timeout,
-                                       on_message, first_stage=host.loading_stage, decoders=REPORT_DECODERS)
+                                       on_message, first_stage=host.loading_stage, decoders=REPORT_DECODERS,
+                                       network=options.scheduler is not None)
     except PluginDefect as defect:
         report, failure = None, None
         checks = [Check(defect.check, False, str(defect))]
     if report is not None:
         report.checks[:0] = checks[:on_file]
+        report.isolation = "".join(isolation[:1])
         return report
     report = empty_report(robot, routine, options)
+    report.isolation = "".join(isolation[:1])
     report.interface_checks = _interface_names(host.checks)
     report.checks.extend(checks)
     if failure is not None:

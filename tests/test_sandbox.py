@@ -1,0 +1,153 @@
+"""The sandbox foreign code runs in (kingen.runtime.sandbox): a plugin that signals its parent
+or every process, starts a daemon, opens a socket, writes outside its folder or runs a program
+makes kingen answer exit 1 with a failed ``sandbox`` check naming what it did, kingen itself
+never stopped or killed, nothing it started left running and nothing written. Each plugin
+is the correct probe of tests/test_hostile.py with one constructor added (compiled here)."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import pytest
+
+from test_hostile import ROBOT, plugin_source
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the sandbox is Linux's")
+
+SPINNER = "kgspinner"
+"""The name a plugin's daemon gives itself (prctl PR_SET_NAME): its mark in the process table."""
+HEADERS = "#include <signal.h>\n#include <sys/prctl.h>\n#include <sys/socket.h>\n#include <stdio.h>\n"
+
+
+def constructor(body):
+    return HEADERS + f"__attribute__((constructor)) static void hostile(void) {{ {body} }}"
+
+
+def verify(tmp_path, body, *command_prefix, env=None):
+    """``kingen verify`` of the probe with ``body`` in a constructor, as a user runs it (in a
+    session of its own: were a signal to reach the test's process group, the test survives);
+    its result, and the seconds it took."""
+    robot = tmp_path / "probe.yaml"
+    robot.write_text(ROBOT)
+    source = tmp_path / "kin_probe.c"
+    source.write_text(plugin_source(CONSTRUCTOR=constructor(body)))
+    start = time.monotonic()
+    result = subprocess.run([*command_prefix, sys.executable, "-m", "kingen.cli", "verify", str(robot), "--source",
+                             str(source), "-o", str(tmp_path / "lib"), "--samples", "200", "--timeout", "10",
+                             "--json", str(tmp_path / "report.json")],
+                            capture_output=True, text=True, timeout=120, cwd=tmp_path, start_new_session=True,
+                            stdin=subprocess.DEVNULL, env=env)
+    assert "Traceback" not in result.stderr, result.stderr
+    return result, time.monotonic() - start
+
+
+def spinners():
+    """The pids of processes named SPINNER still running (zombies are ended)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{entry}/stat") as stream:
+                name, rest = stream.read().split("(", 1)[1].rsplit(")", 1)
+        except (OSError, IndexError):
+            continue
+        if name == SPINNER and rest.split()[0] != "Z":
+            found.append(int(entry))
+    return found
+
+
+def isolation(tmp_path):
+    return json.loads((tmp_path / "report.json").read_text())["isolation"]
+
+
+def test_the_probe_passes_in_the_sandbox_and_the_report_names_it(tmp_path):
+    result, _ = verify(tmp_path, "")
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert isolation(tmp_path) in result.stdout
+    assert isolation(tmp_path).startswith(("sandbox: user, PID, network, mount and IPC namespaces of its own",
+                                           "no namespaces"))
+
+
+SIGNALS = {
+    "SIGSTOP to its parent": ("kill(getppid(), SIGSTOP);", "called kill(1, SIGSTOP)"),
+    "SIGKILL to its parent": ("kill(getppid(), SIGKILL);", "called kill(1, SIGKILL)"),
+    "SIGKILL to every process": ("kill(-1, SIGKILL);", "called kill(-1, SIGKILL)"),
+    "SIGSTOP to its process group": ("kill(0, SIGSTOP);", "called kill(0, SIGSTOP)"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(SIGNALS))
+def test_a_signal_to_a_process_outside_the_plugin_is_refused_and_named(tmp_path, name):
+    """kingen is neither stopped nor killed (it answers, within the test's time limit), and
+    names the call; in the sandbox's PID namespace the plugin's parent is pid 1."""
+    body, words = SIGNALS[name]
+    result, seconds = verify(tmp_path, body)
+    assert result.returncode == 1, result.stdout + result.stderr
+    stage = "during loading the plugin (its constructors and get_kin_config), which the sandbox refused"
+    if isolation(tmp_path).startswith("sandbox"):
+        assert f"FAILED sandbox: the plugin {words} {stage}: the run was stopped" in result.stdout, result.stdout
+    else:
+        assert "FAILED sandbox: the plugin called kill(" in result.stdout, result.stdout
+    assert seconds < 60
+
+
+@pytest.mark.parametrize("how", ["fork", "setsid and a double fork"])
+def test_a_daemon_the_plugin_starts_is_named_and_ended(tmp_path, how):
+    """A constructor that forks (and detaches with setsid) a sleeping process: the run fails
+    naming it, the process is gone when kingen has answered, and kingen's $TMPDIR is left empty."""
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    spin = f'prctl(PR_SET_NAME, "{SPINNER}"); for (;;) sleep(1);'
+    body = {"fork": f"if (fork() == 0) {{ {spin} }}",
+            "setsid and a double fork": f"if (fork() == 0) {{ setsid(); if (fork() == 0) {{ {spin} }} _exit(0); }}"}[how]
+    result, _ = verify(tmp_path, body, env={**os.environ, "TMPDIR": str(temporary)})
+    left = spinners()
+    for pid in left:
+        os.kill(pid, 9)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED sandbox: the plugin left 1 process running when its job ended, which kingen ended" in result.stdout
+    assert left == []
+    assert list(temporary.iterdir()) == []
+
+
+def test_a_socket_is_refused_and_named(tmp_path):
+    result, _ = verify(tmp_path, "socket(AF_INET, SOCK_STREAM, 0);")
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED sandbox: the plugin called socket(AF_INET) during loading the plugin" in result.stdout
+
+
+def test_a_write_outside_the_plugins_folder_is_refused_and_named(tmp_path):
+    outside = tmp_path / "outside.txt"
+    result, _ = verify(tmp_path, f'FILE *f = fopen("{outside}", "w"); if (f) {{ fputs("x", f); fclose(f); }}')
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert f"FAILED sandbox: the plugin opened {outside} for writing during loading the plugin" in result.stdout
+    assert not outside.exists()
+
+
+def test_running_a_program_is_refused_and_named(tmp_path):
+    marker = tmp_path / "the-shell-ran"
+    result, _ = verify(tmp_path, f'execl("/bin/sh", "sh", "-c", "touch {marker}", (char *)0);')
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED sandbox: the plugin called execve(/bin/sh) during loading the plugin" in result.stdout
+    assert not marker.exists()
+
+
+@pytest.mark.skipif(shutil.which("unshare") is None, reason="needs util-linux's unshare")
+def test_where_the_kernel_refuses_namespaces_the_report_says_so_and_the_filter_still_names(tmp_path):
+    """A user namespace that may create none (max_user_namespaces 0), as an unprivileged
+    container is: the run falls back on a child without namespaces and says so; the filter
+    still refuses a signal to kingen and names it."""
+    prefix = ("unshare", "--user", "--map-root-user", "sh", "-c",
+              'echo 0 > /proc/sys/user/max_user_namespaces && exec "$@"', "sh")
+    probe = subprocess.run([*prefix, "true"], capture_output=True)
+    if probe.returncode != 0:
+        pytest.skip("this kernel lets no user namespace be made here")
+    result, _ = verify(tmp_path, "", *prefix)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert isolation(tmp_path).startswith("no namespaces (the kernel refuses them: unshare: No space left on device)")
+    assert "a child process of your user, with your user's access; a seccomp filter" in isolation(tmp_path)
+    result, _ = verify(tmp_path, "kill(getppid(), SIGSTOP);", *prefix)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED sandbox: the plugin called kill(" in result.stdout and ", SIGSTOP) during loading" in result.stdout
