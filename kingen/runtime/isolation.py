@@ -63,11 +63,12 @@ class Channel:
         self._sender.send(kind, value)
 
 
-def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE, decoders=None, network=False):
+def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE, decoders=None, network=False,
+                 on_isolation=None):
     """Run ``job(channel, *arguments)`` in a forked child, in the sandbox of
     kingen.runtime.sandbox; return (result, None) or (None, ChildFailure). ``on_message(kind,
-    value)`` gets every message other than stages, and ('isolation', text) naming the
-    isolation the job got. A KingenError raised in the child is raised here (bad input found
+    value)`` gets every message other than stages, ``on_isolation(text)`` the line naming the
+    isolation the job got (kingen.runtime.sandbox.description). A KingenError raised in the child is raised here (bad input found
     while loading); any other exception there is a kingen defect, raised as InternalError.
     ``network``: the job keeps the network (a Dask scheduler's).
 
@@ -96,7 +97,7 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
         os.close(writing)
         os.close(keeper_writing)
     receiver = wire.Receiver(reading, key)
-    keeper = _KeeperNews(wire.Receiver(keeper_reading, keeper_key), on_message)
+    keeper = _KeeperNews(wire.Receiver(keeper_reading, keeper_key), on_isolation)
     stage, finished, outcome = first_stage, False, None
     try:
         while outcome is None:
@@ -162,8 +163,8 @@ class _KeeperNews:
     the job left running. Read whenever the job's own channel gave something (the keeper
     writes before it answers the call, so a refusal arrives before what followed it)."""
 
-    def __init__(self, receiver, on_message):
-        self._receiver, self._on_message = receiver, on_message
+    def __init__(self, receiver, on_isolation):
+        self._receiver, self._on_isolation = receiver, on_isolation
         self._open = True
         self.refused, self._left = [], []
 
@@ -175,8 +176,8 @@ class _KeeperNews:
                 message = None
             if message is None or not isinstance(message[1], str):
                 self._open = False
-            elif message[0] == "isolation" and self._on_message is not None:
-                self._on_message("isolation", message[1])
+            elif message[0] == "isolation" and self._on_isolation is not None:
+                self._on_isolation(message[1])
             elif message[0] == "refused":
                 self.refused.append((message[1], stage))
             elif message[0] == "left":

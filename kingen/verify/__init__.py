@@ -22,8 +22,9 @@ becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
 import functools
-from dataclasses import asdict
+import platform
 import time
+from dataclasses import asdict
 
 from ..errors import KingenError, PluginDefect
 from ..runtime.isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
@@ -102,14 +103,16 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
             progress(value)
         elif kind == "check":
             checks.append(value)
-        elif kind == "isolation":
-            isolation.append(value)
 
     host.prepare_load()
+    if options.scheduler is not None:
+        # Dask's client asks for the processor's name, which runs uname(1): a program the
+        # sandbox would refuse; asked here, it is cached for the child.
+        platform.uname().processor
     try:
         report, failure = run_in_child(_verify_job, (robot, library, routine, host, options), options.timeout,
                                        on_message, first_stage=host.loading_stage, decoders=REPORT_DECODERS,
-                                       network=options.scheduler is not None)
+                                       network=options.scheduler is not None, on_isolation=isolation.append)
     except PluginDefect as defect:
         report, failure = None, None
         checks = [Check(defect.check, False, str(defect))]
