@@ -151,3 +151,40 @@ def test_where_the_kernel_refuses_namespaces_the_report_says_so_and_the_filter_s
     result, _ = verify(tmp_path, "kill(getppid(), SIGSTOP);", *prefix)
     assert result.returncode == 1, result.stdout + result.stderr
     assert "FAILED sandbox: the plugin called kill(" in result.stdout and ", SIGSTOP) during loading" in result.stdout
+
+
+def test_linuxcncs_interpreter_dies_with_a_killed_kingen(tmp_path):
+    """check-path reads G-code through LinuxCNC's interpreter in a child process; a program
+    that never ends keeps it busy, and SIGKILL of kingen (nothing of kingen runs to end it)
+    ends it too (PR_SET_PDEATHSIG)."""
+    from test_check_path import needs_interpreter
+    from test_hostile import _children
+
+    needs_interpreter()
+    program = tmp_path / "endless.ngc"
+    program.write_text("G21 G90\no100 while [1]\no100 endwhile\nM2\n")
+    kingen = subprocess.Popen([sys.executable, "-m", "kingen.cli", "check-path", "linuxcnc_hexapod", str(program)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
+                              cwd=tmp_path)
+    deadline, interpreter = time.monotonic() + 60, []
+    while not interpreter and time.monotonic() < deadline and kingen.poll() is None:
+        time.sleep(0.2)
+        interpreter = [pid for pid in _children(kingen.pid) if "linuxcnc_canon" in _command(pid)]
+    assert interpreter, "the interpreter never started"
+    kingen.kill()
+    kingen.wait()
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and os.path.exists(f"/proc/{interpreter[0]}"):
+        time.sleep(0.1)
+    alive = os.path.exists(f"/proc/{interpreter[0]}") and "linuxcnc_canon" in _command(interpreter[0])
+    if alive:
+        os.kill(interpreter[0], 9)
+    assert not alive
+
+
+def _command(pid):
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as stream:
+            return stream.read().decode(errors="replace")
+    except OSError:
+        return ""

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import KingenError, located
 from ..runtime.file_gate import refuse_special_file
+from ..runtime.household import dying_with_this_process
 from .moves import Arc, Move
 from .program import source_lines
 
@@ -61,7 +62,8 @@ def gcode_moves(path, start=(0.0,) * 6):
     with tempfile.TemporaryFile() as errors:
         child = subprocess.Popen([interpreter_python(), "-I", str(CANON), os.path.abspath(path),
                                   start_code(start)], stdout=subprocess.PIPE,
-                                 stderr=errors, stdin=subprocess.DEVNULL, text=True, errors="replace")
+                                 stderr=errors, stdin=subprocess.DEVNULL, text=True, errors="replace",
+                                 preexec_fn=dying_with_this_process())
         try:
             yield from _moves(child.stdout, path, errors, np.asarray(start, dtype=float))
         finally:

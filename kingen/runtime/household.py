@@ -127,9 +127,19 @@ def _kill_orphans(known, deadline):
     return len(killed)
 
 
-def die_with_parent():
-    """Ask Linux to SIGKILL this process when its parent dies, however the parent dies."""
+def die_with_parent(parent=None):
+    """Ask Linux to SIGKILL this process when its parent dies, however the parent dies; with
+    ``parent`` (its pid), end at once if that one has died already (this process then has
+    another parent)."""
     try:
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
+    if parent is not None and os.getppid() != parent:
+        os._exit(1)
+
+
+def dying_with_this_process():
+    """A ``preexec_fn`` for :class:`subprocess.Popen`: the program it starts is killed when this
+    process dies, SIGKILL included (PR_SET_PDEATHSIG, which the program keeps across exec)."""
+    return functools.partial(die_with_parent, os.getpid())
