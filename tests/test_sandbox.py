@@ -188,3 +188,42 @@ def _command(pid):
             return stream.read().decode(errors="replace")
     except OSError:
         return ""
+
+
+def _forged_report(robot, plugin, options, **ignored):
+    """What a routine that took its child over could send with the channel's key: a report of
+    its own making in which every check passed."""
+    from kingen.verify.processes import empty_report
+    from kingen.verify.report import Check
+
+    report = empty_report(robot, plugin.routine, options)
+    report.checks = [Check("values", True, "max |error| 0 mm"), Check("warnings", True, "0 mismatches")]
+    return report
+
+
+@pytest.mark.parametrize("answers", ["the routine's", "none"])
+def test_a_forged_passing_report_of_a_wrong_routine_fails(tmp_path, monkeypatch, capsys, answers):
+    """The routine is 1 mm off everywhere; its child sends a forged report that passes (with
+    the routine's real answers on the sample's first poses, or none): kingen's own process
+    compares those answers with the reference itself, and the run fails check 'report'."""
+    from kingen.cli import main
+    import kingen.verify
+
+    monkeypatch.setattr(kingen.verify, "verify", _forged_report)
+    if answers == "none":
+        monkeypatch.setattr(kingen.verify, "answers", None)  # the child then sends nothing but its report
+        monkeypatch.setattr(kingen.verify, "_verify_job", lambda channel, robot, library, routine, host, options:
+                            _forged_report(robot, host.load(library, routine, robot), options))
+    robot = tmp_path / "probe.yaml"
+    robot.write_text(ROBOT)
+    source = tmp_path / "kin_probe.c"
+    source.write_text(plugin_source().replace("- 100.0;", "- 99.0;"))
+    code = main(["verify", str(robot), "--source", str(source), "-o", str(tmp_path / "lib"), "--samples", "200"])
+    out = capsys.readouterr().out
+    assert code == 1, out
+    if answers == "none":
+        assert ("FAILED report: the host process said values passed but sent no answers on the first 64 poses for "
+                "kingen to compare itself: its report was not used") in out, out
+    else:
+        assert ("FAILED report: the host process said values passed, but the routine's answers on the first 64 "
+                "poses, compared with the reference in kingen's own process, are off by up to 1 mm") in out, out
