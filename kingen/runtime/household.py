@@ -32,11 +32,12 @@ class Household:
     - the child's temporary folder (``TMPDIR`` and Python's ``tempfile`` there: module copies,
       reload copies, captured output) is made here and removed here, after all that.
 
-    Linux only, each part a no-op where the kernel lacks it. What it cannot do: a plugin
-    that stops or kills kingen itself (``kill(getppid(), SIGSTOP)``), or processes a plugin
-    detached when kingen is killed with SIGKILL (nothing then runs to end them); see
-    docs/reference/limits.md. A process another thread of kingen forks while the child lives
-    would be taken for an orphan: kingen forks none."""
+    Linux only, each part a no-op where the kernel lacks it. What it cannot do alone (a
+    plugin that stops or kills kingen itself, processes a plugin detached when kingen is
+    killed with SIGKILL), the sandbox the child enters does (:mod:`kingen.runtime.sandbox`);
+    this is what is left where the kernel refuses it. A process another thread of kingen
+    forks while the child lives would be taken for an orphan: kingen forks none.
+    :meth:`clear` says how many orphans it ended: a run whose plugin left some fails."""
 
     def __init__(self):
         self.folder = tempfile.mkdtemp(prefix="kingen-child-")

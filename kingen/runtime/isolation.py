@@ -13,6 +13,12 @@ rather than blaming the routine. The child dies with the parent (``PR_SET_PDEATH
 Linux), and the parent kills it on the way out of any exception, SIGTERM included (the CLI
 turns SIGTERM into ``SystemExit``); whatever the child started, and its temporary folder, go
 with it (:class:`kingen.runtime.household.Household`).
+
+The child enters the sandbox of :mod:`kingen.runtime.sandbox` before the job runs (namespaces,
+a read-only file system but its folder, resource limits, a seccomp filter); the sandbox's
+keeper tells the parent, on a channel of its own, which isolation the job got, what the
+filter refused (a ``sandbox`` failure naming the call and the stage, the child stopped at
+once) and what the job left running when it ended (a ``sandbox`` failure too).
 """
 
 import ctypes
@@ -169,7 +175,7 @@ class _KeeperNews:
         self.refused, self._left = [], []
 
     def _read(self, stage, wait):
-        while self._open and select.select([self._receiver._descriptor], [], [], wait)[0]:
+        while self._open and select.select([self._receiver.fileno()], [], [], wait)[0]:
             try:
                 message = self._receiver.receive(EXIT_GRACE)
             except (TimeoutError, wire.WireError):
