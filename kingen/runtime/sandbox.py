@@ -28,7 +28,9 @@ a job got is the first message the keeper sends (:func:`description`).
 
 import ctypes
 import ctypes.util
+import errno
 import os
+import platform
 import resource
 import signal
 import socket
@@ -42,7 +44,7 @@ CLONE_NEWNS, CLONE_NEWIPC, CLONE_NEWUSER, CLONE_NEWPID, CLONE_NEWNET = (
 MS_RDONLY, MS_NOSUID, MS_NODEV, MS_NOEXEC, MS_BIND, MS_REC, MS_PRIVATE = 1, 2, 4, 8, 4096, 16384, 1 << 18
 AT_FDCWD, AT_RECURSIVE, MOUNT_ATTR_RDONLY = -100, 0x8000, 1
 SYS_MOUNT_SETATTR = 442
-"""mount_setattr(2)'s number: the same on x86-64 and arm64 (the generic table)."""
+"""mount_setattr(2)'s number on x86-64 and arm64 (the only machines the sandbox sets up on)."""
 
 LIMITS = {
     resource.RLIMIT_CORE: 0,
@@ -169,6 +171,10 @@ def _namespaces(folder, network):
     reason it could not (the kernel's refusal), having changed nothing that matters then."""
     flags = CLONE_NEWUSER | CLONE_NEWPID | CLONE_NEWNS | CLONE_NEWIPC | (0 if network else CLONE_NEWNET)
     uid, gid = os.getuid(), os.getgid()
+    if platform.machine() not in ("x86_64", "aarch64"):
+        return f"the sandbox does not know this machine's system calls ({platform.machine()})"
+    if _libc.syscall(SYS_MOUNT_SETATTR, -1, None, 0, None, 0) < 0 and ctypes.get_errno() == errno.ENOSYS:
+        return "the kernel has no mount_setattr (Linux 5.12 or later has)"
     try:
         _checked(_libc.unshare(flags), "unshare")
     except OSError as error:
