@@ -227,3 +227,38 @@ def test_a_forged_passing_report_of_a_wrong_routine_fails(tmp_path, monkeypatch,
     else:
         assert ("FAILED report: the host process said values passed, but the routine's answers on the first 64 "
                 "poses, compared with the reference in kingen's own process, are off by up to 1 mm") in out, out
+
+
+def test_a_signal_to_a_process_of_yours_outside_kingen_is_refused_and_named(tmp_path):
+    """This test's own process (SIGWINCH: harmless were it delivered): outside the sandbox,
+    and no process the plugin started."""
+    result, _ = verify(tmp_path, f"kill({os.getpid()}, SIGWINCH);")
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert f"FAILED sandbox: the plugin called kill({os.getpid()}, SIGWINCH) during loading the plugin" in result.stdout
+
+
+@pytest.mark.parametrize("missing", ["the filter", "the filter and the namespaces"])
+def test_without_libseccomp_or_namespaces_the_run_goes_on_and_says_so(tmp_path, monkeypatch, capsys, missing):
+    """Where libseccomp is missing (and the kernel refuses namespaces too) a right routine
+    still passes, and the report's isolation line says what the run lacked."""
+    from kingen.cli import main
+    from kingen.runtime import isolation, sandbox
+
+    monkeypatch.setattr(isolation, "filtering_available", lambda: "libseccomp or its binding pyseccomp is missing")
+    if missing != "the filter":
+        monkeypatch.setattr(sandbox, "_namespaces", lambda folder, network: "the kernel refuses them: refused here")
+    robot = tmp_path / "probe.yaml"
+    robot.write_text(ROBOT)
+    source = tmp_path / "kin_probe.c"
+    source.write_text(plugin_source())
+    code = main(["verify", str(robot), "--source", str(source), "-o", str(tmp_path / "lib"), "--samples", "200"])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    if missing == "the filter":
+        assert ("isolation: sandbox: user, PID, network, mount and IPC namespaces of its own, the file system "
+                "read-only but its folder; no seccomp filter (libseccomp or its binding pyseccomp is missing); "
+                "limits on processor time, memory, file size and processes") in out, out
+    else:
+        assert ("isolation: no namespaces (the kernel refuses them: refused here): a child process of your user, "
+                "with your user's access; no seccomp filter (libseccomp or its binding pyseccomp is missing); "
+                "limits on processor time, memory, file size") in out, out
