@@ -76,7 +76,7 @@ def unconfirmed(robot, options, report, evidence):
                                       f"{count} poses for kingen to compare itself: its report was not used")
     set_chunk_job(robot, robot.calibrated(options.link_lengths, options.link_offsets),
                   _Answered(report.routine, *evidence), options)
-    counts = compare_poses(PoseStream(robot, options.seed).draw(count)).counts
+    counts = compare_poses(PoseStream(robot, options.seed).draw(count), captured=False).counts
     if counts["max_abs_error_mm"] <= report.tolerance_mm and counts["max_abs_error_rad"] <= report.tolerance_rad \
             and counts["singular_out_of_bound"] == 0:
         return None
