@@ -103,8 +103,8 @@ def confine(folder, log_descriptor, log_key, network, filtering, keeper_closes=(
         log.close()
         os.close(proc)
         os.close(status_reading)
-        if namespaces is True:
-            _init(status_writing, keeper_closes)
+        if namespaces is True:  # (the listener's socket too: the keeper hears its end when the runner's ends)
+            _init(status_writing, (*keeper_closes, runner_end.fileno()))
         os.close(status_writing)
         _runner(namespaces is True, filtering is True, runner_end, network)
         return
