@@ -262,3 +262,31 @@ def test_without_libseccomp_or_namespaces_the_run_goes_on_and_says_so(tmp_path, 
         assert ("isolation: no namespaces (the kernel refuses them: refused here): a child process of your user, "
                 "with your user's access; no seccomp filter (libseccomp or its binding pyseccomp is missing); "
                 "limits on processor time, memory, file size") in out, out
+
+
+def test_nothing_a_plugin_started_outlives_a_kingen_killed_with_sigkill(tmp_path):
+    """A constructor starts a detached daemon, then the plugin spins; kingen is killed with
+    SIGKILL (nothing of it runs to clean up): the daemon ends all the same."""
+    robot = tmp_path / "probe.yaml"
+    robot.write_text(ROBOT)
+    source = tmp_path / "kin_probe.c"
+    spin = f'prctl(PR_SET_NAME, "{SPINNER}"); for (;;) sleep(1);'
+    source.write_text(plugin_source(
+        CONSTRUCTOR=constructor(f"if (fork() == 0) {{ setsid(); if (fork() == 0) {{ {spin} }} _exit(0); }}"),
+        ROUTINE="for (;;) ;"))
+    kingen = subprocess.Popen([sys.executable, "-m", "kingen.cli", "verify", str(robot), "--source", str(source), "-o",
+                               str(tmp_path / "lib"), "--timeout", "600"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, cwd=tmp_path, start_new_session=True)
+    deadline = time.monotonic() + 60
+    while not spinners() and time.monotonic() < deadline and kingen.poll() is None:
+        time.sleep(0.2)
+    assert spinners(), "the plugin's daemon never started"
+    kingen.kill()
+    kingen.wait()
+    deadline = time.monotonic() + 10
+    while spinners() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    left = spinners()
+    for pid in left:
+        os.kill(pid, 9)
+    assert left == []
