@@ -4,6 +4,7 @@ makes kingen answer exit 1 with a failed ``sandbox`` check naming what it did, k
 never stopped or killed, nothing it started left running and nothing written. Each plugin
 is the correct probe of tests/test_hostile.py with one constructor added (compiled here)."""
 
+import hashlib
 import json
 import os
 import shutil
@@ -17,8 +18,10 @@ from test_hostile import ROBOT, plugin_source
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the sandbox is Linux's")
 
-SPINNER = "kgspinner"
-"""The name a plugin's daemon gives itself (prctl PR_SET_NAME): its mark in the process table."""
+def spinner(tmp_path):
+    """The name a test's plugin daemon gives itself (prctl PR_SET_NAME, at most 15 characters):
+    its mark in the process table, the test's own (tests may run side by side)."""
+    return "kg" + hashlib.sha256(str(tmp_path).encode()).hexdigest()[:12]
 HEADERS = "#include <signal.h>\n#include <sys/prctl.h>\n#include <sys/socket.h>\n#include <stdio.h>\n"
 
 
@@ -44,16 +47,16 @@ def verify(tmp_path, body, *command_prefix, env=None):
     return result, time.monotonic() - start
 
 
-def spinners():
-    """The pids of processes named SPINNER still running (zombies are ended)."""
+def spinners(name):
+    """The pids of processes called ``name`` still running (zombies are ended)."""
     found = []
     for entry in os.listdir("/proc"):
         try:
             with open(f"/proc/{entry}/stat") as stream:
-                name, rest = stream.read().split("(", 1)[1].rsplit(")", 1)
+                called, rest = stream.read().split("(", 1)[1].rsplit(")", 1)
         except (OSError, IndexError):
             continue
-        if name == SPINNER and rest.split()[0] != "Z":
+        if called == name and rest.split()[0] != "Z":
             found.append(int(entry))
     return found
 
@@ -99,11 +102,11 @@ def test_a_daemon_the_plugin_starts_is_named_and_ended(tmp_path, how):
     naming it, the process is gone when kingen has answered, and kingen's $TMPDIR is left empty."""
     temporary = tmp_path / "tmp"
     temporary.mkdir()
-    spin = f'prctl(PR_SET_NAME, "{SPINNER}"); for (;;) sleep(1);'
+    spin = f'prctl(PR_SET_NAME, "{spinner(tmp_path)}"); for (;;) sleep(1);'
     body = {"fork": f"if (fork() == 0) {{ {spin} }}",
             "setsid and a double fork": f"if (fork() == 0) {{ setsid(); if (fork() == 0) {{ {spin} }} _exit(0); }}"}[how]
     result, _ = verify(tmp_path, body, env={**os.environ, "TMPDIR": str(temporary)})
-    left = spinners()
+    left = spinners(spinner(tmp_path))
     for pid in left:
         os.kill(pid, 9)
     assert result.returncode == 1, result.stdout + result.stderr
@@ -270,7 +273,7 @@ def test_nothing_a_plugin_started_outlives_a_kingen_killed_with_sigkill(tmp_path
     robot = tmp_path / "probe.yaml"
     robot.write_text(ROBOT)
     source = tmp_path / "kin_probe.c"
-    spin = f'prctl(PR_SET_NAME, "{SPINNER}"); for (;;) sleep(1);'
+    spin = f'prctl(PR_SET_NAME, "{spinner(tmp_path)}"); for (;;) sleep(1);'
     source.write_text(plugin_source(
         CONSTRUCTOR=constructor(f"if (fork() == 0) {{ setsid(); if (fork() == 0) {{ {spin} }} _exit(0); }}"),
         ROUTINE="for (;;) ;"))
@@ -278,15 +281,15 @@ def test_nothing_a_plugin_started_outlives_a_kingen_killed_with_sigkill(tmp_path
                                str(tmp_path / "lib"), "--timeout", "600"], stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL, cwd=tmp_path, start_new_session=True)
     deadline = time.monotonic() + 60
-    while not spinners() and time.monotonic() < deadline and kingen.poll() is None:
+    while not spinners(spinner(tmp_path)) and time.monotonic() < deadline and kingen.poll() is None:
         time.sleep(0.2)
-    assert spinners(), "the plugin's daemon never started"
+    assert spinners(spinner(tmp_path)), "the plugin's daemon never started"
     kingen.kill()
     kingen.wait()
     deadline = time.monotonic() + 10
-    while spinners() and time.monotonic() < deadline:
+    while spinners(spinner(tmp_path)) and time.monotonic() < deadline:
         time.sleep(0.1)
-    left = spinners()
+    left = spinners(spinner(tmp_path))
     for pid in left:
         os.kill(pid, 9)
     assert left == []
