@@ -221,6 +221,7 @@ def in_child(job, arguments, timeout, host, decoders, on_message=None):
     stages, decoded, as it comes."""
     from ..runtime.isolation import run_in_child
 
+    host.prepare_load()
     result, failure = run_in_child(job, arguments, timeout, on_message, first_stage=host.loading_stage,
                                    decoders=decoders)
     if failure is not None:

@@ -330,6 +330,8 @@ def print_report(report, library):
         say_fitted(f"  {line}", width, "    ")
     for notice in report.notices:
         say_fitted(f"  notice: {notice}", width, "    ")
+    if report.isolation:
+        say_fitted(f"  isolation: {report.isolation}", width, "    ")
     verdict = "PASSED" if report.passed else f"FAILED ({len(report.failures)} of {len(report.checks)} checks)"
     speed = (f"; the sampled poses compared in {report.seconds:.2f} s ({report.poses_per_second:,.0f} poses/s, "
              f"{processes_text(report.processes)})" if report.seconds > 0 else "")

@@ -121,6 +121,11 @@ class Host:
         :mod:`kingen.runtime.isolation`)."""
         raise NotImplementedError
 
+    def prepare_load(self):
+        """Build in kingen's cache what :meth:`load` needs besides the library (a host
+        emulator, a driver), in kingen's own process: load runs in a sandbox that can
+        neither write the cache nor run a compiler (kingen.runtime.sandbox). Nothing by default."""
+
     def as_seen(self, robot):
         """``robot`` as this host's routines answer it (every posture by default; a host with
         one answer gives :func:`kingen.robot.one_posture.at_posture`). What verify compares with."""

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import KingenError, located
 from ..runtime.file_gate import refuse_special_file
+from ..runtime.household import dying_with_this_process
 from .moves import Arc, Move
 from .program import source_lines
 
@@ -198,7 +199,7 @@ def canonical_motions(path, start=(0.0,) * 6, setup=Setup(), reading=None):
                     [python, "-I", str(CANON), program, unit_code(setup.offset), start_code(start, setup.machine_unit),
                      str(write_end), str(table), str(parameters), repr(1.0 / setup.machine_unit)],
                     stdout=messages, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, pass_fds=(write_end,),
-                    env=environment, cwd=os.path.dirname(program))
+                    env=environment, cwd=os.path.dirname(program), preexec_fn=dying_with_this_process())
             finally:
                 os.close(write_end)
             _limit_cpu(child, setup.seconds)
@@ -283,7 +284,7 @@ def _rs274_errors(path, program, folder, environment, table, parameters, setup, 
         inches.write_text(_in_inches(table.read_text(errors="replace"), setup.machine_unit))
         child = subprocess.Popen([RS274, "-g", "-t", str(inches), "-v", str(variables), *ini, program],
                                  stdout=subprocess.PIPE, stderr=errors, stdin=subprocess.DEVNULL, env=environment,
-                                 cwd=os.path.dirname(program))
+                                 cwd=os.path.dirname(program), preexec_fn=dying_with_this_process())
         _limit_cpu(child, setup.seconds)
         with child.stdout:
             reading.rs274_motions = sum(1 for text in child.stdout if any(name in text for name in RS274_MOTIONS))

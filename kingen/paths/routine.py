@@ -47,6 +47,7 @@ class RoutineSolver:
         self.column = posture if self.model.postures > 1 else 0
         built = self.host.build(robot, out_dir, timeout=timeout)
         self.library, self.routine, self.timeout = built.library, built.routine, timeout
+        self.host.prepare_load()
         self.agreement = Agreement()
 
     def __call__(self, t6):

@@ -32,11 +32,12 @@ class Household:
     - the child's temporary folder (``TMPDIR`` and Python's ``tempfile`` there: module copies,
       reload copies, captured output) is made here and removed here, after all that.
 
-    Linux only, each part a no-op where the kernel lacks it. What it cannot do: a plugin
-    that stops or kills kingen itself (``kill(getppid(), SIGSTOP)``), or processes a plugin
-    detached when kingen is killed with SIGKILL (nothing then runs to end them); see
-    docs/reference/limits.md. A process another thread of kingen forks while the child lives
-    would be taken for an orphan: kingen forks none."""
+    Linux only, each part a no-op where the kernel lacks it. What it cannot do alone (a
+    plugin that stops or kills kingen itself, processes a plugin detached when kingen is
+    killed with SIGKILL), the sandbox the child enters does (:mod:`kingen.runtime.sandbox`);
+    this is what is left where the kernel refuses it. A process another thread of kingen
+    forks while the child lives would be taken for an orphan: kingen forks none.
+    :meth:`clear` says how many orphans it ended: a run whose plugin left some fails."""
 
     def __init__(self):
         self.folder = tempfile.mkdtemp(prefix="kingen-child-")
@@ -61,14 +62,15 @@ class Household:
     def clear(self, child, grace):
         """After ``child`` ended and was reaped: kill its group and every orphan it left, reap
         them (for at most ``grace`` seconds), remove the temporary folder, and stop being a
-        subreaper unless this process was one before."""
+        subreaper unless this process was one before. Returns how many orphans were killed."""
         if child.pid is not None:
             with suppress(OSError):
                 os.killpg(child.pid, signal.SIGKILL)
-        _kill_orphans(self._known, time.monotonic() + grace)
+        orphans = _kill_orphans(self._known, time.monotonic() + grace)
         if not self._was_subreaper:
             _subreaper(False)
         shutil.rmtree(self.folder, ignore_errors=True)
+        return orphans
 
 
 def _hosted(folder, job, channel, *arguments):
@@ -109,22 +111,36 @@ def children(pid):
 
 def _kill_orphans(known, deadline):
     """SIGKILL and reap every child of this process not in ``known``, again for the children
-    each kill hands over, until none is left or ``deadline`` (time.monotonic()) has passed."""
+    each kill hands over, until none is left or ``deadline`` (time.monotonic()) has passed;
+    return how many were killed."""
+    killed = set()
     while time.monotonic() < deadline:
         orphans = [pid for pid in children(os.getpid()) if pid not in known]
         if not orphans:
-            return
+            break
+        killed.update(orphans)
         for pid in orphans:
             with suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
         for pid in orphans:
             with suppress(OSError):
                 os.waitpid(pid, 0)
+    return len(killed)
 
 
-def die_with_parent():
-    """Ask Linux to SIGKILL this process when its parent dies, however the parent dies."""
+def die_with_parent(parent=None):
+    """Ask Linux to SIGKILL this process when its parent dies, however the parent dies; with
+    ``parent`` (its pid), end at once if that one has died already (this process then has
+    another parent)."""
     try:
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
+    if parent is not None and os.getppid() != parent:
+        os._exit(1)
+
+
+def dying_with_this_process():
+    """A ``preexec_fn`` for :class:`subprocess.Popen`: the program it starts is killed when this
+    process dies, SIGKILL included (PR_SET_PDEATHSIG, which the program keeps across exec)."""
+    return functools.partial(die_with_parent, os.getpid())

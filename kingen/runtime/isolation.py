@@ -13,6 +13,12 @@ rather than blaming the routine. The child dies with the parent (``PR_SET_PDEATH
 Linux), and the parent kills it on the way out of any exception, SIGTERM included (the CLI
 turns SIGTERM into ``SystemExit``); whatever the child started, and its temporary folder, go
 with it (:class:`kingen.runtime.household.Household`).
+
+The child enters the sandbox of :mod:`kingen.runtime.sandbox` before the job runs (namespaces,
+a read-only file system but its folder, resource limits, a seccomp filter); the sandbox's
+keeper tells the parent, on a channel of its own, which isolation the job got, what the
+filter refused (a ``sandbox`` failure naming the call and the stage, the child stopped at
+once) and what the job left running when it ended (a ``sandbox`` failure too).
 """
 
 import ctypes
@@ -20,6 +26,7 @@ import faulthandler
 import functools
 import multiprocessing
 import os
+import select
 import signal
 import sys
 import tempfile
@@ -31,6 +38,9 @@ from typing import Tuple
 from . import wire
 from ..errors import InternalError, KingenError, PluginDefect
 from .household import Household, die_with_parent
+from .sandbox import confine
+from .syscalls import filtering_available
+from .text import counted
 
 FIRST_STAGE = "loading the routine"
 """The stage a job starts in, unless its caller names it (a host's ``loading_stage``)."""
@@ -59,54 +69,56 @@ class Channel:
         self._sender.send(kind, value)
 
 
-def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE, decoders=None):
-    """Run ``job(channel, *arguments)`` in a forked child; return (result, None) or
-    (None, ChildFailure). ``on_message(kind, value)`` gets every message other than
-    stages. A KingenError raised in the child is raised here (bad input found while
-    loading); any other exception there is a kingen defect, raised as InternalError.
+def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STAGE, decoders=None, network=False,
+                 on_isolation=None):
+    """Run ``job(channel, *arguments)`` in a forked child, in the sandbox of
+    kingen.runtime.sandbox; return (result, None) or (None, ChildFailure). ``on_message(kind,
+    value)`` gets every message other than stages, ``on_isolation(text)`` the line naming the
+    isolation the job got (kingen.runtime.sandbox.description). A KingenError raised in the child is raised here (bad input found
+    while loading); any other exception there is a kingen defect, raised as InternalError.
+    ``network``: the job keeps the network (a Dask scheduler's).
 
     Everything the child sends arrives as plain data through an authenticated channel
     (kingen.runtime.wire); ``decoders`` maps a message kind ('result' included) to a function that
     turns its plain value into the object the caller expects, checked field by field
     (raising WireError). A message that fails its check or cannot be read or decoded is a
-    ``crash`` failure naming the stage: the child is stopped, and nothing it sent is used."""
+    ``crash`` failure naming the stage: the child is stopped, and nothing it sent is used.
+    A call the sandbox refused is a ``sandbox`` failure naming it and the stage (the child is
+    stopped at once), and so are processes the job left running when it ended (they end with
+    it): even after a result, which is then not used."""
     decoders = {**CONTROL_DECODERS, **(decoders or {})}
     context = multiprocessing.get_context("fork")
-    key = wire.new_key()
+    key, keeper_key = wire.new_key(), wire.new_key()
     reading, writing = os.pipe()
+    keeper_reading, keeper_writing = os.pipe()
     # Not a daemon, so that the job may fork helpers (verify's reference process); it is
     # always stopped and reaped below, and it dies with this process (PR_SET_PDEATHSIG).
     household = Household()
-    child = context.Process(target=_child_main, args=(reading, writing, key, household.hosted(job), arguments),
-                            daemon=False)
+    child = context.Process(target=_child_main, args=(
+        (reading, writing, keeper_reading, keeper_writing), (key, keeper_key), household, job, arguments, network, filtering_available()),
+        daemon=False)
     try:
         household.start(child)
     finally:
         os.close(writing)
+        os.close(keeper_writing)
     receiver = wire.Receiver(reading, key)
-    stage = first_stage
-    finished = False
+    keeper = _KeeperNews(wire.Receiver(keeper_reading, keeper_key), on_isolation)
+    stage, finished, outcome = first_stage, False, None
     try:
-        while True:
-            try:
-                message = receiver.receive(timeout)
-                if message is not None:
-                    kind, value = message[0], _decoded(decoders, *message)
-            except TimeoutError:
-                return None, ChildFailure("timeout", stage, f"no progress for {timeout:g} s during {stage}; "
-                                                            "the routine was stopped (--timeout)")
-            except wire.WireError as error:
-                return None, ChildFailure("crash", stage, f"kingen's channel to the host process carried {error} "
-                                                         f"during {stage}: the host process was stopped and "
-                                                         "nothing it sent was used")
-            if message is None:
-                finished = True
+        while outcome is None:
+            message, outcome = _next_message(receiver, decoders, timeout, stage)
+            refusal = keeper.refusal(stage)
+            outcome = outcome if refusal is None else (None, refusal)
+            if outcome is not None or message is None:
+                finished = outcome is None
                 break
+            kind, value = message
             finished = kind in LAST_MESSAGES
             if kind == "stage":
                 stage = value
             elif kind == "result":
-                return value, None
+                outcome = value, None
             elif kind == "defect":
                 raise PluginDefect(*value)
             elif kind == "error":
@@ -118,7 +130,13 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     finally:
         receiver.close()
         stopped = _end(child, finished)
-        household.clear(child, EXIT_GRACE)
+        orphans = household.clear(child, EXIT_GRACE)
+        keeper.close(stage)
+    refusal = keeper.refusal(stage)
+    if refusal is not None:
+        return None, refusal
+    if outcome is not None:
+        return outcome if outcome[1] is not None or keeper.left(orphans) is None else (None, keeper.left(orphans))
     if stopped:
         return None, ChildFailure("crash", stage, f"the plugin closed kingen's channel to the host process during "
                                                  f"{stage}, which then did not end within {EXIT_GRACE:g} s: it "
@@ -128,6 +146,72 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
                                                  "not ended by the routine: run it again")
     return None, ChildFailure("crash", stage, f"the plugin ended the host process ({ending(child.exitcode)}) "
                                              f"during {stage}")
+
+
+def _next_message(receiver, decoders, timeout, stage):
+    """(the child's next message as (kind, decoded value), or None when it closed the channel;
+    None), or (None, the ChildFailure of a timeout or of a message that is not kingen's)."""
+    try:
+        message = receiver.receive(timeout)
+        return (None if message is None else (message[0], _decoded(decoders, *message))), None
+    except TimeoutError:
+        return None, (None, ChildFailure("timeout", stage, f"no progress for {timeout:g} s during {stage}; "
+                                                           "the routine was stopped (--timeout)"))
+    except wire.WireError as error:
+        return None, (None, ChildFailure("crash", stage, f"kingen's channel to the host process carried {error} "
+                                                         f"during {stage}: the host process was stopped and "
+                                                         "nothing it sent was used"))
+
+
+class _KeeperNews:
+    """What the sandbox's keeper (kingen.runtime.sandbox.confine) tells kingen, on a channel
+    of its own that the code it confines does not hold: the isolation, what it refused, what
+    the job left running. Read whenever the job's own channel gave something (the keeper
+    writes before it answers the call, so a refusal arrives before what followed it)."""
+
+    def __init__(self, receiver, on_isolation):
+        self._receiver, self._on_isolation = receiver, on_isolation
+        self._open = True
+        self.refused, self._left = [], []
+
+    def _read(self, stage, wait):
+        while self._open and select.select([self._receiver.fileno()], [], [], wait)[0]:
+            try:
+                message = self._receiver.receive(EXIT_GRACE)
+            except (TimeoutError, wire.WireError):
+                message = None
+            if message is None or not isinstance(message[1], str):
+                self._open = False
+            elif message[0] == "isolation" and self._on_isolation is not None:
+                self._on_isolation(message[1])
+            elif message[0] == "refused":
+                self.refused.append((message[1], stage))
+            elif message[0] == "left":
+                self._left.append(message[1])
+
+    def refusal(self, stage):
+        """The ``sandbox`` failure of the first call the sandbox refused (None: none so far)."""
+        self._read(stage, 0)
+        if not self.refused:
+            return None
+        text, when = self.refused[0]
+        return ChildFailure("sandbox", when, f"the plugin {text} during {when}, which the sandbox refused: the "
+                                             "run was stopped")
+
+    def left(self, orphans):
+        """The ``sandbox`` failure of processes the job left running (the keeper's count, or
+        ``orphans`` the household ended), None when it left none."""
+        if self._left:
+            return ChildFailure("sandbox", "the end of the job", f"the plugin {self._left[0]}, which kingen ended")
+        if orphans:
+            return ChildFailure("sandbox", "the end of the job", f"the plugin left {counted(orphans, 'process', 'processes')} "
+                                                                 "running when its job ended, which kingen ended")
+        return None
+
+    def close(self, stage):
+        """Read what the keeper sent up to its end (it has ended), then close the channel."""
+        self._read(stage, EXIT_GRACE)
+        self._receiver.close()
 
 
 _TEXT = functools.partial(wire.typed, str)
@@ -191,17 +275,20 @@ def _end(child, finished):
     return finished and stopped
 
 
-def _child_main(reading, writing, key, job, arguments):
+def _child_main(descriptors, keys, household, job, arguments, network, filtering):
+    reading, writing, keeper_reading, keeper_writing = descriptors
     os.close(reading)
+    os.close(keeper_reading)
     die_with_parent()
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     faulthandler.disable()
     _silence_standard_streams()
-    sender = wire.Sender(writing, key)
+    sender = wire.Sender(writing, keys[0])
     channel = Channel(sender)
     try:
-        channel.send("result", job(channel, *arguments))
+        confine(household.folder, keeper_writing, keys[1], network, filtering, keeper_closes=(writing,))
+        channel.send("result", household.hosted(job)(channel, *arguments))
     except PluginDefect as error:
         channel.send("defect", (str(error), error.check))
     except KingenError as error:

@@ -124,6 +124,10 @@ class Receiver:
             got += len(part)
         return b"".join(parts)
 
+    def fileno(self):
+        """The reading end's descriptor (for select)."""
+        return self._descriptor
+
     def close(self):
         os.close(self._descriptor)
 

@@ -22,8 +22,9 @@ becomes a failed check instead of a dead, silent or stuck kingen.
 """
 
 import functools
-from dataclasses import asdict
+import platform
 import time
+from dataclasses import asdict
 
 from ..errors import KingenError, PluginDefect
 from ..runtime.isolation import ending, keep_freed_memory, killed_from_outside, killer, run_in_child
@@ -36,6 +37,7 @@ from .boundaries import boundary_poses
 from .cluster import ClusterChunks
 from .processes import Printed, chunk_size, compare_poses, compared_chunks, empty_report, merge, process_count
 from .tally import Tally, posture_statistics
+from .evidence import answers, decoder, unconfirmed
 
 __all__ = ["VerifyOptions", "chunk_size", "report_tolerance_mm", "value_tolerance_mm", "verify", "verify_library"]
 
@@ -95,23 +97,37 @@ def verify_library(robot, library, routine, options=VerifyOptions(), progress=No
     context = Context(robot=robot, options=options, library=library)
     checks = [result for check in by_need(host.checks, "library") for result in check.run(context)]
     on_file = len(checks)
+    isolation, evidence = [], []
 
     def on_message(kind, value):
         if kind == "progress" and progress is not None:
             progress(value)
         elif kind == "check":
             checks.append(value)
+        elif kind == "evidence":
+            evidence.append(value)
 
+    host.prepare_load()
+    if options.scheduler is not None:
+        # Dask's client asks for the processor's name, which runs uname(1): a program the
+        # sandbox would refuse; asked here, it is cached for the child.
+        platform.uname().processor
     try:
         report, failure = run_in_child(_verify_job, (robot, library, routine, host, options), options.timeout,
-                                       on_message, first_stage=host.loading_stage, decoders=REPORT_DECODERS)
+                                       on_message, first_stage=host.loading_stage,
+                                       decoders={**REPORT_DECODERS, "evidence": decoder(options)},
+                                       network=options.scheduler is not None, on_isolation=isolation.append)
     except PluginDefect as defect:
         report, failure = None, None
         checks = [Check(defect.check, False, str(defect))]
     if report is not None:
         report.checks[:0] = checks[:on_file]
+        report.isolation = "".join(isolation[:1])
+        forged = unconfirmed(robot, options, report, evidence[0] if evidence else None)
+        report.checks.extend([forged] if forged is not None else [])
         return report
     report = empty_report(robot, routine, options)
+    report.isolation = "".join(isolation[:1])
     report.interface_checks = _interface_names(host.checks)
     report.checks.extend(checks)
     if failure is not None:
@@ -141,6 +157,9 @@ def _verify_job(channel, robot, library, routine, host, options):
     if printed.bytes:
         report.notices.insert(0, f"loading the library printed {printed.bytes} bytes on stdout/stderr "
                                  f"(first line: {printed.first_line!r})")
+    if (plugin.dof, plugin.postures) == (robot.joint_count, robot.postures):
+        with printed.capture():
+            channel.send("evidence", answers(robot, plugin, options))
     return report
 
 

@@ -3,7 +3,7 @@ comparing processes (one per core by default), each drawing its own chunks' pose
 sending back only a chunk's totals. The report is the same whatever the process count."""
 
 import multiprocessing
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -90,10 +90,11 @@ def _compare_chunk(poses, first=False):
     return compare_poses(poses, first)
 
 
-def compare_poses(poses, first=False):
+def compare_poses(poses, first=False, captured=True):
     """Call the routine on ``poses`` (m, 6; mm, degrees), solve the reference and compare: a
     _Part (with the poses kept for diagnoses only for the ``first`` chunk; nothing else
-    heavy, so that it travels between processes cheaply), for set_chunk_job's routine."""
+    heavy, so that it travels between processes cheaply), for set_chunk_job's routine.
+    What the call prints is counted when ``captured`` (a routine run here, not its answers)."""
     robot, calibrated, plugin, options = _chunk_job
     report = empty_report(robot, plugin.routine, options)
     tally = Tally.start(calibrated)
@@ -103,7 +104,7 @@ def compare_poses(poses, first=False):
     # A host that can summarise the solutions by limb branch as it calls (kingen.verify.tally uses it).
     summarises = getattr(plugin, "summarises_branches", False) and compares_by_branch(robot)
     summary = {"branches_of": robot} if summarises else {}
-    with printed.capture():
+    with printed.capture() if captured else nullcontext():
         calls = plugin.call(t6, options.link_lengths, options.link_offsets, **summary)
     expected = in_vocabulary(solve(robot, t6, options.link_lengths, options.link_offsets), plugin)
     accumulate(robot, report, tally, robot.revolute, t6, calls, expected, keep_first=first)

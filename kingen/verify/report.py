@@ -90,6 +90,9 @@ class Report:
     """Per posture: {posture, right, wrong, unreachable_wrongly, missed, worst_error_mm,
     worst_error_rad}: poses solved right, solved wrong (joints beyond their bound), reported
     unreachable where the reference solves them, and solved where the reference finds none."""
+    isolation: str = ""
+    """What the routine ran in (kingen.runtime.sandbox.description), as kingen's own process
+    was told by the sandbox's keeper; empty for a routine verified in the calling process."""
 
     @property
     def golden_checked(self):
@@ -142,6 +145,7 @@ class Report:
             "seconds": round(self.seconds, 6),
             "poses_per_second": self.poses_per_second,
             "processes": self.processes,
+            "isolation": self.isolation,
             "passed": self.passed,
         })
 

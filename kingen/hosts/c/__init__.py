@@ -73,6 +73,11 @@ class CHost(Host):
 
         return build_source(source, out_dir, timeout=timeout)
 
+    def prepare_load(self):
+        from .loader import batch_library
+
+        batch_library()
+
     def load(self, library, routine, robot=None):
         from .loader import Library
 

@@ -46,20 +46,25 @@ void kingen_c_timed_batch(void *function, const void *geometry, int calls, int p
 _driver = None
 
 
+def batch_library(timeout=DEFAULT_TIMEOUT):
+    """The batch driver library's path, built once per content and compiler."""
+    source, command = BATCH.read_text(), compiler_command()
+    folder = cache_dir() / f"c-batch-{digest(VERSION, source, *command)[:16]}"
+    library = folder / "libkingen_c_batch.so"
+
+    def make():
+        write_atomic(folder / BATCH.name, source)
+        compile_c([folder / BATCH.name], library, ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared"], timeout=timeout)
+
+    cached(folder, library, make, {BATCH.name: source})
+    return library
+
+
 def batch_driver(timeout=DEFAULT_TIMEOUT):
-    """The batch driver library, built once per content and compiler; loaded."""
+    """The batch driver library (batch_library), loaded once per process."""
     global _driver
     if _driver is None:
-        source, command = BATCH.read_text(), compiler_command()
-        folder = cache_dir() / f"c-batch-{digest(VERSION, source, *command)[:16]}"
-        library = folder / "libkingen_c_batch.so"
-
-        def make():
-            write_atomic(folder / BATCH.name, source)
-            compile_c([folder / BATCH.name], library, ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-fPIC", "-shared"], timeout=timeout)
-
-        cached(folder, library, make, {BATCH.name: source})
-        _driver = _batch_ffi.dlopen(str(library))
+        _driver = _batch_ffi.dlopen(str(batch_library(timeout)))
     return _driver
 
 

@@ -59,6 +59,11 @@ class DelmiaHost(Host):
 
         return build_legacy(source, out_dir, timeout=timeout)
 
+    def prepare_load(self):
+        from .build import host_support
+
+        host_support()
+
     def load(self, library, routine, robot=None):
         from .loader import Plugin
 

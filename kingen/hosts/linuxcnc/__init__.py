@@ -76,6 +76,11 @@ class LinuxcncHost(Host):
 
         return build_source(source, out_dir, timeout=timeout)
 
+    def prepare_load(self):
+        from .build import harness
+
+        harness()
+
     def load(self, library, routine, robot=None):
         from .loader import Module
 
