@@ -1,11 +1,11 @@
-"""Lengths in other units than kingen's mm: a robot file written in inches (``units: inch``),
-read into mm once; and a machine whose controller works in inches (LinuxCNC's LINEAR_UNITS),
+"""Lengths in other units than kingen's mm: a robot file written in metres or inches (``units: m``,
+``units: inch``), read into mm once; and a machine whose controller works in inches (LinuxCNC's LINEAR_UNITS),
 whose module's tables hold the robot's lengths in its units. Angles stay degrees (files) and
 radians (inside)."""
 
 from dataclasses import replace
 
-LENGTH_UNITS = {"mm": 1.0, "inch": 25.4}
+LENGTH_UNITS = {"mm": 1.0, "m": 1000.0, "inch": 25.4}
 """mm per unit of length."""
 
 

@@ -18,7 +18,7 @@ from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, c_vector, partial_path
 from ..robot.schema import calibration_index
-from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, home_yaw
+from ..kinematics.parasitic import MANIFOLD_TOLERANCE_RAD, home_yaw, manifold_tolerance_mm
 from ..kinematics.singularity import PACKED, partial_sum_split
 from ..kinematics.parasitic_axes import home_axes
 from ..robot.constraints import axes_table, constraint_table, family
@@ -163,7 +163,7 @@ def constraint_view(robot):
     return {"family": "planes", "axes": [c_vector(row) for row in table.axes], "points": [c_vector(row) for row in table.points],
             "offsets": c_vector(table.offsets), "null": c_vector(table.null),
             "inverse": [c_vector(row) for row in table.pseudo_inverse], "home_cos": c_double(home_cos),
-            "home_sin": c_double(home_sin), "tolerance_mm": c_double(MANIFOLD_TOLERANCE_MM),
+            "home_sin": c_double(home_sin), "tolerance_mm": c_double(manifold_tolerance_mm(robot)),
             "tolerance_rad": c_double(MANIFOLD_TOLERANCE_RAD)}
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from ..conventions import t6_from_pose
 from ..errors import located
 from ..units import LENGTH_UNITS
+from .parasitic import off_manifold_words
 from .reference import solve
 from .routine import WARNINGS
 
@@ -101,10 +102,15 @@ def joint_words(robot, home, limbs=None):
 
 def home_problem(robot, home):
     """Why the HomePosture ``home`` cannot be the machine's home, or None when it can: home
-    unreachable, or beyond the travel of some limbs (each named with its joint at home and its
+    unreachable (off the manifold of a machine with task coordinates: by how much, where), or beyond the travel of some limbs (each named with its joint at home and its
     travel), or, for robots with a direct index, singular there (the index at most
     singular_index_mm: an architecturally singular design)."""
     if not home.reachable:
+        off = off_manifold_words(robot, robot.verification.home)
+        if off is not None:
+            return (f"the verification home is off the machine's manifold {off[0]}: the machine's pose for its "
+                    f"{', '.join(robot.task)} there is {off[1]}; its joints there in posture {home.posture}: "
+                    f"{joint_words(robot, home)}")
         return f"the verification home is unreachable in posture {home.posture}: {joint_words(robot, home)}"
     if home.beyond:
         return (f"the verification home lies beyond travel in posture {home.posture}: "
@@ -139,15 +145,38 @@ def extent_mm(robot):
     return max((float(np.linalg.norm(a - b)) for a, b in combinations(points, 2)), default=0.0)
 
 
+def size_problem(robot):
+    """Why ``robot`` cannot be verified or packaged as its file is read, or None: a file that
+    states no ``units:`` read in mm, for a machine less than SMALLEST_MM across (its lengths are
+    likely metres): its size and the ``units:`` line to add."""
+    if robot.length_unit_given:
+        return None
+    across = extent_mm(robot)
+    if across >= SMALLEST_MM:
+        return None
+    return (f"the machine is {across:.3g} mm across its base and platform points at home, less than "
+            f"{SMALLEST_MM:g} mm: the file states no units, so its lengths were read in mm; add the line "
+            f"'units: m' if they are metres ('units: inch' for inches, 'units: mm' if the machine is this small)")
+
+
+def check_size(robot, what):
+    """KingenError (the robot file's ``name`` line, one line) when size_problem finds one:
+    ``what`` (e.g. 'a package') is not written for a machine whose units are in doubt."""
+    problem = size_problem(robot)
+    if problem is not None:
+        raise located(robot.path, robot.line_of("name"), "units", f"{problem}: {what} is not written for it")
+
+
 def scale_notice(robot):
     """A notice when ``robot`` is less than SMALLEST_MM or more than LARGEST_MM across, naming
-    the unit its file was read in; else None."""
+    the unit its file was read in (the file states it: size_problem judges those that do not);
+    else None."""
     across = extent_mm(robot)
-    if SMALLEST_MM <= across <= LARGEST_MM:
+    if SMALLEST_MM <= across <= LARGEST_MM or not robot.length_unit_given and across < SMALLEST_MM:
         return None
     unit = robot.length_unit
     size = f"{across:.3g} mm" if unit == "mm" else f"{across / LENGTH_UNITS[unit]:.3g} {unit} ({across:.3g} mm)"
-    read = ("mm (the file sets no units: a file in inches says 'units: inch')" if unit == "mm"
+    read = ("mm (units: mm)" if unit == "mm"
             else f"{unit} (units: {unit})")
     bound = "less than 10 mm" if across < SMALLEST_MM else "more than 100 m"
     return (f"the robot is {size} across its base and platform points at home, {bound}: its lengths were read in "

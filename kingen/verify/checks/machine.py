@@ -1,23 +1,28 @@
 """``machine``: whether the robot itself can work at its verification home, by the numpy
 reference alone (:mod:`kingen.kinematics.home`): a routine equal to the reference proves
-nothing of a machine whose legs cannot reach home or whose design is singular there. A robot
-implausibly small or large across gets a notice naming the units its file was read in."""
+nothing of a machine whose legs cannot reach home or whose design is singular there, nor of one
+under 10 mm across whose file states no units (read in mm, its lengths are likely metres). A robot
+whose file states its units and that is implausibly small or large across gets a notice naming them."""
 
 import math
 
 from ...conventions import wrap_angle
-from ...kinematics.home import home_problem, judged_posture, scale_notice
+from ...kinematics.home import home_problem, judged_posture, scale_notice, size_problem
 from .base import Check, VerifyCheck
 
 
 def machine_check(robot):
-    """``machine``: passes when the judged posture (the working posture when the file gives one,
+    """``machine``: fails a machine whose units are in doubt (:func:`kingen.kinematics.home.size_problem`);
+    passes when the judged posture (the working posture when the file gives one,
     else some posture) can be the machine's home (:func:`kingen.kinematics.home.home_problem`:
     reachable, within travel, not singular); the failure says why, in the robot file's units.
     A machine with a wrist is judged by its parallel part at the platform's home, and its wrist
     joints at 0 (the home's tool pose) within their travel."""
     if robot.wrist is not None:
         return _with_wrist(robot, machine_check(robot.parallel))
+    size = size_problem(robot)
+    if size is not None:
+        return Check("machine", False, size)
     home = judged_posture(robot)
     problem = home_problem(robot, home)
     if problem is not None:
