@@ -25,6 +25,19 @@ from ..robot.constraints import axes_table, constraint_table, family
 from .wrist import whole_view
 
 
+NEWTON_STEP, NEWTON_STEP_RELATIVE = 1e-10, 1e-12
+"""A generated forward's Newton stops when no step is longer than NEWTON_STEP (mm and radians),
+or than NEWTON_STEP_RELATIVE of the machine's size where that is larger: rounding leaves steps of
+about 1e-16 of the size times the pose's conditioning, which a machine of metres keeps above
+1e-10 mm; the step after which Newton stops leaves an error of about its square."""
+
+
+def newton_step(robot):
+    """The C text of the longest Newton step a generated forward stops at, for ``robot`` in the
+    units the routine computes in (NEWTON_STEP)."""
+    return c_double(max(NEWTON_STEP, NEWTON_STEP_RELATIVE * robot.size_mm))
+
+
 def _partial_source(name):
     """Limb model partials ('limbs/<model>.c.j2') from the registry, wherever they live."""
     model = name[len("limbs/"):-len(".c.j2")] if name.startswith("limbs/") and name.endswith(".c.j2") else None
