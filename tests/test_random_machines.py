@@ -240,3 +240,19 @@ def test_solve_says_how_far_a_pose_is_off_the_manifold(capsys):
     assert main(["solve", "exechon_constrained", "--pose", "100", "50", "-1250", "0", "0", "0"]) == 0  # solve prints; it judges nothing
     out = capsys.readouterr().out
     assert "the T6 is off its manifold by 4.57 degrees in pitch (tolerance 0.00172 degrees)" in out, out
+
+
+@pytest.mark.parametrize("name", ["exechon_constrained", "tricept", "prs_head", "rps_table"])
+def test_published_poses_rounded_as_a_drawing_gives_them_are_on_the_manifold(name):
+    """Each golden pose of a shipped machine with task coordinates (an independent computation's,
+    to 9 decimals) rounded to 4 decimals of a mm and 3 of a degree is on the machine's manifold:
+    the reference answers it as the machine's pose, not WARN_UNREACHABLE."""
+    from kingen.kinematics.parasitic import solve_parasitic
+
+    robot = load_robot(name)
+    poses = np.array([entry.pose for entry in robot.golden])
+    rounded = np.concatenate([np.round(poses[:, :3], 4), np.round(poses[:, 3:], 3)], axis=1)
+    assert np.any(rounded != poses)
+    assert not np.any(solve_parasitic(robot, t6_from_pose(rounded)).off)
+    warnings = reference_solve(robot, t6_from_pose(rounded)).warnings
+    assert not np.any(warnings[np.arange(len(poses)), [entry.posture for entry in robot.golden]] == WARNINGS["WARN_UNREACHABLE"])
