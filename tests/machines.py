@@ -211,3 +211,29 @@ def machines(draw):
     units = draw(st.sampled_from(sorted(UNITS)))
     family, document = draw(FAMILIES[draw(st.sampled_from(sorted(FAMILIES)))](units))
     return (f"{family}, {document['units']}" if "units" in document else family), document
+
+
+LENGTH_FIELDS = ("base_point", "platform_point", "rail_point", "carriage_offset", "link_length", "reference_length",
+                 "base_radius", "platform_radius", "R", "L", "platformradius", "thighlength", "shinlength", "footradius")
+"""The length fields of the families drawn here (a wrist's tool position and the region's positions aside)."""
+
+
+def in_units(document, units):
+    """``document`` (a drawn robot file in mm) with every length written in ``units``: the same machine."""
+    scale = 1.0 / UNITS[units]
+
+    def scaled(mapping):
+        return {key: ([value * scale for value in item] if isinstance(item, list) else item * scale)
+                if key in LENGTH_FIELDS else item for key, item in mapping.items()}
+
+    converted = dict(document, units=units)
+    if "limbs" in document:
+        converted["limbs"] = [scaled(limb) for limb in document["limbs"]]
+    if "layout" in document:
+        converted["layout"] = scaled(document["layout"])
+    if "passive_leg" in document:
+        converted["passive_leg"] = scaled(document["passive_leg"])
+    region = document["verification"]
+    converted["verification"] = {key: [value * scale for value in region[key][:3]] + region[key][3:]
+                                 for key in ("home", "range")}
+    return converted

@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 import yaml
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from conftest import require_linuxcnc_headers
-from machines import coincident_tricept, machines
+from machines import coincident_tricept, in_units, machines
 from kingen.cli import main
 from kingen.hosts.linuxcnc.checks.refusal import far_pose
 from kingen.kinematics.home import judged_posture
@@ -259,3 +259,23 @@ def test_published_poses_rounded_as_a_drawing_gives_them_are_on_the_manifold(nam
     assert not np.any(solve_parasitic(robot, t6_from_pose(rounded)).off)
     warnings = reference_solve(robot, t6_from_pose(rounded)).warnings
     assert not np.any(warnings[np.arange(len(poses)), [entry.posture for entry in robot.golden]] == WARNINGS["WARN_UNREACHABLE"])
+
+
+@settings(max_examples=4 if not FULL else 50, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(drawn=machines(), units=st.sampled_from(["inch", "m"]))
+def test_a_machine_in_inches_or_metres_and_the_same_in_mm_get_the_same_verdict(drawn, units, tmp_path_factory):
+    """The same drawn machine written in mm and in ``units`` (every length divided by 25.4 or
+    1000: tests/machines.in_units) is the same machine: the same joints at home (prismatic ones
+    in mm) and the same verdict from verify."""
+    family, document = drawn
+    assume("units" not in document and "wrist" not in document)  # a wrist's parallel part is in mm
+    folder = tmp_path_factory.mktemp("units")
+    converted = dict(in_units(document, units), name=f"{document['name']}_{units}")
+    paths = [write_machine(folder, document), write_machine(folder, converted)]
+    robots = [robot_from_data(data, path) for data, path in zip((document, converted), paths)]
+    home = np.array(robots[0].verification.home)
+    joints = [reference_solve(robot, t6_from_pose(home[None])).joints for robot in robots]
+    assert np.allclose(joints[0], joints[1], rtol=1e-9, atol=1e-9 * robots[0].size_mm), family
+    verdicts = [run_verify(path, "c", folder)[:2] for path in paths]
+    assert verdicts[0][0] == verdicts[1][0] == 0, (family, failed_checks(verdicts[0][1]), failed_checks(verdicts[1][1]))
