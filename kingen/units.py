@@ -1,13 +1,13 @@
-"""Lengths in other units than kingen's mm: a robot file written in inches (``units: inch``),
-read into mm once; a machine whose controller works in inches (LinuxCNC's LINEAR_UNITS),
-whose module's tables hold the robot's lengths in its units; and numbers written for people
-(reports and terminal lines): lengths in mm, um, nm or pm, no exponent, no -0, zero as 0.
-Angles stay degrees (files) and radians (inside)."""
+"""Lengths in other units than kingen's mm: a robot file written in metres or inches (``units: m``,
+``units: inch``), read into mm once; a machine whose controller works in inches (LinuxCNC's
+LINEAR_UNITS), whose module's tables hold the robot's lengths in its units; and numbers written
+for people (reports and terminal lines): lengths in mm, um, nm or pm, no exponent, no -0, zero
+as 0. Angles stay degrees (files) and radians (inside)."""
 
 import math
 from dataclasses import replace
 
-LENGTH_UNITS = {"mm": 1.0, "inch": 25.4}
+LENGTH_UNITS = {"mm": 1.0, "m": 1000.0, "inch": 25.4}
 """mm per unit of length."""
 
 

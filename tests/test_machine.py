@@ -1,7 +1,8 @@
 """verify's ``machine`` check and the LinuxCNC package's refusal: a robot that cannot work at
 its verification home (legs too short, an architecturally singular layout) fails verify with
-the cause named and gets no package; a robot drawn in metres gets a notice naming its units;
-every shipped robot passes the check."""
+the cause named and gets no package; a robot drawn in metres in a file that states no units
+fails, naming its size and the `units:` line to add, and gets no package from any host; every
+shipped robot passes the check."""
 
 import json
 from pathlib import Path
@@ -43,28 +44,37 @@ def test_an_architecturally_singular_layout_fails_verify_naming_its_direct_index
     assert "mm in posture 0, at most 0.00027 mm: the design is singular there" in detail
 
 
-def test_a_robot_typed_in_metres_gets_a_notice_naming_the_units_it_was_read_in(tmp_path):
+SIZE_PROBLEM = ("the machine is 0.524 mm across its base and platform points at home, less than 10 mm: the file "
+                "states no units, so its lengths were read in mm; add the line 'units: m' if they are metres "
+                "('units: inch' for inches, 'units: mm' if the machine is this small)")
+
+
+def test_a_robot_typed_in_metres_without_units_fails_machine_naming_its_size_and_the_line_to_add(tmp_path):
     code, checks, notices = verify_json(tmp_path, "metre_legs")
-    assert code == 1  # its legs are as short as short_legs' in metres
-    assert checks["machine"]["detail"].startswith("the verification home lies beyond travel in posture 0: "
-                                                  "leg1 0.451949 mm (travel 0.3 to 0.4)")
-    assert ("the robot is 0.524 mm across its base and platform points at home, less than 10 mm: its lengths were "
-            "read in mm (the file sets no units: a file in inches says 'units: inch'); check the file's units") in notices
+    assert code == 1
+    assert checks["machine"]["detail"] == SIZE_PROBLEM
+    assert not any("across" in notice for notice in notices)  # the failure says it once
 
 
-@pytest.mark.parametrize("name, problem", [
-    ("short_legs", f"the verification home lies beyond travel in posture 0: {LEGS}"),
-    ("singular_layout", "the direct index at the verification home is "),
-    ("metre_legs", "the verification home lies beyond travel in posture 0: leg1 0.451949 mm (travel 0.3 to 0.4)"),
-])
-def test_linuxcnc_refuses_to_package_a_robot_that_cannot_work_at_home(tmp_path, capsys, name, problem):
+def test_the_same_file_with_units_m_is_the_mm_machine(tmp_path):
+    """metre_legs with 'units: m' is short_legs (the same numbers in mm): the same verdict, its
+    joints named in metres (451.949 mm = 0.451949 m)."""
+    path = tmp_path / "metre_legs_m.yaml"
+    path.write_text((DATA / "metre_legs.yaml").read_text() + "units: m\n")
+    robot, in_mm = load_robot(str(path)), load_robot(str(DATA / "short_legs.yaml"))
+    assert robot.size_mm == pytest.approx(in_mm.size_mm, rel=1e-12)
+    detail = machine_check(robot).detail
+    assert detail.startswith("the verification home lies beyond travel in posture 0: "
+                             "leg1 0.451949 m (travel 0.3 to 0.4)"), detail
+    assert machine_check(in_mm).detail.startswith(f"the verification home lies beyond travel in posture 0: {LEGS}")
+
+
+@pytest.mark.parametrize("host", ["delmia", "c", "linuxcnc"])
+def test_no_host_packages_a_robot_typed_in_metres_without_units(tmp_path, capsys, host):
     out = tmp_path / "package"
-    assert main(["package", str(DATA / f"{name}.yaml"), "--host", "linuxcnc", "-o", str(out)]) == 2
+    assert main(["package", str(DATA / "metre_legs.yaml"), "--host", host, "-o", str(out)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 1
-    assert lines[0].startswith(f"kingen: error: {DATA / name}.yaml:")
-    assert f"verification.home: {problem}" in lines[0]
-    assert lines[0].endswith("a LinuxCNC package cannot be written for it")
+    assert lines == [f"kingen: error: {DATA / 'metre_legs'}.yaml:2: units: {SIZE_PROBLEM}: a package is not written for it"]
     assert not out.exists()
 
 

@@ -165,9 +165,12 @@ def test_linuxcnc_sheet_of_a_closed_form_delta_speaks_of_carriages_not_newton_or
 
 
 def test_linuxcnc_sheet_of_a_hexapod_speaks_of_newton_and_leg_extensions():
-    text = render_linuxcnc(load_robot("hexapod"))["SETUP.md"]
+    robot = load_robot("hexapod")
+    text = render_linuxcnc(robot)["SETUP.md"]
     assert "`hexapodkins.iterations` (s32 out): Newton's steps in the last forward." in text
-    assert "`.max-step`, `.max-step-angle`: the forward's\n  settings (20, 1e-10, 25.0 mm, 10.0 degrees)." in text
+    # the tolerance: 1e-12 of the robot's size where that exceeds 1e-10 (kingen.hosts.render.newton_step)
+    assert robot.size_mm == 515.0  # z 465 + 50 of the verification region
+    assert "`.max-step`, `.max-step-angle`: the forward's\n  settings (20, 5.15e-10, 25.0 mm, 10.0 degrees)." in text
     assert "- A leg joint (mm) is the leg's extension from its reference length (positive extends it" in text
     assert "closed form" not in text and "carriage" not in text
 

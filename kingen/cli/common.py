@@ -150,7 +150,7 @@ def HOST(function):
     with_host = click.option("--setp", "setp", multiple=True, metavar="NAME=VALUE", callback=_setp,
                              help="Set a pin or parameter of the loaded module (linuxcnc), as halcmd setp.")(with_host)
     with_host = click.option("--units", type=click.Choice(["mm", "inch"]), default=None,
-                             help="The machine's LINEAR_UNITS (linuxcnc) [default: the robot file's units].")(with_host)
+                             help="The machine's LINEAR_UNITS (linuxcnc) [default: the robot file's units; mm for a file in metres].")(with_host)
     return click.option("--host", "host_name", default=DEFAULT_HOST, show_default=True, metavar="NAME",
                         help="The host the routine is for: delmia (DELMIA V5 / IGRIP), linuxcnc (a LinuxCNC "
                              "kinematics module), or one a plugin registered.")(with_host)

@@ -59,8 +59,11 @@ def package(robot, out_dir, target, host, timeout):
 
     The folder is written whole or not at all; an existing folder is replaced only when
     kingen wrote it."""
+    from ..kinematics.home import check_size
+
     target = host_target(host, target, "package")
     model = load_model(robot)
+    check_size(model, "a package")
     paths = host.package(model, out_dir or host.package_dir(model, target), target=target, timeout=timeout)
     for path in paths:
         say(str(path))

@@ -170,15 +170,16 @@ def _manifold_note(model, matrix):
     """Where a machine with task coordinates is for the T6 (1, 4, 4)'s task coordinates, and
     whether the T6 asks for that pose (docs/how-to/hybrid.md)."""
     from ..conventions import pose_from_t6
-    from ..kinematics.parasitic import solve_parasitic
+    from ..kinematics.parasitic import off_manifold_words, solve_parasitic
     from ..kinematics.routine import SINGULAR_TOLERANCE
 
     machine = solve_parasitic(model, matrix)
+    off = off_manifold_words(model, pose_from_t6(matrix)[0])
     where = " ".join(fixed_text(value, 9) for value in pose_from_t6(machine.t6)[0])
     world = dict(zip(("x", "y", "z", "roll", "pitch", "yaw"), ("X", "Y", "Z", "A", "B", "C")))
     read = ", ".join(world[name] for name in world if name in model.task)
     solved = ", ".join(world[name] for name in world if name not in model.task)
-    asked = ("off its manifold: the routine answers WARN_UNREACHABLE with that pose's joints" if machine.off[0]
+    asked = (f"off its manifold {off[0]}: the routine answers WARN_UNREACHABLE with that pose's joints" if off
              else "on its manifold") if model.parasitic_given else f"read for {read} only (this host solves {solved})"
     task = ", ".join(name for name in world if name in model.task)
     if not machine.radicand[0] >= -SINGULAR_TOLERANCE:

@@ -19,10 +19,10 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from ..kinematics.collision import MODELS, clearances
-from ..conventions import matrix_from_pose, rpy_from_rotation, t6_from_matrix
-from ..kinematics.forward import COORDINATES, closure_derivative, unit_wrenches
-from ..kinematics.home import SINGULAR, singular_index_mm
-from ..kinematics.parasitic import solve_parasitic, task_twists
+from ..conventions import matrix_from_pose, t6_from_matrix
+from ..kinematics.forward import COORDINATES
+from ..kinematics.home import SINGULAR, closure_square, equilibrated_det, singular_index_mm
+from ..kinematics.parasitic import solve_parasitic
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
@@ -147,33 +147,14 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
 
 
 def _det_sign(robot, t6, points, joints):
-    """Sign of det d(closure residuals)/d(free coordinates) (n,): over the platform twist
-    for six limbs (free of any angle convention), over the free pose coordinates otherwise;
+    """Sign of det d(closure residuals)/d(free coordinates) (n,) (kingen.kinematics.home.closure_square);
     for robots without a direct index, 0 where that matrix is singular (SINGULAR)."""
-    wrenches = unit_wrenches(robot, points, joints)
-    free = free_coordinates(robot)
-    if len(free) == 6:
-        square = wrenches
-    elif robot.task:  # along the manifold: the task coordinates' rates
-        square = wrenches @ task_twists(robot, t6)
-    else:
-        poses = np.concatenate([t6[:, 3, :3], rpy_from_rotation(np.swapaxes(t6[:, :3, :3], 1, 2))], axis=1)
-        square = closure_derivative(wrenches, poses, free)
+    square = closure_square(robot, t6, points, joints)
     with np.errstate(invalid="ignore"):
         sign = np.nan_to_num(np.sign(np.linalg.det(square)))
         if not robot.has_direct_index:
-            sign = np.where(np.abs(_equilibrated_det(square)) <= SINGULAR ** 2, 0.0, sign)
+            sign = np.where(np.abs(equilibrated_det(square)) <= SINGULAR ** 2, 0.0, sign)
     return sign
-
-
-def _equilibrated_det(square):
-    """det of square matrices (n, k, k) with their columns and then their rows scaled to unit
-    length (at most 1 in magnitude, Hadamard; free of the coordinates' units); 0 for a zero
-    column or row."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scaled = square / np.linalg.norm(square, axis=1, keepdims=True)
-        scaled = scaled / np.linalg.norm(scaled, axis=2, keepdims=True)
-        return np.nan_to_num(np.linalg.det(np.nan_to_num(scaled)))
 
 
 def tilted_t6(robot, azimuths, tilts, convention="axis"):

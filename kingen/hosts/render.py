@@ -18,11 +18,24 @@ from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, c_vector, partial_path
 from ..robot.schema import calibration_index
-from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, home_yaw
+from ..kinematics.parasitic import MANIFOLD_TOLERANCE_RAD, home_yaw, manifold_tolerance_mm
 from ..kinematics.singularity import PACKED, partial_sum_split
 from ..kinematics.parasitic_axes import home_axes
 from ..robot.constraints import axes_table, constraint_table, family
 from .wrist import whole_view
+
+
+NEWTON_STEP, NEWTON_STEP_RELATIVE = 1e-10, 1e-12
+"""A generated forward's Newton stops when no step is longer than NEWTON_STEP (mm and radians),
+or than NEWTON_STEP_RELATIVE of the machine's size where that is larger: rounding leaves steps of
+about 1e-16 of the size times the pose's conditioning, which a machine of metres keeps above
+1e-10 mm; the step after which Newton stops leaves an error of about its square."""
+
+
+def newton_step(robot):
+    """The C text of the longest Newton step a generated forward stops at, for ``robot`` in the
+    units the routine computes in (NEWTON_STEP)."""
+    return c_double(max(NEWTON_STEP, NEWTON_STEP_RELATIVE * robot.size_mm))
 
 
 def _partial_source(name):
@@ -163,7 +176,7 @@ def constraint_view(robot):
     return {"family": "planes", "axes": [c_vector(row) for row in table.axes], "points": [c_vector(row) for row in table.points],
             "offsets": c_vector(table.offsets), "null": c_vector(table.null),
             "inverse": [c_vector(row) for row in table.pseudo_inverse], "home_cos": c_double(home_cos),
-            "home_sin": c_double(home_sin), "tolerance_mm": c_double(MANIFOLD_TOLERANCE_MM),
+            "home_sin": c_double(home_sin), "tolerance_mm": c_double(manifold_tolerance_mm(robot)),
             "tolerance_rad": c_double(MANIFOLD_TOLERANCE_RAD)}
 
 

@@ -217,6 +217,8 @@ def assemblies(robot, joints, near, search=SEARCH):
     else:
         exhaustive, candidates, method = _multi_start(robot, joints, near, free, search)
     found = _polished(robot, candidates, joints, near, free)
+    if not exhaustive and not sgp.applies(robot, free):
+        found, method = _continuum(robot, joints, free, found, method)
     if exhaustive:
         exhaustive, found, method = check_exhaustive(robot, joints, near, free, found, method)
     if exhaustive:
@@ -246,6 +248,18 @@ def check_exhaustive(robot, joints, near, free, found, method):
                                f"{method.removeprefix('exhaustive: ')}: {len(found)} real isolated")
 
 
+def _continuum(robot, joints, free, found, method):
+    """(found, method) of a multi-start search: where the closure Jacobian is singular at every
+    pose Newton reached, the joints admit a continuum of poses (coincident limbs, a platform
+    free to move), not as many modes as starts: the nearest pose stands for it, and the line says so."""
+    singular = _singular(robot, [assembly.pose for assembly in found], joints, free)
+    if not len(found) or not np.all(singular):
+        return found, method
+    return found[:1], (f"not exhaustive: the geometry has a continuum of solutions (the closure Jacobian is singular at "
+                       f"every one of the {counted(len(found), 'pose')} Newton reached; the nearest shown): "
+                       f"{method.removeprefix('not exhaustive: ')}")
+
+
 def _singular(robot, poses, joints, free):
     """(n,) bool: whether the closure Jacobian over the free coordinates is singular at each
     of the poses (n, 6) for ``joints`` (dof,) (SINGULAR_RCOND; angle columns in mm per robot
@@ -254,8 +268,13 @@ def _singular(robot, poses, joints, free):
     if not len(poses):
         return np.zeros(0, dtype=bool)
     _, wrenches = closure(robot, poses, np.tile(joints, (len(poses), 1)))
-    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
-    values = np.linalg.svd(closure_derivative(wrenches, poses, free) * scale, compute_uv=False)
+    if robot.task:  # along the manifold, per unit rate of each task coordinate
+        matrix = wrenches @ task_twists(robot, t6_of(poses))
+        scale = np.array([1.0 if name in ("x", "y", "z") else 1.0 / robot.size_mm for name in robot.task])
+    else:
+        matrix = closure_derivative(wrenches, poses, free)
+        scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
+    values = np.linalg.svd(matrix * scale, compute_uv=False)
     return values[:, -1] <= SINGULAR_RCOND * values[:, 0]
 
 

@@ -16,22 +16,30 @@ is the normalised radicand: below zero no pose has these task coordinates (unrea
 zero the two yaw branches meet (a constraint singularity). The generated C does the same
 operations in the same order (templates/routine_helpers.c.j2, ``parasitic``).
 
-A T6 whose x, y or yaw differ from the solved ones by more than MANIFOLD_TOLERANCE_MM or
-MANIFOLD_TOLERANCE_RAD asks for a pose the machine cannot take: it is *off the manifold*.
+A T6 whose x or y differ from the solved ones by more than manifold_tolerance_mm (a fraction
+MANIFOLD_TOLERANCE of the machine's size) or whose yaw (rotation, for the 'axes' and 'tube'
+families) differs by more than MANIFOLD_TOLERANCE_RAD asks for a pose the machine cannot take: it
+is *off the manifold*. Both tolerances hold a pose copied from a drawing: coordinates rounded to
+4 decimals of a mm and angles to 3 decimals of a degree.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import pose_from_t6, t6_from_pose
+from ..conventions import angle_difference, pose_from_t6, t6_from_pose
 from ..robot.constraints import TASK, constraint_table, family
 from .parasitic_axes import axes_wrenches, solve_axes
 from .parasitic_tube import solve_tube, tube_residuals, tube_wrenches
 
-MANIFOLD_TOLERANCE_MM = 1e-6
-MANIFOLD_TOLERANCE_RAD = 1e-8
-"""How far a T6's x and y (mm) and yaw (rad) may be from the machine's before the routine calls the pose off the manifold."""
+MANIFOLD_TOLERANCE = 1e-5
+"""How far a T6's x and y may be from the machine's before the routine calls the pose off the
+manifold, as a fraction of the machine's size (Robot.size_mm): 0.005 mm on a machine of 500 mm,
+a hundred times the 5e-5 mm a coordinate rounded to 4 decimals may be off."""
+MANIFOLD_TOLERANCE_RAD = 3e-5
+"""How far a T6's yaw (rad; for the 'axes' and 'tube' families, any entry of its rotation) may be
+from the machine's before the routine calls the pose off the manifold: 0.0017 degrees, above the
+1.5e-5 rad three angles each rounded to 3 decimals of a degree may turn the rotation by."""
 OFF_MANIFOLD_EVERY = 8
 """verify leaves one drawn pose in this many as drawn (off the manifold), to exercise the warning."""
 
@@ -44,6 +52,12 @@ class Parasitic:
     t6: np.ndarray
     radicand: np.ndarray
     off: np.ndarray
+
+
+def manifold_tolerance_mm(robot):
+    """How far (mm) a T6's x and y may be from ``robot``'s before its routine calls the pose off
+    the manifold: MANIFOLD_TOLERANCE of its size."""
+    return MANIFOLD_TOLERANCE * robot.size_mm
 
 
 def home_yaw(robot):
@@ -89,7 +103,8 @@ def solve_parasitic(robot, t6):
     fixed[:, :3, 2] = tilt[:, 2]
     fixed[:, 3, 0], fixed[:, 3, 1] = x, y
     turn = np.arctan2(s * c0 - c * s0, c * c0 + s * s0)
-    off = ~((np.abs(x - t6[:, 3, 0]) <= MANIFOLD_TOLERANCE_MM) & (np.abs(y - t6[:, 3, 1]) <= MANIFOLD_TOLERANCE_MM)
+    tolerance = manifold_tolerance_mm(robot)
+    off = ~((np.abs(x - t6[:, 3, 0]) <= tolerance) & (np.abs(y - t6[:, 3, 1]) <= tolerance)
             & (np.abs(turn) <= MANIFOLD_TOLERANCE_RAD))
     return Parasitic(t6=fixed, radicand=radicand, off=off)
 
@@ -195,3 +210,27 @@ def task_rows(t6, task=TASK):
     rows[:, 3:, 3:] = rates
     names = ("x", "y", "z", "roll", "pitch", "yaw")
     return rows[:, [index for index, name in enumerate(names) if name in task]]
+
+
+def off_manifold_words(robot, pose):
+    """(how far, where) when ``pose`` (6,) mm and degrees is off ``robot``'s manifold, else None
+    (also for a robot without task coordinates, and where no pose has its task coordinates):
+    'by 0.054 mm in y (tolerance ...)', the parasitic coordinate farthest beyond its tolerance,
+    and 'x y z roll pitch yaw = ...', the machine's pose for the task coordinates."""
+    if not robot.task:
+        return None
+    with np.errstate(all="ignore"):
+        machine = solve_parasitic(robot, t6_from_pose(np.asarray([pose], dtype=float)))
+        if not machine.off[0] or not np.all(np.isfinite(machine.t6)):
+            return None
+        taken = pose_from_t6(machine.t6)[0]
+        deviation = np.abs(np.asarray(pose, dtype=float) - taken)
+        deviation[3:] = np.degrees(np.abs(angle_difference(np.radians(pose[3:]), np.radians(taken[3:]))))
+    names = ("x", "y", "z", "roll", "pitch", "yaw")
+    limits = [manifold_tolerance_mm(robot)] * 3 + [np.degrees(MANIFOLD_TOLERANCE_RAD)] * 3
+    worst = max((index for index, name in enumerate(names) if name not in robot.task),
+                key=lambda index: deviation[index] / limits[index])
+    unit = "mm" if worst < 3 else "degrees"
+    size = f", {MANIFOLD_TOLERANCE:g} of its {robot.size_mm:g} mm size" if worst < 3 else ""
+    return (f"by {deviation[worst]:.3g} {unit} in {names[worst]} (tolerance {limits[worst]:.3g} {unit}{size})",
+            f"x y z roll pitch yaw = {' '.join(f'{value:.9g}' for value in taken)} (mm, degrees)")

@@ -11,7 +11,7 @@ sample is a pose the machine takes.
 A CSV of poses gives six coordinates per row; each row is compared with the machine's pose
 for its task coordinates (deviations in mm and degrees; a row whose task coordinates no pose
 has is not compared: its samples are unreachable). A row off the manifold (beyond the
-routine's MANIFOLD_TOLERANCE_MM / _RAD, where the routine would warn) is a problem, kind
+routine's manifold_tolerance_mm / MANIFOLD_TOLERANCE_RAD, where the routine would warn) is a problem, kind
 ``off manifold``, unless the check reads the task coordinates only (``--task-only``): then
 it is a notice. Either way the path checked is the machine's, through the rows' task
 coordinates. A G-code program's parasitic words are not read.
@@ -25,7 +25,7 @@ import numpy as np
 from ..conventions import angle_difference, pose_from_t6, t6_from_pose
 from ..hosts.linuxcnc.render import WORLD_AXES
 from ..kinematics.forward import free_mask
-from ..kinematics.parasitic import MANIFOLD_TOLERANCE_MM, MANIFOLD_TOLERANCE_RAD, solve_parasitic
+from ..kinematics.parasitic import MANIFOLD_TOLERANCE_RAD, manifold_tolerance_mm, solve_parasitic
 from ..units import number_text
 from .moves import Move
 from .program import POSE_COLUMNS
@@ -119,8 +119,8 @@ class Manifold:
         move ``index``, named by its coordinate farthest beyond its tolerance."""
         if deviation is None or self.task_only:
             return
-        coordinate = max(self.parasitic, key=lambda at: deviation[at] / tolerance(at))
-        limit = tolerance(coordinate)
+        coordinate = max(self.parasitic, key=lambda at: deviation[at] / tolerance(self.robot, at))
+        limit = tolerance(self.robot, coordinate)
         findings.add(index, findings.place(OFF_MANIFOLD, None, line, asked, np.full(self.robot.dof, np.nan), deviation[coordinate], limit,
                                            limit - deviation[coordinate], between=POSE_COLUMNS[coordinate]))
 
@@ -152,7 +152,7 @@ class Manifold:
             "task_only": self.task_only, "rows": self.rows, "rows_off": self.rows_off,
             "max_deviation": {POSE_COLUMNS[index]: float(self.deviation[index]) for index in self.parasitic}
             if self.csv else None, "first_off": first,
-            "tolerance": {"mm": MANIFOLD_TOLERANCE_MM, "deg": math.degrees(MANIFOLD_TOLERANCE_RAD)}}
+            "tolerance": {"mm": manifold_tolerance_mm(self.robot), "deg": math.degrees(MANIFOLD_TOLERANCE_RAD)}}
 
     def lines(self):
         """The report's lines about the manifold (display text)."""
@@ -182,7 +182,7 @@ def deviations(asked, machine):
     return deviation
 
 
-def tolerance(index):
-    """How far pose coordinate ``index`` may be from the machine's (mm or degrees) before the
+def tolerance(robot, index):
+    """How far pose coordinate ``index`` may be from ``robot``'s (mm or degrees) before the
     routine calls the pose off the manifold."""
-    return MANIFOLD_TOLERANCE_MM if index < 3 else math.degrees(MANIFOLD_TOLERANCE_RAD)
+    return manifold_tolerance_mm(robot) if index < 3 else math.degrees(MANIFOLD_TOLERANCE_RAD)

@@ -118,7 +118,9 @@ def _schema_over(models):
         working_posture: Annotated[int, Field(ge=0)] = Field(
             0, description="The posture a host with one answer per pose (LinuxCNC) uses.")
         collision: Optional[Collision] = Field(None, description="The radii `kingen analyze` checks clearances with.")
-        units: Literal["mm", "inch"] = Field("mm", description="The file's length unit.")
+        units: Literal["mm", "m", "inch"] = Field(
+            "mm", description="The file's length unit: mm, m or inch. A file without it is read in mm, and verify "
+                              "fails such a machine under 10 mm across (its lengths are likely in metres).")
         optimize: Optional[Optimize] = Field(None, description="The design problem `kingen optimize` searches.")
         payload: Optional[PayloadFile] = Field(None, description="The rigid body the platform carries: `kingen loads` "
                                                                  "and verify's machine check hold it.")

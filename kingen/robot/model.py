@@ -51,7 +51,9 @@ class Robot:
     working_posture_given: bool = False
     """Whether the robot file names it (a host with one answer needs it named)."""
     length_unit: str = "mm"
-    """The unit the robot file's lengths are written in ('mm' or 'inch'); the Robot holds mm."""
+    """The unit the robot file's lengths are written in ('mm', 'm' or 'inch'); the Robot holds mm."""
+    length_unit_given: bool = False
+    """Whether the robot file states its unit (``units:``); a file without it is read in mm."""
     left_out: tuple = ()
     """What a view of the robot (kingen.robot.one_posture) leaves unchecked, in words: verify's notices."""
     collision: Optional[dict] = None
@@ -273,6 +275,7 @@ def robot_from_data(data, path, lines=None, raw=None):
         working_posture_given="working_posture" in document.model_fields_set,
         collision=document.collision.model_dump(exclude_none=True) if document.collision else None,
         length_unit=document.units,
+        length_unit_given="units" in document.model_fields_set,
         lines=tuple(lines.items()),
         passive_leg=passive_leg_of(document, locate),
         payload=payload_of(document, LENGTH_UNITS[document.units]),

@@ -14,8 +14,9 @@ from ..defaults import MAX_MM
 MIN_LENGTH_MM = 1e-3
 MAX_DEGREES = 720.0
 """Angles in robot files (directions, offsets, poses) are within +/- two turns."""
-UNIT_TOLERANCE = 1e-6
-"""How far from 1 the norm of a declared direction may be; it is then normalised exactly."""
+UNIT_TOLERANCE = 2e-4
+"""How far from 1 the norm of a declared direction may be; it is then normalised exactly. A unit
+vector written to 4 decimals (each component within 5e-5) has a norm within 1e-4 of 1."""
 
 
 def _check_pose(pose):

@@ -43,7 +43,7 @@ from ...robot.loads_schema import Payload
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)
 from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
-from ...verify.checks.round_trip import FORWARD_SEEDS, ROUND_TRIP_MIN_CONDITIONING, pose_conditioning, seed_offsets
+from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, forward_seeds, pose_conditioning, seed_offsets
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
 from .render import has_static_loads
@@ -136,7 +136,7 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
         allowed_rad = np.maximum(VALUE_TOLERANCE_RAD, allowed_mm / robot.size_mm)
         generator = np.random.default_rng(context.options.seed)
         passed, parts = True, []
-        for label, (distance_mm, distance_deg) in FORWARD_SEEDS.items():
+        for label, (distance_mm, distance_deg) in forward_seeds(robot).items():
             offset = seed_offsets(generator, len(start), distance_mm, distance_deg, free)
             offset[:, 3:] = np.radians(offset[:, 3:])
             found, iterations, returns = library.forward(joints, posture, matrix_from_t6(t6_of(start + offset)).reshape(-1, 16))

@@ -10,7 +10,7 @@ from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
 from ...robot.limbs import c_double, c_vector
-from ..render import refuse, robot_view, template
+from ..render import newton_step, refuse, robot_view, template
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -18,8 +18,6 @@ HOST = CHost()
 """The host the shared view-model asks for the library's names."""
 MAX_ITERATIONS = 20
 """Newton's steps at most in the forward kinematics."""
-TOLERANCE = 1e-10
-"""Newton stops when a step is at most this long (mm and radians)."""
 
 
 def prefix(robot):
@@ -81,7 +79,7 @@ def view_model(robot):
         "fixed_names": " ".join(name for index, name in enumerate(COORDINATES) if not free[index]) or "none",
         "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
-        "tolerance": c_double(TOLERANCE),
+        "tolerance": newton_step(robot),
         **loads_view(robot, free),
     }
 

@@ -25,7 +25,8 @@ class LinuxcncHost(Host):
         return LinuxcncHost(units, setp)
 
     def machine_units(self, robot):
-        return self.units or robot.length_unit
+        """LINEAR_UNITS: the configured ones, else the robot file's ('mm' for a file in metres)."""
+        return self.units or ("inch" if robot.length_unit == "inch" else "mm")
 
     @property
     def checks(self):

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
-from ..render import refuse, build_info, gram_lines, robot_view, schur_test_lines, template
+from ..render import refuse, build_info, gram_lines, newton_step, robot_view, schur_test_lines, template
 from . import LinuxcncHost
 from .five_axis import wrist_view
 from ...kinematics.routine import SINGULAR_TOLERANCE
@@ -29,8 +29,6 @@ HAL_NAME_LEN = 47
 SETTINGS = ("max-iterations", "tolerance", "max-step", "max-step-angle", "status", "iterations")
 """The module's own pins and parameters, besides the geometry."""
 MAX_ITERATIONS = 20
-TOLERANCE = 1e-10
-"""Newton stops when a step is at most this long (mm and radians)."""
 MAX_STEP = 25.0
 MAX_STEP_ANGLE = 10.0
 """mm and degrees per angle: how far the forward may move from the pose passed in (the last
@@ -159,7 +157,7 @@ def view_model(robot, units="mm"):
         "singular_tolerance": c_double(SINGULAR_TOLERANCE),
         "parameters": _parameters(robot),
         "max_iterations": MAX_ITERATIONS,
-        "tolerance": c_double(TOLERANCE),
+        "tolerance": newton_step(robot),
         "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),
         "max_step_angle": c_double(MAX_STEP_ANGLE),
         "degree": c_double(math.pi / 180.0),

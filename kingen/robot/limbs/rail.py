@@ -12,7 +12,7 @@ import numpy as np
 from ...conventions import PRISMATIC
 from pydantic import model_validator
 
-from ..schema import Coordinate, Length, UnitVec3, Vec3
+from ..schema import UNIT_TOLERANCE, Coordinate, Length, UnitVec3, Vec3
 from .base import LimbSolution, TwoBranchModel, axis_words, c_double, c_vector, components_last
 
 
@@ -53,9 +53,16 @@ class Rail(TwoBranchModel):
 
     @model_validator(mode="after")
     def _axis_across_rail(self):
-        if self.revolute_axis is not None and abs(np.dot(self.revolute_axis, self.direction)) > 1e-9:
+        """A revolute axis within UNIT_TOLERANCE of perpendicular to the rail (as written to 4
+        decimals) is made exactly perpendicular (its part along the rail removed, normalised)."""
+        if self.revolute_axis is None:
+            return self
+        across = np.dot(self.revolute_axis, self.direction)
+        if abs(across) > UNIT_TOLERANCE:
             raise ValueError("revolute_axis must be perpendicular to the rail's direction (the carriage "
                              "moves in the plane the joint keeps its link in)")
+        axis = np.asarray(self.revolute_axis) - across * np.asarray(self.direction)
+        object.__setattr__(self, "revolute_axis", [float(value) for value in axis / np.linalg.norm(axis)])  # frozen
         return self
 
     def constraint_plane(self):

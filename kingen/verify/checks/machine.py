@@ -1,19 +1,21 @@
 """``machine``: whether the robot itself can work at its verification home, by the numpy
 reference alone (:mod:`kingen.kinematics.home`): a routine equal to the reference proves
-nothing of a machine whose legs cannot reach home or whose design is singular there. A robot
-implausibly small or large across gets a notice naming the units its file was read in."""
+nothing of a machine whose legs cannot reach home or whose design is singular there, nor of one
+under 10 mm across whose file states no units (read in mm, its lengths are likely metres). A robot
+whose file states its units and that is implausibly small or large across gets a notice naming them."""
 
 import math
 from dataclasses import replace
 
 from ...conventions import wrap_angle
-from ...kinematics.home import home_problem, judged_posture, scale_notice
+from ...kinematics.home import home_problem, judged_posture, scale_notice, size_problem
 from ...kinematics.loads import held_problem, held_text
 from .base import Check, VerifyCheck
 
 
 def machine_check(robot):
-    """``machine``: passes when the judged posture (the working posture when the file gives one,
+    """``machine``: fails a machine whose units are in doubt (:func:`kingen.kinematics.home.size_problem`);
+    passes when the judged posture (the working posture when the file gives one,
     else some posture) can be the machine's home (:func:`kingen.kinematics.home.home_problem`:
     reachable, within travel, not singular, its payload held within every actuator's force limit
     and every passive joint within its limit: kingen.kinematics.loads.held_problem); the failure
@@ -22,6 +24,9 @@ def machine_check(robot):
     joints at 0 (the home's tool pose) within their travel."""
     if robot.wrist is not None:  # the payload sits on the tool: kingen loads judges it, not the parallel part alone
         return _with_wrist(robot, machine_check(replace(robot.parallel, payload=None)))
+    size = size_problem(robot)
+    if size is not None:
+        return Check("machine", False, size)
     home = judged_posture(robot)
     problem = home_problem(robot, home) or (held_problem(robot, home.posture) if home.reachable else None)
     if problem is not None:

@@ -146,6 +146,15 @@ class RoundTrip(VerifyCheck, name="round trip", needs="compared poses"):
 FORWARD_SEEDS = {"a servo cycle away": (0.01, 0.01), "far away": (10.0, 5.0)}
 """Where a host's own forward kinematics is started from, by label: mm along a random direction
 of x y z and degrees along a random direction of roll pitch yaw (the free coordinates only)."""
+FAR_AT_MOST = 0.01
+"""A seed "far away" is at most this fraction of the machine's size away (10 mm is a third of a
+machine 30 mm across, where another assembly mode may lie nearer than the pose)."""
+
+
+def forward_seeds(robot):
+    """FORWARD_SEEDS for ``robot``: the far seeds' distance at most FAR_AT_MOST of its size (mm)."""
+    return {label: (min(distance_mm, FAR_AT_MOST * robot.size_mm) if distance_mm > 1.0 else distance_mm, distance_deg)
+            for label, (distance_mm, distance_deg) in FORWARD_SEEDS.items()}
 
 
 def seed_offsets(generator, count, distance_mm, distance_deg, free):

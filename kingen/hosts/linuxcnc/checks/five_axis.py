@@ -13,7 +13,7 @@ from ....conventions import pose_from_t6, t6_from_pose
 from ....kinematics.reference import solve
 from ....kinematics.routine import VALUE_TOLERANCE_RAD
 from ....verify.checks.base import Check, VerifyCheck
-from ....verify.checks.round_trip import FORWARD_SEEDS
+from ....verify.checks.round_trip import forward_seeds
 from ....verify.options import value_tolerance_mm
 from ....verify.report import not_exercised
 from ..five_axis import axis_of_world, home_axis
@@ -69,7 +69,7 @@ class FiveAxisForward(VerifyCheck, name="forward", needs="compared poses"):
         generator = np.random.default_rng(context.options.seed)
         passed, parts, worst = True, [], [0.0, 0.0, 0.0, 0.0]
         angles, what = ((3, 4, 5), "tool frame") if robot.wrist.whole_pose else ((3, 5), "tool axis")
-        for label, (distance_mm, distance_deg) in FORWARD_SEEDS.items():
+        for label, (distance_mm, distance_deg) in forward_seeds(robot).items():
             found, returns, iterations = module.forward(machine_joints, _seeds(generator, world, distance_mm,
                                                                                distance_deg, module.scale, angles))
             converged = returns == 0
