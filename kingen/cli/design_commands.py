@@ -92,11 +92,21 @@ def optimize(robot, out_dir, seed, iterations, swarm, workers, scheduler, resume
 
 def _stopped(state, out_dir):
     """What a search stopped by Ctrl-C or SIGTERM leaves, in one line: the iteration its
-    checkpoint holds and how to continue, or that it has none."""
-    if not state.iteration:
+    checkpoint on disk holds (what --resume continues from: a signal during an iteration's
+    bookkeeping leaves the checkpoint one iteration behind ``state``) and how to continue, or that
+    it has none."""
+    import json
+
+    from ..design.checkpoint import CHECKPOINT
+
+    try:
+        saved = json.loads((out_dir / CHECKPOINT).read_text())
+        iteration, best = int(saved["iteration"]), float(saved["best_objective"])
+    except (OSError, ValueError, KeyError, TypeError):
+        iteration, best = 0, state.best_objective
+    if not state.iteration or not iteration:
         return "kingen: stopped before the first iteration ended: no checkpoint to resume from"
-    return (f"kingen: stopped at iteration {state.iteration} (best {state.best_objective:g} deg); "
-            f"continue with --resume from {out_dir}")
+    return f"kingen: stopped at iteration {iteration} (best {best:g} deg); continue with --resume from {out_dir}"
 
 
 def _found(outcome):

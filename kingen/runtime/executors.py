@@ -41,23 +41,25 @@ class Workers:
 def _start_worker(parent):
     """In a pool worker, forked or spawned by kingen's process ``parent`` (its pid): it dies
     with kingen, however kingen ends (SIGKILL included: ``PR_SET_PDEATHSIG``; at once if kingen
-    ended before that was asked), and Ctrl-C is the parent's to handle (it checkpoints and
-    stops the pool)."""
+    ended before that was asked), and Ctrl-C and SIGTERM sent to the whole process group (a
+    terminal's Ctrl-C, a service manager's stop) are the parent's to handle (it checkpoints and
+    stops the pool; a worker that died of them first would break the pool)."""
     from .household import die_with_parent
 
     die_with_parent()
     if os.getppid() != parent:
         os.kill(os.getpid(), signal.SIGKILL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # blocked while it was forked (_started)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})  # blocked while it was forked
 
 
 def _started(pool):
-    """``pool`` with its workers started now, SIGINT blocked while they fork (they inherit the
-    block and ignore SIGINT before lifting it): Ctrl-C during the start then neither kills a
+    """``pool`` with its workers started now, SIGINT and SIGTERM blocked while they fork (they
+    inherit the block and ignore both before lifting it): Ctrl-C during the start then neither kills a
     worker before it ignores SIGINT (a broken pool, exit 3) nor is lost in the fork's own
     handlers (the run went on to exit 0); it reaches kingen once the workers are up."""
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         pool.submit(int).result()
     finally:

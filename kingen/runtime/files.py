@@ -11,6 +11,7 @@ import contextlib
 import hashlib
 import json
 import os
+import secrets
 import pwd
 import shutil
 import stat
@@ -82,7 +83,10 @@ def atomic_file(path, executable=False):
     temporary = None
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+        # Named before it is made: a signal that unwinds kingen between the file's creation and
+        # the name's assignment (inside tempfile.mkstemp) would leave it behind.
+        temporary = target.parent / f".{target.name}.{secrets.token_hex(6)}"
+        handle = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
         with os.fdopen(handle, "wb") as stream:
             yield stream
         os.chmod(temporary, (0o777 if executable else 0o666) & ~umask())
