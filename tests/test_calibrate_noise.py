@@ -17,33 +17,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from ruamel.yaml import YAML
 
 from kingen.calibrate.measurements import write_measurements
 from kingen.cli import main
 from kingen.robot.model import load_robot
 from kingen.robot.reading import read_robot_file
+from test_calibrate import homogeneous, rotation
 
 INCH = 25.4
 NOISE_MM, NOISE_RAD, JOINT_MM = 0.01, 20e-6, 0.001
 FRAME = np.array([120.0, -60.0, 30.0, 1.5, -2.0, 15.0])
 """The tracker's pose in the base frame (mm, degrees)."""
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def rotation(roll, pitch, yaw):
-    """Rz(yaw) Ry(pitch) Rx(roll), degrees."""
-    a, b, c = np.radians([roll, pitch, yaw])
-    rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
-    ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
-    rz = np.array([[math.cos(c), -math.sin(c), 0], [math.sin(c), math.cos(c), 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
-
-def homogeneous(pose):
-    matrix = np.eye(4)
-    matrix[:3, :3], matrix[:3, 3] = rotation(*pose[3:]), pose[:3]
-    return matrix
 
 
 def pose_of(matrix):

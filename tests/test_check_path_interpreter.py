@@ -153,15 +153,22 @@ def test_print_and_debug_comments_change_no_verdict(tmp_path, capsys):
     assert [place["line"] - 4 for place in loud["problems"]] == [place["line"] for place in quiet["problems"]]
 
 
+def three_joint_ini(folder, head):
+    """``folder``/machine.ini: ``head`` (the sections a test is about), then three joints at 500
+    mm/s and 5000 mm/s^2."""
+    ini = folder / "machine.ini"
+    ini.write_text(head + "".join(f"[JOINT_{index}]\nMAX_VELOCITY = 500\nMAX_ACCELERATION = 5000\n"
+                                  for index in range(3)))
+    return ini
+
+
 @pytest.mark.parametrize("change", ["T1 M6", "M61 Q1"])
 def test_a_tool_change_applies_the_tools_length_offset_from_the_ini_tool_table(tmp_path, capsys, change):
     """With T1 50 mm long (G43), the machine's controlled point is 50 mm above the programmed one,
     whether the tool was changed (M6) or declared in the spindle (M61)."""
     needs_interpreter()
     (tmp_path / "tools.tbl").write_text("T1 P1 Z50 D6 ;a 6 mm end mill\n")
-    ini = tmp_path / "machine.ini"
-    ini.write_text("[EMCIO]\nTOOL_TABLE = tools.tbl\n" + "".join(
-        f"[JOINT_{index}]\nMAX_VELOCITY = 500\nMAX_ACCELERATION = 5000\n" for index in range(3)))
+    ini = three_joint_ini(tmp_path, "[EMCIO]\nTOOL_TABLE = tools.tbl\n")
     samples = tmp_path / "samples.csv"
     code, out, err, document = check(capsys, tmp_path, f"G21 G90\n{change}\nG43\nG1 X10 Y0 Z20 F600\nM2\n",
                                      "--ini", ini, "--csv", samples)
@@ -174,9 +181,7 @@ def test_a_tool_change_applies_the_tools_length_offset_from_the_ini_tool_table(t
 def test_the_work_offset_comes_from_the_parameter_file_or_offset(tmp_path, capsys):
     needs_interpreter()
     (tmp_path / "machine.var").write_text("5220 1\n5221 5\n5222 -7\n5223 20\n")
-    ini = tmp_path / "machine.ini"
-    ini.write_text("[RS274NGC]\nPARAMETER_FILE = machine.var\n" + "".join(
-        f"[JOINT_{index}]\nMAX_VELOCITY = 500\nMAX_ACCELERATION = 5000\n" for index in range(3)))
+    ini = three_joint_ini(tmp_path, "[RS274NGC]\nPARAMETER_FILE = machine.var\n")
     samples = tmp_path / "samples.csv"
     program = "G21 G90\nG1 X10 Y0 Z0 F600\nM2\n"
     code, out, err, document = check(capsys, tmp_path, program, "--ini", ini, "--csv", samples)

@@ -30,17 +30,23 @@ SMALL = {"search": {"swarm": 6, "iterations": 4, "c1": 2.8, "c2": 1.3},
                                                       "azimuth_step": 8, "tilt_max": 120, "collision": "thesis"}}
 
 
-@pytest.fixture(scope="module")
-def small_file(tmp_path_factory):
-    """rus_optimized with a small swarm and a coarse azimuth step: seconds, not minutes."""
+def small_robot_file(folder, optimize=SMALL):
+    """rus_optimized as ``folder``/rus_small.yaml with its optimize section's entries replaced by
+    ``optimize``'s (SMALL: a small swarm and a coarse azimuth step) and no golden values."""
     data = read_robot_file(resolve_robot_path("rus_optimized"))[0]
-    data["optimize"] = {**data["optimize"], **SMALL}
+    data["optimize"] = {**data["optimize"], **optimize}
     data.pop("golden", None)
-    path = tmp_path_factory.mktemp("design") / "rus_small.yaml"
+    path = folder / "rus_small.yaml"
     buffer = io.StringIO()
     YAML().dump({**data, "name": "rus_small"}, buffer)
     path.write_text(buffer.getvalue())
     return path
+
+
+@pytest.fixture(scope="module")
+def small_file(tmp_path_factory):
+    """rus_optimized with a small swarm and a coarse azimuth step: seconds, not minutes."""
+    return small_robot_file(tmp_path_factory.mktemp("design"))
 
 
 def _run(small_file, folder, *extra):

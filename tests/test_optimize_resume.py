@@ -2,7 +2,6 @@
 kingen alone or to its whole group, as a service manager stops it) resumes to exactly the result an uninterrupted run with the same seed gets; so
 does a search resumed from the checkpoint of any iteration boundary."""
 
-import io
 import json
 import os
 import shutil
@@ -12,14 +11,12 @@ import sys
 import time
 
 import pytest
-from ruamel.yaml import YAML
 
 from kingen.cli import main
 from kingen.design import search
 from kingen.design.problem import Problem
-from kingen.robot.model import resolve_robot_path
 from kingen.robot.reading import read_robot_file
-from test_optimize import SMALL
+from test_optimize import SMALL, small_robot_file
 
 pytestmark = pytest.mark.xdist_group("optimize")
 ITERATIONS = 40
@@ -34,16 +31,9 @@ SAME = ("objective_deg", "swarm_objective_deg", "history", "variables", "tilt_ta
 def small_file(tmp_path_factory):
     """rus_optimized with a small swarm, coarse azimuth and tilt steps and no patience limit:
     milliseconds an iteration."""
-    data = read_robot_file(resolve_robot_path("rus_optimized"))[0]
-    data["optimize"] = {**data["optimize"], **SMALL,
-                        "search": {**SMALL["search"], "iterations": ITERATIONS, "patience": 100000},
-                        "objective": {**SMALL["objective"], "azimuth_step": 45, "tilt_step": 5}}
-    data.pop("golden", None)
-    path = tmp_path_factory.mktemp("resume") / "rus_small.yaml"
-    buffer = io.StringIO()
-    YAML().dump({**data, "name": "rus_small"}, buffer)
-    path.write_text(buffer.getvalue())
-    return path
+    return small_robot_file(tmp_path_factory.mktemp("resume"), {
+        **SMALL, "search": {**SMALL["search"], "iterations": ITERATIONS, "patience": 100000},
+        "objective": {**SMALL["objective"], "azimuth_step": 45, "tilt_step": 5}})
 
 
 @pytest.fixture(scope="module")
