@@ -153,3 +153,18 @@ def test_the_tricepts_head_through_a_0_is_caught_by_its_wrist_joints_speed(tmp_p
     found = {(place["line"], place["kind"], place["joint"]) for place in json.loads((tmp_path / "r.json").read_text())["problems"]}
     assert {(4, "joint speed", "ax4"), (6, "joint speed", "ax4")} <= found
     assert not any(line in (3, 5) for line, _, _ in found)
+
+
+def test_a_move_along_the_wrists_singular_pole_ends_in_bounded_samples(tmp_path, capsys):
+    """From home the tool axis lies on the wrist's pole, where its singular measure grazes 0 along
+    a pure Z move: refinement stops at its bound (kingen.paths.refinement.MAX_REFINED) instead of
+    doubling the samples forty times (gigabytes), and the singularity is reported at its line."""
+    needs_interpreter()
+    program = tmp_path / "along_the_pole.ngc"
+    program.write_text("G21 G91\nG1 Z-1 F600\nG1 Z1\nM2\n")
+    report = tmp_path / "report.json"
+    code, out, err = run(capsys, "check-path", "exechon_wrist", program, "--json", report)
+    assert code == 1, err
+    document = json.loads(report.read_text())
+    assert document["samples"] < 1000
+    assert {place["line"] for place in document["problems"]} == {2, 3}

@@ -4,7 +4,9 @@ Between two samples where a decision quantity g is within its limit at both ends
 can only dip to 0 if its slope there reaches min(g_a, g_b) / du. The slope is estimated by
 the secant slopes of that interval and its two neighbours; where SAFETY times that estimate
 over the interval reaches the smaller end value, the interval is split at its middle, and
-again, until no interval is suspect or intervals are MIN_STEP short. Every interval whose
+again, until no interval is suspect, intervals are MIN_STEP short or the samples added reach
+MAX_REFINED times the batch's own (a quantity that grazes its boundary along a whole move, such
+as a wrist held on its singular pole, would otherwise double the samples MAX_ROUNDS times). Every interval whose
 ends lie on two sides of a boundary is then bisected BISECTIONS times, so that the place
 where the boundary is crossed is known to within 2^-BISECTIONS of the interval.
 """
@@ -19,6 +21,8 @@ MAX_ROUNDS = 40
 MIN_STEP = 1e-12
 """Intervals (in the move's parameter u in [0, 1]) shorter than this are not split."""
 BISECTIONS = 40
+MAX_REFINED = 16
+"""Refinement adds at most this many times a batch's own samples (bisection's are apart)."""
 
 
 def _suspect(batch):
@@ -50,9 +54,9 @@ def refined(batch, evaluate):
     """``batch`` (sorted by piece, then u) with the samples refinement and bisection add (sorted
     alike), and the count of added samples. ``evaluate(piece, u)`` gives the Batch of pieces
     ``piece`` at parameters ``u``."""
-    added = 0
+    added, allowed = 0, MAX_REFINED * len(batch.u)
     for _ in range(MAX_ROUNDS):
-        suspect = np.flatnonzero(_suspect(batch))
+        suspect = np.flatnonzero(_suspect(batch))[:max(allowed - added, 0)]
         if len(suspect) == 0:
             break
         middles = 0.5 * (batch.u[suspect] + batch.u[suspect + 1])
