@@ -48,7 +48,8 @@ def loads(robot, pose, velocity, acceleration, wrench, posture, json_path):
     Exit 0 when every load and angle shown is within its limit, 1 when one is beyond it (named)."""
     import numpy as np
 
-    from ..kinematics.loads import Motion, loads as compute, machine_pose, machine_t6
+    from .. import loads as compute
+    from ..kinematics.loads import machine_pose
     from ..kinematics.routine import WARNING_NAMES, WARNINGS
     from ..runtime.files import write_atomic
 
@@ -56,13 +57,10 @@ def loads(robot, pose, velocity, acceleration, wrench, posture, json_path):
     if posture is not None and posture >= model.postures:
         raise click.BadParameter(f"{model.name} has postures 0 to {model.postures - 1}", param_hint="--posture")
     asked = np.array(pose if pose is not None else model.verification.home, dtype=float)
-    motion = None
-    if velocity is not None or acceleration is not None:
-        motion = Motion(velocity=_internal(velocity), acceleration=_internal(acceleration))
-    result = compute(model, machine_t6(model, asked[None]), wrench=wrench, motion=motion)
-    reached = [k for k in (range(model.postures) if posture is None else [posture])
-               if result.warnings[0, k] != WARNINGS["WARN_UNREACHABLE"]]
-    postures = [_posture_loads(model, result, k, WARNING_NAMES) for k in reached]
+    chosen = list(range(model.postures)) if posture is None else [posture]
+    result = compute(model, [asked], wrench=wrench, velocity=velocity, acceleration=acceleration, postures=chosen)
+    postures = [_posture_loads(model, result, column, number, WARNING_NAMES) for column, number in enumerate(chosen)
+                if result.warnings[0, column] != WARNINGS["WARN_UNREACHABLE"]]
     at = machine_pose(result)[0]
     document = {"robot": model.name, "pose": asked.tolist(), "machine_pose": at.tolist(),
                 "payload": _payload_text(model), "gravity": list(model.gravity),
@@ -70,7 +68,7 @@ def loads(robot, pose, velocity, acceleration, wrench, posture, json_path):
                 else None, "wrench": list(wrench) if wrench else None, "postures": postures}
     if json_path is not None:
         write_atomic(json_path, json.dumps(finite(document), indent=2, allow_nan=False) + "\n")
-    _print(model, asked, at, postures, motion is not None, wrench)
+    _print(model, asked, at, postures, velocity is not None or acceleration is not None, wrench)
     beyond = [f"posture {entry['posture']}: {text}" for entry in postures for text in entry["beyond"]]
     for line in beyond:
         say(f"BEYOND LIMIT {line}")
@@ -80,14 +78,6 @@ def loads(robot, pose, velocity, acceleration, wrench, posture, json_path):
     return EXIT_FAILED if beyond else 0
 
 
-def _internal(values):
-    """Six numbers (mm, degrees per s or s^2) as (mm, rad); zeros for None."""
-    import numpy as np
-
-    values = np.zeros(6) if values is None else np.array(values, dtype=float)
-    return np.concatenate([values[:3], np.radians(values[3:])])
-
-
 def _payload_text(model):
     payload = model.payload
     if payload is None:
@@ -95,35 +85,30 @@ def _payload_text(model):
     return {"mass": payload.mass, "centre": list(payload.centre), "inertia": [list(row) for row in payload.inertia]}
 
 
-def _posture_loads(model, result, posture, warning_names):
-    """One posture's entry of the JSON's ``postures``, with ``beyond``: what leaves its limit, in words."""
+def _posture_loads(model, result, column, posture, warning_names):
+    """The entry of the JSON's ``postures`` of ``posture`` (``result``'s posture ``column``), with
+    ``beyond``: what leaves its limit, in words."""
     import numpy as np
 
-    forces = result.forces[0, posture]
+    from ..kinematics.loads import beyond_limits
+
+    forces = result.forces[0, column]
     units = ["N m" if t.wraps else "N" for t in model.joint_types]
-    base = np.degrees(result.base_angles[0, posture])
-    platform = np.degrees(result.platform_angles[0, posture])
-    beyond = []
-    for index, limb in enumerate(model.limbs):
-        name = model.joint_names[index]
-        limit = limb.max_torque if limb.joint_type.wraps else limb.max_force
-        if limit is not None and not abs(forces[index]) <= limit:
-            beyond.append(f"{name} {forces[index]:.6g} {units[index]} beyond its {limit:g} {units[index]}")
-        cones = limb.joint_limits
-        for side, angles in (("base", base), ("platform", platform)):
-            cone = getattr(cones, side) if cones is not None else None
-            if cone is not None and not angles[index] <= cone:
-                beyond.append(f"{name} {side} joint at {angles[index]:.6g} deg beyond its {cone:g} deg")
+    names = model.joint_names
+    loaded, bent = beyond_limits(model, result, 0, column)
+    beyond = [text for _, _, text in sorted(
+        [(n, 0, f"{names[n]} {force:.6g} {units[n]} beyond its {limit:g} {units[n]}") for n, force, limit in loaded]
+        + [(n, 1, f"{names[n]} {side} joint at {angle:.6g} deg beyond its {cone:g} deg") for n, side, angle, cone in bent])]
     deflection = None
     if result.deflection is not None:
-        move = result.deflection[0, posture]
+        move = result.deflection[0, column]
         deflection = [*move[:3].tolist(), *np.degrees(move[3:]).tolist()]
-    constraint = result.constraint[0, posture]
-    return {"posture": posture, "warning": warning_names.get(int(result.warnings[0, posture]), "?"),
+    constraint = result.constraint[0, column]
+    return {"posture": posture, "warning": warning_names.get(int(result.warnings[0, column]), "?"),
             "forces": forces.tolist(), "units": units,
-            "limits": [(limb.max_torque if limb.joint_type.wraps else limb.max_force) for limb in model.limbs]
-            + [None] * (model.joint_count - model.dof),
-            "joint_angles": {"base": base.tolist(), "platform": platform.tolist()},
+            "limits": [limb.actuator_limit for limb in model.limbs] + [None] * (model.joint_count - model.dof),
+            "joint_angles": {"base": np.degrees(result.base_angles[0, column]).tolist(),
+                             "platform": np.degrees(result.platform_angles[0, column]).tolist()},
             "constraint": {"force": constraint[:3].tolist(), "moment": constraint[3:].tolist()},
             "deflection": deflection, "beyond": beyond}
 
@@ -140,17 +125,18 @@ def _print(model, asked, at, postures, moving, wrench):
         say("the platform's pose: " + " ".join(f"{v:.6f}" for v in at))
     elif np.max(np.abs(at - asked)) > 1e-9:
         say("the machine's pose for these task coordinates: " + " ".join(f"{v:.6f}" for v in at))
+    from ..kinematics.loads import SIDES
+
     for entry in postures:
         say(f"posture {entry['posture']} ({entry['warning']})")
         rows = [("joint", "load", "limit", "base joint (deg)", "platform joint (deg)")]
         for index, name in enumerate(model.joint_names):
             limit = entry["limits"][index]
-            leg = index < model.dof  # a wrist joint has no passive joints of its own
-            cones = model.limbs[index].joint_limits if leg else None
+            limb = model.limbs[index] if index < model.dof else None  # a wrist joint has no passive joints
             rows.append((name, f"{entry['forces'][index] + 0.0:.6g} {entry['units'][index]}",
                          f"{limit:g} {entry['units'][index]}" if limit is not None else "-",
-                         _angle_text(entry["joint_angles"]["base"][index], cones, "base") if leg else "-",
-                         _angle_text(entry["joint_angles"]["platform"][index], cones, "platform") if leg else "-"))
+                         *(_angle_text(entry["joint_angles"][side][index], limb.cone(side)) if limb else "-"
+                           for side in SIDES)))
         print_table(rows)
         force, moment = entry["constraint"]["force"], entry["constraint"]["moment"]
         parallel = model.parallel
@@ -176,6 +162,5 @@ def _rounded(value, scale):
     return 0.0 if value <= scale else value
 
 
-def _angle_text(angle, cones, side):
-    cone = getattr(cones, side) if cones is not None else None
+def _angle_text(angle, cone):
     return f"{angle + 0.0:.4f}" + (f" / {cone:g}" if cone is not None else "")

@@ -9,15 +9,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..kinematics.loads import loads
+from ..kinematics.loads import SIDES, load_limited, loads
 
 UNIT_FORCES = np.eye(3)
 """The forces (N) at the platform origin whose displacements give its compliance's columns."""
-
-
-def load_limited(robot):
-    """Whether the robot file limits an actuator's load or a passive joint's angle."""
-    return any(limb.max_force or limb.max_torque or limb.joint_limits for limb in robot.limbs)
 
 
 def stiffness_given(robot):
@@ -33,15 +28,14 @@ def load_quantities(robot, t6, posture):
     count = len(t6)
     held = loads(robot, t6, postures=[posture])
     forces = np.abs(held.forces[:, 0, :robot.dof])
-    limits = np.array([(limb.max_torque if limb.joint_type.wraps else limb.max_force) or np.nan for limb in robot.limbs])
+    limits = np.array([limb.actuator_limit or np.nan for limb in robot.limbs])
     with np.errstate(invalid="ignore"):
         fractions = forces / limits
     limited = np.isfinite(limits)
     fraction = np.max(fractions[:, limited], axis=1) if np.any(limited) else np.full(count, np.nan)
     bent = np.zeros(count, dtype=bool)
-    for side, angles in (("base", held.base_angles), ("platform", held.platform_angles)):
-        cones = np.array([getattr(limb.joint_limits, side) if limb.joint_limits is not None and
-                          getattr(limb.joint_limits, side) is not None else np.inf for limb in robot.limbs])
+    for side, angles in zip(SIDES, (held.base_angles, held.platform_angles)):
+        cones = np.array([limb.cone(side) if limb.cone(side) is not None else np.inf for limb in robot.limbs])
         bent |= np.any(np.degrees(angles[:, 0]) > cones, axis=1)
     return {"actuator_load": np.nan_to_num(fraction, nan=0.0) > 1.0, "joint_angle": bent, "load_fraction": fraction,
             "min_stiffness_n_per_mm": _least_stiffness(robot, t6, posture)}

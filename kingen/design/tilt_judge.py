@@ -16,7 +16,7 @@ import numpy as np
 
 from ..defaults import VERSION
 from .analysis import CAUSES, CROSSING, Settings, singular_index_mm
-from .load_analysis import load_limited
+from ..kinematics.loads import load_limited
 from ..runtime.compiler import compile_c, compiler_command
 from ..runtime.files import cache_dir, cached, digest, write_atomic
 from ..robot.limbs.crank import Crank

@@ -10,7 +10,10 @@ from .platform_loads import Loads, Motion, external_wrench, machine_t6, payload_
 from .reference import solve
 from .wrist_loads import wrist_loads
 
-__all__ = ["Loads", "Motion", "held_problem", "held_text", "loads", "machine_pose", "machine_t6", "static_loads_of"]
+__all__ = ["Loads", "Motion", "beyond_limits", "held_problem", "held_text", "load_limited", "load_unit", "loads",
+           "machine_pose", "machine_t6", "static_loads_of"]
+SIDES = ("base", "platform")
+"""A limb's passive joints, as joint_limits names them."""
 
 BLOCK_POSTURES = 65536
 """Poses times postures computed at once: their (n, p, m, 6) arrays about 20 MB each."""
@@ -56,25 +59,43 @@ def static_loads_of(robot, t6, solution):
     return _block_loads(robot, np.asarray(t6, dtype=float), None, None, np.array([0]), solution)
 
 
+def load_limited(robot):
+    """Whether the robot file limits an actuator's load or a passive joint's angle."""
+    return any(limb.actuator_limit or limb.joint_limits for limb in robot.limbs)
+
+
+def beyond_limits(robot, result, index=0, posture=0):
+    """What of ``result`` (Loads) at pose ``index`` in its ``posture`` column leaves a limit the
+    robot file states: (loaded, bent), lists of (limb index, load N or N m, limit) and of (limb
+    index, side, angle deg, limit deg). A load that is not a number (a singular posture) is beyond."""
+    loaded, bent = [], []
+    for number, limb in enumerate(robot.limbs):
+        force = result.forces[index, posture, number]
+        if limb.actuator_limit is not None and not abs(force) <= limb.actuator_limit:
+            loaded.append((number, force, limb.actuator_limit))
+        for side, angles in zip(SIDES, (result.base_angles, result.platform_angles)):
+            angle = np.degrees(angles[index, posture, number])
+            if limb.cone(side) is not None and not angle <= limb.cone(side):
+                bent.append((number, side, angle, limb.cone(side)))
+    return loaded, bent
+
+
+def load_unit(limb):
+    """'N m' for a revolute actuator's load, 'N' for a prismatic one's."""
+    return "N m" if limb.joint_type.wraps else "N"
+
+
 def held_problem(robot, posture):
     """Why ``robot`` (no wrist) cannot hold its payload at the verification home in ``posture``,
     in words naming each limb, or None: every actuator's static load within its max_force or
     max_torque and every passive joint within its joint_limits."""
-    if not any(limb.max_force or limb.max_torque or limb.joint_limits for limb in robot.limbs):
+    if not load_limited(robot):
         return None
-    result = loads(robot, machine_t6(robot, np.asarray(robot.verification.home, dtype=float)[None]))
-    loaded, bent = [], []
-    for index, limb in enumerate(robot.limbs):
-        name = robot.joint_names[index]
-        limit, unit = (limb.max_torque, "N m") if limb.joint_type.wraps else (limb.max_force, "N")
-        force = result.forces[0, posture, index]
-        if limit is not None and not abs(force) <= limit:
-            loaded.append(f"{name} {force:.6g} {unit} (limit {limit:g})")
-        for side, angles in (("base", result.base_angles), ("platform", result.platform_angles)):
-            cone = getattr(limb.joint_limits, side) if limb.joint_limits is not None else None
-            angle = np.degrees(angles[0, posture, index])
-            if cone is not None and not angle <= cone:
-                bent.append(f"{name}'s {side} joint {angle:.6g} deg (limit {cone:g})")
+    result = loads(robot, machine_t6(robot, np.asarray(robot.verification.home, dtype=float)[None]), postures=[posture])
+    loaded, bent = beyond_limits(robot, result)
+    names = robot.joint_names
+    loaded = [f"{names[n]} {force:.6g} {load_unit(robot.limbs[n])} (limit {limit:g})" for n, force, limit in loaded]
+    bent = [f"{names[n]}'s {side} joint {angle:.6g} deg (limit {cone:g})" for n, side, angle, cone in bent]
     held = f"the payload ({robot.payload.mass:g} kg)" if robot.payload is not None else "the unloaded platform"
     problems = ([f"holding {held} at the verification home needs more than the actuators give: {', '.join(loaded)}"]
                 if loaded else []) + ([f"passive joints beyond their limits: {', '.join(bent)}"] if bent else [])
@@ -83,7 +104,7 @@ def held_problem(robot, posture):
 
 def held_text(robot):
     """What verify's machine check says it judged of loads, or '' where the file states no limit."""
-    if not any(limb.max_force or limb.max_torque or limb.joint_limits for limb in robot.limbs):
+    if not load_limited(robot):
         return ""
     held = f"holds its payload ({robot.payload.mass:g} kg)" if robot.payload is not None else "holds the unloaded platform"
     return f", {held} within every stated force, torque and joint-angle limit"

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.collision import clearances
-from ..kinematics.loads import static_loads_of
+from ..kinematics.loads import SIDES, static_loads_of
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from ..kinematics.singularity import limb_wrenches
@@ -117,10 +117,10 @@ class Evaluator:
         """The passive joints' angles and the actuators' loads that the robot file limits."""
         columns = []
         for joint, limb in enumerate(self.robot.limbs):
-            for side in ("base", "platform"):
-                if limb.joint_limits is not None and getattr(limb.joint_limits, side) is not None:
+            for side in SIDES:
+                if limb.cone(side) is not None:
                     columns.append(Quantity("joint angle", joint, True, part=side))
-            if (limb.max_torque if limb.joint_type.wraps else limb.max_force) is not None:
+            if limb.actuator_limit is not None:
                 columns.append(Quantity("actuator load", joint, True))
         return columns
 
@@ -190,10 +190,9 @@ class Evaluator:
         if quantity.kind == "direct index":
             return self.threshold
         if quantity.kind == "joint angle":
-            return getattr(self.robot.limbs[quantity.joint].joint_limits, quantity.part)
+            return self.robot.limbs[quantity.joint].cone(quantity.part)
         if quantity.kind == "actuator load":
-            limb = self.robot.limbs[quantity.joint]
-            return limb.max_torque if limb.joint_type.wraps else limb.max_force
+            return self.robot.limbs[quantity.joint].actuator_limit
         return 0.0
 
     def value_of(self, quantity, batch, row):

@@ -107,6 +107,16 @@ class LimbModel(Strict):
         refuse_wrong_limit(self.joint_type, self.max_force, self.max_torque)
         return self
 
+    @property
+    def actuator_limit(self):
+        """The actuator's load limit: max_torque (N m) for a revolute joint, max_force (N) for a
+        prismatic one; None where the file gives none."""
+        return self.max_torque if self.joint_type.wraps else self.max_force
+
+    def cone(self, side):
+        """The passive joint's limit on ``side`` ('base' or 'platform'), degrees, or None."""
+        return None if self.joint_limits is None else getattr(self.joint_limits, side)
+
     @field_validator("calibrate")
     @classmethod
     def _check_calibratable(cls, calibrate):
