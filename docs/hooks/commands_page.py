@@ -12,6 +12,8 @@ escaped for Markdown and HTML outside its code spans, so ``build/<name>`` reads 
 import inspect
 import re
 
+from markdown_parts import piped, replaced_marker
+
 MARKER = "<!-- kingen-commands -->"
 PAGE = "reference/commands.md"
 PROG = "kingen"
@@ -20,11 +22,7 @@ SENTENCE_END = re.compile(r"(?<=[.?!])[)\"']?\s+(?=[A-Z`])")
 
 
 def on_page_markdown(markdown, page, config, files):
-    if page.file.src_uri != PAGE:
-        return markdown
-    if MARKER not in markdown:
-        raise ValueError(f"{PAGE} has lost its marker {MARKER}")
-    return markdown.replace(MARKER, commands_markdown())
+    return replaced_marker(markdown, page, PAGE, MARKER, commands_markdown)
 
 
 # -- text --------------------------------------------------------------------------------------
@@ -54,8 +52,7 @@ def paragraph(text):
 
 def cell(text):
     """``text`` escaped for one table cell: on one line, pipes outside code spans escaped."""
-    parts = escape(" ".join(text.split())).split("`")
-    return "`".join(part if index % 2 else part.replace("|", "\\|") for index, part in enumerate(parts))
+    return piped(escape(" ".join(text.split())))
 
 
 def paragraphs(help_text):

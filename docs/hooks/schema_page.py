@@ -19,6 +19,7 @@ import typing
 from pathlib import Path
 
 import annotated_types
+from markdown_parts import piped, replaced_marker
 
 MARKER = "<!-- robot-file-schema -->"
 PAGE = "reference/robot-file.md"
@@ -33,11 +34,7 @@ def on_config(config):
 
 
 def on_page_markdown(markdown, page, config, files):
-    if page.file.src_uri != PAGE:
-        return markdown
-    if MARKER not in markdown:
-        raise ValueError(f"{PAGE} has lost its marker {MARKER}")
-    return markdown.replace(MARKER, schema_markdown())
+    return replaced_marker(markdown, page, PAGE, MARKER, schema_markdown)
 
 
 # -- what the page says about validators ----------------------------------------------------
@@ -257,8 +254,7 @@ def _default(field):
 
 def _cell(text):
     """A table cell: pipes escaped outside code spans (inside them the table reads them as text)."""
-    parts = str(text).replace("\n", " ").split("`")
-    return "`".join(part if index % 2 else part.replace("|", "\\|") for index, part in enumerate(parts))
+    return piped(str(text).replace("\n", " "))
 
 
 def _model_checks(model, words):
