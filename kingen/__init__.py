@@ -18,7 +18,8 @@ the angles of a pose (x y z roll pitch yaw, R = Rz(yaw) Ry(pitch) Rx(roll)), rad
 revolute joints.
 """
 
-from .defaults import AZIMUTH_STEP_DEG, DEFAULT_HOST, MAX_MM, TILT_MAX_DEG, TILT_STEP_DEG, VERSION
+from .defaults import (AZIMUTH_STEP_DEG, DEFAULT_HOST, LOAD_RATE_MAX, LOAD_WRENCH_MAX, MAX_MM, TILT_MAX_DEG, TILT_STEP_DEG,
+                       VERSION)
 
 __version__ = VERSION
 __all__ = ["analyze", "assembly_modes", "build", "load_robot", "loads", "shipped_robots", "solve", "verify_library"]
@@ -298,8 +299,6 @@ def loads(robot, poses, wrench=None, velocity=None, acceleration=None, postures=
     from .kinematics.loads import Motion, loads as compute, machine_t6
 
     poses = _poses("loads: poses", poses, 1.0)
-    from .defaults import LOAD_RATE_MAX, LOAD_WRENCH_MAX
-
     rates, forces = [(LOAD_RATE_MAX, "mm or deg per s or s^2")] * 6, [(LOAD_WRENCH_MAX, "N or N m")] * 6
     vectors = {name: None if value is None else _numbers(f"loads: {name}", value, (6,), bounds)
                for name, value, bounds in (("wrench", wrench, forces), ("velocity", velocity, rates),

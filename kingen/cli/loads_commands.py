@@ -126,6 +126,7 @@ def _print(model, asked, at, postures, moving, wrench):
     elif np.max(np.abs(at - asked)) > 1e-9:
         say("the machine's pose for these task coordinates: " + " ".join(f"{v:.6f}" for v in at))
     from ..kinematics.loads import SIDES
+    from ..kinematics.platform_loads import all_free
 
     for entry in postures:
         say(f"posture {entry['posture']} ({entry['warning']})")
@@ -139,8 +140,7 @@ def _print(model, asked, at, postures, moving, wrench):
                            for side in SIDES)))
         print_table(rows)
         force, moment = entry["constraint"]["force"], entry["constraint"]["moment"]
-        parallel = model.parallel
-        if not parallel.task and len(parallel.forward_free or "xyzabc") == 6:
+        if all_free(model.parallel):
             say("  constraints: none (six actuated directions)")
         else:
             scale = ROUNDING * (1.0 + max(abs(value) for value in entry["forces"]))

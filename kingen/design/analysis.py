@@ -130,7 +130,7 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
     threshold = robot.direct_index_min if robot.direct_index_min is not None else -1.0
     crossed = (index < CROSSING * home.index_mm) | ((home.det_sign != 0) & (sign != home.det_sign) & reachable)
     cause = np.full(len(t6), CAUSES.index("none"))
-    held = load_quantities(robot, t6, posture) if load_limited(robot) or stiffness_given(robot) else {}
+    held = load_quantities(robot, t6, posture, expected) if load_limited(robot) or stiffness_given(robot) else {}
     candidates = [
         ("joint_angle", held.get("joint_angle", False)),
         ("actuator_load", held.get("actuator_load", False)),
@@ -195,7 +195,7 @@ def tilt_limits(robot, posture, settings=Settings(), home=None):
     tilts = settings.tilts
     first, causes, least = _first_stops(robot, posture, settings, home)
     return [{"azimuth_deg": round(float(azimuth), 6), "max_tilt_deg": round(float(tilts[max(stop - 1, 0)]), 6),
-             "cause": CAUSES[cause], "min_direct_index_mm": float(index) if np.isfinite(index) else None}
+             "cause": CAUSES[cause], "min_direct_index_mm": _finite_or_none(index)}
             for azimuth, stop, cause, index in zip(settings.azimuths, first, causes, least)]
 
 
@@ -246,8 +246,7 @@ def sweeps(robot, posture, settings=Settings(), home=None):
 
 def _entry(robot, value, evaluated, i):
     def number(key):
-        value = float(evaluated[key][i])
-        return value if np.isfinite(value) else None
+        return _finite_or_none(evaluated[key][i])
 
     scale = 1.0 / robot.joint_scale()
     return {"value": value, "warning": int(evaluated["warning"][i]), "cause": CAUSES[evaluated["cause"][i]],
@@ -361,7 +360,7 @@ def analyze(robot, posture=None, settings=Settings(), progress=None):
                  "sweep_angle_step_deg": SWEEP_STEP_DEG, "sweep_position_steps": SWEEP_STEPS,
                  "slice_cells": SLICE_CELLS, "slice_rays": SLICE_RAYS,
                  "crossing_fraction": CROSSING, "crossing_sign_of_det_j": True,
-                 "direct_index_at_home_mm": float(home.index_mm) if np.isfinite(home.index_mm) else None, "det_j_sign_at_home": home.det_sign,
+                 "direct_index_at_home_mm": _finite_or_none(home.index_mm), "det_j_sign_at_home": home.det_sign,
                  "singular_fraction": SINGULAR}
     return {"robot": robot.name, "posture": posture, "available": available, "settings": described,
             "tilt_limits": limits, "sweeps": swept, "slices": sliced, "direct_index_min_mm": robot.direct_index_min,
@@ -377,3 +376,9 @@ def singular_at_home(robot, home):
                 f"{singular_index_mm(robot):.3g} mm ({SINGULAR:g} of the robot's size)")
     return (f"home is a direct singularity: the closure Jacobian over the free coordinates is singular there "
             f"(scaled determinant at most {SINGULAR ** 2:g})")
+
+
+def _finite_or_none(value):
+    """``value`` as a float, None where it is not finite (JSON's null)."""
+    value = float(value)
+    return value if np.isfinite(value) else None

@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..kinematics.loads import SIDES, load_limited, loads
+from ..kinematics.loads import SIDES, load_limited, static_loads_of
 
 UNIT_FORCES = np.eye(3)
 """The forces (N) at the platform origin whose displacements give its compliance's columns."""
@@ -20,13 +20,14 @@ def stiffness_given(robot):
     return all(limb.stiffness is not None for limb in robot.limbs)
 
 
-def load_quantities(robot, t6, posture):
-    """Per pose of ``t6`` (n, 4, 4, what analysis.evaluate judges) in ``posture``: {actuator_load,
+def load_quantities(robot, t6, posture, solution):
+    """Per pose of ``t6`` (n, 4, 4, what analysis.evaluate judges, with the reference's
+    ``solution`` there) in ``posture``: {actuator_load,
     joint_angle: (n,) bool, beyond a limit; load_fraction: (n,) the largest |load| / limit over the
     limited actuators (NaN: none limited, or unreachable); min_stiffness_n_per_mm: (n,) (NaN without
     every limb's stiffness)}."""
     count = len(t6)
-    held = loads(robot, t6, postures=[posture])
+    held = static_loads_of(robot, t6, solution, posture)
     forces = np.abs(held.forces[:, 0, :robot.dof])
     limits = np.array([limb.actuator_limit or np.nan for limb in robot.limbs])
     with np.errstate(invalid="ignore"):
@@ -38,16 +39,16 @@ def load_quantities(robot, t6, posture):
         cones = np.array([limb.cone(side) if limb.cone(side) is not None else np.inf for limb in robot.limbs])
         bent |= np.any(np.degrees(angles[:, 0]) > cones, axis=1)
     return {"actuator_load": np.nan_to_num(fraction, nan=0.0) > 1.0, "joint_angle": bent, "load_fraction": fraction,
-            "min_stiffness_n_per_mm": _least_stiffness(robot, t6, posture)}
+            "min_stiffness_n_per_mm": _least_stiffness(robot, t6, posture, solution)}
 
 
-def _least_stiffness(robot, t6, posture):
+def _least_stiffness(robot, t6, posture, solution):
     """(n,) N/mm: 1 / the largest eigenvalue of the platform origin's translational compliance
     (NaN without every limb's stiffness, or where the posture holds no load)."""
     if not stiffness_given(robot):
         return np.full(len(t6), np.nan)
     unloaded = replace(robot, payload=None)
-    columns = [loads(unloaded, t6, wrench=np.r_[force, 0.0, 0.0, 0.0], postures=[posture]).deflection[:, 0, :3]
+    columns = [static_loads_of(unloaded, t6, solution, posture, np.r_[force, 0.0, 0.0, 0.0]).deflection[:, 0, :3]
                for force in UNIT_FORCES]
     compliance = np.stack(columns, axis=2)  # (n, 3, 3) mm per N
     symmetric = 0.5 * (compliance + np.swapaxes(compliance, 1, 2))

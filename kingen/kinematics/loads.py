@@ -6,7 +6,7 @@ import numpy as np
 
 from ..conventions import pose_from_t6
 from .parasitic import solve_parasitic
-from .platform_loads import Loads, Motion, external_wrench, machine_t6, payload_wrench, platform_loads
+from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platform_loads
 from .reference import solve
 from .wrist_loads import wrist_loads
 
@@ -37,15 +37,16 @@ def loads(robot, t6, wrench=None, motion=None, postures=None):
 
 
 def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
-    """loads() over one block of poses (``solution``: the reference's there, when the caller has it)."""
+    """loads() over one block of poses (``solution``: the reference's at ``t6``, the poses the
+    machine takes, when the caller has it)."""
     if robot.wrist is not None:
         return wrist_loads(robot, t6, wrench, motion, chosen)
-    machine = solve_parasitic(robot, t6).t6 if robot.task else t6
-    solution = solution if solution is not None else solve(robot, machine)
-    external = external_wrench(machine, wrench) if wrench is not None else 0.0
-    static = payload_wrench(robot, machine) + external
-    applied = static if motion is None else payload_wrench(robot, machine, motion) + external
-    return platform_loads(robot, machine, solution, chosen, static, applied)
+    if solution is None:
+        machine = solve_parasitic(robot, t6).t6 if robot.task else t6
+        solution = solve(robot, machine)
+    else:  # the pose the caller's solution was solved at: the machine's already
+        machine = t6
+    return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion))
 
 
 def machine_pose(loads_result):
@@ -53,10 +54,11 @@ def machine_pose(loads_result):
     return pose_from_t6(loads_result.machine)
 
 
-def static_loads_of(robot, t6, solution):
-    """Loads of ``robot`` in its posture 0 at rest (the payload under gravity) at T6 (n, 4, 4)
-    the machine takes, from the reference's ``solution`` there: what check-path judges per sample."""
-    return _block_loads(robot, np.asarray(t6, dtype=float), None, None, np.array([0]), solution)
+def static_loads_of(robot, t6, solution, posture=0, wrench=None):
+    """Loads of ``robot`` in ``posture`` at rest (the payload under gravity, and ``wrench`` at the
+    platform origin) at T6 (n, 4, 4) the machine takes, from the reference's ``solution`` there
+    (no solve again): what check-path and analyze judge per sample."""
+    return _block_loads(robot, np.asarray(t6, dtype=float), wrench, None, np.array([posture]), solution)
 
 
 def load_limited(robot):

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import pose_from_t6, t6_from_pose
-from .forward import COORDINATES
+from ..conventions import t6_from_pose
+from .forward import free_mask, pose_jacobian, poses_of
 from .parasitic import solve_parasitic, task_twists
 from .reference import solve
 from .routine import WARNINGS
@@ -70,31 +70,19 @@ class Loads:
     warnings: np.ndarray
 
 
+def all_free(robot):
+    """Whether the platform moves in all six pose coordinates (then T is a change of basis)."""
+    return not robot.task and bool(free_mask(robot).all())
+
+
 def free_twists(robot, t6):
     """(n, 6, d) the twists per unit rate of each free coordinate at T6 (n, 4, 4) the machine
     takes: its task coordinates (kingen.kinematics.parasitic.task_twists), else its ``forward.free``
-    coordinates (all six when none are declared) with the other pose coordinates held."""
+    coordinates (all six when none are declared) with the other pose coordinates held
+    (kingen.kinematics.forward.pose_jacobian), in pose order."""
     if robot.task:
         return task_twists(robot, t6)
-    free = robot.forward_free or COORDINATES
-    return coordinate_twists(t6)[:, :, [COORDINATES.index(name) for name in free]]
-
-
-def coordinate_twists(t6):
-    """(n, 6, 6) the twist per unit rate of each pose coordinate (x, y, z in mm; roll, pitch, yaw
-    in rad) with the others held, at T6 (n, 4, 4): [e_k; 0] for a translation; for an angle,
-    omega = E_k (E's columns Rz Ry e_x, Rz e_y, e_z) and v = p x omega (the platform origin p held)."""
-    t6 = np.asarray(t6, dtype=float)
-    _, pitch, yaw = np.radians(pose_from_t6(t6)[:, 3:]).T
-    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-    zero, one = np.zeros_like(yaw), np.ones_like(yaw)
-    euler = np.stack([np.stack([cy * cp, sy * cp, -sp], -1), np.stack([-sy, cy, zero], -1),
-                      np.stack([zero, zero, one], -1)], axis=1)  # (n, column, 3)
-    twists = np.zeros((len(t6), 6, 6))
-    twists[:, :3, :3] = np.eye(3)
-    twists[:, 3:, 3:] = np.swapaxes(euler, 1, 2)
-    twists[:, :3, 3:] = np.swapaxes(np.cross(t6[:, None, 3, :3], euler), 1, 2)
-    return twists
+    return pose_jacobian(poses_of(t6))[:, :, free_mask(robot)]
 
 
 def payload_wrench(robot, t6, motion=None):
@@ -133,6 +121,15 @@ def external_wrench(t6, wrench):
     return np.concatenate([force, np.cross(t6[:, 3, :3], force) + wrench[3:] * MM_PER_M], axis=1)
 
 
+def applied_wrenches(robot, t6, wrench=None, motion=None):
+    """((n, 6), (n, 6)) [N; N mm about the base origin]: the wrench applied at T6 (n, 4, 4) at rest
+    (the payload's weight and the external ``wrench``, (6,) [N, N m] at the frame's origin) and
+    with ``motion`` (the payload's momentum's rate too; the same as at rest without a motion)."""
+    external = external_wrench(t6, wrench) if wrench is not None else 0.0
+    static = payload_wrench(robot, t6) + external
+    return static, (static if motion is None else payload_wrench(robot, t6, motion) + external)
+
+
 def platform_loads(robot, machine, solution, chosen, static, applied):
     """:class:`Loads` of ``robot`` (no wrist) at the T6 ``machine`` (n, 4, 4) it takes, from the
     reference's ``solution`` there, in postures ``chosen``, holding the wrenches ``static`` (at
@@ -143,14 +140,14 @@ def platform_loads(robot, machine, solution, chosen, static, applied):
     with np.errstate(divide="ignore", invalid="ignore"):
         lines = wrenches[:, limbs, table]  # (n, p, m, 6): each limb's unit force line [f; C x f]
         rows = lines / transmissions[:, limbs, table][..., None]
-    twists = None if (not robot.task and len(robot.forward_free or COORDINATES) == 6) else free_twists(robot, machine)
+    twists = None if all_free(robot) else free_twists(robot, machine)
     if twists is None:  # six free coordinates: J^T tau = -W
         reduced, generalized = rows, -applied
     else:
         reduced, generalized = rows @ twists[:, None], -np.einsum("nkd,nk->nd", twists, applied)
     forces = _solve_each(np.swapaxes(reduced, 2, 3), generalized[:, None, :])  # (n, p, m)
     carried = -(applied[:, None, :] + (np.swapaxes(rows, 2, 3) @ forces[..., None])[..., 0])
-    constraint = _about_origin(carried, machine)
+    constraint = about_origin(carried, machine)
     scale = np.where(np.array([t.wraps for t in robot.joint_types[:robot.dof]]), 1.0 / MM_PER_M, 1.0)
     warnings = solution.warnings[:, chosen]
     unreachable = warnings == WARNINGS["WARN_UNREACHABLE"]
@@ -180,7 +177,7 @@ def _solve_each(matrices, right):
     return out
 
 
-def _about_origin(wrench, t6):
+def about_origin(wrench, t6):
     """Wrenches (n, p, 6) [N; N mm about the base origin] as [N; N m about the platform origin]."""
     force = wrench[..., :3]
     moment = wrench[..., 3:] - np.cross(t6[:, None, 3, :3], force)

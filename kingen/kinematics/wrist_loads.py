@@ -11,7 +11,7 @@ wrench."""
 
 import numpy as np
 
-from .platform_loads import MM_PER_M, Loads, external_wrench, payload_wrench, platform_loads
+from .platform_loads import Loads, about_origin, applied_wrenches, platform_loads
 from .reference import solve
 from .routine import WARNINGS
 from .wrist import rotation_about, tool_t6
@@ -42,12 +42,10 @@ def wrist_loads(robot, t6, wrench, motion, chosen):
     for posture in chosen:
         readings = solution.joints[:, dof:, posture]
         tool = tool_t6(robot, platform, readings)
-        external = external_wrench(tool, wrench) if wrench is not None else 0.0
-        static = payload_wrench(robot, tool) + external
-        applied = static if motion is None else payload_wrench(robot, tool, motion) + external
+        static, applied = applied_wrenches(robot, tool, wrench, motion)
         branch = posture // 2 if robot.wrist.branch is None else posture
         held = platform_loads(parallel, platform, legs, np.array([branch]), static, applied)
-        centre_moment = (applied[:, 3:] - np.cross(platform[:, 3, :3], applied[:, :3])) / MM_PER_M
+        centre_moment = about_origin(applied[:, None], platform)[:, 0, 3:]  # N m about the wrist centre
         torques = -np.einsum("nki,ni->nk", wrist_axes(robot, platform, readings), centre_moment)
         unreachable = solution.warnings[:, posture] == WARNINGS["WARN_UNREACHABLE"]
         forces = np.concatenate([held.forces[:, 0], np.where(unreachable[:, None], np.nan, torques)], axis=1)

@@ -30,10 +30,15 @@ ConeAngle = Annotated[float, Field(gt=0, lt=180)]
 InertiaEntry = Annotated[float, Field(ge=-MAX_INERTIA, le=MAX_INERTIA)]
 
 
+def _as_matrix(value):
+    """(3, 3) kg m^2 from principal moments [Ixx, Iyy, Izz] or a whole matrix."""
+    return np.diag(value) if not isinstance(value[0], list) else np.array(value, dtype=float)
+
+
 def _inertia_matrix(value):
     """The payload's inertia as a 3 x 3 symmetric positive-definite matrix (kg m^2), from its
     principal moments [Ixx, Iyy, Izz] or a whole matrix."""
-    matrix = np.diag(value) if not isinstance(value[0], list) else np.array(value, dtype=float)
+    matrix = _as_matrix(value)
     scale = max(float(np.max(np.abs(matrix))), 1e-300)
     if np.max(np.abs(matrix - matrix.T)) > SYMMETRY_TOLERANCE * scale:
         raise ValueError("the inertia matrix must be symmetric")
@@ -109,8 +114,7 @@ def payload_of(document, mm_per_unit):
     section = document.payload
     if section is None:
         return None
-    inertia = np.zeros((3, 3)) if section.inertia is None else (
-        np.diag(section.inertia) if not isinstance(section.inertia[0], list) else np.array(section.inertia))
+    inertia = np.zeros((3, 3)) if section.inertia is None else _as_matrix(section.inertia)
     inertia = 0.5 * (inertia + inertia.T)
     return Payload(mass=section.mass, centre=tuple(float(v) * mm_per_unit for v in section.centre),
                    inertia=tuple(map(tuple, inertia.tolist())))
