@@ -33,3 +33,7 @@ LOAD_RATE_MAX = 1e9
 """kingen loads: |velocity| and |acceleration| components at most (mm, degrees per s or s^2)."""
 LOAD_WRENCH_MAX = 1e12
 """kingen loads: |wrench| components at most (N, N m)."""
+INTERPRETER_SECONDS = 60.0
+"""check-path: CPU seconds each of LinuxCNC's interpreters (the gcode module's child, rs274) may take."""
+MAX_SAMPLES = 100_000_000
+"""check-path: regular samples a program may ask for at its chord (five to fifteen minutes of checking on one core)."""

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import click
 
+from ..defaults import INTERPRETER_SECONDS, MAX_SAMPLES
 from ..errors import KingenError
 from .common import (EXIT_FAILED, OUT_DIR, ROBOT, TIMEOUT, FiniteRange, _output_file, cli, finite, load_model,
                      print_table, refuse_special_files, say)
@@ -83,10 +84,10 @@ def _offset(context, parameter, value):
 @click.option("--offset", cls=_Numbers, callback=_offset, default=None, metavar="X Y Z [A B C]",
               help="G-code: where the part is: the work offset of the coordinate system the program starts in (mm, "
                    "degrees), in place of the .ini's parameter file's [default: the parameter file's, else none].")
-@click.option("--interpreter-seconds", type=FiniteRange(min=1.0, max=86400.0), default=60.0, show_default=True,
+@click.option("--interpreter-seconds", type=FiniteRange(min=1.0, max=86400.0), default=INTERPRETER_SECONDS, show_default=True,
               metavar="S", help="G-code: CPU seconds LinuxCNC's interpreter may take to read the program (an endless "
                                 "loop ends here, bad input at the line reached).")
-@click.option("--max-samples", type=click.IntRange(min=1), default=100_000_000, show_default=True, metavar="N",
+@click.option("--max-samples", type=click.IntRange(min=1), default=MAX_SAMPLES, show_default=True, metavar="N",
               help="Regular samples the program may ask for at --chord (more is bad input at the line that asks).")
 @OUT_DIR
 @TIMEOUT

@@ -16,14 +16,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..conventions import t6_from_pose
-from ..defaults import DEFAULT_TIMEOUT
+from ..defaults import DEFAULT_TIMEOUT, INTERPRETER_SECONDS, MAX_SAMPLES
 from ..kinematics.routine import WARNINGS
 from .evaluation import Evaluator
 from .findings import Findings
 from .five_axis import FiveAxis
 from ..errors import located
 from .ini import load_ini
-from .interpreter import DEFAULT_INTERPRETER_SECONDS, Reading, Setup, gcode_moves
+from .interpreter import Reading, Setup, gcode_moves
 from .judging import has_accelerations, judge_margins, judge_rates, record
 from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
 from .manifold import Manifold
@@ -38,8 +38,6 @@ CHUNK = 20000
 """Regular samples solved at once (a move longer than that is cut into pieces)."""
 DEFAULT_CHORD = 0.1
 """mm and degrees between regular samples."""
-DEFAULT_MAX_SAMPLES = 100_000_000
-"""Regular samples a program may ask for (five to fifteen minutes of checking on one core)."""
 
 
 @dataclass(frozen=True)
@@ -63,8 +61,8 @@ class Settings:
     timeout: float = DEFAULT_TIMEOUT
     task_only: bool = False
     offset: tuple = None
-    interpreter_seconds: float = DEFAULT_INTERPRETER_SECONDS
-    max_samples: int = DEFAULT_MAX_SAMPLES
+    interpreter_seconds: float = INTERPRETER_SECONDS
+    max_samples: int = MAX_SAMPLES
 
 
 @dataclass
@@ -202,11 +200,7 @@ class _Checker:
             rows = rows[on]
             poses[rows, :3] = xyz
             t6[rows] = t6_from_pose(poses[rows])
-        if self.manifold is not None:
-            poses, t6 = self.manifold.samples(poses)
-        if self.world:
-            t6 = self.five_axis.t6(poses)
-        batch = self.evaluator.evaluate(piece, u, poses, t6)
+        batch = self.evaluator.evaluate(piece, u, *self._commanded(poses, t6))
         column = self.evaluator.assembly_column()
         if column is not None:
             batch.margins[:, column] *= self.signs[piece]
@@ -295,17 +289,22 @@ class _Checker:
         return speeds, accelerations
 
 
+    def _commanded(self, poses, t6):
+        """(poses, T6) the machine is commanded to for path samples ``poses`` (n, 6) and their T6: a
+        constrained machine's on its manifold, a wrist machine's five-axis world read as its tool's."""
+        if self.manifold is not None:
+            poses, t6 = self.manifold.samples(poses)
+        if self.world:
+            t6 = self.five_axis.t6(poses)
+        return poses, t6
+
     def _slope(self, move):
         """(dof,) the joints' derivative along ``move``'s path at its start (per mm), the reference's
         joints 0.01 mm apart (the routine is not asked)."""
         length = lengths(move)[0]
         u = np.array([0.0, min(1.0, 0.01 / length)])
-        poses, t6 = poses_and_t6(move, u, self.interpolation)
-        if self.manifold is not None:
-            poses, t6 = self.manifold.samples(poses)
-        if self.world:
-            t6 = self.five_axis.t6(poses)
-        joints = self.evaluator.evaluate(np.zeros(2, dtype=int), u, poses, t6).joints
+        joints = self.evaluator.evaluate(np.zeros(2, dtype=int), u,
+                                         *self._commanded(*poses_and_t6(move, u, self.interpolation))).joints
         step = np.where(self.robot.revolute, np.angle(np.exp(1j * (joints[1] - joints[0]))), joints[1] - joints[0])
         return step / (u[1] * length)
 

@@ -13,9 +13,9 @@ import numpy as np
 
 MAX_PROBLEMS = 1000
 TRACE_POINTS = 4000
+"""The figures' samples at most: the trace keeps every k-th sample, k doubling as it fills."""
 UNSCALED = ("unreachable", "limb singular", "joint angle", "actuator load")
 """Kinds whose values are not the joint's (radicands; degrees, N or N m already in display units)."""
-"""The figures' samples at most: the trace keeps every k-th sample, k doubling as it fills."""
 
 
 @dataclass

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 from ..errors import KingenError
 from ..runtime.file_gate import read_limited
+from .interpreter import linuxcnc_python
 
 INI_BYTES = 1 << 20
 LINUXCNC_READER = """
@@ -73,12 +74,6 @@ def read_ini(text):
             values[section, key] = value
             lines[section, key] = number
     return values, lines
-
-
-def linuxcnc_python():
-    """The Python that has LinuxCNC's ``linuxcnc`` module, or None (kingen's reader is used)."""
-    python = os.environ.get("KINGEN_LINUXCNC_PYTHON", "/usr/bin/python3")
-    return python if os.access(python, os.X_OK) else None
 
 
 def linuxcnc_values(path, wanted):

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..defaults import INTERPRETER_SECONDS
 from ..errors import KingenError, located
 from ..runtime.file_gate import refuse_special_file
 from ..runtime.household import dying_with_this_process
@@ -38,8 +39,6 @@ LINUXCNC_PYTHON = "/usr/bin/python3"
 the system's Python); ``KINGEN_LINUXCNC_PYTHON`` names another."""
 CANON = Path(__file__).with_name("linuxcnc_canon.py")
 RS274 = "/usr/bin/rs274"
-DEFAULT_INTERPRETER_SECONDS = 60.0
-"""CPU seconds each interpreter (the ``gcode`` module's child, then ``rs274``) may take."""
 DEFAULT_TOOLS = 999
 """Without a tool table, tools 1 .. DEFAULT_TOOLS exist, with no offsets and no diameter."""
 PATH_MODES = {610: "G61", 611: "G61.1", 640: "G64"}
@@ -48,11 +47,11 @@ PLANE_AXES = {1: (0, 1, 2), 2: (1, 2, 0), 3: (2, 0, 1)}
 """LinuxCNC's plane (G17 XY, G19 YZ, G18 XZ): the x, y, z indices of its first and second
 axis and of its normal."""
 KINDS = {"T": "rapid", "F": "feed", "A": "arc", "P": "probe", "R": "tap"}
+"""The canon's motion letters and the Move kinds they become."""
 RS274_MOTIONS = (b"STRAIGHT_TRAVERSE(", b"STRAIGHT_FEED(", b"STRAIGHT_PROBE(", b"ARC_FEED(", b"RIGID_TAP(",
                  b"NURBS_FEED(")
 """The canonical calls ``rs274`` prints for a motion (a spline, G5 .. G5.2, is one NURBS_FEED;
 the gcode module cuts it into straight feeds)."""
-"""The canon's motion letters and the Move kinds they become."""
 CLEAN_PATH = "/usr/local/bin:/usr/bin:/bin"
 
 
@@ -70,7 +69,7 @@ class Setup:
     parameter_file: object = None
     offset: tuple = None
     machine_unit: float = 1.0
-    seconds: float = DEFAULT_INTERPRETER_SECONDS
+    seconds: float = INTERPRETER_SECONDS
     subroutine_path: tuple = ()
 
 
@@ -94,12 +93,18 @@ class Reading:
     line: tuple = (None, 1)
 
 
+def linuxcnc_python():
+    """The Python with LinuxCNC's modules (``KINGEN_LINUXCNC_PYTHON``, else LINUXCNC_PYTHON), or None."""
+    python = os.environ.get("KINGEN_LINUXCNC_PYTHON", LINUXCNC_PYTHON)
+    return python if os.access(python, os.X_OK) else None
+
+
 def interpreter_python():
     """The Python to run the interpreter with; KingenError when it is missing."""
-    python = os.environ.get("KINGEN_LINUXCNC_PYTHON", LINUXCNC_PYTHON)
-    if not os.access(python, os.X_OK):
-        raise KingenError(f"{python}: not found: reading G-code needs LinuxCNC's interpreter "
-                          f"(Debian's linuxcnc-uspace; KINGEN_LINUXCNC_PYTHON names its Python)")
+    python = linuxcnc_python()
+    if python is None:
+        raise KingenError(f"{os.environ.get('KINGEN_LINUXCNC_PYTHON', LINUXCNC_PYTHON)}: not found: reading G-code "
+                          "needs LinuxCNC's interpreter (Debian's linuxcnc-uspace; KINGEN_LINUXCNC_PYTHON names its Python)")
     return python
 
 

@@ -45,8 +45,9 @@ class Limits:
 
 AXES = "XYZABC"
 PLANNER_KEYS = {"ARC_BLEND_ENABLE": 1.0, "ARC_BLEND_OPTIMIZATION_DEPTH": 50.0, "ARC_BLEND_KINK_RATIO": 0.1}
-MACHINE_KEYS = (("EMCMOT", "SERVO_PERIOD"), ("DISPLAY", "MAX_FEED_OVERRIDE"))
 """[TRAJ] settings of LinuxCNC's planner that kingen follows, with LinuxCNC's defaults."""
+MACHINE_KEYS = (("EMCMOT", "SERVO_PERIOD"), ("DISPLAY", "MAX_FEED_OVERRIDE"))
+"""The servo period and the largest feed override, which the planner's timing reads."""
 
 
 @dataclass(frozen=True)

@@ -28,8 +28,8 @@ The end, after the last motion:
     D                           the program was read to its end
 
 The tool table LinuxCNC's processes share (``$HOME/.tool.mmap``, under the private HOME kingen
-gives this process) is created here and filled from the tool table file given, or with every
-tool number 1 .. DEFAULT_TOOLS at no offset and no diameter.
+gives this process) is created here and filled from the tool table file kingen gives (the
+``.ini``'s, or every tool number 1 .. DEFAULT_TOOLS at no offset and no diameter).
 """
 
 import ctypes
@@ -41,6 +41,7 @@ import gcode
 from rs274.interpret import Translated
 
 DEFAULT_TOOLS = 999
+"""Comment buffers the table is read with (kingen.paths.interpreter.DEFAULT_TOOLS tools without a table)."""
 ENTRY = struct.Struct("ii12di")
 """CANON_TOOL_TABLE's leading fields: tool number, pocket, offsets x y z a b c u v w, diameter,
 front angle, back angle, orientation (the comment after them is not read)."""
@@ -69,9 +70,7 @@ class Tools:
         self.comments = [ctypes.create_string_buffer(256) for _ in range(DEFAULT_TOOLS + 1)]
         pointers = (ctypes.c_char_p * len(self.comments))(*[ctypes.cast(b, ctypes.c_char_p) for b in self.comments])
         self.pointers = pointers
-        lines = open(table, errors="replace").read().splitlines() if table else [
-            f"T{number} P{number}" for number in range(1, DEFAULT_TOOLS + 1)]
-        for line in lines:
+        for line in open(table, errors="replace").read().splitlines():
             self.lib._Z19tooldata_read_entryPKcPPc(line.encode()[:250], pointers)
         self.buffer = ctypes.create_string_buffer(4096)
         self.spindle = None

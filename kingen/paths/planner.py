@@ -72,11 +72,6 @@ class Plan:
         """Each of path coordinates ``s`` (n,): the row of the part it lies on."""
         return np.minimum(np.searchsorted(self.parts[:, 1], s, side="left"), len(self.parts) - 1)
 
-    def part(self, s):
-        """(n,) the part of the move each of path coordinates ``s`` (n,; mm) lies on: the
-        planner's segments, across whose ends the path's direction or parameter may turn."""
-        return self._rows(np.asarray(s, dtype=float))
-
     @property
     def arcs(self):
         """Whether a blend arc follows part of the move."""

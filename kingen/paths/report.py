@@ -82,8 +82,9 @@ def verdict_line(outcome):
     if runs(outcome):
         return f"check-path {outcome.robot.name} {outcome.program}: runs within every limit judged ({where}; " \
                f"judged: {', '.join(judged) or 'nothing'})"
-    lines = sorted({(place.file is not None, place.file or "", place.line) for place in findings.problems.values()})
-    first = f"{lines[0][1]}:{lines[0][2]}" if lines and lines[0][0] else lines[0][2] if lines else "?"
+    problems = findings.sorted_problems()
+    lines = {(place.file, place.line) for place in problems}
+    first = place_line(problems[0]) if problems else "?"
     return (f"check-path {outcome.robot.name} {outcome.program}: does not run: "
             f"{counted(len(findings.problems) + findings.dropped, 'problem')} on {counted(len(lines), 'line')}, "
             f"first at line {first} ({where})")
