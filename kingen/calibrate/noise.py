@@ -48,10 +48,6 @@ class Noise:
     joint_mm: float = CALIBRATION_NOISE["joint_mm"]
     joint_deg: float = CALIBRATION_NOISE["joint_deg"]
 
-    def as_dict(self):
-        return {"device_mm": self.device_mm, "device_deg": self.device_deg, "joint_mm": self.joint_mm,
-                "joint_deg": self.joint_deg}
-
 
 def covariances(residual_of, measured, joints, revolute, noise):
     """(n, k, k): each pose's residual covariance C_i (module docstring) in the residuals' units

@@ -3,6 +3,7 @@
 deviations as error bars)."""
 
 import base64
+from dataclasses import asdict
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -43,7 +44,7 @@ def result(parameters, fit, before, after, validation, seconds):
         "residuals_after": summary(*after),
         "validation": None if validation[0] is None else summary(*validation[0]),
         "validation_nominal": None if validation[1] is None else summary(*validation[1]),
-        "noise": fit.stated.as_dict(),
+        "noise": asdict(fit.stated),
         "equations": int(inference.redundancy + np.count_nonzero(fit.chosen)),
         "redundancy": int(inference.redundancy),
         "variance_factor": float(inference.variance_factor) if inference.redundancy > 0 else None,

@@ -95,14 +95,12 @@ def _stopped(state, out_dir):
     checkpoint on disk holds (what --resume continues from: a signal during an iteration's
     bookkeeping leaves the checkpoint one iteration behind ``state``) and how to continue, or that
     it has none."""
-    import json
-
-    from ..design.checkpoint import CHECKPOINT
+    from ..design.checkpoint import read
 
     try:
-        saved = json.loads((out_dir / CHECKPOINT).read_text())
-        iteration, best = int(saved["iteration"]), float(saved["best_objective"])
-    except (OSError, ValueError, KeyError, TypeError):
+        saved = read(out_dir)
+        iteration, best = saved.iteration, saved.best_objective
+    except KingenError:
         iteration, best = 0, state.best_objective
     if not state.iteration or not iteration:
         return "kingen: stopped before the first iteration ended: no checkpoint to resume from"

@@ -136,7 +136,8 @@ def run_in_child(job, arguments, timeout, on_message=None, first_stage=FIRST_STA
     if refusal is not None:
         return None, refusal
     if outcome is not None:
-        return outcome if outcome[1] is not None or keeper.left(orphans) is None else (None, keeper.left(orphans))
+        left = keeper.left(orphans)
+        return outcome if outcome[1] is not None or left is None else (None, left)
     if stopped:
         return None, ChildFailure("crash", stage, f"the plugin closed kingen's channel to the host process during "
                                                  f"{stage}, which then did not end within {EXIT_GRACE:g} s: it "

@@ -41,8 +41,7 @@ def build_library(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
             compile_c([Path(scratch) / source.name], built, [*LIBRARY_FLAGS, f"-I{scratch}"], timeout=timeout,
                       shown_source=source)
         finally:
-            for name, text in files.items():
-                write_atomic(out_dir / name, text)
+            write_files({out_dir / name: text for name, text in files.items()})
         write_atomic(library, built.read_bytes(), executable=True)
     return BuildResult(source, library, prefix(robot), compiled=True)
 

@@ -36,7 +36,7 @@ from ...kinematics.forward import free_mask, t6_of
 from ...kinematics.loads import loads
 from ...kinematics.parasitic import solve_parasitic
 from ...kinematics.reference import solve
-from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNING_BAND, WARNINGS
+from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNING_BAND, WARNINGS, warning_codes
 from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
 from ...kinematics.wrist_rates import tool_jacobian
 from ...robot.loads_schema import Payload
@@ -218,9 +218,7 @@ def constraint_statuses(radicand):
     library classifies it (unreachable below -SINGULAR_TOLERANCE or not a number, singular
     within it), and whether D lies farther than WARNING_BAND from both thresholds (where
     library and reference must agree)."""
-    statuses = np.where(~(radicand >= -SINGULAR_TOLERANCE), WARNINGS["WARN_UNREACHABLE"],
-                        np.where(radicand <= SINGULAR_TOLERANCE, WARNINGS["WARN_SINGULAR_SOLUTION"],
-                                 WARNINGS["WARN_GOOD_SOLUTION"]))
+    statuses = warning_codes(False, radicand <= SINGULAR_TOLERANCE, ~(radicand >= -SINGULAR_TOLERANCE))
     with np.errstate(invalid="ignore"):
         edge = np.minimum(np.abs(radicand - SINGULAR_TOLERANCE), np.abs(radicand + SINGULAR_TOLERANCE))
     return statuses, ~(edge <= WARNING_BAND)
