@@ -1,6 +1,7 @@
 """Shared fixtures: shipped robots, plugins built once per test session."""
 
 import compileall
+import contextlib
 import dataclasses
 import importlib.util
 import os
@@ -16,7 +17,13 @@ settings.register_profile("ci", derandomize=True, database=None)
 if os.environ.get("CI"):
     settings.load_profile("ci")  # the same examples on every CI run: a red CI is reproducible
 
-os.environ.pop("COLUMNS", None)  # solve and verify fit $COLUMNS: tests that parse the full lines set none
+# solve and verify fit $COLUMNS: tests that parse the full lines set none. GNU readline (which
+# pytest's pdb support may load) exports the terminal's COLUMNS into the C environment, which
+# child processes inherit though os.environ does not show it: load it first, then unset.
+with contextlib.suppress(ImportError):
+    import readline  # noqa: F401
+os.environ.pop("COLUMNS", None)
+os.unsetenv("COLUMNS")
 os.environ.setdefault("KINGEN_CACHE", tempfile.mkdtemp(prefix="kingen-test-cache-"))
 
 # Tests start kingen in new Python processes (`python -m kingen.cli` 49 times in one run, pytest

@@ -93,20 +93,30 @@ def _subreaper(on):
     return bool(was.value)
 
 
-def children(pid):
-    """The pids of the processes whose parent is ``pid``, from /proc (empty without it)."""
+def children(pid, proc=None):
+    """The pids of the processes whose parent is ``pid``, from /proc, or from the /proc open as
+    descriptor ``proc`` (a PID namespace's own); empty without it."""
     found = []
     with suppress(OSError):
-        for entry in os.listdir("/proc"):
-            if entry.isdigit():
-                try:
-                    with open(f"/proc/{entry}/stat", "rb") as stream:
-                        fields = stream.read().rsplit(b")", 1)[1].split()
-                except OSError:  # it ended meanwhile
-                    continue
-                if int(fields[1]) == pid:
-                    found.append(int(entry))
+        for entry in os.listdir("/proc" if proc is None else proc):
+            if entry.isdigit() and _parent(entry, proc) == pid:
+                found.append(int(entry))
     return found
+
+
+def _parent(pid, proc):
+    """The parent pid in ``pid``'s stat file (in /proc, or the /proc of descriptor ``proc``);
+    None when it has ended meanwhile."""
+    try:
+        descriptor = os.open(f"{pid}/stat" if proc is not None else f"/proc/{pid}/stat", os.O_RDONLY,
+                             dir_fd=proc)
+        try:
+            fields = os.read(descriptor, 4096).rsplit(b")", 1)[1].split()
+        finally:
+            os.close(descriptor)
+    except OSError:
+        return None
+    return int(fields[1])
 
 
 def _kill_orphans(known, deadline):

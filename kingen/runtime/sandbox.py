@@ -37,12 +37,11 @@ import socket
 import sys
 
 from . import syscalls, wire
-from .household import die_with_parent
+from .household import children, die_with_parent
+from .syscalls import AT_FDCWD, CLONE_NEWIPC, CLONE_NEWNET, CLONE_NEWNS, CLONE_NEWPID, CLONE_NEWUSER
 
-CLONE_NEWNS, CLONE_NEWIPC, CLONE_NEWUSER, CLONE_NEWPID, CLONE_NEWNET = (
-    0x00020000, 0x08000000, 0x10000000, 0x20000000, 0x40000000)
 MS_NOSUID, MS_NODEV, MS_NOEXEC, MS_BIND, MS_REC, MS_PRIVATE = 2, 4, 8, 4096, 16384, 1 << 18
-AT_FDCWD, AT_RECURSIVE, MOUNT_ATTR_RDONLY = -100, 0x8000, 1
+AT_RECURSIVE, MOUNT_ATTR_RDONLY = 0x8000, 1
 SYS_MOUNT_SETATTR = 442
 """mount_setattr(2)'s number on x86-64 and arm64 (the only machines the sandbox sets up on)."""
 
@@ -118,7 +117,7 @@ def confine(folder, log_descriptor, log_key, network, filtering, keeper_closes=(
             filtering = "the kernel refused to load it"
         log.send("isolation", description(namespaces, filtering, network))
         if listener is not None:
-            runner = syscalls.children_of(proc, child)[:1] if namespaces is True else [child]
+            runner = children(child, proc)[:1] if namespaces is True else [child]
             syscalls.Supervisor(listener, (runner or [child])[0], child, folder, namespaces is True, log,
                                 proc).watch()
         _, status = os.waitpid(child, 0)

@@ -37,8 +37,13 @@ REFUSED = ("ptrace", "process_vm_readv", "process_vm_writev", "pidfd_getfd", "pi
            "fsopen", "fsmount", "fsconfig", "fspick", "mount_setattr", "bpf", "perf_event_open", "userfaultfd",
            "keyctl", "add_key", "request_key", "init_module", "finit_module", "delete_module", "kexec_load",
            "kexec_file_load", "reboot", "swapon", "swapoff", "acct")
-NAMESPACE_FLAGS = (0x00020000, 0x02000000, 0x04000000, 0x08000000, 0x10000000, 0x20000000, 0x40000000)
+CLONE_NEWNS, CLONE_NEWCGROUP, CLONE_NEWUTS, CLONE_NEWIPC, CLONE_NEWUSER, CLONE_NEWPID, CLONE_NEWNET = (
+    0x00020000, 0x02000000, 0x04000000, 0x08000000, 0x10000000, 0x20000000, 0x40000000)
+NAMESPACE_FLAGS = (CLONE_NEWNS, CLONE_NEWCGROUP, CLONE_NEWUTS, CLONE_NEWIPC, CLONE_NEWUSER, CLONE_NEWPID,
+                   CLONE_NEWNET)
 """clone(2)'s flags for new namespaces (mount, cgroup, UTS, IPC, user, PID, network)."""
+AT_FDCWD = -100
+"""The folder argument that means the caller's working folder."""
 HIDDEN = ("clone3", "openat2")
 """Calls whose arguments the filter cannot read: answered ENOSYS, so that the C library falls back
 on clone and openat, which it can."""
@@ -95,15 +100,6 @@ def load_filter(network):
 def _int(value):
     """A system call's argument as the C int it was."""
     return ctypes.c_int32(value & 0xFFFFFFFF).value
-
-
-def children_of(proc, pid):
-    """The pids whose parent is ``pid``, from the /proc whose descriptor is ``proc``."""
-    found = []
-    for entry in os.listdir(proc):
-        if entry.isdigit() and _status(proc, entry, "PPid") == pid:
-            found.append(int(entry))
-    return found
 
 
 def _status(proc, pid, field):
@@ -281,7 +277,7 @@ class Supervisor:
                 os.close(memory)
             path = os.fsdecode(text.split(b"\0")[0])
             if not os.path.isabs(path):
-                path = os.path.join(self._link(caller, "cwd" if folder == -100 else f"fd/{folder}"), path)
+                path = os.path.join(self._link(caller, "cwd" if folder == AT_FDCWD else f"fd/{folder}"), path)
             return os.path.normpath(path)
         except (OSError, TypeError):
             return None
