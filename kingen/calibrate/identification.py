@@ -53,12 +53,14 @@ STRUCTURE_POSES = 60
 class Problem:
     """The residuals and their Jacobian for Parameters ``parameters`` and Measurements
     ``measurements``; ``start`` (n, 6; mm, radians) the poses forward kinematics starts from
-    (position measurements), kept at the last solution; ``whitener`` (n, k, k) each pose's
-    residuals' whitening (kingen.calibrate.noise; None: the residuals as they are)."""
+    (position measurements), kept at the last solution; ``factor`` (n, k, k) each pose's
+    residuals' covariance factor L_i (kingen.calibrate.noise.factors; None: the residuals as they
+    are), whose inverse, ``whitener``, whitens them."""
 
-    def __init__(self, parameters, measurements, start, whitener=None):
+    def __init__(self, parameters, measurements, start, factor=None):
         self.parameters, self.measurements, self.start = parameters, measurements, start
-        self.whitener = whitener
+        self.factor = factor
+        self.whitener = None if factor is None else np.linalg.inv(factor)
 
     def raw(self, values, measurements, keep=False):
         """(n, k) each pose's residuals (see the module docstring) in mm-equivalents, unwhitened."""
@@ -82,7 +84,7 @@ class Problem:
 
         data = self.measurements
         covariance = noise.covariances(residual_of, data.measured, data.joints, self.parameters.robot.revolute, stated)
-        return Problem(self.parameters, data, self.start, noise.whiteners(covariance))
+        return Problem(self.parameters, data, self.start, noise.factors(covariance))
 
     def without(self, row):
         """This Problem without measurement ``row`` (0-based)."""
@@ -90,7 +92,7 @@ class Problem:
         data = self.measurements
         data = replace(data, joints=data.joints[keep], measured=data.measured[keep],
                        lines=tuple(np.asarray(data.lines)[keep].tolist()))
-        return Problem(self.parameters, data, self.start[keep], None if self.whitener is None else self.whitener[keep])
+        return Problem(self.parameters, data, self.start[keep], None if self.factor is None else self.factor[keep])
 
     def jacobian(self, values, columns):
         """d(residuals)/dx (m, len(columns)) by central differences."""
@@ -104,10 +106,10 @@ class Problem:
 
     def unwhitened(self, jacobian):
         """A whitened Jacobian (m, r) of this Problem's residuals back in mm-equivalents."""
-        if self.whitener is None:
+        if self.factor is None:
             return jacobian
-        blocks = jacobian.reshape(len(self.whitener), -1, jacobian.shape[1])
-        return np.einsum("nij,njc->nic", np.linalg.inv(self.whitener), blocks).reshape(jacobian.shape)
+        blocks = jacobian.reshape(len(self.factor), -1, jacobian.shape[1])
+        return np.einsum("nij,njc->nic", self.factor, blocks).reshape(jacobian.shape)
 
     def errors(self, values):
         """(position error (n,) mm, orientation error (n,) degrees or None, closed (n,)): what

@@ -70,13 +70,13 @@ def covariances(residual_of, measured, joints, revolute, noise):
     return total
 
 
-def whiteners(covariance):
-    """(n, k, k): L_i^-1 for each pose's covariance C_i = L_i L_i^T, a covariance with no noise
-    at all in some direction given a floor of 1e-12 of its trace there."""
+def factors(covariance):
+    """(n, k, k): L_i of each pose's covariance C_i = L_i L_i^T (its inverse whitens the pose's
+    residuals), a covariance with no noise at all in some direction given a floor of 1e-12 of its
+    trace there."""
     k = covariance.shape[1]
     floor = 1e-12 * np.trace(covariance, axis1=1, axis2=2)[:, None, None] + np.finfo(float).tiny
-    factor = np.linalg.cholesky(covariance + floor * np.eye(k))
-    return np.linalg.inv(factor)
+    return np.linalg.cholesky(covariance + floor * np.eye(k))
 
 
 def whiten(whitener, residuals):

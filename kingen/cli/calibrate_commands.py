@@ -145,10 +145,10 @@ def _worse_than_nominal(outcome):
     after, nominal = outcome["validation"], outcome["validation_nominal"]
     if after is None:
         return None
-    for key, unit, scale in (("rms_mm", "um", 1000.0), ("rms_deg", "deg", 1.0)):
+    for key, written in (("rms_mm", length_text), ("rms_deg", lambda value: f"{number_text(value, 4)} deg")):
         if after[key] is not None and after[key] > nominal[key]:
-            return (f"on the held-out measurements it is worse than the nominal robot ({after[key] * scale:.4g} {unit} "
-                    f"RMS against {nominal[key] * scale:.4g} {unit})")
+            return (f"on the held-out measurements it is worse than the nominal robot ({written(after[key])} "
+                    f"RMS against {written(nominal[key])})")
     return None
 
 
