@@ -1,0 +1,182 @@
+"""Loading a WebAssembly module of the C library into this process through wasmtime, and calling
+it as the C host's :class:`~kingen.hosts.c.loader.Library` calls its shared library: the same
+methods, the same checks (:data:`kingen.hosts.c.checks.CHECKS`), the batch driver compiled into
+the module (:mod:`.build`). What differs is only how arguments reach the code: a NumPy array
+handed to a module's function is copied into the module's memory from ``__heap_base`` on
+(the library allocates nothing, so nothing of its own lives there), the function runs, and the
+array is copied back (:class:`Call`). Function pointers are indices into the module's function
+table, where an exported function is added once.
+
+Imports: a module may import WASI functions only. ``clock_time_get`` answers the monotonic clock
+in nanoseconds (the timed batch's); any other answers ENOSYS. Any other import is a defect.
+"""
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import KingenError, PluginDefect
+from ...runtime.file_gate import refuse_special_file
+from ..c.loader import Library, entry_points
+
+WASI = "wasi_snapshot_preview1"
+ENOSYS = 52
+ALIGNMENT = 16
+PAGE = 65536
+
+
+class Buffer:
+    """A NumPy array handed to a module's function, copied into its memory before the call and
+    back after it (unless read-only); ``[i]`` reads its element i (a ``double *`` out-argument)."""
+
+    def __init__(self, array):
+        self.array = array
+
+    def __getitem__(self, index):
+        return self.array.reshape(-1)[index]
+
+
+class Foreign:
+    """What :class:`~kingen.hosts.c.loader.Library`'s methods ask of cffi, answered for a
+    module: ``from_buffer`` and ``new`` make :class:`Buffer` arguments, ``cast`` passes values on."""
+
+    @staticmethod
+    def from_buffer(ctype, array):
+        return Buffer(array)
+
+    @staticmethod
+    def new(ctype):
+        return Buffer(np.zeros(1))
+
+    @staticmethod
+    def cast(ctype, value):
+        return value
+
+
+class Module:
+    """A module instantiated in its own wasmtime store: its exports and its memory as NumPy bytes."""
+
+    def __init__(self, path):
+        import wasmtime
+
+        config = wasmtime.Config()
+        config.parallel_compilation = False  # no compiler threads in the sandbox's process budget
+        self.engine = wasmtime.Engine(config)
+        self.store = wasmtime.Store(self.engine)
+        try:
+            module = wasmtime.Module.from_file(self.engine, str(path))
+        except wasmtime.WasmtimeError as error:
+            raise PluginDefect(f"the module cannot be loaded: {str(error).splitlines()[0]}") from None
+        linker = wasmtime.Linker(self.engine)
+        for wanted in module.imports:
+            if wanted.module != WASI or not isinstance(wanted.type, wasmtime.FuncType):
+                raise PluginDefect(f"the module imports {wanted.module}.{wanted.name}: a routine may import "
+                                   "only WASI functions")
+            answer = self._clock if wanted.name == "clock_time_get" else self._unsupported
+            linker.define_func(WASI, wanted.name, wanted.type, answer, access_caller=True)
+        try:
+            instance = linker.instantiate(self.store, module)
+        except (wasmtime.WasmtimeError, wasmtime.Trap) as error:
+            raise PluginDefect(f"the module cannot be instantiated: {str(error).splitlines()[0]}") from None
+        self.exports = instance.exports(self.store)
+        self.memory = self.exports["memory"]
+        self.base = self.exports["__heap_base"].value(self.store)
+        if "_initialize" in self.exports:
+            self.exports["_initialize"](self.store)
+        self._bytes = None
+
+    def _clock(self, caller, clock, precision, out):
+        caller["memory"].write(caller, time.monotonic_ns().to_bytes(8, "little"), out)
+        return 0
+
+    @staticmethod
+    def _unsupported(caller, *arguments):
+        return ENOSYS
+
+    def bytes(self, end):
+        """The memory as uint8 (grown to hold ``end`` bytes at least)."""
+        size = self.memory.data_len(self.store)
+        if size < end:
+            self.memory.grow(self.store, -(-(end - size) // PAGE))
+            self._bytes = None
+        if self._bytes is None or len(self._bytes) != self.memory.data_len(self.store):
+            self._bytes = np.ctypeslib.as_array(self.memory.data_ptr(self.store),
+                                                shape=(self.memory.data_len(self.store),))
+        return self._bytes
+
+    def table_index(self, name):
+        """The function table's index of the exported function ``name`` (added to the table)."""
+        return self.exports["__indirect_function_table"].grow(self.store, 1, self.exports[name])
+
+
+class Call:
+    """An exported function called with :class:`Buffer` arguments laid out from ``__heap_base``."""
+
+    def __init__(self, module, name):
+        self.module, self.function = module, module.exports[name]
+
+    def __call__(self, *arguments):
+        buffers, addresses, end = [], [], self.module.base
+        for argument in arguments:
+            if isinstance(argument, Buffer):
+                buffers.append((end, argument.array))
+                addresses.append(end)
+                end += -(-argument.array.nbytes // ALIGNMENT) * ALIGNMENT
+            else:
+                addresses.append(int(argument))
+        memory = self.module.bytes(end)
+        for address, array in buffers:
+            memory[address:address + array.nbytes] = np.ascontiguousarray(array).view(np.uint8).reshape(-1)
+        returned = self.function(self.module.store, *addresses)
+        for address, array in buffers:
+            if array.flags.writeable:
+                array.reshape(-1)[...] = memory[address:address + array.nbytes].view(array.dtype)
+        return returned
+
+
+class Driver:
+    """The batch driver's functions in the module, as the C host's cffi driver offers them."""
+
+    def __init__(self, module):
+        self.module = module
+
+    def __getattr__(self, name):
+        return Call(self.module, name)
+
+
+class WasmLibrary(Library):
+    """A WebAssembly module of the C library for ``robot``, loaded through wasmtime: the C host's
+    :class:`~kingen.hosts.c.loader.Library` with the module in place of the shared library.
+    KingenError for no such file; PluginDefect for a module that does not load, imports anything
+    but WASI, or lacks a function of the header."""
+
+    def __init__(self, library, routine, robot):
+        path = Path(library).resolve()
+        refuse_special_file(path)
+        if not path.is_file():
+            raise KingenError(f"{path}: no such module")
+        self.module = Module(path)
+        self.ffi = Foreign()
+        self.functions, self.indices = {}, {}
+        for name in entry_points(robot):
+            symbol = f"{routine}_{name}"
+            if symbol not in self.module.exports:
+                raise PluginDefect(f"the module does not export {symbol}")
+            if name == "default_geometry":
+                self.geometry = self.module.exports[symbol].value(self.module.store)
+            else:
+                self.functions[name] = Call(self.module, symbol)
+                self.indices[name] = self.module.table_index(symbol)
+        self.routine, self.robot = routine, robot
+        self.dof, self.postures = robot.joint_count, robot.postures
+        self.driver = Driver(self.module)
+
+    def _pointer(self, ctype, array):
+        return Buffer(array)
+
+    def _function(self, name):
+        return self.indices[name]
+
+    def _geometry(self):
+        return self.geometry
