@@ -3,12 +3,15 @@ compiler-rt; a missing part skips, or fails under KINGEN_REQUIRE_TOOLCHAINS=1), 
 glue run by Node against the reference, and the one-line error of a missing toolchain."""
 
 import json
+import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
+from kingen.hosts.c.render import render
 from kingen.hosts.wasm.build import GLUE, compile_wasm, module_meta, wasm_toolchain
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNING_NAMES
@@ -78,3 +81,105 @@ def test_a_missing_wasi_libc_is_named(monkeypatch, tmp_path):
     problem = wasm_toolchain().problem
     assert problem.startswith("WebAssembly toolchain: wasi-libc is not installed (Debian package wasi-libc)"), problem
     assert "math.h" in problem and "\n" not in problem
+
+
+VERIFIED_FAMILIES = ("hexapod", "ceart", "exechon_wrist", "tricept_wrist3")
+"""Verified through the API here; tau through the real command line."""
+SHARED_CHECKS = ("values", "warnings", "closure", "jacobian", "c jacobian", "round trip", "forward", "determinism")
+
+
+def require_wasmtime():
+    pytest.importorskip("wasmtime", reason="verify --host wasm needs the wasmtime package (pip install 'kingen[wasm]')")
+
+
+def kingen_process(*arguments, cwd, env=None):
+    return subprocess.run([sys.executable, "-m", "kingen.cli", *map(str, arguments)], cwd=cwd, capture_output=True,
+                          text=True, timeout=120, env={**os.environ, **(env or {})})
+
+
+def verdicts(output):
+    """{check name: "ok" or "FAILED"} of a verify report's lines."""
+    found = {}
+    for line in output.splitlines():
+        words = line.split(None, 1)
+        if len(words) == 2 and words[0] in ("ok", "FAILED") and ":" in words[1]:
+            found[words[1].split(":")[0]] = words[0]
+    return found
+
+
+def test_verify_host_wasm_passes_on_the_command_line(tmp_path):
+    require_wasm()
+    require_wasmtime()
+    result = kingen_process("verify", "tau", "--host", "wasm", "--samples", "400", "-o", tmp_path / "out", cwd=tmp_path)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert result.stdout.startswith(f"verify tau: 400 poses x 8 postures, {tmp_path / 'out' / 'kingen_tau.wasm'}")
+    assert {check: verdicts(result.stdout).get(check) for check in (*SHARED_CHECKS, "c loads")} == \
+        {check: "ok" for check in (*SHARED_CHECKS, "c loads")}
+
+
+@pytest.mark.parametrize("name", VERIFIED_FAMILIES)
+def test_verify_host_wasm_passes_through_the_api(name, tmp_path, monkeypatch):
+    require_wasm()
+    require_wasmtime()
+    import kingen
+
+    monkeypatch.chdir(tmp_path)
+    robot = load_robot(name)
+    report = kingen.verify_library(robot, host="wasm", samples=150)
+    results = {check.name: check.passed for check in report.checks}
+    assert report.passed, [(check.name, check.detail) for check in report.checks if not check.passed]
+    expected = (*SHARED_CHECKS, *(("c direct index",) if robot.dof == 6 else ()))
+    assert {check: results.get(check) for check in expected} == {check: True for check in expected}
+    assert (tmp_path / "build" / name / "wasm" / f"kingen_{name}.wasm").is_file()
+
+
+def test_a_wrong_sign_in_the_compiled_source_fails_values(tmp_path):
+    """The C source edited before compiling (one limb's rail point added instead of subtracted):
+    the module built from it with --source fails values, the diagnosis naming that limb's joint."""
+    require_wasm()
+    require_wasmtime()
+    robot = load_robot("tau")
+    planted = tmp_path / "planted"
+    planted.mkdir()
+    for file_name, text in render(robot).items():
+        (planted / file_name).write_text(text)
+    source = planted / "kingen_tau.c"
+    right = "w[1] = point[1] - rail->rail_point[1]"
+    assert right in source.read_text()
+    source.write_text(source.read_text().replace(right, "w[1] = point[1] + rail->rail_point[1]"))
+    result = kingen_process("verify", "tau", "--host", "wasm", "--source", source, "--samples", "200",
+                            "-o", tmp_path / "out", cwd=tmp_path)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert verdicts(result.stdout)["values"] == "FAILED"
+    assert "joint 1 (carriage2) disagrees" in result.stdout
+
+
+def test_a_missing_toolchain_stops_verify_in_one_line(tmp_path):
+    result = kingen_process("verify", "tau", "--host", "wasm", "-o", tmp_path / "out", cwd=tmp_path,
+                            env={"KINGEN_WASM_CC": "/nonexistent/clang"})
+    assert result.returncode == 2
+    assert result.stderr == ("kingen: error: WebAssembly toolchain: /nonexistent/clang is not installed "
+                             "(Debian package clang; or set $KINGEN_WASM_CC)\n")
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_package_runs_its_example_in_node(tmp_path):
+    require_wasm()
+    require_tool("node", "nodejs")
+    result = kingen_process("package", "hexapod", "--host", "wasm", "-o", tmp_path / "package", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert sorted(path.name for path in (tmp_path / "package").iterdir() if not path.name.startswith(".")) == \
+        ["SETUP.md", "example.js", "kingen_hexapod.h", "kingen_hexapod.wasm", "kingen_wasm.js"]
+    ran = subprocess.run(["node", "example.js"], cwd=tmp_path / "package", capture_output=True, text=True, timeout=60,
+                         check=True)
+    robot = load_robot("hexapod")
+    home = np.array(robot.verification.home, dtype=float)
+    lines = dict(line.split(": ", 1) for line in ran.stdout.splitlines())
+    posture = int(next(key for key in lines if key.startswith("inverse")).split()[-1])
+    inverse = json.loads(lines[f"inverse, posture {posture}"])
+    expected = solve(robot, t6_from_pose(home[None]))
+    assert inverse["warning"] == WARNING_NAMES[expected.warnings[0, posture]]
+    np.testing.assert_allclose(inverse["joints"], expected.joints[0, :, posture], rtol=0, atol=1e-9)
+    forward = json.loads(lines["forward"])
+    assert forward["status"] == 0
+    np.testing.assert_allclose(forward["pose"], home, rtol=0, atol=1e-7)
