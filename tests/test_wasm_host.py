@@ -133,25 +133,57 @@ def test_verify_host_wasm_passes_through_the_api(name, tmp_path, monkeypatch):
     assert (tmp_path / "build" / name / "wasm" / f"kingen_{name}.wasm").is_file()
 
 
+def planted_source(tmp_path, right, wrong, before=""):
+    """tau's C library rendered into tmp_path/planted, ``right`` (which must stand in it) replaced
+    by ``wrong`` and ``before`` put at its top: the source's path."""
+    planted = tmp_path / "planted"
+    planted.mkdir()
+    for file_name, text in render(load_robot("tau")).items():
+        (planted / file_name).write_text(text)
+    source = planted / "kingen_tau.c"
+    assert right in source.read_text()
+    source.write_text(before + source.read_text().replace(right, wrong))
+    return source
+
+
 def test_a_wrong_sign_in_the_compiled_source_fails_values(tmp_path):
     """The C source edited before compiling (one limb's rail point added instead of subtracted):
     the module built from it with --source fails values, the diagnosis naming that limb's joint."""
     require_wasm()
     require_wasmtime()
-    robot = load_robot("tau")
-    planted = tmp_path / "planted"
-    planted.mkdir()
-    for file_name, text in render(robot).items():
-        (planted / file_name).write_text(text)
-    source = planted / "kingen_tau.c"
-    right = "w[1] = point[1] - rail->rail_point[1]"
-    assert right in source.read_text()
-    source.write_text(source.read_text().replace(right, "w[1] = point[1] + rail->rail_point[1]"))
+    source = planted_source(tmp_path, "w[1] = point[1] - rail->rail_point[1]", "w[1] = point[1] + rail->rail_point[1]")
     result = kingen_process("verify", "tau", "--host", "wasm", "--source", source, "--samples", "200",
                             "-o", tmp_path / "out", cwd=tmp_path)
     assert result.returncode == 1, result.stdout + result.stderr
     assert verdicts(result.stdout)["values"] == "FAILED"
     assert "joint 1 (carriage2) disagrees" in result.stdout
+
+
+INVERSE_BODY = "        double solutions[][NUM_SOLUTIONS], int warnings[])\n{\n"
+
+
+def test_a_module_that_traps_fails_crash(tmp_path):
+    """A module executing ``unreachable`` on half the region's poses: check ``crash`` names the trap, exit 1."""
+    require_wasm()
+    require_wasmtime()
+    source = planted_source(tmp_path, INVERSE_BODY, INVERSE_BODY + "    if (pose[3] > -1200.0) __builtin_trap();\n")
+    result = kingen_process("verify", "tau", "--host", "wasm", "--source", source, "--samples", "200",
+                            "-o", tmp_path / "out", cwd=tmp_path)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert ("  FAILED crash: the module trapped in kingen_c_inverse_batch: wasm trap: wasm `unreachable` instruction "
+            "executed\n") in result.stdout
+
+
+def test_a_module_importing_anything_but_wasi_fails_load(tmp_path):
+    require_wasm()
+    require_wasmtime()
+    source = planted_source(tmp_path, INVERSE_BODY, INVERSE_BODY + "    phone_home();\n",
+                            before='__attribute__((import_module("env"), import_name("phone_home"))) '
+                                   'extern void phone_home(void);\n')
+    result = kingen_process("verify", "tau", "--host", "wasm", "--source", source, "--samples", "200",
+                            "-o", tmp_path / "out", cwd=tmp_path)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "  FAILED load: the module imports env.phone_home: a routine may import only WASI functions\n" in result.stdout
 
 
 def test_a_missing_toolchain_stops_verify_in_one_line(tmp_path):

@@ -61,6 +61,7 @@ class Module:
 
         config = wasmtime.Config()
         config.parallel_compilation = False  # no compiler threads in the sandbox's process budget
+        config.memory_may_move = False  # a view of the memory stays valid however the memory grows
         self.engine = wasmtime.Engine(config)
         self.store = wasmtime.Store(self.engine)
         try:
@@ -84,6 +85,7 @@ class Module:
         if "_initialize" in self.exports:
             self.exports["_initialize"](self.store)
         self._bytes = None
+        self.failures = (wasmtime.Trap, wasmtime.WasmtimeError)
 
     def bytes(self, end):
         """The memory as uint8, grown to hold ``end`` bytes at least (the library itself never
@@ -101,11 +103,18 @@ class Module:
         return self.exports["__indirect_function_table"].grow(self.store, 1, self.exports[name])
 
 
+def trap_reason(error):
+    """What a trap says of its cause: wasmtime's last line ("wasm trap: ..."), without its backtrace."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    return lines[-1] if lines else type(error).__name__
+
+
 class Call:
-    """An exported function called with :class:`Buffer` arguments laid out from ``__heap_base``."""
+    """An exported function called with :class:`Buffer` arguments laid out from ``__heap_base``;
+    a trap (or the module's exit through WASI) is a PluginDefect of the check ``crash``."""
 
     def __init__(self, module, name):
-        self.module, self.function = module, module.exports[name]
+        self.module, self.name, self.function = module, name, module.exports[name]
 
     def __call__(self, *arguments):
         buffers, addresses, end = [], [], self.module.base
@@ -119,7 +128,10 @@ class Call:
         memory = self.module.bytes(end)
         for address, array in buffers:
             memory[address:address + array.nbytes] = np.ascontiguousarray(array).view(np.uint8).reshape(-1)
-        returned = self.function(self.module.store, *addresses)
+        try:
+            returned = self.function(self.module.store, *addresses)
+        except self.module.failures as error:
+            raise PluginDefect(f"the module trapped in {self.name}: {trap_reason(error)}", check="crash") from None
         for address, array in buffers:
             if array.flags.writeable:
                 array.reshape(-1)[...] = memory[address:address + array.nbytes].view(array.dtype)
