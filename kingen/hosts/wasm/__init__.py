@@ -14,6 +14,7 @@ class WasmHost(CHost):
     name = "wasm"
     description = "the C library compiled to WebAssembly, for a browser or any WebAssembly runtime"
     loading_stage = "loading the module"
+    per_call = "wasmtime"
 
     def out_dir(self, robot):
         from ..c.build import default_dir
