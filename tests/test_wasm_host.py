@@ -218,3 +218,15 @@ def test_the_package_runs_its_example_in_node(tmp_path):
     forward = json.loads(lines["forward"])
     assert forward["status"] == 0
     np.testing.assert_allclose(forward["pose"], home, rtol=0, atol=1e-7)
+
+
+def test_without_wasmtime_verify_says_what_to_install(tmp_path):
+    require_wasm()
+    blocker = tmp_path / "blocked" / "wasmtime"
+    blocker.mkdir(parents=True)
+    (blocker / "__init__.py").write_text("raise ImportError('no wasmtime here')\n")
+    result = kingen_process("verify", "tau", "--host", "wasm", "--samples", "50", "-o", tmp_path / "out", cwd=tmp_path,
+                            env={"PYTHONPATH": str(tmp_path / "blocked")})
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert result.stderr == ("kingen: error: --host wasm: loading a module needs the Python package wasmtime "
+                             "(pip install 'kingen[wasm]')\n")
