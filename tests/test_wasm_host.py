@@ -65,6 +65,39 @@ def test_the_javascript_glue_answers_as_the_reference(name):
                                        atol=1e-6)
 
 
+MACHINE_POSE_SCRIPT = """
+const KingenWasm = require(process.argv[1]);
+const input = JSON.parse(require("fs").readFileSync(0, "utf8"));
+const kin = KingenWasm.create(require("fs").readFileSync(input.module), input.meta);
+process.stdout.write(JSON.stringify(input.poses.map((pose) => kin.machinePose(pose))));
+"""
+
+
+@pytest.mark.parametrize("name", ["exechon_constrained", "tau"])
+def test_the_glue_gives_a_machines_pose_for_its_task_coordinates(name):
+    """A machine with task coordinates: machinePose is the reference's machine pose (its
+    parasitic coordinates solved) where that is good; null for a robot without task coordinates."""
+    require_wasm()
+    require_tool("node", "nodejs")
+    from kingen.kinematics.parasitic import solve_parasitic
+
+    robot = load_robot(name)
+    poses, t6 = random_t6(robot, 12, seed=7)
+    given = {"module": str(compile_wasm(robot)), "meta": module_meta(robot), "poses": poses.tolist()}
+    ran = subprocess.run(["node", "-e", MACHINE_POSE_SCRIPT, str(GLUE)], input=json.dumps(given), capture_output=True,
+                         text=True, timeout=60, check=True)
+    answers = json.loads(ran.stdout)
+    if not robot.task:
+        assert answers == [None] * len(poses)
+        return
+    expected = solve_parasitic(robot, t6)
+    good = [index for index, answer in enumerate(answers) if answer["status"] == 0]
+    assert len(good) >= len(poses) // 2, answers
+    for index in good:
+        np.testing.assert_allclose(np.array(answers[index]["matrix"]).reshape(4, 4).T, expected.t6[index],
+                                   rtol=0, atol=1e-9, err_msg=f"{name} pose {poses[index]}")
+
+
 def test_a_missing_compiler_is_one_line_naming_its_package(monkeypatch):
     monkeypatch.setenv("KINGEN_WASM_CC", "/nonexistent/clang")
     toolchain = wasm_toolchain()
