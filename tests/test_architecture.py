@@ -79,7 +79,7 @@ def test_no_import_circle():
 LAYERS = (
     ("foundation", ("kingen.errors", "kingen.conventions", "kingen.units", "kingen.defaults", "kingen.vendor")),
     ("runtime", ("kingen.runtime",)),
-    ("robot", ("kingen.robot", "kingen.limbs")),
+    ("robot", ("kingen.robot",)),
     ("kinematics", ("kingen.kinematics",)),
     ("verify", ("kingen.verify",)),
     ("hosts", ("kingen.hosts",)),
