@@ -92,6 +92,14 @@ class LimbModel(Strict):
     singular); the C partial then classifies it with kingen_classify."""
     calibratable: ClassVar[dict] = {}
     """Parameter -> the unit its calibration field is read in ('mm' or 'degrees')."""
+    calibration_parameters: ClassVar[tuple] = ()
+    """What ``kingen calibrate`` identifies on a limb of this model: (field, group, kind) per field,
+    ``kind`` 'vector' (its 3 components, mm), 'tilt' (a unit direction's two tilts across itself,
+    degrees, 0 nominal), 'mm' or 'deg' (the number itself); ``group`` one of
+    kingen.calibrate.parameters.GROUPS. Empty: calibrate refuses a robot with limbs of this model."""
+    revolute_axis_turns_about: ClassVar[Optional[str]] = None
+    """The field (a unit direction) a constraining ``revolute_axis`` stays perpendicular to (a rail's
+    direction): calibration turns the axis about it, one parameter; None: two tilts across the axis."""
     length_fields: ClassVar[tuple] = ()
     """Fields in mm (numbers or 3-vectors): the robot's size is the largest of them."""
     c_columns: ClassVar[str] = ""

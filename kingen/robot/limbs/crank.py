@@ -34,6 +34,9 @@ class Crank(TwoBranchModel):
 
     joint_type = REVOLUTE
     calibratable = {"zero_offset": "degrees", "crank_length": "mm", "rod_length": "mm"}
+    calibration_parameters = (("pivot", "base", "vector"), ("crank_direction", "direction", "deg"),
+                              ("crank_length", "length", "mm"), ("rod_length", "length", "mm"),
+                              ("zero_offset", "zero", "deg"), ("platform_point", "platform", "vector"))
     length_fields = ("pivot", "crank_length", "rod_length", "platform_point")
     joint_words = ("the crank's angle from the horizontal less its zero offset (positive turns its tip "
                    "down, toward -Z); the rod keeps its length")
