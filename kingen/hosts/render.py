@@ -93,6 +93,15 @@ def _model_tables(robot):
     return list(tables.values())
 
 
+def closed_form_model(robot):
+    """The table (as the view's ``models`` holds it) of the one limb model of ``robot`` whose
+    forward a translating platform solves in closed form, its three limbs' spheres intersected
+    (:attr:`kingen.robot.limbs.LimbModel.closed_form_forward`), or None: Newton's method."""
+    if robot.dof != 3 or len(robot.models) != 1 or not type(robot.limbs[0]).closed_form_forward:
+        return None
+    return _model_tables(robot)[0]
+
+
 def schur_test_lines(entry):
     """Straight-line C89 (declarations first) that sets ``double margin``: positive exactly when
     M - KINGEN_DIRECT_MIN^2 diag(0, 0, 0, 1, 1, 1) is positive definite (the direct index lies

@@ -92,6 +92,12 @@ class LimbModel(Strict):
     singular); the C partial then classifies it with kingen_classify."""
     calibratable: ClassVar[dict] = {}
     """Parameter -> the unit its calibration field is read in ('mm' or 'degrees')."""
+    closed_form_forward: ClassVar[bool] = False
+    """Whether a translating platform on three limbs of this model has its forward in closed form in
+    the generated C (the C library's and LinuxCNC's): the partial's "sphere" part then sets
+    ``centre[limb][k]`` (k = 0..2) and ``radius[limb]``, the sphere the platform origin lies on, from
+    its ``row`` and ``measured[row->joint]`` (every row's ``platform_point`` already turned by the
+    platform's rotation), with ``int k`` declared; False: Newton's method."""
     calibration_parameters: ClassVar[tuple] = ()
     """What ``kingen calibrate`` identifies on a limb of this model: (field, group, kind) per field,
     ``kind`` 'vector' (its 3 components, mm), 'tilt' (a unit direction's two tilts across itself,
@@ -214,6 +220,13 @@ class LimbModel(Strict):
     def c_row(self):
         """This limb's table row for the partial: {column: C text} (numbers via c_double)."""
         raise NotImplementedError
+
+    def tilt_judge_row(self):
+        """This limb's geometry as the design optimiser's compiled judge reads it
+        (kingen.design.tilt_judge: {member of its design struct: number or 3 numbers}, mm, base
+        frame, the platform point in the platform frame), or None: the judge does not decide a
+        robot with limbs of this model, the numpy analysis does."""
+        return None
 
     def singular_scale(self):
         """The scale of the joint's ill-conditioning in its singular band (mm or rad per

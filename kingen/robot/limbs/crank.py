@@ -113,5 +113,13 @@ class Crank(TwoBranchModel):
                 "rod_length": c_double(self.rod_length), "platform_point": c_vector(self.platform_point),
                 "zero_offset": c_double(math.radians(self.zero_offset))}
 
+    def tilt_judge_row(self):
+        """The pivot, the crank direction's cosine and sine, the crank and rod lengths and the
+        platform point: the six-crank judge's geometry."""
+        beta = np.radians(self.crank_direction)
+        return {"pivot": list(map(float, self.pivot)), "cos_direction": float(np.cos(beta)),
+                "sin_direction": float(np.sin(beta)), "crank_length": self.crank_length,
+                "rod_length": self.rod_length, "platform": list(map(float, self.platform_point))}
+
     def explain_offset(self, offset):
         return f"a wrong crank zero ({math.degrees(offset):+.6g} deg)"

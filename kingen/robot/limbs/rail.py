@@ -42,6 +42,7 @@ class Rail(TwoBranchModel):
     """The carriage offset moves the carriage as the rail point does: it is kept as written and the
     rail point stands for both."""
     revolute_axis_turns_about = "direction"
+    closed_form_forward = True
     length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
     c_columns = ("joint, rail point s (mm, base frame), direction u (unit), carriage offset d (mm), "
                  "platform point n (mm, platform frame), link length l (mm), origin (mm), "
