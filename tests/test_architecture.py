@@ -7,6 +7,7 @@ import ast
 import io
 import keyword
 import re
+import sys
 import tokenize
 from pathlib import Path
 
@@ -325,10 +326,11 @@ def first(path):
     assert same_shape_runs({"a.c": c_shapes(c), "b.c.j2": c_shapes(template)}) == ["a.c:1-8 ~ b.c.j2:1-8"]
 
 
-NAME_LIMB_TYPES = ("kingen/robot/layouts.py",)
-"""The modules outside the limb models (kingen/robot/limbs/: each model's module, its template
-partial, the registry) that may name a limb type: at most two. The layouts' tags: a layout
-(``type: hexapod``) expands into limbs of one model. Everything else asks the model."""
+NAME_LIMB_TYPES = ("kingen/robot/limbs/__init__.py", "kingen/robot/layouts.py")
+"""The modules outside the limb models (each registered model's module, their base and their
+template partials) that may name a limb type, at most two: the models' registry, and the layouts,
+the robot file's tags that expand into limbs of one model (``layout: {type: stewart_gough}``).
+Everything else asks the model."""
 C_PROSE = re.compile(r"/\*.*?\*/|//[^\n]*|\{#.*?#\}", re.DOTALL)
 
 
@@ -354,12 +356,16 @@ def limb_type_names(text, kind, models):
 
 def limb_type_naming_modules(models):
     """{path: [(line, word)]} of kingen's Python modules, C files and C templates outside the limb
-    models that name a limb type (limb_type_names)."""
+    models (the ``models``' own modules, their base, their partials) that name a limb type
+    (limb_type_names)."""
+    from kingen.robot.limbs import LimbModel, partial_path
+
     root = PACKAGE.parent
-    limbs = (PACKAGE / "robot" / "limbs", root / "templates" / "limbs")
+    own = {Path(sys.modules[cls.__module__].__file__).resolve() for cls in (LimbModel, *models.values())}
+    own |= {partial_path(cls).resolve() for cls in models.values()}
     found = {}
     for path in sorted([*PACKAGE.rglob("*"), *(root / "templates").rglob("*")]):
-        if not path.is_file() or any(folder in path.parents for folder in limbs):
+        if not path.is_file() or path.resolve() in own:
             continue
         kind = "py" if path.suffix == ".py" else "c" if path.name.endswith(C_SUFFIXES) else None
         names = limb_type_names(path.read_text(), kind, models) if kind else []
