@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
-from ..render import refuse, build_info, closed_form_model, gram_lines, newton_step, robot_view, schur_test_lines, template
+from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_step, robot_view, schur_test_lines,
+                      template)
 from . import LinuxcncHost
 from .five_axis import wrist_view
 from ...kinematics.routine import SINGULAR_TOLERANCE

@@ -2,8 +2,8 @@
 
 A limb model is one class (a pydantic schema) in one module of :mod:`kingen.robot.limbs`, plus
 one template partial ``templates/limbs/<model>.c.j2``. Everything else in kingen iterates
-over the registry and asks the class; nothing names a model but the registry and the layouts. docs/explanation/conventions.md has
-the equations; docs/developer/extending.md the checklist.
+over the registry and asks the class; nothing names a model but the registry and the layouts.
+docs/explanation/conventions.md has the equations; docs/developer/extending.md the checklist.
 """
 
 import math
