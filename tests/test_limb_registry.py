@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Literal
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -19,7 +20,8 @@ from kingen.calibrate.measurements import write_measurements
 from kingen.cli import main
 from kingen.conventions import t6_from_pose
 from kingen.kinematics.reference import solve
-from kingen.robot.limbs import LimbModel, LimbSolution, c_double, c_vector
+from kingen.hosts import get_host
+from kingen.robot.limbs import LimbModel, LimbSolution, Rail, c_double, c_vector
 from kingen.robot.model import load_robot
 from kingen.hosts.delmia.package import render_package
 from kingen.robot.schema import Coordinate, Vec3
@@ -148,3 +150,15 @@ def test_calibrate_refuses_a_model_that_declares_no_parameters(toy, tmp_path, ca
     error = capsys.readouterr().err
     assert error == (f"kingen: error: {toy.path}: limbs: calibrate does not know the parameters of the 'plumb' limb "
                      "model (it knows leg, rail, crank)\n")
+
+
+@pytest.mark.parametrize("host", ["c", "linuxcnc"])
+def test_the_hosts_ask_the_model_whether_the_forward_is_in_closed_form(host, monkeypatch, tmp_path, capsys):
+    """Three rails on a translating platform: the closed form where the rail says it has one;
+    Newton's method, verified, where it says not."""
+    robot = load_robot("linear_delta")
+    assert any("kingen_closed_form(" in text for text in get_host(host).render(robot).values())
+    monkeypatch.setattr(Rail, "closed_form_forward", False)
+    assert not any("kingen_closed_form(" in text for text in get_host(host).render(robot).values())
+    assert main(["verify", "linear_delta", "--host", host, "--samples", "300", "-o", str(tmp_path)]) == 0
+    assert re.search(r"ok +forward: .*(Newton steps|iterations) mean [1-9]", capsys.readouterr().out)
