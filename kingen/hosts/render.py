@@ -18,9 +18,9 @@ from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, c_vector, partial_path
 from ..robot.schema import calibration_index
-from ..kinematics.parasitic import MANIFOLD_TOLERANCE_RAD, home_yaw, manifold_tolerance_mm
+from ..kinematics.hybrid.parasitic import MANIFOLD_TOLERANCE_RAD, home_yaw, manifold_tolerance_mm
 from ..kinematics.singularity import PACKED, partial_sum_split
-from ..kinematics.parasitic_axes import home_axes
+from ..kinematics.hybrid.parasitic_axes import home_axes
 from ..robot.constraints import axes_table, constraint_table, family
 from .wrist import whole_view
 
