@@ -9,7 +9,7 @@ import numpy as np
 
 from kingen.conventions import t6_from_pose
 from kingen.kinematics.forward import free_mask, newton
-from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 

@@ -7,6 +7,7 @@ import ast
 import io
 import keyword
 import re
+import sys
 import tokenize
 from pathlib import Path
 
@@ -79,7 +80,7 @@ def test_no_import_circle():
 LAYERS = (
     ("foundation", ("kingen.errors", "kingen.conventions", "kingen.units", "kingen.defaults", "kingen.vendor")),
     ("runtime", ("kingen.runtime",)),
-    ("robot", ("kingen.robot", "kingen.limbs")),
+    ("robot", ("kingen.robot",)),
     ("kinematics", ("kingen.kinematics",)),
     ("verify", ("kingen.verify",)),
     ("hosts", ("kingen.hosts",)),
@@ -323,3 +324,68 @@ def first(path):
         "        y = 3;\n    return y;\n}\n"
     template = c.replace("f(", "g(").replace("scale", "{{ scale }}").replace("/* c */", "{# jinja #}")
     assert same_shape_runs({"a.c": c_shapes(c), "b.c.j2": c_shapes(template)}) == ["a.c:1-8 ~ b.c.j2:1-8"]
+
+
+NAME_LIMB_TYPES = ("kingen/robot/limbs/__init__.py", "kingen/robot/layouts.py")
+"""The modules outside the limb models (each registered model's module, their base and their
+template partials) that may name a limb type, at most two: the models' registry, and the layouts,
+the robot file's tags that expand into limbs of one model (``layout: {type: stewart_gough}``).
+Everything else asks the model."""
+C_PROSE = re.compile(r"/\*.*?\*/|//[^\n]*|\{#.*?#\}", re.DOTALL)
+
+
+def limb_type_names(text, kind, models):
+    """Where ``text`` (a Python module, kind 'py', or C or a C template, kind 'c') names one of
+    the limb ``models`` (the registry: tag -> class): a Python string equal to a tag or a name
+    equal to a class's; in C, outside comments, a tag, its plural or kingen_<tag>(s) as a word.
+    [(line, word)]."""
+    if kind == "c":
+        code = C_PROSE.sub(lambda match: "\n" * match.group(0).count("\n"), text)
+        word = re.compile(r"\b(?:kingen_)?(?:%s)s?\b" % "|".join(map(re.escape, models)))
+        return [(code[:found.start()].count("\n") + 1, found.group(0)) for found in word.finditer(code)]
+    classes = {cls.__name__ for cls in models.values()}
+    found = []
+    for token in tokenize.generate_tokens(io.StringIO(text).readline):
+        if token.type == tokenize.NAME and token.string in classes:
+            found.append((token.start[0], token.string))
+        elif token.type == tokenize.STRING and token.string.strip("'\"") in models \
+                and ast.literal_eval(token.string) in models:
+            found.append((token.start[0], token.string))
+    return found
+
+
+def limb_type_naming_modules(models):
+    """{path: [(line, word)]} of kingen's Python modules, C files and C templates outside the limb
+    models (the ``models``' own modules, their base, their partials) that name a limb type
+    (limb_type_names)."""
+    from kingen.robot.limbs import LimbModel, partial_path
+
+    root = PACKAGE.parent
+    own = {Path(sys.modules[cls.__module__].__file__).resolve() for cls in (LimbModel, *models.values())}
+    own |= {partial_path(cls).resolve() for cls in models.values()}
+    found = {}
+    for path in sorted([*PACKAGE.rglob("*"), *(root / "templates").rglob("*")]):
+        if not path.is_file() or path.resolve() in own:
+            continue
+        kind = "py" if path.suffix == ".py" else "c" if path.name.endswith(C_SUFFIXES) else None
+        names = limb_type_names(path.read_text(), kind, models) if kind else []
+        if names:
+            found[str(path.relative_to(root))] = names
+    return found
+
+
+def test_outside_the_limb_models_at_most_two_modules_name_a_limb_type():
+    from kingen.robot.limbs import MODELS
+
+    assert len(NAME_LIMB_TYPES) <= 2
+    named = {path: names for path, names in limb_type_naming_modules(MODELS).items() if path not in NAME_LIMB_TYPES}
+    assert named == {}, "these modules name a limb type: ask the limb model (kingen/robot/limbs/base.py) instead"
+
+
+def test_a_planted_limb_type_fails_the_limb_type_test():
+    from kingen.robot.limbs import MODELS
+
+    python = 'closed = robot.models == ("rail",)\nfrom .limbs import Crank  # a crank\nwords = "three rails"\n'
+    assert limb_type_names(python, "py", MODELS) == [(1, '"rail"'), (2, "Crank")]
+    c = "/* three rails */\nconst kingen_rail *rail = &kingen_data->rails[0]; // a rail\n{# legs #}{{ crank_length }}\n"
+    assert limb_type_names(c, "c", MODELS) == [(2, "kingen_rail"), (2, "rail"), (2, "rails")]

@@ -17,7 +17,7 @@ from kingen.hosts.c.build import build_library
 from kingen.hosts.c.loader import Library
 from kingen.hosts.c.render import render
 from kingen.kinematics.home import judged_posture
-from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot

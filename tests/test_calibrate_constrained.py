@@ -17,7 +17,7 @@ from kingen.calibrate.identification import region_poses
 from kingen.calibrate.measurements import write_measurements
 from kingen.cli import main
 from kingen.conventions import t6_from_pose
-from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.robot.model import load_robot, resolve_robot_path
 from kingen.robot.reading import read_robot_file

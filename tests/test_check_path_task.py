@@ -12,8 +12,8 @@ import pytest
 
 from kingen.cli import main
 from kingen.conventions import matrix_from_pose, t6_from_pose
-from kingen.kinematics.parasitic import constraint_residuals
-from kingen.kinematics.parasitic_tube import tube_residuals
+from kingen.kinematics.hybrid.parasitic import constraint_residuals
+from kingen.kinematics.hybrid.parasitic_tube import tube_residuals
 from kingen.robot.model import load_robot
 from conftest import require_linuxcnc_headers, require_tool
 from test_check_path import needs_interpreter, run

@@ -13,7 +13,7 @@ import pytest
 
 from kingen.conventions import pose_from_t6
 from kingen.hosts.linuxcnc.five_axis import axis_of_world, home_axis
-from kingen.kinematics.wrist_forward import tool_forward
+from kingen.kinematics.hybrid.wrist_forward import tool_forward
 from kingen.paths.check import Settings, check_program
 from kingen.robot.model import load_robot
 from conftest import require_linuxcnc_headers, require_tool

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from kingen.conventions import rotation_from_rpy, t6_from_pose
-from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import load_robot

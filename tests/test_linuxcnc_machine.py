@@ -23,7 +23,7 @@ from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.five_axis import axis_of_world, home_axis
 from kingen.hosts.linuxcnc.package import render_package
 from kingen.robot.model import load_robot
-from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import solve
 
 DRIVER = Path(__file__).parent / "linuxcnc" / "driver.py"

@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from kingen.conventions import pose_from_t6, t6_from_pose
 from kingen.kinematics.loads import Motion, loads, machine_t6
-from kingen.kinematics.parasitic import solve_parasitic
+from kingen.kinematics.hybrid.parasitic import solve_parasitic
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.robot.loads_schema import Payload
@@ -338,7 +338,7 @@ def test_a_wrist_machines_loads_are_the_virtual_work_of_the_payload_on_its_tool(
     platform the machine's pose there) and the wrist's readings. The legs' joints by central
     differences of the parallel part's reference, the wrist's are the coordinates themselves;
     the payload's weight does its work at its centre on the tool the wrist's forward gives."""
-    from kingen.kinematics.wrist import tool_t6
+    from kingen.kinematics.hybrid.wrist import tool_t6
 
     robot = replace(load_robot(name), payload=PAYLOAD)
     parallel, dof = robot.parallel, robot.dof

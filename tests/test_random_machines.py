@@ -250,7 +250,7 @@ def test_published_poses_rounded_as_a_drawing_gives_them_are_on_the_manifold(nam
     """Each golden pose of a shipped machine with task coordinates (an independent computation's,
     to 9 decimals) rounded to 4 decimals of a mm and 3 of a degree is on the machine's manifold:
     the reference answers it as the machine's pose, not WARN_UNREACHABLE."""
-    from kingen.kinematics.parasitic import solve_parasitic
+    from kingen.kinematics.hybrid.parasitic import solve_parasitic
 
     robot = load_robot(name)
     poses = np.array([entry.pose for entry in robot.golden])

@@ -7,7 +7,7 @@ from conftest import ONE_RAIL, PLUMB_LEG, SHIPPED, random_t6
 from kingen.kinematics.routine import SINGULAR_TOLERANCE, WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.robot.model import load_robot
-from kingen.kinematics.parasitic import on_manifold
+from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import platform_points_in_base, solve
 
 GOOD, LIMITS, UNREACHABLE, SINGULAR = (WARNINGS[k] for k in (

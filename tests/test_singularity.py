@@ -13,7 +13,7 @@ from kingen.kinematics.routine import WARNINGS
 from kingen.conventions import t6_from_pose
 from kingen.errors import KingenError
 from kingen.robot.model import load_robot
-from kingen.kinematics.parasitic import on_manifold, task_rows, task_twists
+from kingen.kinematics.hybrid.parasitic import on_manifold, task_rows, task_twists
 from kingen.kinematics.reference import solve
 from kingen.kinematics.singularity import (
     EXACT_WINDOW, PACKED, direct_index, direct_index_of_entries, direct_index_side, finite_difference_jacobian,

@@ -1,5 +1,5 @@
 """A serial wrist on the constrained Exechon (robots/exechon_wrist.yaml): the numpy reference's
-inverse from the tool pose (kingen.kinematics.wrist) against an independent computation written
+inverse from the tool pose (kingen.kinematics.hybrid.wrist) against an independent computation written
 here (Newton on the whole chain's tool tip and tool axis, the platform's rotation by Newton on its
 constraint equations, rotations by scipy), its warnings, the wrist's forward (tool_t6, tool_turn),
 and the one-line refusals of what this version does not solve."""
@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from kingen.conventions import t6_from_pose
 from kingen.kinematics.routine import WARNINGS
 from kingen.kinematics.reference import solve
-from kingen.kinematics.wrist import tool_t6, tool_turn
+from kingen.kinematics.hybrid.wrist import tool_t6, tool_turn
 from kingen.robot.model import load_robot, resolve_robot_path
 
 from conftest import refusal_of

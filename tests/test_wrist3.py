@@ -1,5 +1,5 @@
 """A three-axis spherical wrist on the Tricept-type machine (robots/tricept_wrist3.yaml): the numpy
-reference's inverse from the whole tool pose (kingen.kinematics.wrist) against an independent
+reference's inverse from the whole tool pose (kingen.kinematics.hybrid.wrist) against an independent
 computation written here (Newton on the whole chain's tool pose, six equations in the wrist
 centre and the three wrist angles, the platform's rotation by tests/test_tricept.py's Newton on
 the tube's direction, rotations by scipy), its golden values, its warnings, the wrist's forward
@@ -15,10 +15,10 @@ from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
 from kingen.kinematics.singularity import jacobian
-from kingen.kinematics.wrist import tool_t6
+from kingen.kinematics.hybrid.wrist import tool_t6
 from kingen.kinematics.forward import poses_of
-from kingen.kinematics.wrist_forward import tool_rates
-from kingen.kinematics.wrist_rates import tool_jacobian
+from kingen.kinematics.hybrid.wrist_forward import tool_rates
+from kingen.kinematics.hybrid.wrist_rates import tool_jacobian
 from kingen.robot.model import load_robot, resolve_robot_path
 
 import test_tricept

@@ -1,6 +1,6 @@
 """The generated routine of a machine with a three-axis (spherical) wrist, robots/tricept_wrist3.yaml,
 in DELMIA's plugin and the C library (templates/wrist.c.j2's three-axis branch) against kingen's
-numpy reference (kingen.kinematics.wrist): every posture's joints to 1e-9 and the same warnings
+numpy reference (kingen.kinematics.hybrid.wrist): every posture's joints to 1e-9 and the same warnings
 over poses drawn round the verification home, at the gimbal lock and at non-finite T6; the C
 library's forward gives the whole tool pose back to 1e-9."""
 
@@ -13,7 +13,7 @@ from kingen.hosts.c.build import build_library
 from kingen.hosts.c.loader import Library
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
-from kingen.kinematics.wrist import rotation_about
+from kingen.kinematics.hybrid.wrist import rotation_about
 from kingen.robot.model import load_robot, resolve_robot_path
 
 FILE = resolve_robot_path("tricept_wrist3")

@@ -14,7 +14,7 @@ from kingen.conventions import t6_from_pose
 from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.robot.model import load_robot
-from kingen.kinematics.wrist_forward import tool_forward
+from kingen.kinematics.hybrid.wrist_forward import tool_forward
 from kingen.verify.checks.jacobian import jacobian_check
 from kingen.verify.checks.round_trip import round_trip_check
 from kingen.verify.options import VerifyOptions

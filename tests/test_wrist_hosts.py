@@ -1,6 +1,6 @@
 """The generated routine of a robot with a serial wrist, in DELMIA's plugin and the C library
 (templates/wrist.c.j2 through templates/postures_body.c.j2), against kingen's numpy reference
-(kingen.kinematics.wrist): every posture's joints to 1e-9 and the same warnings, at the
+(kingen.kinematics.hybrid.wrist): every posture's joints to 1e-9 and the same warnings, at the
 wrist's own warnings (its singularity, its travel, a cone a nutating wrist cannot reach), at
 non-finite T6 and over poses drawn round the verification home."""
 

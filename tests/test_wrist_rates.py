@@ -1,6 +1,6 @@
 """The joint rates per tool twist of a machine with a wrist in closed form
-(kingen.kinematics.wrist_rates) against an independent computation, the machine's forward map
-differentiated by central differences and inverted (kingen.kinematics.wrist_forward.tool_rates);
+(kingen.kinematics.hybrid.wrist_rates) against an independent computation, the machine's forward map
+differentiated by central differences and inverted (kingen.kinematics.hybrid.wrist_forward.tool_rates);
 and the C library's Jacobian against both: the same rates, and none for the twist about the tool
 axis through the tool tip (the five-axis reading)."""
 
@@ -15,8 +15,8 @@ from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.kinematics.singularity import jacobian
 from kingen.kinematics.forward import poses_of
-from kingen.kinematics.wrist_forward import tool_rates
-from kingen.kinematics.wrist_rates import tool_jacobian
+from kingen.kinematics.hybrid.wrist_forward import tool_rates
+from kingen.kinematics.hybrid.wrist_rates import tool_jacobian
 from kingen.robot.model import load_robot
 
 POSES = 60

@@ -15,7 +15,7 @@ from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS, warnings_to_exercise
 from kingen.kinematics.forward import poses_of
-from kingen.kinematics.wrist_forward import tool_rates
+from kingen.kinematics.hybrid.wrist_forward import tool_rates
 from kingen.robot.model import load_robot
 from kingen.verify.boundaries import boundary_poses
 from kingen.verify.checks import Closure, Context

@@ -15,8 +15,8 @@ from kingen.hosts import get_host
 from kingen.kinematics.poses import sample_poses
 from kingen.kinematics.reference import solve
 from kingen.kinematics.routine import WARNINGS
-from kingen.kinematics.wrist import tool_t6
-from kingen.kinematics.wrist_rates import tool_jacobian
+from kingen.kinematics.hybrid.wrist import tool_t6
+from kingen.kinematics.hybrid.wrist_rates import tool_jacobian
 from kingen.robot.model import load_robot
 from kingen.runtime.resources import robots_dir
 from kingen.verify import VerifyOptions, verify_library

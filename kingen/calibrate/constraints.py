@@ -6,9 +6,10 @@ like the other angles): the unit vector d becomes (d + a u + b v) / |d + a u + b
 v the two unit vectors across d (``across``). What each family of constrained machine
 (kingen.robot.constraints) gains:
 
-- revolute axes fixed in the base ('planes'): a leg's ``revolute_axis`` two turns; a rail's
-  ``revolute_axis`` one turn about the rail's direction (the axis must stay perpendicular to the
-  rail, so that the carriage moves in its plane: the other way is not a parameter of this model);
+- revolute axes fixed in the base ('planes'): a limb's ``revolute_axis`` two turns, or one turn
+  about the direction its model names in ``revolute_axis_turns_about`` (a rail's: the axis must stay
+  perpendicular to the rail, so that the carriage moves in its plane: the other way is not a
+  parameter of that model);
 - revolute axes fixed in the platform ('axes', the Exechon's): the pair's shared
   ``platform_revolute_axis`` two turns (both legs of the pair keep one axis, as their common
   part holds them), the third leg's two turns;
@@ -63,7 +64,7 @@ def entries(robot):
     found = []
     if kind == "planes":
         for index, limb in enumerate(robot.limbs):
-            parts = (TURN,) if limb.model == "rail" else TILTS
+            parts = (TURN,) if type(limb).revolute_axis_turns_about else TILTS
             found += [(f"{names[index]}.revolute_axis.{_word(part)}", AXIS_GROUP[0], "deg", 0.0, index,
                        "revolute_axis", part) for part in parts]
     elif kind == "axes":
@@ -95,7 +96,8 @@ def partners(robot):
 
 def limb_axis(limb, field, angles, direction):
     """The limb's constraint axis ``field`` turned by ``angles`` ({'a', 'b'} or {'turn'}: radians);
-    ``direction`` (3,) the rail's calibrated direction (for a 'turn') or None."""
+    ``direction`` (3,) the calibrated direction of the model's ``revolute_axis_turns_about`` (for a
+    'turn') or None."""
     nominal = np.asarray(getattr(limb, field), dtype=float)
     if TURN in angles:
         return turned_about(nominal, direction, angles[TURN])

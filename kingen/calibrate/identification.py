@@ -26,7 +26,7 @@ import numpy as np
 from ..conventions import t6_from_matrix, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.forward import free_mask, poses_of
-from ..kinematics.parasitic import on_manifold
+from ..kinematics.hybrid.parasitic import on_manifold
 from ..kinematics.poses import sample_poses
 from ..kinematics.reference import solve
 from . import identifiability, noise
@@ -157,7 +157,7 @@ def region_poses(robot, count, seed):
     """``count`` seeded poses (mm, degrees) of the robot's verification region, the coordinates
     forward kinematics does not solve for (a translating platform's angles) held at home; a
     machine with task coordinates at its nominal poses for the drawn task coordinates (on its
-    manifold, kingen.kinematics.parasitic.on_manifold); a machine with a wrist: tool poses of
+    manifold, kingen.kinematics.hybrid.parasitic.on_manifold); a machine with a wrist: tool poses of
     its region (kingen.calibrate.prediction.synthesize takes the machine's turn about the tool axis)."""
     poses = sample_poses(robot, count, seed)
     if robot.wrist is not None:

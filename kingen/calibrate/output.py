@@ -13,7 +13,7 @@ optimiser's (kingen.design.problem)."""
 import copy
 import math
 
-from ..kinematics.parasitic import on_manifold
+from ..kinematics.hybrid.parasitic import on_manifold
 
 from ..design.problem import robot_yaml, suffixed_name
 from ..units import LENGTH_UNITS, scaled_limbs

@@ -1,12 +1,10 @@
 """The calibration's parameter vector: every limb's geometry, the measuring frame and the target.
 
-Values are in mm and degrees (a robot file in inches is read in mm, as kingen holds every robot). Per limb model:
-
-- leg: base point (3), platform point (3), reference length;
-- rail: rail point (3), the direction's tilt about two axes across it (2, degrees, 0 nominal),
-  platform point (3), link length, origin (the carriage offset moves the carriage as the rail
-  point does: it is kept as written and the rail point stands for both);
-- crank: pivot (3), crank direction, crank length, rod length, zero offset, platform point (3).
+Values are in mm and degrees (a robot file in inches is read in mm, as kingen holds every robot). Per
+limb, what its model's ``calibration_parameters`` lists (kingen.robot.limbs): a leg's base point (3),
+platform point (3) and reference length; a rail's rail point (3), its direction's tilt about two axes
+across it (2, degrees, 0 nominal), platform point (3), link length and origin; a crank's pivot (3),
+crank direction, crank and rod lengths, zero offset and platform point (3).
 
 A machine with task coordinates adds its constraints' geometry (kingen.calibrate.constraints):
 the revolute axes' turns and a passive leg's base point and axes. A machine with a serial wrist
@@ -30,6 +28,7 @@ import numpy as np
 
 from ..conventions import matrix_from_pose
 from ..errors import KingenError
+from ..robot.limbs import MODELS
 from . import constraints, wrist
 from .constraints import AXIS_GROUP
 
@@ -41,17 +40,6 @@ GROUPS = dict(
     target="the target (the measured frame or reflector on the platform; on the tool with a wrist)",
     **dict([AXIS_GROUP]))
 """The groups --identify selects, in words."""
-
-MODEL_FIELDS = {
-    "leg": (("base_point", "base", "vector"), ("platform_point", "platform", "vector"),
-            ("reference_length", "length", "mm")),
-    "rail": (("rail_point", "base", "vector"), ("direction", "direction", "tilt"),
-             ("platform_point", "platform", "vector"), ("link_length", "length", "mm"), ("origin", "zero", "mm")),
-    "crank": (("pivot", "base", "vector"), ("crank_direction", "direction", "deg"),
-              ("crank_length", "length", "mm"), ("rod_length", "length", "mm"), ("zero_offset", "zero", "deg"),
-              ("platform_point", "platform", "vector")),
-}
-"""Per limb model: (field, group, kind) of what calibration identifies."""
 
 POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
 
@@ -85,10 +73,11 @@ class Parameters:
         self.lever = robot.size_mm
         entries = []
         for index, limb in enumerate(robot.limbs):
-            fields = MODEL_FIELDS.get(limb.model)
-            if fields is None:
+            fields = type(limb).calibration_parameters
+            if not fields:
+                known = (name for name, model in MODELS.items() if model.calibration_parameters)
                 raise KingenError(f"{robot.path}: limbs: calibrate does not know the parameters of the "
-                                  f"'{limb.model}' limb model (it knows {', '.join(MODEL_FIELDS)})")
+                                  f"'{limb.model}' limb model (it knows {', '.join(known)})")
             name = robot.joint_names[index]
             for field, group, kind in fields:
                 entries.extend(_limb_entries(name, index, limb, field, group, kind))
@@ -150,10 +139,12 @@ class Parameters:
                     float(value)
         limbs = []
         for index, (limb, update) in enumerate(zip(base.limbs, updates)):
-            direction = None
-            if limb.model == "rail":
-                direction = constraints.tilted(limb.direction, turns.get((index, "direction"), {}))
-                update["direction"] = [float(v) for v in direction]
+            for field, _, kind in type(limb).calibration_parameters:
+                if kind == "tilt":
+                    update[field] = [float(v) for v in constraints.tilted(getattr(limb, field),
+                                                                          turns.get((index, field), {}))]
+            about = type(limb).revolute_axis_turns_about
+            direction = None if about is None else update.get(about, getattr(limb, about))
             for field in ("revolute_axis", "platform_revolute_axis"):
                 owner = self._partners.get(index, index)
                 if getattr(limb, field, None) is not None:
@@ -201,8 +192,9 @@ class Parameters:
 
 
 def _limb_entries(name, index, limb, field, group, kind):
-    """The Parameters of one limb field of ``kind``: 'vector' (3 components, mm), 'tilt' (a rail
-    direction's two tilts, degrees, 0 nominal), 'mm' or 'deg' (one number)."""
+    """The Parameters of one limb field of ``kind``: 'vector' (3 components, mm), 'tilt' (a unit
+    direction's two tilts, degrees, 0 nominal), 'mm' or 'deg' (one number)
+    (kingen.robot.limbs.LimbModel.calibration_parameters)."""
     if kind == "vector":
         return [Parameter(f"{name}.{field}.{axis}", group, "mm", float(getattr(limb, field)[axis_index]),
                           index, field, axis_index) for axis_index, axis in enumerate("xyz")]

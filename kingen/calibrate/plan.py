@@ -25,7 +25,7 @@ from ..conventions import pose_from_t6, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.collision import clearances
 from ..kinematics.forward import closure, closure_derivative, free_mask, t6_of
-from ..kinematics.parasitic import task_twists
+from ..kinematics.hybrid.parasitic import task_twists
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from . import identifiability

@@ -13,7 +13,7 @@ import numpy as np
 from ..conventions import (matrix_from_pose, matrix_from_t6, pose_from_t6, rotation_from_rpy, t6_from_matrix,
                            t6_from_pose, wrap_angle)
 from ..kinematics.forward import free_mask, newton
-from ..kinematics.parasitic import on_manifold, pose_constraint_residuals
+from ..kinematics.hybrid.parasitic import on_manifold, pose_constraint_residuals
 from ..kinematics.reference import platform_points_in_base, solve
 from .wrist import platform_of_tool, tool_of_platform
 
@@ -70,7 +70,7 @@ def joint_residuals(parameters, values, measurements):
     """Predicted minus read joints (n, dof) in mm-equivalents (radians times the robot's size)
     at the measured poses, each limb on the branch nearer its read joint; for a machine with
     task coordinates, then its constraint equations' residuals there (n, 3; mm,
-    kingen.kinematics.parasitic.pose_constraint_residuals): the built machine's pose keeps them,
+    kingen.kinematics.hybrid.parasitic.pose_constraint_residuals): the built machine's pose keeps them,
     so a measured pose lies on the real machine's manifold. With a wrist, the legs' and the
     parallel part's constraints at the platform pose the measured tool pose and the read wrist
     joints give (:func:`measured_platform`)."""

@@ -9,7 +9,7 @@ tool's reach (mm, group 'length'): the tool frame's origin moved along the tool'
 
 The wrist's joints are read, like the legs'. The tool frame in the platform frame for readings
 q is W(q) = Rot(a1, q1 + z1) Rot(a2, q2 + z2) ... H0 (H0 the tool frame at zero, column-form
-homogeneous matrices, kingen.kinematics.wrist.tool_t6): a tool at B puts the platform at
+homogeneous matrices, kingen.kinematics.hybrid.wrist.tool_t6): a tool at B puts the platform at
 B W(q)^-1, and the platform at P puts the tool at P W(q).
 """
 
@@ -19,7 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..conventions import matrix_from_t6
-from ..kinematics.wrist import tool_t6
+from ..kinematics.hybrid.wrist import tool_t6
 from .constraints import TILTS, tilted
 
 TOOL = "tool"

@@ -170,7 +170,7 @@ def _manifold_note(model, matrix):
     """Where a machine with task coordinates is for the T6 (1, 4, 4)'s task coordinates, and
     whether the T6 asks for that pose (docs/how-to/hybrid.md)."""
     from ..conventions import pose_from_t6
-    from ..kinematics.parasitic import off_manifold_words, solve_parasitic
+    from ..kinematics.hybrid.parasitic import off_manifold_words, solve_parasitic
     from ..kinematics.routine import SINGULAR_TOLERANCE
 
     machine = solve_parasitic(model, matrix)
@@ -193,7 +193,7 @@ def _turn_note(model, matrix, expected):
     import numpy as np
 
     from ..kinematics.routine import WARNINGS
-    from ..kinematics.wrist import tool_t6, tool_turn
+    from ..kinematics.hybrid.wrist import tool_t6, tool_turn
 
     turns = []
     for k in range(model.postures):

@@ -23,11 +23,11 @@ from ..conventions import matrix_from_pose, t6_from_matrix
 from ..kinematics.forward import COORDINATES
 from ..kinematics.home import SINGULAR, closure_square, equilibrated_det, singular_index_mm
 from ..kinematics.loads import load_limited
-from ..kinematics.parasitic import solve_parasitic
+from ..kinematics.hybrid.parasitic import solve_parasitic
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
-from ..kinematics.wrist import rotation_about
+from ..kinematics.hybrid.wrist import rotation_about
 from .load_analysis import load_quantities, loads_available, stiffness_given
 from .wrist_analysis import at_pole, beyond_travel, radicand_stops, tool_moving, wrist_available
 

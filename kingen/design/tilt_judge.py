@@ -19,7 +19,6 @@ from .analysis import CAUSES, CROSSING, Settings, singular_index_mm
 from ..kinematics.loads import load_limited
 from ..runtime.compiler import compile_c, compiler_command
 from ..runtime.files import cache_dir, cached, digest, write_atomic
-from ..robot.limbs.crank import Crank
 
 DECLARATIONS = """
 typedef struct {
@@ -35,9 +34,10 @@ COLLISION_MODELS = {"segments": 1, "thesis": 2}
 
 
 def judges(robot):
-    """Whether the compiled judge decides this robot: six cranks, no travel limits, no load limits
+    """Whether the compiled judge decides this robot: six limbs whose model gives the judge its
+    geometry (LimbModel.tilt_judge_row: cranks), no travel limits, no load limits
     (kingen.design.load_analysis judges those)."""
-    return (robot.dof == 6 and all(isinstance(limb, Crank) and limb.travel is None for limb in robot.limbs)
+    return (robot.dof == 6 and all(limb.tilt_judge_row() is not None and limb.travel is None for limb in robot.limbs)
             and not load_limited(robot))
 
 
@@ -74,11 +74,8 @@ def _design(robot, posture, settings):
     branches = robot.posture_branches(posture)
     position = np.array(robot.verification.home, dtype=float)
     for number, limb in enumerate(robot.limbs):
-        beta = np.radians(limb.crank_direction)
-        design.pivot[number] = list(map(float, limb.pivot))
-        design.cos_direction[number], design.sin_direction[number] = float(np.cos(beta)), float(np.sin(beta))
-        design.crank_length[number], design.rod_length[number] = limb.crank_length, limb.rod_length
-        design.platform[number] = list(map(float, limb.platform_point))
+        for member, value in limb.tilt_judge_row().items():
+            getattr(design, member)[number] = value
         design.branch[number] = int(branches[number])
     design.home = [*map(float, position[:3]), *map(float, np.radians(position[3:]))]
     design.euler = int(settings.tilt_convention == "euler")

@@ -1,7 +1,7 @@
 """What ``analyze`` judges differently on a machine with a serial wrist (kingen.robot.wrist).
 
 Its poses are tool poses (mm, degrees; the tool tip and the tool axis, the turn about the axis
-free; with a three-axis wrist the whole pose), solved by the numpy reference from the tool's T6 (kingen.kinematics.wrist): joints the
+free; with a three-axis wrist the whole pose), solved by the numpy reference from the tool's T6 (kingen.kinematics.hybrid.wrist): joints the
 legs', then the wrist's. The parallel part is judged at the platform pose the machine takes for
 each tool pose, the wrist by its radicands (the first wrist joint's 1 - (a1.w_p)^2 and the
 branches' D). An A/C head's usual home has its tool axis along the first wrist axis (the
@@ -15,7 +15,7 @@ import numpy as np
 from ..conventions import matrix_from_pose, t6_from_matrix
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
-from ..kinematics.wrist import orientation_rows
+from ..kinematics.hybrid.wrist import orientation_rows
 
 TURN_PROBE_DEG = 1.0
 """A coordinate moved by this much at home that moves neither the tool tip nor the tool axis

@@ -18,9 +18,9 @@ from ..runtime import templates
 from ..runtime.library_info import BUILD_INFO_MARKER
 from ..robot.limbs import MODELS, c_double, c_vector, partial_path
 from ..robot.schema import calibration_index
-from ..kinematics.parasitic import MANIFOLD_TOLERANCE_RAD, home_yaw, manifold_tolerance_mm
+from ..kinematics.hybrid.parasitic import MANIFOLD_TOLERANCE_RAD, home_yaw, manifold_tolerance_mm
 from ..kinematics.singularity import PACKED, partial_sum_split
-from ..kinematics.parasitic_axes import home_axes
+from ..kinematics.hybrid.parasitic_axes import home_axes
 from ..robot.constraints import axes_table, constraint_table, family
 from .wrist import whole_view
 
@@ -91,6 +91,15 @@ def _model_tables(robot):
                     else -1 for parameter in cls.calibratable})
         table["rows"].append(row)
     return list(tables.values())
+
+
+def closed_form_model(robot):
+    """The table (as the view's ``models`` holds it) of the one limb model of ``robot`` whose
+    forward a translating platform solves in closed form, its three limbs' spheres intersected
+    (:attr:`kingen.robot.limbs.LimbModel.closed_form_forward`), or None: Newton's method."""
+    if robot.dof != 3 or len(robot.models) != 1 or not type(robot.limbs[0]).closed_form_forward:
+        return None
+    return _model_tables(robot)[0]
 
 
 def schur_test_lines(entry):

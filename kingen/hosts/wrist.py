@@ -16,7 +16,7 @@ normal is at most this: then each branch is one sign of the second wrist joint."
 def turned_axis(wrist):
     """(3,) z0, the unit axis (platform frame, every wrist joint at 0) the wrist's first two
     joints turn: the tool's z axis for two joints, the third joint's axis for three
-    (kingen.kinematics.wrist)."""
+    (kingen.kinematics.hybrid.wrist)."""
     return wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]
 
 
@@ -26,7 +26,7 @@ def wrist_table(robot):
     ``reach`` (mm) the tool tip's distance along the tool's z axis from the wrist centre, every
     wrist joint at 0 (kingen.robot.wrist.Wrist), ``three`` whether it has three joints (then
     :func:`_third_table`'s entries too), then what follows from
-    them alone, by kingen.kinematics.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
+    them alone, by kingen.kinematics.hybrid.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
     its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
     ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward; ``zero`` the
     joints' zero offsets (rad, kingen.robot.wrist.Wrist.zero), empty when all are 0 (the C is
@@ -108,7 +108,7 @@ def whole_view(robot, parallel_view, build_info):
 def branch_words(robot):
     """(branch 0, branch 1) of ``robot``'s wrist in words, exact for every tool axis it reaches:
     branch 0 takes the intermediate axis c = Rot(a2, t2) z0 on the side of a1 x a2
-    (kingen.kinematics.wrist), branch 1 the other (the head's flip). Where z0 lies in the plane
+    (kingen.kinematics.hybrid.wrist), branch 1 the other (the head's flip). Where z0 lies in the plane
     of a1 and a2, c.(a1 x a2) = sin(t2) (a2 x z0).(a1 x a2), so a branch is a sign of t2. z0 is
     the tool axis of a two-axis wrist, the third joint's axis of a three-axis one (:func:`turned_axis`)."""
     wrist = robot.wrist

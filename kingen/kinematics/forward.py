@@ -13,7 +13,7 @@ finite differences. How every assembly mode is found, and said:
 - otherwise not exhaustively: Newton from seeded starts over a stated region (``search``
   times the verification region around home), which the output names. A machine with task
   coordinates (kingen.robot.constraints) is solved for them with every iterate on its manifold:
-  x, y and yaw in closed form (kingen.kinematics.parasitic), the derivative along the manifold.
+  x, y and yaw in closed form (kingen.kinematics.hybrid.parasitic), the derivative along the manifold.
 
 An exhaustive method counts isolated solutions only: on a geometry with a continuum of them
 (coincident joints, congruent planar platforms) its paths end elsewhere or nowhere. So its
@@ -31,9 +31,9 @@ import numpy as np
 
 from ..conventions import matrix_from_pose, pose_from_t6, t6_from_matrix
 from ..runtime.text import counted
-from .parasitic import on_manifold, task_twists
+from .hybrid.parasitic import on_manifold, task_twists
 from .reference import platform_points_in_base, solve
-from .wrist import tool_t6
+from .hybrid.wrist import tool_t6
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 ITERATIONS = 60
@@ -146,7 +146,7 @@ def newton(robot, starts, joints, free):
 
 def _on_manifold(robot, poses):
     """Poses (n, 6) (mm, radians) of a machine with task coordinates with x, y and yaw its own
-    for their z, roll and pitch (kingen.kinematics.parasitic); other robots' as they are."""
+    for their z, roll and pitch (kingen.kinematics.hybrid.parasitic); other robots' as they are."""
     if not robot.task:
         return poses
     moved = on_manifold(robot, np.concatenate([poses[:, :3], np.degrees(poses[:, 3:])], axis=1))

@@ -13,7 +13,7 @@ from ..conventions import rpy_from_rotation, t6_from_pose
 from ..errors import located
 from ..units import LENGTH_UNITS
 from .forward import closure_derivative, free_mask, unit_wrenches
-from .parasitic import off_manifold_words, task_twists
+from .hybrid.parasitic import off_manifold_words, task_twists
 from .reference import solve
 from .routine import WARNINGS
 

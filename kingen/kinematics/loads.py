@@ -1,14 +1,14 @@
 """Loads at poses (kingen.kinematics.platform_loads: the method, docs/explanation/loads.md):
 over any number of poses in blocks, a machine with a serial wrist through
-kingen.kinematics.wrist_loads, and what verify and check-path judge of them."""
+kingen.kinematics.hybrid.wrist_loads, and what verify and check-path judge of them."""
 
 import numpy as np
 
 from ..conventions import pose_from_t6
-from .parasitic import solve_parasitic
+from .hybrid.parasitic import solve_parasitic
 from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platform_loads
 from .reference import solve
-from .wrist_loads import wrist_loads
+from .hybrid.wrist_loads import wrist_loads
 
 __all__ = ["Loads", "Motion", "beyond_limits", "held_problem", "held_text", "load_limited", "load_unit", "loads",
            "machine_pose", "machine_t6", "static_loads_of"]
@@ -24,7 +24,7 @@ def loads(robot, t6, wrench=None, motion=None, postures=None):
     ``motion`` (a :class:`Motion`, or None: at rest) and an external wrench ``wrench`` (6,) [N, N m]
     at the platform origin, base frame; in ``postures`` (indices; None: every posture), which the
     result's posture axis then follows. A machine with a serial wrist: the pose, the payload,
-    ``motion`` and ``wrench`` are the tool's (kingen.kinematics.wrist_loads)."""
+    ``motion`` and ``wrench`` are the tool's (kingen.kinematics.hybrid.wrist_loads)."""
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)
     chosen = np.arange(robot.postures) if postures is None else np.asarray(postures, dtype=int)
     step = max(1, BLOCK_POSTURES // len(chosen))

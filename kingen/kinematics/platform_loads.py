@@ -8,7 +8,7 @@ origin (N mm), base frame: W . t is a power (N mm/s). Limb i's row J_i = w_i / t
 force line over its transmission, kingen.kinematics.singularity) gives its joint rate per twist.
 
 The platform moves in d free directions, the columns of T (6, d): the twists per unit rate of
-each free coordinate (a constrained machine's task coordinates, kingen.kinematics.parasitic.
+each free coordinate (a constrained machine's task coordinates, kingen.kinematics.hybrid.parasitic.
 task_twists; otherwise the robot's ``forward.free`` coordinates with the others held, all six
 for a six-limb machine). Virtual work over those motions gives the actuators' generalized forces
 tau (N for a prismatic joint; N mm per rad for a revolute one, reported in N m) that hold the
@@ -30,7 +30,7 @@ import numpy as np
 
 from ..conventions import t6_from_pose
 from .forward import free_mask, pose_jacobian, poses_of
-from .parasitic import solve_parasitic, task_twists
+from .hybrid.parasitic import solve_parasitic, task_twists
 from .reference import solve
 from .routine import WARNINGS
 from .singularity import branch_table, branch_values, limb_wrenches

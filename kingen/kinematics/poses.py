@@ -1,13 +1,13 @@
 """The seeded poses of a robot's verification region, drawn the same way by verify, snapshots
 and benchmarks: uniform in home +/- range (mm, degrees; docs/explanation/conventions.md), from one
 PCG64 generator, so that a seed names the same poses bit for bit whatever the chunking. A
-machine with task coordinates (kingen.kinematics.parasitic) has its drawn poses moved onto its
+machine with task coordinates (kingen.kinematics.hybrid.parasitic) has its drawn poses moved onto its
 manifold (x, y and yaw the machine's), but for one in OFF_MANIFOLD_EVERY, left as drawn, whose
 answer is the off-manifold warning (where its routine reads x, y and yaw: ``parasitic_given``)."""
 
 import numpy as np
 
-from .parasitic import OFF_MANIFOLD_EVERY, on_manifold
+from .hybrid.parasitic import OFF_MANIFOLD_EVERY, on_manifold
 
 
 class PoseStream:

@@ -15,10 +15,10 @@ real solution reports the value at the clamped radicand (closest approach), so
 values are always finite. Non-finite T6: all postures unreachable, all joints 0. A limb
 whose value overflows (a T6 of 1e300 mm) is unreachable with joints 0. A machine with task
 coordinates (kingen.robot.constraints) is solved at the pose its constraints give for the T6's
-z, roll and pitch (kingen.kinematics.parasitic): a T6 off that manifold (for a routine that
+z, roll and pitch (kingen.kinematics.hybrid.parasitic): a T6 off that manifold (for a routine that
 reads x, y and yaw: ``parasitic_given``), or one whose task coordinates no pose has, is
 unreachable with the joints of that pose. A robot with a serial wrist is solved from the tool
-pose by kingen.kinematics.wrist.
+pose by kingen.kinematics.hybrid.wrist.
 """
 
 import functools
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .certificate import certified_above
-from .parasitic import solve_parasitic
+from .hybrid.parasitic import solve_parasitic
 from .routine import SINGULAR_TOLERANCE, warning_codes
-from .wrist import solve_tool
+from .hybrid.wrist import solve_tool
 from .singularity import (EXACT_WINDOW, branch_table, direct_index_of_entries, direct_index_side, gram_entries_of,
                           gram_partial_sums, limb_wrenches, posture_values)
 
@@ -53,7 +53,7 @@ class Solution:
     """Per posture, the branch each joint takes (kingen.kinematics.singularity.branch_table as tuples)."""
     constraint: np.ndarray = None
     """(n,) a machine with task coordinates: the normalised radicand D of its parasitic yaw
-    (kingen.kinematics.parasitic), -inf off the manifold where its routine reads x, y and yaw;
+    (kingen.kinematics.hybrid.parasitic), -inf off the manifold where its routine reads x, y and yaw;
     None for other robots. Its warnings count it as a limb's."""
     points: np.ndarray = None
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""

@@ -63,7 +63,7 @@ def warnings_to_exercise(robot, vocabulary=None):
 def _wrist_misses_axes(wrist):
     """Whether some axes lie beyond the reach of ``wrist``'s first two joints (its
     WARN_UNREACHABLE: the tool axis of a two-axis wrist, the third axis of a three-axis one):
-    over every target axis w_p the wrist's radicand D (kingen.kinematics.wrist) is least at
+    over every target axis w_p the wrist's radicand D (kingen.kinematics.hybrid.wrist) is least at
     a1.w_p = +/-1, -(|a1.a2| + |a2.z0|)^2 / (1 - (a1.a2)^2), and only below -SINGULAR_TOLERANCE is
     an axis unreachable (axes a calibration tilted by a few hundredths of a degree reach every axis)."""
     first, second, start = wrist.axes[0], wrist.axes[1], wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]

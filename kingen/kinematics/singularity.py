@@ -33,7 +33,7 @@ def branch_table(robot):
     """(postures, joint_count) int array (read-only): the branch each joint takes in each
     posture: each limb's, then (a robot with a wrist) each wrist joint's, the posture's last bit
     (0 where a one-posture view holds the wrist on one branch: its joints are that branch's in
-    both columns, kingen.kinematics.wrist)."""
+    both columns, kingen.kinematics.hybrid.wrist)."""
     held = robot.wrist is not None and robot.wrist.branch is not None
     return _branch_table(robot.branch_bits, robot.joint_count - robot.dof, held)
 

@@ -7,10 +7,10 @@ Decision quantities (one column each), internal units:
 - ``travel``: upper - q and q - lower per joint with a limit (mm or rad);
 - ``unreachable``: D + tol and ``limb singular``: D - tol per limb with a radicand (D the
   limb's normalised radicand, tol kingen.kinematics.routine.SINGULAR_TOLERANCE), as the
-  routine's warnings decide them; a wrist's joints have theirs (kingen.kinematics.wrist: the
+  routine's warnings decide them; a wrist's joints have theirs (kingen.kinematics.hybrid.wrist: the
   first's 1 - (a1.w)^2, 0 where the tool axis lies along the first axis, only singular; the
   second's, below 0 where no wrist angle reaches the axis); a machine with task coordinates has the pair for its
-  constraint's radicand too (kingen.kinematics.parasitic: below 0 no pose has the sample's
+  constraint's radicand too (kingen.kinematics.hybrid.parasitic: below 0 no pose has the sample's
   task coordinates), its ``part`` 'constraint';
 - ``direct index``: the direct index minus the robot's ``direct_index_min`` (mm);
 - ``assembly change``: det of the six unit force lines (mm^3), which the caller signs by its

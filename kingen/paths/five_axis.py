@@ -15,7 +15,7 @@ import numpy as np
 
 from ..conventions import matrix_from_pose, t6_from_matrix
 from ..hosts.linuxcnc.five_axis import COORDINATES, home_axis, world_of_t6
-from ..kinematics.wrist import rotation_about
+from ..kinematics.hybrid.wrist import rotation_about
 from ..units import number_text
 
 NOT_READ = "B, and the turn about the tool axis"

@@ -4,7 +4,7 @@ Such a machine is commanded by its task coordinates only (robot.task: z, roll, p
 z), exactly the words its LinuxCNC module reads (the coordinates its forward solves for:
 kingen.kinematics.forward.free_mask);
 the other coordinates are parasitic: the machine takes them
-(kingen.kinematics.parasitic.solve_parasitic). Every sample a check solves is first put on
+(kingen.kinematics.hybrid.parasitic.solve_parasitic). Every sample a check solves is first put on
 the manifold here: its task coordinates kept, its parasitic ones the machine's, so each
 sample is a pose the machine takes.
 
@@ -25,7 +25,7 @@ import numpy as np
 from ..conventions import angle_difference, pose_from_t6, t6_from_pose
 from ..hosts.linuxcnc.render import WORLD_AXES
 from ..kinematics.forward import free_mask
-from ..kinematics.parasitic import MANIFOLD_TOLERANCE_RAD, manifold_tolerance_mm, solve_parasitic
+from ..kinematics.hybrid.parasitic import MANIFOLD_TOLERANCE_RAD, manifold_tolerance_mm, solve_parasitic
 from ..units import number_text
 from .moves import Move
 from .program import POSE_COLUMNS

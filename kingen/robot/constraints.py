@@ -5,11 +5,11 @@ P-R-S, a leg's R-P-S: ``revolute_axis``) keeps its platform point C in the plane
 a.(C - c) = 0 (``LimbModel.constraint_plane``). Three such planes leave the platform three
 degrees of freedom: the robot file's ``task`` coordinates (z, roll, pitch); the other three,
 x, y and yaw, follow from them (parasitic motion) and are solved in closed form
-(kingen.kinematics.parasitic). A leg whose platform-side joint is a revolute joint with its
+(kingen.kinematics.hybrid.parasitic). A leg whose platform-side joint is a revolute joint with its
 axis e fixed in the platform (S-P-R, U-P-R: ``platform_revolute_axis``) stays normal to it:
 (R e).(b - p) = e.n. Two legs sharing one such axis and a third with another (the Exechon's)
 leave the platform x, y, z of its origin as task coordinates; roll, pitch and yaw follow, in
-closed form (kingen.kinematics.parasitic_axes). A passive leg (the Tricept's tube,
+closed form (kingen.kinematics.hybrid.parasitic_axes). A passive leg (the Tricept's tube,
 kingen.robot.passive_leg) fixes the rotation from x, y, z too. This module validates the
 declaration and writes the constant tables the solution uses, for the reference and the C alike.
 """

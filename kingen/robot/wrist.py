@@ -6,7 +6,7 @@ frame in the platform frame with every wrist joint at 0 (mm, degrees). kingen so
 three revolute joints whose axes meet at the platform frame's origin (the wrist centre, the
 parallel part's task point): two with the tool tip on the tool's z axis through that centre (a
 five-axis machine: tool tip and tool axis), three anywhere (a spherical wrist: the whole tool
-pose); the inverse from the tool pose is then in closed form (kingen.kinematics.wrist). Anything
+pose); the inverse from the tool pose is then in closed form (kingen.kinematics.hybrid.wrist). Anything
 else (prismatic joints, axes off the centre) is refused in one located line. :func:`with_wrist` makes the whole machine's Robot from its parallel part's:
 its joints are the legs' then the wrist's, its postures the parallel part's times the wrist's
 two branches (the branch the last bit), its verification region and golden values over the

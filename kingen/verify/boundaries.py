@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from ..conventions import t6_from_pose
-from ..kinematics.parasitic import on_manifold
+from ..kinematics.hybrid.parasitic import on_manifold
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS, warnings_to_exercise
 from .descent import DIRECT_INDEX, descend

@@ -8,10 +8,10 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..conventions import joint_errors
-from ..kinematics.parasitic import constraint_residuals, pose_constraint_residuals
+from ..kinematics.hybrid.parasitic import constraint_residuals, pose_constraint_residuals
 from ..kinematics.routine import INPUTS_MODIFIED, SINGULAR_TOLERANCE, UNWRITTEN_WARNING, WARNING_BAND, WARNINGS
 from ..kinematics.singularity import branch_table, branch_values, posture_values, representative_postures
-from ..kinematics.wrist import tool_miss, tool_t6
+from ..kinematics.hybrid.wrist import tool_miss, tool_t6
 from .options import CONDITIONING_FACTOR
 
 DIAGNOSIS_POSES = 2000
@@ -344,7 +344,7 @@ def closure_error(robot, expected, solutions):
 
 def wrist_error(robot, t6, expected, solutions):
     """(largest miss, (pose, posture) pairs judged) of a robot with a wrist: the wrist's forward
-    (kingen.kinematics.wrist.tool_t6) from the reference's platform pose and the routine's wrist
+    (kingen.kinematics.hybrid.wrist.tool_t6) from the reference's platform pose and the routine's wrist
     joints of each posture (``solutions`` (n, joint_count, postures)) against the asked tool T6
     ``t6`` (n, 4, 4): the larger of the tool tip's distance (mm) and the tool axes' (unit
     vectors; with two wrist joints the tool's z axis only, the turn about it free; with three

@@ -14,11 +14,11 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   (:func:`kingen.kinematics.singularity.jacobian`) on regular postures of the sample (a machine
   with task coordinates: the limbs' rows at the machine's pose, which the regular sampled poses
   are, those off its manifold being unreachable; a machine with a wrist: the legs' and the wrist's
-  rates per tool twist, :func:`kingen.kinematics.wrist_rates.tool_jacobian`).
+  rates per tool twist, :func:`kingen.kinematics.hybrid.wrist_rates.tool_jacobian`).
 - ``c direct index``: for six-limb robots, the library's direct index against kingen's
   (:func:`kingen.kinematics.singularity.direct_index`) on regular postures of the sample.
 - ``c machine pose``: for a machine with task coordinates and no wrist, the library's machine
-  pose and its status against kingen's (:func:`kingen.kinematics.parasitic.solve_parasitic`) on
+  pose and its status against kingen's (:func:`kingen.kinematics.hybrid.parasitic.solve_parasitic`) on
   the sampled poses, those off the machine's manifold and those beside the warnings' boundaries
   among them.
 - ``c loads``: for robots without a wrist or task coordinates, the library's static loads
@@ -34,11 +34,11 @@ import numpy as np
 from ...conventions import matrix_from_t6, pose_from_t6, wrap_difference
 from ...kinematics.forward import free_mask, t6_of
 from ...kinematics.loads import loads
-from ...kinematics.parasitic import solve_parasitic
+from ...kinematics.hybrid.parasitic import solve_parasitic
 from ...kinematics.reference import solve
 from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNING_BAND, WARNINGS, warning_codes
 from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
-from ...kinematics.wrist_rates import tool_jacobian
+from ...kinematics.hybrid.wrist_rates import tool_jacobian
 from ...robot.loads_schema import Payload
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)

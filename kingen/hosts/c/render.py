@@ -10,7 +10,7 @@ from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
 from ...robot.limbs import c_double, c_vector
-from ..render import newton_step, refuse, robot_view, template
+from ..render import closed_form_model, newton_step, refuse, robot_view, template
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -70,8 +70,7 @@ def view_model(robot):
         "task_words": ", ".join(parallel.task),
         "parasitic_words": ", ".join(name for name in COORDINATES if name not in parallel.task),
         "parasitic_indices": [index for index, name in enumerate(COORDINATES) if name not in parallel.task],
-        "closed_form": tuple(free) == (True, True, True, False, False, False) and robot.models == ("rail",)
-        and robot.dof == 3,
+        "closed_form": closed_form_model(robot) if tuple(free) == (True, True, True, False, False, False) else None,
         "limbs": robot.dof,
         "limb_count": "KINGEN_LIMBS" if robot.wrist is not None else "NUM_DOFS",
         "free_columns": [index for index, name in enumerate(COORDINATES) if free[index]],

@@ -8,7 +8,8 @@ from pathlib import Path
 
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
-from ..render import refuse, build_info, gram_lines, newton_step, robot_view, schur_test_lines, template
+from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_step, robot_view, schur_test_lines,
+                      template)
 from . import LinuxcncHost
 from .five_axis import wrist_view
 from ...kinematics.routine import SINGULAR_TOLERANCE
@@ -144,7 +145,7 @@ def view_model(robot, units="mm"):
         "free_indices": free,
         "parasitic_indices": [index for index in range(6) if index not in free],
         "task_words": ", ".join(WORLD_AXES[index] for index in free),
-        "closed_form": translating(robot) and robot.dof == 3 and robot.models == ("rail",),
+        "closed_form": closed_form_model(robot) if translating(robot) else None,
         "working_posture": robot.working_posture,
         "branch_words": words,
         "joints": joints,

@@ -2,7 +2,9 @@
 
 ``MODELS`` maps each YAML tag (``model: rail``) to its class. Everything that works per
 model (schema, reference solver, C tables, setup sheet words, diagnoses, verify's
-conditioning bound) asks the class; nothing else in kingen names a model. ``register``
+conditioning bound, loads' limits, calibration's parameters, the closed-form forward, the
+design judge's geometry) asks the class; nothing else in kingen names a model but this
+registry and the layouts (kingen.robot.layouts), tests/test_architecture.py checks. ``register``
 adds a model at run time (tests do, with a toy model); the robot-file schema follows
 the registry's content (:func:`kingen.robot.model.robot_file_schema`).
 """

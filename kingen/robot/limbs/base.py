@@ -2,8 +2,8 @@
 
 A limb model is one class (a pydantic schema) in one module of :mod:`kingen.robot.limbs`, plus
 one template partial ``templates/limbs/<model>.c.j2``. Everything else in kingen iterates
-over the registry and asks the class; nothing names a model. docs/explanation/conventions.md has
-the equations; docs/developer/extending.md the checklist.
+over the registry and asks the class; nothing names a model but the registry and the layouts.
+docs/explanation/conventions.md has the equations; docs/developer/extending.md the checklist.
 """
 
 import math
@@ -92,6 +92,20 @@ class LimbModel(Strict):
     singular); the C partial then classifies it with kingen_classify."""
     calibratable: ClassVar[dict] = {}
     """Parameter -> the unit its calibration field is read in ('mm' or 'degrees')."""
+    closed_form_forward: ClassVar[bool] = False
+    """Whether a translating platform on three limbs of this model has its forward in closed form in
+    the generated C (the C library's and LinuxCNC's): the partial's "sphere" part then sets
+    ``centre[limb][k]`` (k = 0..2) and ``radius[limb]``, the sphere the platform origin lies on, from
+    its ``row`` and ``measured[row->joint]`` (every row's ``platform_point`` already turned by the
+    platform's rotation), with ``int k`` declared; False: Newton's method."""
+    calibration_parameters: ClassVar[tuple] = ()
+    """What ``kingen calibrate`` identifies on a limb of this model: (field, group, kind) per field,
+    ``kind`` 'vector' (its 3 components, mm), 'tilt' (a unit direction's two tilts across itself,
+    degrees, 0 nominal), 'mm' or 'deg' (the number itself); ``group`` one of
+    kingen.calibrate.parameters.GROUPS. Empty: calibrate refuses a robot with limbs of this model."""
+    revolute_axis_turns_about: ClassVar[Optional[str]] = None
+    """The field (a unit direction) a constraining ``revolute_axis`` stays perpendicular to (a rail's
+    direction): calibration turns the axis about it, one parameter; None: two tilts across the axis."""
     length_fields: ClassVar[tuple] = ()
     """Fields in mm (numbers or 3-vectors): the robot's size is the largest of them."""
     c_columns: ClassVar[str] = ""
@@ -206,6 +220,13 @@ class LimbModel(Strict):
     def c_row(self):
         """This limb's table row for the partial: {column: C text} (numbers via c_double)."""
         raise NotImplementedError
+
+    def tilt_judge_row(self):
+        """This limb's geometry as the design optimiser's compiled judge reads it
+        (kingen.design.tilt_judge: {member of its design struct: number or 3 numbers}, mm, base
+        frame, the platform point in the platform frame), or None: the judge does not decide a
+        robot with limbs of this model, the numpy analysis does."""
+        return None
 
     def singular_scale(self):
         """The scale of the joint's ill-conditioning in its singular band (mm or rad per

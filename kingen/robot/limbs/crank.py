@@ -34,6 +34,9 @@ class Crank(TwoBranchModel):
 
     joint_type = REVOLUTE
     calibratable = {"zero_offset": "degrees", "crank_length": "mm", "rod_length": "mm"}
+    calibration_parameters = (("pivot", "base", "vector"), ("crank_direction", "direction", "deg"),
+                              ("crank_length", "length", "mm"), ("rod_length", "length", "mm"),
+                              ("zero_offset", "zero", "deg"), ("platform_point", "platform", "vector"))
     length_fields = ("pivot", "crank_length", "rod_length", "platform_point")
     joint_words = ("the crank's angle from the horizontal less its zero offset (positive turns its tip "
                    "down, toward -Z); the rod keeps its length")
@@ -109,6 +112,14 @@ class Crank(TwoBranchModel):
                 "sin_direction": c_double(math.sin(beta)), "crank_length": c_double(self.crank_length),
                 "rod_length": c_double(self.rod_length), "platform_point": c_vector(self.platform_point),
                 "zero_offset": c_double(math.radians(self.zero_offset))}
+
+    def tilt_judge_row(self):
+        """The pivot, the crank direction's cosine and sine, the crank and rod lengths and the
+        platform point: the six-crank judge's geometry."""
+        beta = np.radians(self.crank_direction)
+        return {"pivot": list(map(float, self.pivot)), "cos_direction": float(np.cos(beta)),
+                "sin_direction": float(np.sin(beta)), "crank_length": self.crank_length,
+                "rod_length": self.rod_length, "platform": list(map(float, self.platform_point))}
 
     def explain_offset(self, offset):
         return f"a wrong crank zero ({math.degrees(offset):+.6g} deg)"

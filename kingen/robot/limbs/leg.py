@@ -32,6 +32,8 @@ class Leg(LimbModel):
 
     joint_type = PRISMATIC
     calibratable = {"reference_length": "mm"}
+    calibration_parameters = (("base_point", "base", "vector"), ("platform_point", "platform", "vector"),
+                              ("reference_length", "length", "mm"))
     length_fields = ("base_point", "platform_point", "reference_length")
     joint_words = ("the leg's extension from its reference length (positive extends it; with a reference "
                    "length of 0, the leg's whole length)")

@@ -36,6 +36,13 @@ class Rail(TwoBranchModel):
     joint_words = ("the carriage's position along its rail, 0 at the origin's distance from the rail point "
                    "(positive moves it along the rail's direction); the link keeps its length")
     calibratable = {"origin": "mm", "link_length": "mm"}
+    calibration_parameters = (("rail_point", "base", "vector"), ("direction", "direction", "tilt"),
+                              ("platform_point", "platform", "vector"), ("link_length", "length", "mm"),
+                              ("origin", "zero", "mm"))
+    """The carriage offset moves the carriage as the rail point does: it is kept as written and the
+    rail point stands for both."""
+    revolute_axis_turns_about = "direction"
+    closed_form_forward = True
     length_fields = ("rail_point", "carriage_offset", "platform_point", "link_length", "origin")
     c_columns = ("joint, rail point s (mm, base frame), direction u (unit), carriage offset d (mm), "
                  "platform point n (mm, platform frame), link length l (mm), origin (mm), "

@@ -4,13 +4,13 @@ of the limbs' constraint geometry (:mod:`kingen.kinematics.singularity`), on reg
 import numpy as np
 
 from ...conventions import joint_errors
-from ...kinematics.parasitic import task_rows, task_twists
+from ...kinematics.hybrid.parasitic import task_rows, task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import finite_difference_jacobian, jacobian, posture_wrenches
-from ...kinematics.wrist import rotation_about
+from ...kinematics.hybrid.wrist import rotation_about
 from ...kinematics.forward import poses_of
-from ...kinematics.wrist_forward import tool_rates
+from ...kinematics.hybrid.wrist_forward import tool_rates
 from ...runtime.text import counted
 from ..options import report_tolerance_mm
 from ..report import not_exercised
@@ -111,7 +111,7 @@ TURN_RAD = 0.5
 def wrist_rates(robot, expected, joints, wanted):
     """(n, joint_count, postures, 6) the joint rates per tool twist of ``robot`` (with a wrist)
     at each posture's ``joints`` (n, joint_count, postures), the platform near the reference's
-    (kingen.kinematics.wrist_forward.tool_rates), where ``wanted`` (n, postures); NaN elsewhere
+    (kingen.kinematics.hybrid.wrist_forward.tool_rates), where ``wanted`` (n, postures); NaN elsewhere
     and where that posture has no finite joints."""
     count, total, postures = joints.shape
     near = poses_of(expected.platform)

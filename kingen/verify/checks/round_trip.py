@@ -5,12 +5,12 @@ import numpy as np
 
 from ...conventions import joint_errors
 from ...kinematics.forward import closure_derivative, free_mask, newton, poses_of, t6_of
-from ...kinematics.parasitic import task_twists
+from ...kinematics.hybrid.parasitic import task_twists
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
-from ...kinematics.wrist import orientation_rows
-from ...kinematics.wrist_forward import tool_forward
+from ...kinematics.hybrid.wrist import orientation_rows
+from ...kinematics.hybrid.wrist_forward import tool_forward
 from ..options import CONDITIONING_FACTOR, report_tolerance_mm
 from ..tally import closure_miss
 from ..report import not_exercised
@@ -81,7 +81,7 @@ def wrist_round_trip(robot, options, t6, expected, joints):
     """``round trip`` of a machine with a wrist (``robot`` calibrated): from the routine's
     ``joints`` (n, joint_count, postures) of every regular posture (regular_postures, the
     parallel part's conditioning above ROUND_TRIP_MIN_CONDITIONING),
-    the machine's forward (kingen.kinematics.wrist_forward: the parallel part's Newton seeded at
+    the machine's forward (kingen.kinematics.hybrid.wrist_forward: the parallel part's Newton seeded at
     the reference's platform pose, then the wrist) gives a tool T6 whose tip and axis (with
     three wrist joints: whole frame) must be the sampled one's, and the reference's inverse of that T6 must give the joints back in the
     same posture: within the value bounds (mm, rad)."""

@@ -6,7 +6,7 @@ out of reach in every posture (a 3-PRS on vertical rails reaches any z: its carr
 import numpy as np
 
 from ....conventions import t6_from_pose
-from ....kinematics.parasitic import on_manifold
+from ....kinematics.hybrid.parasitic import on_manifold
 from ....kinematics.reference import solve
 from ....kinematics.routine import WARNINGS
 from ....verify.checks.base import Check, VerifyCheck

@@ -21,8 +21,8 @@ generated C does the same operations in the same order (templates/routine_helper
 
 import numpy as np
 
-from ..conventions import t6_from_pose
-from ..robot.constraints import axes_table
+from ...conventions import t6_from_pose
+from ...robot.constraints import axes_table
 
 
 def home_axes(robot, table):

@@ -39,9 +39,9 @@ turn is free.
 
 import numpy as np
 
-from ..conventions import wrap_angle
+from ...conventions import wrap_angle
 from .parasitic import solve_parasitic
-from .routine import SINGULAR_TOLERANCE, WARNINGS, warning_codes
+from ..routine import SINGULAR_TOLERANCE, WARNINGS, warning_codes
 
 
 def rotation_about(axis, angle):

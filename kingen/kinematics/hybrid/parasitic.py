@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import angle_difference, pose_from_t6, t6_from_pose
-from ..robot.constraints import TASK, constraint_table, family
+from ...conventions import angle_difference, pose_from_t6, t6_from_pose
+from ...robot.constraints import TASK, constraint_table, family
 from .parasitic_axes import axes_wrenches, solve_axes
 from .parasitic_tube import solve_tube, tube_residuals, tube_wrenches
 

@@ -11,9 +11,9 @@ wrench."""
 
 import numpy as np
 
-from .platform_loads import Loads, about_origin, applied_wrenches, platform_loads
-from .reference import solve
-from .routine import WARNINGS
+from ..platform_loads import Loads, about_origin, applied_wrenches, platform_loads
+from ..reference import solve
+from ..routine import WARNINGS
 from .wrist import rotation_about, tool_t6
 
 

@@ -10,7 +10,7 @@ Poses are (x, y, z) mm and (roll, pitch, yaw) rad here, as in kingen.kinematics.
 
 import numpy as np
 
-from .forward import free_mask, newton, t6_of
+from ..forward import free_mask, newton, t6_of
 from .wrist import orientation_rows, tool_t6
 
 
