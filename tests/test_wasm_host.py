@@ -79,7 +79,7 @@ def test_the_glue_gives_a_machines_pose_for_its_task_coordinates(name):
     parasitic coordinates solved) where that is good; null for a robot without task coordinates."""
     require_wasm()
     require_tool("node", "nodejs")
-    from kingen.kinematics.parasitic import solve_parasitic
+    from kingen.kinematics.hybrid.parasitic import solve_parasitic
 
     robot = load_robot(name)
     poses, t6 = random_t6(robot, 12, seed=7)
