@@ -1,0 +1,64 @@
+"""analyze's tilt limits for the report's 3D view (kingen.view's scene overlays, plain JSON
+data, base frame, mm).
+
+- ``surface``: the tilt limits as a fan around the machine: its apex at home's tool point (the
+  T6 origin, which a tilt does not move), one vertex at the tip of the tool axis (the T6's z
+  axis, AXIS_SHARE of the robot's size long) tilted to each azimuth's limit, triangles between
+  neighbouring azimuths, the last closing on the first.
+- ``points``: those tips, each labelled with its azimuth, its limit and what stops it there.
+- ``frames`` and ``markers``: the machine at each azimuth's limit (the largest tilt that passes;
+  joints from the numpy reference in the analysed posture, mm and degrees), one marker per
+  azimuth, so that the view shows the pose each limit stops.
+"""
+
+import numpy as np
+
+from ..conventions import matrix_from_t6, pose_from_t6
+from ..kinematics.reference import solve
+from ..kinematics.routine import answer_frame
+from .analysis import tilted_t6
+from .figures import LABELS
+
+AXIS_SHARE = 0.5
+"""The drawn tool axis' length, as a share of the robot's size (robot.size_mm)."""
+
+
+def limit_t6(robot, rows, convention):
+    """T6 (n, 4, 4) of home tilted to each row's limit (rows of analysis' tilt_limits:
+    ``azimuth_deg``, ``max_tilt_deg``) in tilt ``convention`` (analysis.TILT_CONVENTIONS)."""
+    return np.concatenate([tilted_t6(robot, [row["azimuth_deg"]], [row["max_tilt_deg"]], convention)
+                           for row in rows]) if rows else np.empty((0, 4, 4))
+
+
+def _label(row):
+    """A limit's words: its azimuth, its tilt and what stops it."""
+    stop = f"not stopped up to {row['max_tilt_deg']:g} deg" if row["cause"] == "none" else \
+        f"{row['max_tilt_deg']:g} deg, then {LABELS.get(row['cause'], row['cause'])}"
+    return f"azimuth {row['azimuth_deg']:g} deg: {stop}"
+
+
+def tilt_overlays(robot, analysis, convention):
+    """{surface, points, frames, markers} of ``analysis`` (analysis.analyze's, its tilt limits
+    found in tilt ``convention``) for ``robot``; {} when it has no tilt limits."""
+    rows = analysis["tilt_limits"]
+    if not rows:
+        return {}
+    posture = analysis["posture"]
+    t6 = limit_t6(robot, rows, convention)
+    matrices = matrix_from_t6(t6)
+    apex = matrices[0, :3, 3]
+    tips = apex + AXIS_SHARE * robot.size_mm * matrices[:, :3, 2]
+    count = len(rows)
+    triangles = [[0, 1 + index, 1 + (index + 1) % count] for index in range(count)]
+    solution = solve(robot, t6)
+    joints = solution.joints[:, :, posture] * np.where(robot.revolute, 180.0 / np.pi, 1.0)
+    warnings = solution.warnings[:, posture]
+    frames = [answer_frame(row["azimuth_deg"], pose, values, warning)
+              for row, pose, values, warning in zip(rows, pose_from_t6(t6), joints, warnings)]
+    return {"surface": {"vertices": [[float(v) for v in point] for point in np.vstack([apex, tips])],
+                        "triangles": triangles,
+                        "label": f"tilt limits: the tool axis ({AXIS_SHARE * robot.size_mm:g} mm drawn) at its "
+                                 f"largest tilt towards each azimuth"},
+            "points": [{"position": [float(v) for v in tip], "label": _label(row)} for row, tip in zip(rows, tips)],
+            "frames": frames,
+            "markers": [{"frame": index, "label": _label(row)} for index, row in enumerate(rows)]}
