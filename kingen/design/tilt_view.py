@@ -7,7 +7,7 @@ data, base frame, mm).
   neighbouring azimuths, the last closing on the first.
 - ``points``: those tips, each labelled with its azimuth, its limit and what stops it there.
 - ``frames`` and ``markers``: the machine at each azimuth's limit (the largest tilt that passes;
-  joints from the numpy reference in the analysed posture, mm and degrees), one marker per
+  joints from the numpy reference in the analysed posture, mm and radians), one marker per
   azimuth, so that the view shows the pose each limit stops.
 """
 
@@ -51,9 +51,9 @@ def tilt_overlays(robot, analysis, convention):
     count = len(rows)
     triangles = [[0, 1 + index, 1 + (index + 1) % count] for index in range(count)]
     solution = solve(robot, t6)
-    joints = solution.joints[:, :, posture] * np.where(robot.revolute, 180.0 / np.pi, 1.0)
+    joints = solution.joints[:, :, posture]
     warnings = solution.warnings[:, posture]
-    frames = [answer_frame(row["azimuth_deg"], pose, values, warning)
+    frames = [answer_frame(row["azimuth_deg"], pose, values, warning, label=_label(row))
               for row, pose, values, warning in zip(rows, pose_from_t6(t6), joints, warnings)]
     return {"surface": {"vertices": [[float(v) for v in point] for point in np.vstack([apex, tips])],
                         "triangles": triangles,

@@ -29,8 +29,8 @@ WARNING_NAMES = {value: name for name, value in WARNINGS.items()}
 def answer_frame(t, pose, joints, warning, **more):
     """A routine's answer at one pose as plain JSON data (a frame of kingen.view's scene):
     ``{t, pose, joints, warning, **more}``: ``pose`` (6) mm and degrees rounded to 1e-9,
-    ``joints`` as given (the robot file's units: mm, degrees), None where not finite, ``warning``
-    its WARN_* name."""
+    ``joints`` (the routine's units: mm, radians), None where not finite, ``warning`` its WARN_*
+    name."""
     return {"t": float(t), "pose": [round(float(value), 9) + 0.0 for value in pose],
             "joints": [float(value) if np.isfinite(value) else None for value in joints],
             "warning": WARNING_NAMES.get(int(warning), f"warning {int(warning)}"), **more}

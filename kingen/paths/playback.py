@@ -2,10 +2,10 @@
 ``markers``, plain JSON data): the machine's poses along the program with the joints kingen
 computed there, and each problem of the table marked at its own place.
 
-Frames: ``{t, line, pose, joints, warning}``; ``t`` where the frame stands along the program in
-regular samples (the figures' x axis), ``line`` its program line, ``pose`` the machine's pose
+Frames: ``{t, pose, joints, warning, line, label}``; ``t`` where the frame stands along the
+program in regular samples (the figures' x axis), ``line`` its program line, ``label`` both in words, ``pose`` the machine's pose
 (mm, degrees, base frame: a wrist machine's tool pose, a constrained machine's on its manifold),
-``joints`` in the robot file's joint units (mm, degrees; None where a limb has no solution),
+``joints`` in the routine's units (mm, radians; None where a limb has no solution),
 ``warning`` the routine's warning name (WARN_*). At most FRAMES frames of the path, evenly
 thinned from the findings' trace (its first and last kept), plus one frame at each problem's own
 place (at most findings.MAX_PROBLEMS), in the order of ``t``.
@@ -43,8 +43,13 @@ def path_frames(outcome):
         return []
     kept = np.unique(np.round(np.linspace(0, count - 1, min(count, FRAMES))).astype(int))
     poses = machine_poses(outcome, trace["poses"][kept])
-    return [answer_frame(trace["sample"][at], pose, trace["joints"][at], trace["warnings"][at], line=int(trace["line"][at]))
-            for at, pose in zip(kept, poses)]
+    joints = trace["joints"][kept] / outcome.findings.display_scale
+    return [_frame(trace["sample"][at], pose, values, trace["warnings"][at], int(trace["line"][at]))
+            for at, pose, values in zip(kept, poses, joints)]
+
+
+def _frame(t, pose, joints, warning, line):
+    return answer_frame(t, pose, joints, warning, line=line, label=f"line {line}, sample {float(t):g}")
 
 
 def playback(outcome):
@@ -53,7 +58,8 @@ def playback(outcome):
     problems = outcome.findings.sorted_problems()
     own = [place for place in problems if place.sample is not None and np.all(np.isfinite(place.joints))]
     poses = machine_poses(outcome, [place.pose for place in own])
-    at_places = {id(place): answer_frame(place.sample, pose, place.joints, place.warning, line=place.line)
+    scale = outcome.findings.display_scale
+    at_places = {id(place): _frame(place.sample, pose, np.asarray(place.joints) / scale, place.warning, place.line)
                  for place, pose in zip(own, poses)}
     ordered = sorted([(frame["t"], 0, index, frame) for index, frame in enumerate(path)]
                      + [(frame["t"], 1, index, frame) for index, frame in enumerate(at_places.values())])
