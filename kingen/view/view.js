@@ -346,6 +346,8 @@ class View {
     this.machine = new Drawing(THREE, scene, this.machineGroup, 1);
     const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point)];
     if (scene.machine.tool) points.push([0, 1, 2].map(r => scene.machine.tool[r][3]));
+    for (const arrow of scene.arrows || []) points.push(arrow.origin, add(arrow.origin, arrow.vector));
+    points.push(...(scene.points || []).map(point => point.position), ...(scene.surface ? scene.surface.vertices : []));
     const centre = scaled(points.reduce(add, [0, 0, 0]), 1 / points.length);
     const radius = Math.max(...points.map(p => norm(sub(p, centre)))) || scene.size;
     this.orbit = {target: centre, distance: radius * 4.4, azimuth: -60 * DEG, elevation: 25 * DEG};
