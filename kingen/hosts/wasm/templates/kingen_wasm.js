@@ -8,6 +8,7 @@
  *   kin.inverse([0, 0, 800, 5, 0, 0], 0)   // -> {joints: [...], warning: "WARN_GOOD_SOLUTION"}
  *   kin.inverseAll([0, 0, 800, 5, 0, 0])   // -> {joints: [[...] per posture], warnings: [...], status: 0}
  *   kin.forward(joints, 0, seedPose)       // -> {pose: [x, y, z, roll, pitch, yaw], matrix, status, iterations}
+ *   kin.machinePose(pose)                  // a machine with task coordinates: -> {pose, matrix, status}, else null
  *
  * Units and frames (kingen's conventions, docs/reference/conventions.md): a pose is the platform
  * (a wrist's: the tool) frame in the base frame as x y z in mm and roll pitch yaw in degrees,
@@ -141,6 +142,18 @@
         var matrix = Array.from(this.doubles(this.at.out, 16));
         return {pose: matrixPose(matrix), matrix: matrix, status: status,
                 iterations: this.ints(this.at.iterations, 1)[0]};
+    };
+
+    /* A machine with task coordinates (the module exports <prefix>_machine_pose): the machine's whole
+     * pose for the task coordinates of pose (mm, degrees), its other coordinates solved from its
+     * constraints: {pose, matrix (row-major, 16), status (the C function's: a warning code, or -1 for
+     * a pose holding NaN or infinity)}; null for a robot without one. */
+    Kingen.prototype.machinePose = function (pose) {
+        var solve = this.exports[this.prefix + "_machine_pose"];
+        if (!solve) return null;
+        this.doubles(this.at.pose, 16).set(poseMatrix(pose));
+        var status = solve(this.at.pose, this.at.out), matrix = Array.from(this.doubles(this.at.out, 16));
+        return {pose: matrixPose(matrix), matrix: matrix, status: status};
     };
 
     var KingenWasm = {
