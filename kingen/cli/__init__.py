@@ -21,7 +21,7 @@ import click
 
 from ..errors import InternalError, KingenError, PluginDefect
 from . import (calibrate_commands, design_commands, loads_commands, path_commands, routine_commands,  # noqa: F401
-               solve_commands)  # (they register the commands)
+               solve_commands, view_commands)  # (they register the commands)
 from .common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERNAL, cli, say
 
 EXIT_TERMINATED = 128 + signal.SIGTERM
