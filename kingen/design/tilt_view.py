@@ -3,12 +3,13 @@ data, base frame, mm).
 
 - ``surface``: the tilt limits as a fan around the machine: its apex at home's tool point (the
   T6 origin, which a tilt does not move), one vertex at the tip of the tool axis (the T6's z
-  axis, AXIS_SHARE of the robot's size long) tilted to each azimuth's limit, triangles between
-  neighbouring azimuths, the last closing on the first.
+  axis, drawn AXIS_SHARE of the robot's size long, pointing away from the base: +z at home for
+  a platform above its base, -z for one hanging below) tilted to each azimuth's limit,
+  triangles between neighbouring azimuths, the last closing on the first.
 - ``points``: those tips, each labelled with its azimuth, its limit and what stops it there.
-- ``frames`` and ``markers``: the machine at each azimuth's limit (the largest tilt that passes;
-  joints from the numpy reference in the analysed posture, mm and radians), one marker per
-  azimuth, so that the view shows the pose each limit stops.
+- ``frames``: the machine at each azimuth's limit (the largest tilt that passes; joints from the
+  numpy reference in the analysed posture, mm and radians), labelled as its point, so that the
+  view's timeline shows the pose each limit stops.
 """
 
 import numpy as np
@@ -32,14 +33,20 @@ def limit_t6(robot, rows, convention):
 
 def _label(row):
     """A limit's words: its azimuth, its tilt and what stops it."""
-    stop = f"not stopped up to {row['max_tilt_deg']:g} deg" if row["cause"] == "none" else \
-        f"{row['max_tilt_deg']:g} deg, then {LABELS.get(row['cause'], row['cause'])}"
-    return f"azimuth {row['azimuth_deg']:g} deg: {stop}"
+    stop = "not stopped" if row["cause"] == "none" else LABELS.get(row["cause"], row["cause"])
+    return f"{row['azimuth_deg']:g}°: {row['max_tilt_deg']:g}°, {stop}"
+
+
+def away_from_base(robot, home):
+    """+1 when the T6 z axis at ``home`` (4, 4 matrix) points away from the base (from the limbs'
+    base joints' centre towards the tool point, or across it), else -1."""
+    centre = np.mean([limb.base_joint() for limb in robot.parallel.limbs], axis=0)
+    return 1.0 if (home[:3, 3] - centre) @ home[:3, 2] >= 0.0 else -1.0
 
 
 def tilt_overlays(robot, analysis, convention):
-    """{surface, points, frames, markers} of ``analysis`` (analysis.analyze's, its tilt limits
-    found in tilt ``convention``) for ``robot``; {} when it has no tilt limits."""
+    """{surface, points, frames} of ``analysis`` (analysis.analyze's, its tilt limits found in
+    tilt ``convention``) for ``robot``; {} when it has no tilt limits."""
     rows = analysis["tilt_limits"]
     if not rows:
         return {}
@@ -47,7 +54,9 @@ def tilt_overlays(robot, analysis, convention):
     t6 = limit_t6(robot, rows, convention)
     matrices = matrix_from_t6(t6)
     apex = matrices[0, :3, 3]
-    tips = apex + AXIS_SHARE * robot.size_mm * matrices[:, :3, 2]
+    length = away_from_base(robot, matrix_from_t6(tilted_t6(robot, [0.0], [0.0], convention)[0])) * AXIS_SHARE * \
+        robot.size_mm
+    tips = apex + length * matrices[:, :3, 2]
     count = len(rows)
     triangles = [[0, 1 + index, 1 + (index + 1) % count] for index in range(count)]
     solution = solve(robot, t6)
@@ -57,8 +66,7 @@ def tilt_overlays(robot, analysis, convention):
               for row, pose, values, warning in zip(rows, pose_from_t6(t6), joints, warnings)]
     return {"surface": {"vertices": [[float(v) for v in point] for point in np.vstack([apex, tips])],
                         "triangles": triangles,
-                        "label": f"tilt limits: the tool axis ({AXIS_SHARE * robot.size_mm:g} mm drawn) at its "
-                                 f"largest tilt towards each azimuth"},
+                        "label": f"tilt limits: the tool axis ({abs(length):g} mm drawn) at its largest tilt "
+                                 "towards each azimuth"},
             "points": [{"position": [float(v) for v in tip], "label": _label(row)} for row, tip in zip(rows, tips)],
-            "frames": frames,
-            "markers": [{"frame": index, "label": _label(row)} for index, row in enumerate(rows)]}
+            "frames": frames}

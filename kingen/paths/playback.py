@@ -10,6 +10,10 @@ program in regular samples (the figures' x axis), ``line`` its program line, ``l
 thinned from the findings' trace (its first and last kept), plus one frame at each problem's own
 place (at most findings.MAX_PROBLEMS), in the order of ``t``.
 
+Travel: per joint the travel the check judged (the robot file's and the .ini's), ``[lower,
+upper]`` in the robot file's units (mm, degrees), None where a side is unlimited: the view colours
+a limb beyond it.
+
 Markers: ``{frame, label}``, one per problem of the report's table (report.problem_rows), in
 its order; ``frame`` indexes ``frames``: the problem's own place, or, for one with no joints
 (a CSV row off a constrained machine's manifold), the first frame of the path on its line.
@@ -52,8 +56,15 @@ def _frame(t, pose, joints, warning, line):
     return answer_frame(t, pose, joints, warning, line=line, label=f"line {line}, sample {float(t):g}")
 
 
+def travel(outcome):
+    """Each joint's judged travel (module docstring)."""
+    scale = outcome.findings.display_scale
+    return [[float(low * factor), float(high * factor)] if np.isfinite(low) and np.isfinite(high) else None
+            for low, high, factor in zip(outcome.limits.lower, outcome.limits.upper, scale)]
+
+
 def playback(outcome):
-    """{"frames": [...], "markers": [...]} of ``outcome`` (module docstring)."""
+    """{"frames": [...], "markers": [...], "travel": [...]} of ``outcome`` (module docstring)."""
     path = path_frames(outcome)
     problems = outcome.findings.sorted_problems()
     own = [place for place in problems if place.sample is not None and np.all(np.isfinite(place.joints))]
@@ -71,7 +82,7 @@ def playback(outcome):
         index = number[id(frame)] if frame is not None else _on_line(frames, place.line)
         if index is not None:
             markers.append({"frame": index, "label": _label(row)})
-    return {"frames": frames, "markers": markers}
+    return {"frames": frames, "markers": markers, "travel": travel(outcome)}
 
 
 def _on_line(frames, line):
