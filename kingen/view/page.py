@@ -33,9 +33,9 @@ def _json_in_script(data):
 
 def routine_script(robot):
     """(script, note): the <script> elements that set ``window.kingenRoutine`` (the robot's C
-    library compiled to WebAssembly, base64, with its glue) and the page's note; ("", what the
-    sliders need) where the WebAssembly toolchain is not installed."""
-    from ..hosts.wasm.build import compile_wasm, wasm_toolchain
+    library compiled to WebAssembly, base64, started by the wasm host's JS glue) and None; ("",
+    what the sliders need) where the WebAssembly toolchain is not installed."""
+    from ..hosts.wasm.build import GLUE, compile_wasm, module_meta, wasm_toolchain
 
     toolchain = wasm_toolchain()
     if not toolchain.ready:
@@ -43,16 +43,10 @@ def routine_script(robot):
                     f"WebAssembly, which this page was written without: {toolchain.problem}. Install it and run "
                     f"kingen view again.")
     module = base64.b64encode(compile_wasm(robot).read_bytes()).decode()
-    return _glue_script(robot, module), None
-
-
-def _glue_script(robot, module):
-    """The wasm host's JS glue and the start of the robot's module from base64 ``module``."""
-    from ..hosts.wasm import glue_source
-
-    return (f"<script>\n{glue_source()}\n</script>\n<script>\n"
-            f"window.kingenRoutineReady = kingenWasm.fromBase64({json.dumps(module)}).then(routine => {{\n"
-            f"  window.kingenRoutine = routine;\n}});\n</script>")
+    start = (f"window.kingenRoutineReady = KingenWasm.instantiate(Uint8Array.from(atob({json.dumps(module)}), "
+             f"c => c.charCodeAt(0)), {_json_in_script(module_meta(robot))}).then(routine => {{ "
+             f"window.kingenRoutine = routine; }});")
+    return f"<script>\n{GLUE.read_text()}\n</script>\n<script>\n{start}\n</script>", None
 
 
 def page_html(robot, scene, *, title, routine=True):

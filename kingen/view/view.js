@@ -32,18 +32,6 @@ function poseFromMatrix(h) {
   return [h[0][3], h[1][3], h[2][3], roll / DEG, pitch / DEG, yaw / DEG];
 }
 
-function t6FromMatrix(h) {  // DELMIA's T6, row by row: n, o, a (the rotation's columns), p
-  const t6 = [];
-  for (let c = 0; c < 4; c++) for (let r = 0; r < 4; r++) t6.push(r < 3 ? h[r][c] : (c === 3 ? 1 : 0));
-  return t6;
-}
-
-function matrixFromT6(t6) {
-  const h = [[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 1]];
-  for (let c = 0; c < 4; c++) for (let r = 0; r < 3; r++) h[r][c] = t6[4 * c + r];
-  return h;
-}
-
 const apply = (h, p) => [0, 1, 2].map(r => h[r][0] * p[0] + h[r][1] * p[1] + h[r][2] * p[2] + h[r][3]);
 const turn = (m, p) => [0, 1, 2].map(r => m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2]);
 const times = (a, b) => a.map((row, r) => b[0].map((_, c) => row.reduce((s, v, k) => s + v * b[k][c], 0)));
@@ -181,7 +169,9 @@ async function loadThree() {
 }
 
 class Drawing {
-  // One machine drawn (the machine, or a translucent ghost): cylinders between points.
+  // One machine drawn (the machine, or a translucent ghost): cylinders between points, balls and
+  // plates. Each draw() makes the same calls in the same order, so its meshes are kept and moved
+  // (shared unit geometries, one material per colour), not made again.
   constructor(THREE, scene, group, opacity) {
     this.THREE = THREE;
     this.scene = scene;
@@ -189,31 +179,50 @@ class Drawing {
     this.opacity = opacity;
     this.radius = scene.size / 150;
     this.meshes = [];
+    this.used = 0;
+    this.materials = new Map();
+    this.cylinder = new THREE.CylinderGeometry(1, 1, 1, 12);
+    this.sphere = new THREE.SphereGeometry(1, 16, 12);
   }
 
-  material(colour) {
-    const {THREE} = this;
-    return new THREE.MeshStandardMaterial({color: colour, metalness: 0.2, roughness: 0.6,
-                                           transparent: this.opacity < 1, opacity: this.opacity});
+  material(colour, opacity) {
+    const key = `${colour}/${opacity}`;
+    if (!this.materials.has(key)) {
+      const {THREE} = this;
+      this.materials.set(key, new THREE.MeshStandardMaterial({color: colour, metalness: 0.2, roughness: 0.6, side: THREE.DoubleSide,
+                                                              transparent: opacity < 1, opacity, depthWrite: opacity === 1}));
+    }
+    return this.materials.get(key);
+  }
+
+  mesh(kind, make) {  // the next mesh of this draw: the kept one, or a new one
+    let mesh = this.meshes[this.used];
+    if (!mesh || mesh.userData.kind !== kind) {
+      if (mesh) this.group.remove(mesh);
+      mesh = make();
+      mesh.userData.kind = kind;
+      this.meshes[this.used] = mesh;
+      this.group.add(mesh);
+    }
+    mesh.visible = true;
+    this.used += 1;
+    return mesh;
   }
 
   rod(a, b, radius, colour) {
     const {THREE} = this, length = norm(sub(b, a));
-    const mesh = new THREE.Mesh(new THREE.CylinderGeometry(radius, radius, 1, 12), this.material(colour));
-    mesh.scale.set(1, Math.max(length, 1e-9), 1);
+    const mesh = this.mesh("rod", () => new THREE.Mesh(this.cylinder));
+    mesh.material = this.material(colour, this.opacity);
+    mesh.scale.set(radius, Math.max(length, 1e-9), radius);
     mesh.position.set(...scaled(add(a, b), 0.5));
     if (length > 0) mesh.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), new THREE.Vector3(...scaled(sub(b, a), 1 / length)));
-    this.group.add(mesh);
-    this.meshes.push(mesh);
-    return mesh;
   }
 
   ball(p, radius, colour) {
-    const {THREE} = this;
-    const mesh = new THREE.Mesh(new THREE.SphereGeometry(radius, 16, 12), this.material(colour));
+    const {THREE} = this, mesh = this.mesh("ball", () => new THREE.Mesh(this.sphere));
+    mesh.material = this.material(colour, this.opacity);
+    mesh.scale.set(radius, radius, radius);
     mesh.position.set(...p);
-    this.group.add(mesh);
-    this.meshes.push(mesh);
   }
 
   polygon(points, colour) {  // a flat plate through points (ordered about their centre)
@@ -234,27 +243,17 @@ class Drawing {
       .sort((a, b) => a[0] - b[0]).map(pair => pair[1]);
     const vertices = [];
     for (let i = 0; i < ordered.length; i++) vertices.push(...centre, ...ordered[i], ...ordered[(i + 1) % ordered.length]);
-    const geometry = new THREE.BufferGeometry();
-    geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
-    geometry.computeVertexNormals();
-    const material = this.material(colour);
-    material.side = THREE.DoubleSide;
-    if (this.opacity === 1) { material.transparent = true; material.opacity = 0.75; }
-    const mesh = new THREE.Mesh(geometry, material);
-    this.group.add(mesh);
-    this.meshes.push(mesh);
+    const mesh = this.mesh("plate", () => new THREE.Mesh(new THREE.BufferGeometry()));
+    mesh.geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
+    mesh.geometry.computeVertexNormals();
+    mesh.material = this.material(colour, Math.min(this.opacity, 0.75));
     for (let i = 0; i < ordered.length; i++) this.rod(ordered[i], ordered[(i + 1) % ordered.length], this.radius * 0.6, colour);
-  }
-
-  clear() {
-    for (const mesh of this.meshes) { this.group.remove(mesh); mesh.geometry.dispose(); mesh.material.dispose(); }
-    this.meshes = [];
   }
 
   // The base (its fixed joints and rails), the limbs in their status's colours, the platform,
   // the passive leg, the wrist and tool: from a drawing (scene.py's machine) and the joints.
   draw(drawing, joints) {
-    this.clear();
+    this.used = 0;
     const model = this.scene.model, r = this.radius, platformColour = 0x707880;
     const pivots = model.limbs.map(limb => limb.pivot);
     if (pivots.length >= 3) this.polygon(pivots, 0x9aa0a6);
@@ -281,12 +280,23 @@ class Drawing {
     const origin = [drawing.platform[0][3], drawing.platform[1][3], drawing.platform[2][3]];
     if (corners.length >= 3) this.polygon(corners, drawing.status === "WARN_GOOD_SOLUTION" ? platformColour : 0xd08080);
     if (model.passive_leg) this.rod(model.passive_leg.base_point, origin, r * 2.2, 0x808890);
+    const middle = scaled(corners.reduce(add, [0, 0, 0]), 1 / Math.max(corners.length, 1));
+    if (corners.length && norm(sub(middle, origin)) > r) this.rod(middle, origin, r * 2.4, platformColour);
+    if (model.wrist) {  // each wrist axis, turned by the joints before it, through the wrist centre
+      let turned = drawing.platform.slice(0, 3).map(row => row.slice(0, 3));
+      model.wrist.axes.forEach((axis, k) => {
+        const along = scaled(turn(turned, axis), this.scene.size * 0.05);
+        this.rod(sub(origin, along), add(origin, along), r * 1.8, 0x404850);
+        turned = times(turned, rotationAbout(axis, joints[model.limbs.length + k] + model.wrist.zero[k]));
+      });
+    }
     if (drawing.tool) {
       const tip = [drawing.tool[0][3], drawing.tool[1][3], drawing.tool[2][3]];
       this.ball(origin, r * 2.5, 0x5a5f66);
       this.rod(origin, tip, r * 1.4, 0xc8a040);
     }
     this.frame(drawing.tool || drawing.platform, r * 12);
+    for (const mesh of this.meshes.slice(this.used)) mesh.visible = false;
   }
 
   frame(h, length) {  // the tool (or platform) frame: x red, y green, z blue
@@ -308,6 +318,8 @@ function parseFragment(hash) {  // #pose=x,y,z,roll,pitch,yaw&posture=K
       if (pose.length === 6 && pose.every(Number.isFinite)) found.pose = pose;
     } else if (key === "posture" && /^\d+$/.test(value || "")) {
       found.posture = Number(value);
+    } else if (key === "bench" && /^\d+$/.test(value || "")) {
+      found.bench = Number(value);
     }
   }
   return found;
@@ -325,6 +337,7 @@ class View {
     this.warning = scene.warning;
     this.drawn = scene.machine;
     this.times = [];
+    this.routineTimes = [];
     this.setUpRenderer();
     this.setUpControls();
     this.setUpOverlays();
@@ -406,7 +419,7 @@ class View {
     posture.addEventListener("change", () => { this.posture = Number(posture.value); this.update(); });
     const note = this.root.querySelector(".kingen-note");
     if (this.routine === null) note.textContent = this.scene.no_routine || "The routine is not in this page: the machine is drawn where kingen computed it.";
-    else note.textContent = `Every change is answered by ${this.routine.name}, the generated C library compiled to WebAssembly.`;
+    else note.textContent = `Every change is answered by the routine ${this.routine.prefix}, the generated C library compiled to WebAssembly inside this page.`;
   }
 
   setUpOverlays() {
@@ -508,17 +521,26 @@ class View {
   update() {
     if (!this.routine) return;
     const started = performance.now();
-    let t6 = t6FromMatrix(matrixFromPose(this.pose));
-    if (this.scene.free.length < 6 && this.routine.machinePose) {
-      t6 = this.routine.machinePose(t6);
-      this.pose = poseFromMatrix(matrixFromT6(t6));
+    if (this.scene.free.length < 6) {
+      const machine = this.routine.machinePose(this.pose);
+      if (machine && machine.status >= 0) this.pose = machine.pose;
+      this.scene.coordinates.forEach((name, k) => {
+        if (!this.scene.free.includes(name)) for (const field of this.fields[name]) field.value = this.pose[k];
+      });
     }
-    const answer = this.routine.inversePosture(t6, this.posture);
+    const answer = this.routine.inverse(this.pose, this.posture);
+    this.routineTimes.push(performance.now() - started);
     this.show(answer.joints, answer.warning, "wasm");
     const spent = performance.now() - started;
     this.times.push(spent);
     const timing = document.getElementById("kingen-timing");
-    if (timing) timing.textContent = JSON.stringify({last_ms: spent, max_ms: Math.max(...this.times), changes: this.times.length});
+    if (timing) {
+      const quantile = (list, q) => list.slice().sort((a, b) => a - b)[Math.floor(q * (list.length - 1))];
+      timing.textContent = JSON.stringify({changes: this.times.length, median_ms: quantile(this.times, 0.5),
+                                           p95_ms: quantile(this.times, 0.95), max_ms: Math.max(...this.times),
+                                           routine_median_ms: quantile(this.routineTimes, 0.5),
+                                           routine_max_ms: Math.max(...this.routineTimes)});
+    }
   }
 
   show(joints, warning, by) {
@@ -576,6 +598,17 @@ function wristStatus(scene, index, q) {
   return travel && (q < travel[0] * DEG || q > travel[1] * DEG) ? "limits" : "good";
 }
 
+// #bench=N: N changes of the first free coordinate's slider, each an input event as a user's
+// drag makes, answered and timed by update() into #kingen-timing (benchmarks/view.py reads it).
+function bench(view, count) {
+  const name = view.scene.free[0], k = view.scene.coordinates.indexOf(name), slider = view.fields[name][0];
+  const home = view.scene.region.home[k], range = view.scene.region.range[k];
+  for (let i = 0; i < count; i++) {
+    slider.value = home + range * Math.sin(i);
+    slider.dispatchEvent(new Event("input"));
+  }
+}
+
 async function startView(root) {
   const scene = JSON.parse(root.querySelector(".kingen-scene").textContent);
   const THREE = await loadThree();
@@ -590,6 +623,7 @@ async function startView(root) {
   } else {
     view.show(scene.joints, scene.warning, "kingen");
   }
+  if (asked.bench && view.routine) bench(view, asked.bench);
   root.dataset.ready = "1";
   window.kingenView = view;
   return view;
