@@ -5,7 +5,8 @@ base frame, mm).
   the calibrated robot predicts from the read joints, less what the device measured), rotated
   from the device's frame into the base frame by the identified measuring frame, drawn at the
   measured point (the target's origin, in the base frame through the identified measuring
-  frame), magnified by one round factor stated in the view's description.
+  frame), magnified by one round factor stated in the view's description; the LABELLED longest
+  labelled with their measurement's line and length (the rest would hide one another).
 - the ghost: the calibrated machine with its geometry changes (limbs, constraints, wrist; not the
   measuring frame or the target) magnified by one round factor stated in its label, so that
   changes of a few hundredths of a millimetre show beside the nominal machine.
@@ -21,6 +22,8 @@ from ..units import length_text
 
 ARROW_SHARE = 0.1
 """The longest residual arrow is drawn at most this share of the robot's size (robot.size_mm) long."""
+LABELLED = 3
+"""The residual arrows labelled, the longest."""
 GHOST_SHARE = 0.1
 """The ghost's largest magnified change is at most this share of the robot's size (mm, or
 mm-equivalents: degrees turned at the robot's size)."""
@@ -45,7 +48,7 @@ def residual_arrows(problem, values):
     """({"origin", "vector", "label"} per measured pose, factor) for the identification Problem
     ``problem`` (its poses: the outliers left out) at parameter ``values`` (mm, degrees): see
     the module docstring; ``vector`` is the residual (mm, base frame) times ``factor``, the
-    ``label`` the measurement's line and the residual's length."""
+    ``label`` the measurement's line and the residual's length ("" but for the LABELLED longest)."""
     data = problem.measurements
     predicted, _ = problem.predicted(values)
     frame = problem.parameters.frame(values)
@@ -53,9 +56,10 @@ def residual_arrows(problem, values):
     residuals = (predicted[:, :3] - data.measured[:, :3]) @ frame[:3, :3].T
     sizes = np.linalg.norm(residuals, axis=1)
     factor = magnification(float(np.max(sizes, initial=0.0)), ARROW_SHARE * problem.parameters.robot.size_mm)
+    longest = set(np.argsort(-sizes, kind="stable")[:LABELLED].tolist())
     arrows = [{"origin": [float(v) for v in point], "vector": [float(v) * factor for v in residual],
-               "label": f"line {line}: {length_text(size)}"}
-              for point, residual, size, line in zip(points, residuals, sizes, data.lines)]
+               "label": f"line {line}: {length_text(size)}" if row in longest else ""}
+              for row, (point, residual, size, line) in enumerate(zip(points, residuals, sizes, data.lines))]
     return arrows, factor
 
 

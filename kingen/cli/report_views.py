@@ -8,23 +8,30 @@ Every report's view draws the poses kingen computed (no WebAssembly routine insi
 shows what was judged; ``kingen view`` has the sliders), with one copy of three.js per report.
 """
 
+from pathlib import Path
+
 VIEW_HEIGHT = 620
 """The view's height in a report (px)."""
 
 
 def path_view(outcome):
-    """check-path's view of ``outcome`` (paths.check.Outcome): the machine at the program's first
-    checked pose, the path's frames and the problems' markers (kingen.paths.playback)."""
+    """check-path's view of ``outcome`` (paths.check.Outcome): the path's frames and the problems'
+    markers (kingen.paths.playback), the machine shown at the first problem (without one, at the
+    program's first checked pose)."""
     from ..paths.playback import playback
     from ..view import scene, view_fragment
 
     overlays = playback(outcome)
-    start = overlays["frames"][0]["pose"] if overlays["frames"] else None
-    shown = {**scene(outcome.robot, start, outcome.posture), **overlays,
-             "description": f"{outcome.program} on {outcome.robot.name}, posture {outcome.posture}: "
-                            f"{len(overlays['frames'])} frames along the program, {len(overlays['markers'])} "
-                            "problems marked on the timeline (click one to see the machine there)"}
-    return view_fragment(outcome.robot, shown, title=f"{outcome.robot.name}: {outcome.program}", routine=False,
+    frames, markers = overlays["frames"], overlays["markers"]
+    start = markers[0]["frame"] if markers else 0
+    program = Path(outcome.program).name
+    shown = {**scene(outcome.robot, frames[start]["pose"] if frames else None, outcome.posture), **overlays,
+             "description": f"{program} on {outcome.robot.name}, posture {outcome.posture}: {len(frames)} frames "
+                            f"along the program, {len(markers)} problems numbered on the timeline (click one to see "
+                            "the machine there)"}
+    if frames:
+        shown["start_frame"] = start
+    return view_fragment(outcome.robot, shown, title=f"{outcome.robot.name}: {program}", routine=False,
                          height=VIEW_HEIGHT)
 
 
@@ -43,8 +50,7 @@ def calibration_view(parameters, fit):
     ghost, scale = magnified_robot(parameters, fit.values)
     if ghost is not None:
         drawing, _, _ = machine_at(ghost, shown["t6"], shown["posture"])
-        shown["ghost"] = {**drawing, "scale": scale,
-                          "label": f"calibrated machine, its geometry changes drawn {scale:,.0f} times larger"}
+        shown["ghost"] = {**drawing, "scale": scale, "label": "calibrated machine"}
         words.append(f"the calibrated machine as a ghost, its geometry changes drawn {scale:,.0f} times larger")
     else:
         words.append("no geometry changed (only the measuring frame and the target)")

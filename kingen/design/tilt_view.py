@@ -6,7 +6,9 @@ data, base frame, mm).
   axis, drawn AXIS_SHARE of the robot's size long, pointing away from the base: +z at home for
   a platform above its base, -z for one hanging below) tilted to each azimuth's limit,
   triangles between neighbouring azimuths, the last closing on the first.
-- ``points``: those tips, each labelled with its azimuth, its limit and what stops it there.
+- ``points``: those tips; labelled (its azimuth, its limit and what stops it there) where the
+  cause differs from the previous azimuth's, and at the least tilt, so that the labels do not
+  hide one another; every tip's words are its frame's label.
 - ``frames``: the machine at each azimuth's limit (the largest tilt that passes; joints from the
   numpy reference in the analysed posture, mm and radians), labelled as its point, so that the
   view's timeline shows the pose each limit stops.
@@ -35,6 +37,14 @@ def _label(row):
     """A limit's words: its azimuth, its tilt and what stops it."""
     stop = "not stopped" if row["cause"] == "none" else LABELS.get(row["cause"], row["cause"])
     return f"{row['azimuth_deg']:g}°: {row['max_tilt_deg']:g}°, {stop}"
+
+
+def _labelled(rows):
+    """Per row whether its point is labelled: its cause differs from the previous row's (the
+    first row's from the last's), or it has the least tilt (the first such)."""
+    least = min(range(len(rows)), key=lambda index: rows[index]["max_tilt_deg"])
+    return [index == least or row["cause"] != rows[index - 1]["cause"] or len(rows) == 1
+            for index, row in enumerate(rows)]
 
 
 def away_from_base(robot, home):
@@ -68,5 +78,6 @@ def tilt_overlays(robot, analysis, convention):
                         "triangles": triangles,
                         "label": f"tilt limits: the tool axis ({abs(length):g} mm drawn) at its largest tilt "
                                  "towards each azimuth"},
-            "points": [{"position": [float(v) for v in tip], "label": _label(row)} for row, tip in zip(rows, tips)],
+            "points": [{"position": [float(v) for v in tip], "label": _label(row) if shown else ""}
+                       for row, tip, shown in zip(rows, tips, _labelled(rows))],
             "frames": frames}

@@ -53,7 +53,8 @@ def path_frames(outcome):
 
 
 def _frame(t, pose, joints, warning, line):
-    return answer_frame(t, pose, joints, warning, line=line, label=f"line {line}, sample {float(t):g}")
+    sample = f"{float(t):.0f}" if float(t).is_integer() else f"{float(t):.2f}"
+    return answer_frame(t, pose, joints, warning, line=line, label=f"line {line}, sample {sample}")
 
 
 def travel(outcome):
