@@ -22,7 +22,7 @@ from ..kinematics.routine import answer_frame
 from .analysis import tilted_t6
 from .figures import LABELS
 
-AXIS_SHARE = 0.5
+AXIS_SHARE = 1.0
 """The drawn tool axis' length, as a share of the robot's size (robot.size_mm)."""
 
 
