@@ -158,3 +158,4 @@ def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, tmp_path):
         np.testing.assert_allclose(drawn["base_side"], limb["base_side"], atol=1e-6 * robot.size_mm)
     covered, bluish = drawn_pixels(shot)
     assert 0.02 < covered < 0.9 and bluish > 0.002, (covered, bluish)
+
