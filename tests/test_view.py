@@ -6,6 +6,7 @@ writes into #kingen-joints equal `kingen solve`'s within 1e-9, the machine it dr
 reference's, and a screenshot shows a drawing."""
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -159,3 +160,24 @@ def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, tmp_path):
     covered, bluish = drawn_pixels(shot)
     assert 0.02 < covered < 0.9 and bluish > 0.002, (covered, bluish)
 
+
+
+def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_why(tmp_path):
+    """With the WebAssembly compiler missing ($KINGEN_WASM_CC naming none), `kingen view` still
+    writes the page: it shows the joints kingen computed, its sliders greyed, and names what is
+    missing."""
+    require_tool("chromium", "chromium")
+    environment = {**os.environ, "KINGEN_WASM_CC": str(tmp_path / "no-clang")}
+    done = subprocess.run([sys.executable, "-m", "kingen.cli", "view", "tau", "-o", str(tmp_path)], capture_output=True,
+                          text=True, timeout=300, env=environment)
+    assert done.returncode == 0, done.stderr
+    page = tmp_path / "tau.html"
+    assert "KingenWasm" not in page.read_text() and "no-clang is not installed" in page.read_text()
+    dom = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom", page.as_uri()],
+                         capture_output=True, text=True, timeout=120).stdout
+    answer = json.loads(re.search(r'<pre id="kingen-joints" hidden="">([^<]*)</pre>', dom).group(1))
+    robot = load_robot("tau")
+    expected = solve(robot, t6_from_pose(np.array([robot.verification.home])))
+    assert answer["by"] == "kingen"
+    np.testing.assert_allclose(answer["joints"], expected.joints[0, :, robot.working_posture], atol=1e-12)
+    assert re.search(r'<input type="range"[^>]*disabled', dom) and "The sliders need the routine" in dom
