@@ -1,5 +1,5 @@
 """The ``kingen`` command line: list, render, build, package, solve, verify, bench, fk, analyze,
-optimize, golden, info, check-path. Commands live in :mod:`.routine_commands`, :mod:`.solve_commands` and
+optimize, golden, info, check-path, view. Commands live in :mod:`.routine_commands`, :mod:`.solve_commands` and
 :mod:`.design_commands`; what
 they share (options, the host and routine to use, printing) in :mod:`.common`.
 

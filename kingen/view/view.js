@@ -59,16 +59,17 @@ function closure(model, platform, joints) {  // each limb's |P - B(q)| - l(q), m
                                       - (limb.passive[0] + limb.passive[1] * joints[i]));
 }
 
-// The platform's pose for the joints: its coordinates in `unknown` (indices into x y z roll pitch
-// yaw) found by Gauss-Newton on the limbs' closures from `start` (a pose), the others kept.
-function solvePlatform(model, start, unknown, joints) {
+// The pose (x y z mm, roll pitch yaw degrees) whose coordinates in `unknown` (indices) make the
+// residuals residualOf(H) least in the least-squares sense, by Gauss-Newton from `start`, the
+// others kept: the platform's pose the joints decide.
+function solvePlatform(residualOf, start, unknown) {
   let pose = start.slice();
-  for (let step = 0; step < 30 && unknown.length; step++) {
-    const residual = closure(model, matrixFromPose(pose), joints);
+  for (let step = 0; step < 40 && unknown.length; step++) {
+    const residual = residualOf(matrixFromPose(pose));
     const columns = unknown.map(k => {
       const moved = pose.slice();
-      moved[k] += 1e-6 * (k < 3 ? 100 : 1);
-      return closure(model, matrixFromPose(moved), joints).map((v, i) => (v - residual[i]) / (moved[k] - pose[k]));
+      moved[k] += k < 3 ? 1e-4 : 1e-6;
+      return residualOf(matrixFromPose(moved)).map((v, i) => (v - residual[i]) / (moved[k] - pose[k]));
     });
     const n = unknown.length, normal = [], right = [];
     for (let a = 0; a < n; a++) {
@@ -78,10 +79,20 @@ function solvePlatform(model, start, unknown, joints) {
     const delta = gauss(normal, right);
     if (!delta) break;
     unknown.forEach((k, a) => { pose[k] += delta[a]; });
-    if (norm(delta) < 1e-10) break;
+    if (norm(delta) < 1e-11) break;
   }
   return pose;
 }
+
+// The wrist's rotations (base frame) before each of its joints, then after the last, for the
+// platform's rotation (3 x 3) and the wrist's joints (radians, their readings).
+function wristTurns(wrist, rotation, joints) {
+  const turns = [rotation];
+  wrist.axes.forEach((axis, k) => { turns.push(times(turns[k], rotationAbout(axis, joints[k] + wrist.zero[k]))); });
+  return turns;
+}
+
+const rotationOf = h => h.slice(0, 3).map(row => row.slice(0, 3));
 
 function gauss(a, b) {  // a x = b by elimination with partial pivoting; null when singular
   const n = b.length, m = a.map((row, i) => [...row, b[i]]);
@@ -115,15 +126,22 @@ function limbStatus(scene, index, q, residual, warning, across) {
 function drawingAt(scene, pose, joints, warning, previous) {
   const model = scene.model, wrist = model.wrist, asked = matrixFromPose(pose);
   let platform;
-  if (wrist) {
+  const legs = joints.slice(0, model.limbs.length), seed = poseFromMatrix(previous.platform);
+  if (wrist) {  // the wrist centre from the tool; the platform's rotation from the legs and the tool's rotation
     const axis = [asked[0][2], asked[1][2], asked[2][2]], tip = [asked[0][3], asked[1][3], asked[2][3]];
     const centre = wrist.whole_pose ? sub(tip, turn(asked, wrist.tip)) : sub(tip, scaled(axis, wrist.reach));
-    const seed = poseFromMatrix(previous.platform);
-    platform = matrixFromPose(solvePlatform(model, [...centre, ...seed.slice(3)], [3, 4, 5], joints));
-  } else if (scene.free.length < 6) {
+    const columns = wrist.whole_pose ? [0, 1, 2] : [2], wristJoints = joints.slice(model.limbs.length);
+    const residualOf = h => {
+      const tool = times(wristTurns(wrist, rotationOf(h), wristJoints).at(-1), rotationOf(wrist.tool));
+      const missed = columns.flatMap(c => [0, 1, 2].map(r => (tool[r][c] - asked[r][c]) * scene.size));
+      return [...closure(model, h, legs), ...missed];
+    };
+    platform = matrixFromPose(solvePlatform(residualOf, [...centre, ...seed.slice(3)], [3, 4, 5]));
+  } else if (scene.free.length < 6 && closure(model, asked, legs).some(v => Math.abs(v) > 1e-9 * scene.size)) {
+    // a pose that is not the machine's (its routine's machine pose not at hand): its other coordinates from the legs
     const unknown = [0, 1, 2, 3, 4, 5].filter(k => !scene.free.includes(scene.coordinates[k]));
-    const seed = poseFromMatrix(previous.platform);
-    platform = matrixFromPose(solvePlatform(model, pose.map((v, k) => unknown.includes(k) ? seed[k] : v), unknown, joints));
+    platform = matrixFromPose(solvePlatform(h => closure(model, h, legs), pose.map((v, k) => unknown.includes(k) ? seed[k] : v),
+                                            unknown));
   } else {
     platform = asked;
   }
@@ -137,9 +155,8 @@ function drawingAt(scene, pose, joints, warning, previous) {
   });
   let tool = null;
   if (wrist) {
-    let turned = platform.slice(0, 3).map(row => row.slice(0, 3));
-    wrist.axes.forEach((axis, k) => { turned = times(turned, rotationAbout(axis, joints[model.limbs.length + k] + wrist.zero[k])); });
-    const r = times(turned, wrist.tool.slice(0, 3).map(row => row.slice(0, 3)));
+    const turned = wristTurns(wrist, rotationOf(platform), joints.slice(model.limbs.length)).at(-1);
+    const r = times(turned, rotationOf(wrist.tool));
     const origin = add([platform[0][3], platform[1][3], platform[2][3]], turn(turned, wrist.tool.slice(0, 3).map(row => row[3])));
     tool = [[...r[0], origin[0]], [...r[1], origin[1]], [...r[2], origin[2]], [0, 0, 0, 1]];
   }
@@ -283,11 +300,10 @@ class Drawing {
     const middle = scaled(corners.reduce(add, [0, 0, 0]), 1 / Math.max(corners.length, 1));
     if (corners.length && norm(sub(middle, origin)) > r) this.rod(middle, origin, r * 2.4, platformColour);
     if (model.wrist) {  // each wrist axis, turned by the joints before it, through the wrist centre
-      let turned = drawing.platform.slice(0, 3).map(row => row.slice(0, 3));
+      const turns = wristTurns(model.wrist, rotationOf(drawing.platform), joints.slice(model.limbs.length));
       model.wrist.axes.forEach((axis, k) => {
-        const along = scaled(turn(turned, axis), this.scene.size * 0.05);
+        const along = scaled(turn(turns[k], axis), this.scene.size * 0.05);
         this.rod(sub(origin, along), add(origin, along), r * 1.8, 0x404850);
-        turned = times(turned, rotationAbout(axis, joints[model.limbs.length + k] + model.wrist.zero[k]));
       });
     }
     if (drawing.tool) {
@@ -541,11 +557,12 @@ class View {
     this.times.push(spent);
     const timing = document.getElementById("kingen-timing");
     if (timing) {
-      const quantile = (list, q) => list.slice().sort((a, b) => a - b)[Math.floor(q * (list.length - 1))];
-      timing.textContent = JSON.stringify({changes: this.times.length, median_ms: quantile(this.times, 0.5),
-                                           p95_ms: quantile(this.times, 0.95), max_ms: Math.max(...this.times),
-                                           routine_median_ms: quantile(this.routineTimes, 0.5),
-                                           routine_max_ms: Math.max(...this.routineTimes)});
+      // The first answer is the page's at load (its shaders compiled then); the changes are the rest.
+      const quantile = (list, q) => list.length ? list.slice().sort((a, b) => a - b)[Math.floor(q * (list.length - 1))] : null;
+      const changes = this.times.slice(1), routine = this.routineTimes.slice(1);
+      timing.textContent = JSON.stringify({load_ms: this.times[0], changes: changes.length, median_ms: quantile(changes, 0.5),
+                                           p95_ms: quantile(changes, 0.95), max_ms: quantile(changes, 1),
+                                           routine_median_ms: quantile(routine, 0.5), routine_max_ms: quantile(routine, 1)});
     }
   }
 
@@ -556,6 +573,8 @@ class View {
     this.machine.draw(this.drawn, joints);
     const out = document.getElementById("kingen-joints");
     if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by});
+    const drawn = document.getElementById("kingen-drawing");
+    if (drawn && this.root.dataset.primary === "1") drawn.textContent = JSON.stringify(this.drawn);
     const table = this.root.querySelector(".kingen-table tbody");
     table.innerHTML = "";
     joints.forEach((q, i) => {
