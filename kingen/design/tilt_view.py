@@ -76,7 +76,7 @@ def tilt_overlays(robot, analysis, convention):
               for row, pose, values, warning in zip(rows, pose_from_t6(t6), joints, warnings)]
     return {"surface": {"vertices": [[float(v) for v in point] for point in np.vstack([apex, tips])],
                         "triangles": triangles,
-                        "label": f"tilt limits: the tool axis ({abs(length):g} mm drawn) at its largest tilt "
+                        "label": f"tilt limits: the tool axis ({abs(length):.0f} mm drawn) at its largest tilt "
                                  "towards each azimuth"},
             "points": [{"position": [float(v) for v in tip], "label": _label(row) if shown else ""}
                        for row, tip, shown in zip(rows, tips, _labelled(rows))],
