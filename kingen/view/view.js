@@ -510,10 +510,7 @@ class View {
       button.style.left = `${100 * marker.frame / Math.max(1, frames.length - 1)}%`;
       button.addEventListener("click", () => { slider.value = marker.frame; this.showFrame(marker.frame); });
     });
-    if (Number.isInteger(this.scene.start_frame)) {  // a report opens at a frame of its own (its first finding)
-      slider.value = this.scene.start_frame;
-      this.showFrame(this.scene.start_frame);
-    }
+    if (Number.isInteger(this.scene.start_frame)) slider.value = this.scene.start_frame;  // startView shows it
   }
 
   showFrame(index) {
@@ -643,6 +640,8 @@ async function startView(root) {
   if (asked.pose || asked.posture !== undefined) {
     if (view.routine) view.setPose(asked.pose || view.pose, asked.posture ?? view.posture);
     else view.root.querySelector(".kingen-note").textContent += " The pose in the address is not drawn: it needs the routine.";
+  } else if (Number.isInteger(scene.start_frame) && (scene.frames || [])[scene.start_frame]) {
+    view.showFrame(scene.start_frame);  // a report opens at a frame of its own (check-path: its first problem)
   } else if (view.routine) {
     view.update();
   } else {
