@@ -373,6 +373,9 @@ class View {
     this.machineGroup = new THREE.Group();
     this.world.add(this.machineGroup);
     this.machine = new Drawing(THREE, scene, this.machineGroup, 1);
+    const base = new THREE.Group();  // the base frame at its origin: x red, y green, z blue
+    this.world.add(base);
+    new Drawing(THREE, scene, base, 1).frame([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], scene.size / 6);
     const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point)];
     if (scene.machine.tool) points.push([0, 1, 2].map(r => scene.machine.tool[r][3]));
     for (const arrow of scene.arrows || []) points.push(arrow.origin, add(arrow.origin, arrow.vector));
@@ -566,7 +569,7 @@ class View {
     this.drawn = drawingAt(this.scene, this.pose, joints, warning, this.drawn);
     this.machine.draw(this.drawn, joints);
     const out = document.getElementById("kingen-joints");
-    if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by});
+    if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by, pose: this.pose, posture: this.posture});
     const drawn = document.getElementById("kingen-drawing");
     if (drawn && this.root.dataset.primary === "1") drawn.textContent = JSON.stringify(this.drawn);
     const table = this.root.querySelector(".kingen-table tbody");
