@@ -28,6 +28,7 @@ SECTIONS = {
     "calibrate_montecarlo": ("calibrate_montecarlo.py", ["--seeds", "30", "--poses", "50"],
                              "Calibration's stated deviations (Monte-Carlo)"),
     "c_host": ("c_host.py", [], "The C host"),
+    "wasm_host": ("wasm_host.py", [], "The WebAssembly host"),
     "hybrid": ("hybrid.py", ["--calls", "200000", "--rounds", "5"], "Constrained machines"),
     "check_path": ("check_path.py", ["--samples", "1000000", "--moves", "100"], "Path checking"),
     "loads": ("loads.py", ["--poses", "1000000", "--rows", "2000", "--rounds", "3"], "Loads"),

@@ -194,7 +194,7 @@ def verify_library(robot, library=None, routine=None, host=DEFAULT_HOST, samples
     routine : str, optional
         The routine's name in ``library``; the host's name for the robot by default.
     host : str, optional
-        ``"delmia"`` or ``"linuxcnc"``.
+        A registered host's name: ``"delmia"``, ``"linuxcnc"``, ``"c"`` or ``"wasm"``.
     samples, seed : int, optional
         How many seeded poses of the robot's verification region are compared.
 

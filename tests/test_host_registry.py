@@ -90,7 +90,7 @@ def test_a_target_the_host_does_not_have_is_a_usage_error(toy, tmp_path, capsys)
 def test_an_unknown_host_is_named(toy, capsys):
     _, robot = toy
     code, _, err = run(capsys, "verify", robot, "--host", "fanuc")
-    assert code == 2 and err == "kingen: error: unknown host 'fanuc' (known: c, delmia, linuxcnc, toy)\n"
+    assert code == 2 and err == "kingen: error: unknown host 'fanuc' (known: c, delmia, linuxcnc, toy, wasm)\n"
     with pytest.raises(KingenError, match="unknown host"):
         hosts.get_host("nowhere")
 

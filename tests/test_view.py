@@ -181,3 +181,29 @@ def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_wh
     assert answer["by"] == "kingen"
     np.testing.assert_allclose(answer["joints"], expected.joints[0, :, robot.working_posture], atol=1e-12)
     assert re.search(r'<input type="range"[^>]*disabled', dom) and "The sliders need the routine" in dom
+
+
+def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(tmp_path):
+    """tau: three input events on its first slider (#bench=3), as a drag makes them: the answer
+    written is the reference's at the pose the page then shows. tricept (task x, y, z): the pose
+    given in the address becomes the machine's pose for its x, y, z (the module's machine pose),
+    and the joints are the reference's there."""
+    require_browser()
+    from kingen.conventions import pose_from_t6
+    from kingen.kinematics.parasitic import solve_parasitic
+
+    for name, fragment in (("tau", "#pose=-1150,-700,-1850,0,0,0&posture=1&bench=3"),
+                           ("tricept", "#pose=40,-30,-1050,3,-2,9&posture=0")):
+        robot = load_robot(name)
+        assert kingen("view", name, "-o", str(tmp_path / name)).returncode == 0
+        answer = open_page(tmp_path / name / f"{name}.html", fragment, tmp_path / f"{name}.png",
+                           tmp_path / f"profile-{name}")["joints"]
+        assert answer["by"] == "wasm" and answer["posture"] == int(fragment.split("posture=")[1][0])
+        if name == "tau":
+            assert answer["pose"][0] != -1150.0 and answer["pose"][1:] == [-700, -1850, 0, 0, 0]  # the first slider moved
+        else:
+            machine = pose_from_t6(solve_parasitic(robot, t6_from_pose(np.array([[40.0, -30, -1050, 3, -2, 9]]))).t6)[0]
+            np.testing.assert_allclose(answer["pose"], machine, atol=1e-9)
+        expected = solve(robot, t6_from_pose(np.array([answer["pose"]])))
+        np.testing.assert_allclose(answer["joints"], expected.joints[0, :, answer["posture"]], atol=1e-9)
+        assert WARNINGS[answer["warning"]] == expected.warnings[0, answer["posture"]]

@@ -141,7 +141,7 @@ def verify(robot, out_dir, library, source, routine, samples, seed, json_path, j
 @HOST
 @TIMEOUT
 def bench(robot, out_dir, library, source, routine, calls, floor_source, json_path, host, timeout):
-    """Print ns per routine call (C batch driver, per-call cffi) and poses per second.
+    """Print ns per routine call (C batch driver, per-call cffi or wasmtime) and poses per second.
 
     A --floor is verified first (on a few thousand poses, as verify --source would) and refused
     when it fails a check: only a correct floor gives a meaningful ratio."""
@@ -161,7 +161,7 @@ def bench(robot, out_dir, library, source, routine, calls, floor_source, json_pa
                        {"result": functools.partial(typed, Figures)})
     say(f"bench {model.name} ({routine}, {counted(model.postures, 'posture')}, {counted(figures['calls'], 'call')})")
     say(f"  routine via C batch driver: {figures['batch_ns_per_call']:10.1f} ns/call")
-    say(f"  routine via cffi per call:  {figures['cffi_ns_per_call']:10.1f} ns/call")
+    say(f"  {f'routine via {host.per_call} per call:':<28}{figures['cffi_ns_per_call']:10.1f} ns/call")
     if "worst_call_ns" in figures:
         say(f"  each call timed singly:     {figures['median_call_ns']:10.1f} ns median, "
             f"{figures['worst_call_ns']:.1f} ns worst of {figures['single_calls']:,} calls")

@@ -3,8 +3,8 @@ through :mod:`kingen.robot.limbs`.
 
 ``HOSTS`` maps each ``--host`` name to a :class:`~kingen.hosts.base.Host` instance.
 ``register`` adds one at run time (tests do, with a toy host); ``get_host`` is how every
-command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``), LinuxCNC (``linuxcnc``) and a portable C library (``c``) are
-built in.
+command finds the host it was asked for. DELMIA V5 / IGRIP (``delmia``), LinuxCNC (``linuxcnc``), a portable C library (``c``) and that library compiled to
+WebAssembly (``wasm``) are built in.
 """
 
 from ..defaults import DEFAULT_HOST
@@ -14,6 +14,7 @@ from .base import BuildResult, Host, LoadedRoutine
 from .delmia import DelmiaHost
 from .c import CHost
 from .linuxcnc import LinuxcncHost
+from .wasm import WasmHost
 
 HOSTS = {}
 
@@ -49,6 +50,7 @@ def name_problems(robot_name):
 register(DelmiaHost())
 register(LinuxcncHost())
 register(CHost())
+register(WasmHost())
 
 __all__ = ["BuildResult", "DEFAULT_HOST", "HOSTS", "Host", "LoadedRoutine", "get_host", "name_problems",
            "register", "unregister"]

@@ -72,6 +72,8 @@ class Host:
     """What ``--target`` may name for this host (empty: the option does not apply)."""
     default_targets: ClassVar[dict] = {}
     """``--target`` when not given, per command ('build', 'package')."""
+    per_call: ClassVar[str] = "cffi"
+    """What calls the routine once per call from Python (``kingen bench``'s per-call line)."""
     loading_stage: ClassVar[str] = "loading the routine"
     """The stage a crash or hang while loading foreign code is reported in."""
     checks: tuple = ()

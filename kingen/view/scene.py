@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from ..conventions import matrix_from_t6, pose_from_t6, t6_from_pose
+from ..errors import KingenError
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE, WARNING_NAMES
 from ..kinematics.wrist import rotation_about
@@ -160,7 +161,7 @@ def scene(robot, pose=None, posture=None):
     pose = np.asarray(robot.verification.home if pose is None else pose, dtype=float)
     posture = robot.working_posture if posture is None else int(posture)
     if not 0 <= posture < robot.postures:
-        raise ValueError(f"posture {posture} does not exist (the robot has {robot.postures})")
+        raise KingenError(f"posture {posture} does not exist (the robot has {robot.postures})")
     t6 = t6_from_pose(pose)
     if robot.task:
         from ..kinematics.parasitic import solve_parasitic

@@ -7,7 +7,7 @@
 "use strict";
 
 const STATUS_COLOURS = {good: 0x4a7ab0, limits: 0xe08a00, singular: 0xb040c0, unreachable: 0xd02020};
-const STATUS_WORDS = {good: "within travel", limits: "beyond its travel", singular: "singular",
+const STATUS_WORDS = {good: "good", limits: "beyond its travel", singular: "singular",
                       unreachable: "unreachable"};
 const DEG = Math.PI / 180;
 
@@ -242,7 +242,7 @@ class Drawing {
     mesh.position.set(...p);
   }
 
-  polygon(points, colour) {  // a flat plate through points (ordered about their centre)
+  polygon(points, colour, opacity) {  // a flat plate through points (ordered about their centre)
     const {THREE} = this;
     const centre = scaled(points.reduce(add, [0, 0, 0]), 1 / points.length);
     let normal = [0, 0, 0];
@@ -263,7 +263,7 @@ class Drawing {
     const mesh = this.mesh("plate", () => new THREE.Mesh(new THREE.BufferGeometry()));
     mesh.geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
     mesh.geometry.computeVertexNormals();
-    mesh.material = this.material(colour, Math.min(this.opacity, 0.75));
+    mesh.material = this.material(colour, Math.min(this.opacity, opacity));
     for (let i = 0; i < ordered.length; i++) this.rod(ordered[i], ordered[(i + 1) % ordered.length], this.radius * 0.6, colour);
   }
 
@@ -273,7 +273,7 @@ class Drawing {
     this.used = 0;
     const model = this.scene.model, r = this.radius, platformColour = 0x707880;
     const pivots = model.limbs.map(limb => limb.pivot);
-    if (pivots.length >= 3) this.polygon(pivots, 0x9aa0a6);
+    if (pivots.length >= 3) this.polygon(pivots, 0x9aa0a6, 0.35);
     model.limbs.forEach((limb, i) => {
       const shown = drawing.limbs[i], colour = STATUS_COLOURS[shown.status] || STATUS_COLOURS.good;
       const travel = this.scene.travel[i];
@@ -295,7 +295,7 @@ class Drawing {
     });
     const corners = drawing.limbs.map(limb => limb.platform_point);
     const origin = [drawing.platform[0][3], drawing.platform[1][3], drawing.platform[2][3]];
-    if (corners.length >= 3) this.polygon(corners, drawing.status === "WARN_GOOD_SOLUTION" ? platformColour : 0xd08080);
+    if (corners.length >= 3) this.polygon(corners, drawing.status === "WARN_GOOD_SOLUTION" ? platformColour : 0xd08080, 0.75);
     if (model.passive_leg) this.rod(model.passive_leg.base_point, origin, r * 2.2, 0x808890);
     const middle = scaled(corners.reduce(add, [0, 0, 0]), 1 / Math.max(corners.length, 1));
     if (corners.length && norm(sub(middle, origin)) > r) this.rod(middle, origin, r * 2.4, platformColour);
@@ -373,6 +373,9 @@ class View {
     this.machineGroup = new THREE.Group();
     this.world.add(this.machineGroup);
     this.machine = new Drawing(THREE, scene, this.machineGroup, 1);
+    const base = new THREE.Group();  // the base frame at its origin: x red, y green, z blue
+    this.world.add(base);
+    new Drawing(THREE, scene, base, 1).frame([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], scene.size / 6);
     const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point)];
     if (scene.machine.tool) points.push([0, 1, 2].map(r => scene.machine.tool[r][3]));
     for (const arrow of scene.arrows || []) points.push(arrow.origin, add(arrow.origin, arrow.vector));
@@ -569,7 +572,7 @@ class View {
     this.drawn = drawingAt(this.scene, this.pose, joints, warning, this.drawn);
     this.machine.draw(this.drawn, joints);
     const out = document.getElementById("kingen-joints");
-    if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by});
+    if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by, pose: this.pose, posture: this.posture});
     const drawn = document.getElementById("kingen-drawing");
     if (drawn && this.root.dataset.primary === "1") drawn.textContent = JSON.stringify(this.drawn);
     const table = this.root.querySelector(".kingen-table tbody");
