@@ -94,6 +94,21 @@ def test_the_fragment_holds_the_page_apart():
     assert "&lt;script" in fragment and 'title="tau &lt;view&gt;"' in fragment
 
 
+@pytest.fixture(scope="module")
+def page_of(tmp_path_factory):
+    """``kingen view NAME``'s page (a real process), made once per robot in this module."""
+    made = {}
+
+    def page(name):
+        if name not in made:
+            folder = tmp_path_factory.mktemp(f"view-{name}")
+            done = kingen("view", name, "-o", str(folder))
+            assert done.returncode == 0, done.stderr
+            made[name] = folder / f"{name}.html"
+        return made[name]
+    return page
+
+
 def require_browser():
     require_tool("chromium", "chromium")
     from kingen.hosts.wasm.build import wasm_toolchain
@@ -128,7 +143,7 @@ def drawn_pixels(shot):
 
 
 @pytest.mark.parametrize("name", FAMILIES)
-def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, tmp_path):
+def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, page_of, tmp_path):
     """`kingen view` then the page opened at a sampled pose (#pose=...&posture=K): #kingen-joints
     holds what the WebAssembly routine computed, equal to `kingen solve`'s (the C library and the
     reference it is held to) within 1e-9; the drawing's platform is the reference's; the
@@ -136,8 +151,7 @@ def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, tmp_path):
     require_browser()
     robot = load_robot(name)
     pose, posture = sample_pose(robot)
-    assert kingen("view", name, "-o", str(tmp_path)).returncode == 0
-    page = tmp_path / f"{name}.html"
+    page = page_of(name)
     assert page.stat().st_size < MAX_BYTES
     shot = tmp_path / "shot.png"
     found = open_page(page, f"#pose={','.join(repr(float(v)) for v in pose)}&posture={posture}", shot, tmp_path / "profile")
@@ -183,7 +197,7 @@ def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_wh
     assert re.search(r'<input type="range"[^>]*disabled', dom) and "The sliders need the routine" in dom
 
 
-def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(tmp_path):
+def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(page_of, tmp_path):
     """tau: three input events on its first slider (#bench=3), as a drag makes them: the answer
     written is the reference's at the pose the page then shows. tricept (task x, y, z): the pose
     given in the address becomes the machine's pose for its x, y, z (the module's machine pose),
@@ -195,8 +209,7 @@ def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(t
     for name, fragment in (("tau", "#pose=-1150,-700,-1850,0,0,0&posture=1&bench=3"),
                            ("tricept", "#pose=40,-30,-1050,3,-2,9&posture=0")):
         robot = load_robot(name)
-        assert kingen("view", name, "-o", str(tmp_path / name)).returncode == 0
-        answer = open_page(tmp_path / name / f"{name}.html", fragment, tmp_path / f"{name}.png",
+        answer = open_page(page_of(name), fragment, tmp_path / f"{name}.png",
                            tmp_path / f"profile-{name}")["joints"]
         assert answer["by"] == "wasm" and answer["posture"] == int(fragment.split("posture=")[1][0])
         if name == "tau":
@@ -207,3 +220,20 @@ def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(t
         expected = solve(robot, t6_from_pose(np.array([answer["pose"]])))
         np.testing.assert_allclose(answer["joints"], expected.joints[0, :, answer["posture"]], atol=1e-9)
         assert WARNINGS[answer["warning"]] == expected.warnings[0, answer["posture"]]
+
+
+@pytest.mark.parametrize("name, pose", [
+    ("tau", [-1945.831, -1223.741, -1357.706, 2.465, -12.176, -2.006]),  # two carriages' links cannot reach
+    ("tau", [-1324.87, -593.763, -1471.892, 13.688, -6.474, 4.456]),  # two carriages beyond their travel
+    ("exechon_wrist", [-372.916, -186.871, -1088.471, 184.93, -24.352, -4.012]),  # leg2 beyond its travel
+])
+def test_the_limbs_colours_in_a_real_browser_are_the_references_statuses(name, pose, page_of, tmp_path):
+    """Each limb's colour key the page draws (unreachable, beyond its travel, good) is the one
+    kingen.view.scene gives from the reference's radicands and the robot file's travel."""
+    require_browser()
+    robot = load_robot(name)
+    fragment = f"#pose={','.join(map(str, pose))}&posture={robot.working_posture}"
+    found = open_page(page_of(name), fragment, tmp_path / "shot.png", tmp_path / "profile")
+    expected, _, warning = machine_at(robot, t6_from_pose(np.array(pose)), robot.working_posture)
+    assert found["joints"]["warning"] == warning != "WARN_GOOD_SOLUTION"
+    assert [limb["status"] for limb in found["drawing"]["limbs"]] == [limb["status"] for limb in expected["limbs"]]
