@@ -16,7 +16,9 @@ computed here, with the reference (kingen.kinematics.reference), at the scene's 
 overlay has the same keys as ``machine``.
 
 Optional overlays (kingen.view.page draws each one it finds): ``frames`` [{t, pose: [6], joints,
-warning}] (a path played on a timeline), ``markers`` [{frame, label}] (findings on that timeline),
+warning, label?}] (a path played on a timeline; ``label`` shown beside it, else ``t`` in s),
+``start_frame`` (the frame the timeline opens at), ``markers`` [{frame, label}] (findings on
+that timeline, numbered on it, each label shown at its frame),
 ``arrows`` [{origin: [3], vector: [3], label}], ``ghost`` {label, scale, platform, limbs, tool},
 ``surface`` {vertices: [[3]...], triangles: [[3]...], label}, ``points`` [{position: [3], label}].
 :func:`machine_at` gives a ghost's or a frame's drawing.

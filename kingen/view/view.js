@@ -505,19 +505,22 @@ class View {
         this.showFrame(next);
       }, 40);
     });
-    for (const marker of this.scene.markers || []) {
+    (this.scene.markers || []).forEach((marker, n) => {
       const button = marks.appendChild(document.createElement("button"));
       button.className = "kingen-marker";
-      button.textContent = marker.label;
-      button.title = `frame ${marker.frame}: ${marker.label}`;
+      button.textContent = String(n + 1);  // the label in full on hover and beside the slider at its frame
+      button.title = `${n + 1}: ${marker.label}`;
       button.style.left = `${100 * marker.frame / Math.max(1, frames.length - 1)}%`;
       button.addEventListener("click", () => { slider.value = marker.frame; this.showFrame(marker.frame); });
-    }
+    });
+    if (Number.isInteger(this.scene.start_frame)) slider.value = this.scene.start_frame;  // startView shows it
   }
 
   showFrame(index) {
     const frame = this.scene.frames[index];
-    this.root.querySelector(".kingen-frame").textContent = `t = ${Number(frame.t).toFixed(3)} s`;
+    const marked = (this.scene.markers || []).map((marker, n) => [marker, n]).filter(([marker]) => marker.frame === index);
+    this.root.querySelector(".kingen-frame").textContent = [frame.label ?? `t = ${Number(frame.t).toFixed(3)} s`,
+      ...marked.map(([marker, n]) => `${n + 1}: ${marker.label}`)].join("; ");
     if (this.routine) { this.setPose(frame.pose, frame.posture ?? this.posture); return; }
     this.pose = frame.pose.slice();
     this.show(frame.joints, frame.warning, "kingen");
@@ -640,6 +643,8 @@ async function startView(root) {
   if (asked.pose || asked.posture !== undefined) {
     if (view.routine) view.setPose(asked.pose || view.pose, asked.posture ?? view.posture);
     else view.root.querySelector(".kingen-note").textContent += " The pose in the address is not drawn: it needs the routine.";
+  } else if (Number.isInteger(scene.start_frame) && (scene.frames || [])[scene.start_frame]) {
+    view.showFrame(scene.start_frame);  // a report opens at a frame of its own (check-path: its first problem)
   } else if (view.routine) {
     view.update();
   } else {

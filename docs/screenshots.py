@@ -1,0 +1,121 @@
+"""The how-tos' screenshots of the 3D view in each report, made from real runs, not by hand.
+
+    python docs/screenshots.py [--only check-path|calibrate|analyze] [--keep DIR]
+
+Runs kingen as a user does (``python -m kingen.cli``, a real process): check-path on LinuxCNC's
+sample hexapod with a CSV program that leaves its struts' travel and speed (the .ini written
+here), calibrate on the hexapod from measurements of a perturbed hexapod (made here with kingen's
+own model, device noise 10 um and 0.001 deg, joints read to 1 um), and analyze on the CEART
+6-RUS; then opens each report.html in headless Chromium (WebGL through SwiftShader) with every
+part of the page but the view hidden, and writes the screenshots to docs/images/
+(check_path_view.png, calibrate_view.png, analyze_view.png). Chromium is /usr/bin/chromium or
+``$CHROMIUM``.
+"""
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+IMAGES = Path(__file__).resolve().parent / "images"
+SIZE = (1100, 640)
+"""The screenshots' width and height (px): the view's frame in a report."""
+ONLY_THE_VIEW = ("<style>body > *:not(.kingen-view-frame) { display: none !important; } "
+                 "body { margin: 0; max-width: none; }</style></head>")
+INI = """[TRAJ]
+LINEAR_UNITS = inch
+MAX_LINEAR_VELOCITY = 20
+MAX_LINEAR_ACCELERATION = 1000
+""" + "".join(f"\n[JOINT_{index}]\nMAX_VELOCITY = 0.5\nMAX_ACCELERATION = 100\nMIN_LIMIT = 26\nMAX_LIMIT = 31\n"
+              for index in range(6))
+PROGRAM = "x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,600\n20,10,520,2,0,0,600\n0,0,560,0,0,0,600\n-30,0,540,0,-4,0,600\n"
+
+
+def kingen(*arguments, codes=(0,)):
+    """Run ``python -m kingen.cli`` with ``arguments``; its exit code must be one of ``codes``."""
+    done = subprocess.run([sys.executable, "-m", "kingen.cli", *map(str, arguments)], capture_output=True, text=True)
+    if done.returncode not in codes:
+        raise SystemExit(f"kingen {' '.join(map(str, arguments))}: exit {done.returncode}\n{done.stderr}")
+
+
+def check_path(folder):
+    """check-path's report of PROGRAM on linuxcnc_hexapod with INI's limits."""
+    (folder / "part.csv").write_text(PROGRAM)
+    (folder / "hexapod.ini").write_text(INI)
+    kingen("check-path", "linuxcnc_hexapod", folder / "part.csv", "--ini", folder / "hexapod.ini",
+           "--html", folder / "report.html", codes=(1,))
+    return folder / "report.html"
+
+
+def calibrate(folder):
+    """calibrate's report of the hexapod from 30 noisy measurements of a perturbed hexapod."""
+    from kingen.calibrate.identification import region_poses
+    from kingen.calibrate.measurements import write_measurements
+    from kingen.calibrate.parameters import Parameters
+    from kingen.calibrate.prediction import synthesize
+    from kingen.conventions import t6_from_pose
+    from kingen.kinematics.reference import solve
+    from kingen.robot.model import load_robot
+
+    robot = load_robot("hexapod")
+    parameters = Parameters(robot, "pose")
+    rng = np.random.default_rng(5)
+    truth = parameters.nominal.copy()
+    limbs = np.array([entry.limb is not None for entry in parameters.entries])
+    truth[limbs] += rng.uniform(-0.5, 0.5, limbs.sum())
+    truth[parameters.groups == "frame"] = [150.0, -80.0, 40.0, 2.0, -3.0, 25.0]
+    poses = region_poses(robot, 120, 3)
+    poses = poses[solve(robot, t6_from_pose(poses)).warnings[:, robot.working_posture] == 0][:30]
+    joints, measured = synthesize(parameters, truth, poses, robot.working_posture)
+    joints = np.round(joints / 0.001) * 0.001
+    measured[:, :3] += rng.normal(0.0, 0.01, measured[:, :3].shape)
+    measured[:, 3:] += rng.normal(0.0, 0.001, measured[:, 3:].shape)
+    (folder / "measured.csv").write_text(write_measurements(robot, "pose", joints, measured))
+    kingen("calibrate", "hexapod", "--measurements", folder / "measured.csv", "-o", folder / "calibration")
+    return folder / "calibration" / "report.html"
+
+
+def analyze(folder):
+    """analyze's report of ceart."""
+    kingen("analyze", "ceart", "-o", folder / "analysis")
+    return folder / "analysis" / "report.html"
+
+
+REPORTS = {"check-path": (check_path, "check_path_view.png"), "calibrate": (calibrate, "calibrate_view.png"),
+           "analyze": (analyze, "analyze_view.png")}
+
+
+def screenshot(report, shot, scratch):
+    """``shot``: the view of ``report`` alone, SIZE, in headless Chromium."""
+    probe = scratch / f"{shot.stem}.html"
+    probe.write_text(report.read_text().replace("</head>", ONLY_THE_VIEW, 1))
+    chromium = os.environ.get("CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
+    subprocess.run([chromium, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                    "--no-first-run", "--disable-background-networking", "--hide-scrollbars",
+                    f"--user-data-dir={scratch / 'profile'}", f"--window-size={SIZE[0]},{SIZE[1]}",
+                    "--virtual-time-budget=10000", f"--screenshot={shot}", probe.as_uri()],
+                   check=True, capture_output=True, timeout=180)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", choices=sorted(REPORTS), action="append")
+    parser.add_argument("--keep", type=Path, help="Keep the runs' outputs in this folder.")
+    options = parser.parse_args()
+    with tempfile.TemporaryDirectory() as temporary:
+        scratch = options.keep or Path(temporary)
+        for name in options.only or REPORTS:
+            make, image = REPORTS[name]
+            folder = scratch / name
+            folder.mkdir(parents=True, exist_ok=True)
+            screenshot(make(folder), IMAGES / image, scratch)
+            print(IMAGES / image)
+
+
+if __name__ == "__main__":
+    main()
