@@ -197,23 +197,30 @@ def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_wh
     assert re.search(r'<input type="range"[^>]*disabled', dom) and "The sliders need the routine" in dom
 
 
-def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(page_of, tmp_path):
+def test_a_slider_change_joints_and_a_machine_with_task_coordinates_in_a_real_browser(page_of, tmp_path):
     """tau: three input events on its first slider (#bench=3), as a drag makes them: the answer
     written is the reference's at the pose the page then shows. tricept (task x, y, z): the pose
     given in the address becomes the machine's pose for its x, y, z (the module's machine pose),
-    and the joints are the reference's there."""
+    and the joints are the reference's there. hexapod: joints given in the address (#joints=)
+    move the machine to the pose they were solved at (the routine's forward kinematics)."""
     require_browser()
     from kingen.conventions import pose_from_t6
     from kingen.kinematics.parasitic import solve_parasitic
 
+    hexapod_pose = np.array([12.0, -8.0, 490.0, 3.0, -2.0, 5.0])
+    hexapod_joints = solve(load_robot("hexapod"), t6_from_pose(hexapod_pose[None])).joints[0, :, 0]
     for name, fragment in (("tau", "#pose=-1150,-700,-1850,0,0,0&posture=1&bench=3"),
-                           ("tricept", "#pose=40,-30,-1050,3,-2,9&posture=0")):
+                           ("tricept", "#pose=40,-30,-1050,3,-2,9&posture=0"),
+                           ("hexapod", f"#joints={','.join(map(repr, map(float, hexapod_joints)))}&posture=0")):
         robot = load_robot(name)
         answer = open_page(page_of(name), fragment, tmp_path / f"{name}.png",
                            tmp_path / f"profile-{name}")["joints"]
         assert answer["by"] == "wasm" and answer["posture"] == int(fragment.split("posture=")[1][0])
         if name == "tau":
             assert answer["pose"][0] != -1150.0 and answer["pose"][1:] == [-700, -1850, 0, 0, 0]  # the first slider moved
+        elif name == "hexapod":
+            np.testing.assert_allclose(answer["pose"], hexapod_pose, atol=1e-6)
+            np.testing.assert_allclose(answer["joints"], hexapod_joints, atol=1e-9)
         else:
             machine = pose_from_t6(solve_parasitic(robot, t6_from_pose(np.array([[40.0, -30, -1050, 3, -2, 9]]))).t6)[0]
             np.testing.assert_allclose(answer["pose"], machine, atol=1e-9)
