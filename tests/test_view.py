@@ -26,7 +26,8 @@ FAMILIES = ("hexapod", "tau", "ceart", "exechon_wrist", "tricept_wrist3")
 """Six legs, three rails (Gantry-Tau), six cranks, an Exechon with a two-axis wrist, a Tricept with a spherical wrist."""
 CHROMIUM = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
             "--enable-unsafe-swiftshader", "--disable-quic", "--no-first-run", "--disable-background-networking",
-            "--disable-component-update", "--disable-sync", "--window-size=1000,700", "--virtual-time-budget=8000"]
+            "--disable-component-update", "--disable-sync", "--window-size=1000,700", "--virtual-time-budget=8000",
+            "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>"]  # offline: any fetch would fail
 BACKGROUND = (0xF4, 0xF5, 0xF7)
 """The 3D stage's clear colour (view.js)."""
 MAX_BYTES = 5_000_000
@@ -185,6 +186,7 @@ def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_wh
     done = subprocess.run([sys.executable, "-m", "kingen.cli", "view", "tau", "-o", str(tmp_path)], capture_output=True,
                           text=True, timeout=300, env=environment)
     assert done.returncode == 0, done.stderr
+    assert "sliders need the routine compiled to WebAssembly" in done.stdout and "no-clang is not installed" in done.stdout
     page = tmp_path / "tau.html"
     assert "KingenWasm" not in page.read_text() and "no-clang is not installed" in page.read_text()
     dom = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom", page.as_uri()],
