@@ -127,9 +127,12 @@ def sample_pose(robot):
 
 
 def open_page(page, fragment, shot, profile):
-    """The page's DOM after it ran, opened with ``fragment`` in headless Chromium, and its screenshot."""
-    done = subprocess.run([*CHROMIUM, f"--user-data-dir={profile}", f"--screenshot={shot}", "--dump-dom",
-                           page.as_uri() + fragment], capture_output=True, text=True, timeout=120)
+    """The page's DOM after it ran, opened with ``fragment`` in headless Chromium, and its
+    screenshot; the page's script wrote nothing on the console (WebGL's driver notes aside)."""
+    done = subprocess.run([*CHROMIUM, f"--user-data-dir={profile}", f"--screenshot={shot}", "--enable-logging=stderr",
+                           "--v=0", "--dump-dom", page.as_uri() + fragment], capture_output=True, text=True, timeout=120)
+    said = [line for line in done.stderr.splitlines() if ":CONSOLE" in line and "GL Driver Message" not in line]
+    assert said == [], said
     return {key: json.loads(value) for key, value in
             re.findall(r'<pre id="kingen-(joints|drawing)" hidden="">([^<]*)</pre>', done.stdout) if value}
 
