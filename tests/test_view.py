@@ -238,10 +238,11 @@ def test_a_slider_change_joints_and_a_machine_with_task_coordinates_in_a_real_br
     ("tau", [-1945.831, -1223.741, -1357.706, 2.465, -12.176, -2.006]),  # two carriages' links cannot reach
     ("tau", [-1324.87, -593.763, -1471.892, 13.688, -6.474, 4.456]),  # two carriages beyond their travel
     ("exechon_wrist", [-372.916, -186.871, -1088.471, 184.93, -24.352, -4.012]),  # leg2 beyond its travel
+    ("tau", [-1587.2588745805463, -750.0, -1900.0, 0.0, 0.0, 0.0]),  # carriage1's link square to its rail
 ])
 def test_the_limbs_colours_in_a_real_browser_are_the_references_statuses(name, pose, page_of, tmp_path):
-    """Each limb's colour key the page draws (unreachable, beyond its travel, good) is the one
-    kingen.view.scene gives from the reference's radicands and the robot file's travel."""
+    """Each limb's colour key the page draws (unreachable, beyond its travel, singular, good) is
+    the one kingen.view.scene gives from the reference's radicands and the robot file's travel."""
     require_browser()
     robot = load_robot(name)
     fragment = f"#pose={','.join(map(str, pose))}&posture={robot.working_posture}"

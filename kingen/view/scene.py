@@ -12,7 +12,9 @@ range} (the verification region, mm and degrees: the sliders' span); ``joint_nam
 ``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, or None);
 ``postures`` and ``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
 ``warning`` (the reference's there); ``size`` (mm, the robot's largest length: the drawing's
-scale); ``model`` and ``machine`` (below); ``no_routine`` (set by kingen.view.page: what the
+scale); ``singular_across`` (the cosine of the angle between a limb's link and its base side's
+motion within which the page colours it singular: sqrt of the singular tolerance on its
+normalised radicand, which is that cosine squared); ``model`` and ``machine`` (below); ``no_routine`` (set by kingen.view.page: what the
 sliders need, on a page without the routine).
 
 What the page needs to draw the machine at a pose of its own is ``model``: per limb its
@@ -197,6 +199,7 @@ def scene(robot, pose=None, posture=None):
         "joints": [float(v) for v in joints],
         "warning": warning,
         "size": float(robot.size_mm),
+        "singular_across": math.sqrt(SINGULAR_TOLERANCE),
         "model": model(robot),
         "machine": drawing,
     }

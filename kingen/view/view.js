@@ -114,13 +114,14 @@ function gauss(a, b) {  // a x = b by elimination with partial pivoting; null wh
   return x;
 }
 
-// A limb's colour key (scene.py's LIMB_STATUSES): unreachable where its link cannot close,
-// beyond its travel, singular where the posture is and its base side moves across its link.
+// A limb's colour key (scene.py's machine): unreachable where its link cannot close, beyond its
+// travel, singular where the posture is and the link is within scene.singular_across (the cosine
+// of its angle) of square to its base side's motion (a rail's or a crank's radicand near 0).
 function limbStatus(scene, index, q, residual, warning, across) {
   const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? DEG : 1;
   if (Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
   if (travel && (q < travel[0] * unit - 1e-12 || q > travel[1] * unit + 1e-12)) return "limits";
-  return warning === "WARN_SINGULAR_SOLUTION" && across < 1e-3 ? "singular" : "good";
+  return warning === "WARN_SINGULAR_SOLUTION" && across <= scene.singular_across ? "singular" : "good";
 }
 
 // The drawing ({platform, limbs, tool, status}, scene.py's machine) for a pose the page asked for
