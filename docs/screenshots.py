@@ -1,6 +1,7 @@
-"""The how-tos' screenshots of the 3D view in each report, made from real runs, not by hand.
+"""The how-tos' screenshots of the 3D view in each report and of kingen view's own page, made
+from real runs, not by hand.
 
-    python docs/screenshots.py [--only check-path|calibrate|analyze] [--keep DIR]
+    python docs/screenshots.py [--only check-path|calibrate|analyze|view] [--keep DIR]
 
 Runs kingen as a user does (``python -m kingen.cli``, a real process): check-path on LinuxCNC's
 sample hexapod with a CSV program that leaves its struts' travel and speed (the .ini written
@@ -8,8 +9,9 @@ here), calibrate on the hexapod from measurements of a perturbed hexapod (made h
 own model, device noise 10 um and 0.001 deg, joints read to 1 um), and analyze on the CEART
 6-RUS; then opens each report.html in headless Chromium (WebGL through SwiftShader) with every
 part of the page but the view hidden, and writes the screenshots to docs/images/
-(check_path_view.png, calibrate_view.png, analyze_view.png). Chromium is /usr/bin/chromium or
-``$CHROMIUM``.
+(check_path_view.png, calibrate_view.png, analyze_view.png). ``kingen view exechon_wrist``'s page is
+opened whole, at a pose given in its address (VIEW_POSE), its routine answering (view.png).
+Chromium is /usr/bin/chromium or ``$CHROMIUM``.
 """
 
 import argparse
@@ -86,19 +88,31 @@ def analyze(folder):
     return folder / "analysis" / "report.html"
 
 
+VIEW_POSE = "#pose=50,-20,-1380,165,8,40&posture=1"
+"""exechon_wrist's first golden pose: the tool tilted 15 degrees, the A/C head on its branch 1."""
+
+
+def view(folder):
+    """kingen view's page of exechon_wrist, opened at VIEW_POSE."""
+    kingen("view", "exechon_wrist", "-o", folder)
+    return folder / "exechon_wrist.html"
+
+
 REPORTS = {"check-path": (check_path, "check_path_view.png"), "calibrate": (calibrate, "calibrate_view.png"),
-           "analyze": (analyze, "analyze_view.png")}
+           "analyze": (analyze, "analyze_view.png"), "view": (view, "view.png")}
 
 
 def screenshot(report, shot, scratch):
     """``shot``: the view of ``report`` alone, SIZE, in headless Chromium."""
     probe = scratch / f"{shot.stem}.html"
-    probe.write_text(report.read_text().replace("</head>", ONLY_THE_VIEW, 1))
+    page = report.read_text()
+    probe.write_text(page.replace("</head>", ONLY_THE_VIEW, 1) if "kingen-view-frame" in page else page)
+    address = probe.as_uri() + (VIEW_POSE if "kingen-view-frame" not in page else "")
     chromium = os.environ.get("CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
     subprocess.run([chromium, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                     "--no-first-run", "--disable-background-networking", "--hide-scrollbars",
                     f"--user-data-dir={scratch / 'profile'}", f"--window-size={SIZE[0]},{SIZE[1]}",
-                    "--virtual-time-budget=10000", f"--screenshot={shot}", probe.as_uri()],
+                    "--virtual-time-budget=10000", f"--screenshot={shot}", address],
                    check=True, capture_output=True, timeout=180)
 
 

@@ -26,7 +26,8 @@ FAMILIES = ("hexapod", "tau", "ceart", "exechon_wrist", "tricept_wrist3")
 """Six legs, three rails (Gantry-Tau), six cranks, an Exechon with a two-axis wrist, a Tricept with a spherical wrist."""
 CHROMIUM = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
             "--enable-unsafe-swiftshader", "--disable-quic", "--no-first-run", "--disable-background-networking",
-            "--disable-component-update", "--disable-sync", "--window-size=1000,700", "--virtual-time-budget=8000"]
+            "--disable-component-update", "--disable-sync", "--window-size=1000,700", "--virtual-time-budget=8000",
+            "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>"]  # offline: any fetch would fail
 BACKGROUND = (0xF4, 0xF5, 0xF7)
 """The 3D stage's clear colour (view.js)."""
 MAX_BYTES = 5_000_000
@@ -94,6 +95,21 @@ def test_the_fragment_holds_the_page_apart():
     assert "&lt;script" in fragment and 'title="tau &lt;view&gt;"' in fragment
 
 
+@pytest.fixture(scope="module")
+def page_of(tmp_path_factory):
+    """``kingen view NAME``'s page (a real process), made once per robot in this module."""
+    made = {}
+
+    def page(name):
+        if name not in made:
+            folder = tmp_path_factory.mktemp(f"view-{name}")
+            done = kingen("view", name, "-o", str(folder))
+            assert done.returncode == 0, done.stderr
+            made[name] = folder / f"{name}.html"
+        return made[name]
+    return page
+
+
 def require_browser():
     require_tool("chromium", "chromium")
     from kingen.hosts.wasm.build import wasm_toolchain
@@ -111,9 +127,12 @@ def sample_pose(robot):
 
 
 def open_page(page, fragment, shot, profile):
-    """The page's DOM after it ran, opened with ``fragment`` in headless Chromium, and its screenshot."""
-    done = subprocess.run([*CHROMIUM, f"--user-data-dir={profile}", f"--screenshot={shot}", "--dump-dom",
-                           page.as_uri() + fragment], capture_output=True, text=True, timeout=120)
+    """The page's DOM after it ran, opened with ``fragment`` in headless Chromium, and its
+    screenshot; the page's script wrote nothing on the console (WebGL's driver notes aside)."""
+    done = subprocess.run([*CHROMIUM, f"--user-data-dir={profile}", f"--screenshot={shot}", "--enable-logging=stderr",
+                           "--v=0", "--dump-dom", page.as_uri() + fragment], capture_output=True, text=True, timeout=120)
+    said = [line for line in done.stderr.splitlines() if ":CONSOLE" in line and "GL Driver Message" not in line]
+    assert said == [], said
     return {key: json.loads(value) for key, value in
             re.findall(r'<pre id="kingen-(joints|drawing)" hidden="">([^<]*)</pre>', done.stdout) if value}
 
@@ -128,7 +147,7 @@ def drawn_pixels(shot):
 
 
 @pytest.mark.parametrize("name", FAMILIES)
-def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, tmp_path):
+def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, page_of, tmp_path):
     """`kingen view` then the page opened at a sampled pose (#pose=...&posture=K): #kingen-joints
     holds what the WebAssembly routine computed, equal to `kingen solve`'s (the C library and the
     reference it is held to) within 1e-9; the drawing's platform is the reference's; the
@@ -136,8 +155,7 @@ def test_the_page_in_a_real_browser_answers_as_kingen_solve(name, tmp_path):
     require_browser()
     robot = load_robot(name)
     pose, posture = sample_pose(robot)
-    assert kingen("view", name, "-o", str(tmp_path)).returncode == 0
-    page = tmp_path / f"{name}.html"
+    page = page_of(name)
     assert page.stat().st_size < MAX_BYTES
     shot = tmp_path / "shot.png"
     found = open_page(page, f"#pose={','.join(repr(float(v)) for v in pose)}&posture={posture}", shot, tmp_path / "profile")
@@ -171,6 +189,7 @@ def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_wh
     done = subprocess.run([sys.executable, "-m", "kingen.cli", "view", "tau", "-o", str(tmp_path)], capture_output=True,
                           text=True, timeout=300, env=environment)
     assert done.returncode == 0, done.stderr
+    assert "sliders need the routine compiled to WebAssembly" in done.stdout and "no-clang is not installed" in done.stdout
     page = tmp_path / "tau.html"
     assert "KingenWasm" not in page.read_text() and "no-clang is not installed" in page.read_text()
     dom = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom", page.as_uri()],
@@ -183,27 +202,51 @@ def test_without_a_webassembly_toolchain_the_page_draws_kingens_pose_and_says_wh
     assert re.search(r'<input type="range"[^>]*disabled', dom) and "The sliders need the routine" in dom
 
 
-def test_a_slider_change_and_a_machine_with_task_coordinates_in_a_real_browser(tmp_path):
+def test_a_slider_change_joints_and_a_machine_with_task_coordinates_in_a_real_browser(page_of, tmp_path):
     """tau: three input events on its first slider (#bench=3), as a drag makes them: the answer
     written is the reference's at the pose the page then shows. tricept (task x, y, z): the pose
     given in the address becomes the machine's pose for its x, y, z (the module's machine pose),
-    and the joints are the reference's there."""
+    and the joints are the reference's there. hexapod: joints given in the address (#joints=)
+    move the machine to the pose they were solved at (the routine's forward kinematics)."""
     require_browser()
     from kingen.conventions import pose_from_t6
     from kingen.kinematics.parasitic import solve_parasitic
 
+    hexapod_pose = np.array([12.0, -8.0, 490.0, 3.0, -2.0, 5.0])
+    hexapod_joints = solve(load_robot("hexapod"), t6_from_pose(hexapod_pose[None])).joints[0, :, 0]
     for name, fragment in (("tau", "#pose=-1150,-700,-1850,0,0,0&posture=1&bench=3"),
-                           ("tricept", "#pose=40,-30,-1050,3,-2,9&posture=0")):
+                           ("tricept", "#pose=40,-30,-1050,3,-2,9&posture=0"),
+                           ("hexapod", f"#joints={','.join(map(repr, map(float, hexapod_joints)))}&posture=0")):
         robot = load_robot(name)
-        assert kingen("view", name, "-o", str(tmp_path / name)).returncode == 0
-        answer = open_page(tmp_path / name / f"{name}.html", fragment, tmp_path / f"{name}.png",
+        answer = open_page(page_of(name), fragment, tmp_path / f"{name}.png",
                            tmp_path / f"profile-{name}")["joints"]
         assert answer["by"] == "wasm" and answer["posture"] == int(fragment.split("posture=")[1][0])
         if name == "tau":
             assert answer["pose"][0] != -1150.0 and answer["pose"][1:] == [-700, -1850, 0, 0, 0]  # the first slider moved
+        elif name == "hexapod":
+            np.testing.assert_allclose(answer["pose"], hexapod_pose, atol=1e-6)
+            np.testing.assert_allclose(answer["joints"], hexapod_joints, atol=1e-9)
         else:
             machine = pose_from_t6(solve_parasitic(robot, t6_from_pose(np.array([[40.0, -30, -1050, 3, -2, 9]]))).t6)[0]
             np.testing.assert_allclose(answer["pose"], machine, atol=1e-9)
         expected = solve(robot, t6_from_pose(np.array([answer["pose"]])))
         np.testing.assert_allclose(answer["joints"], expected.joints[0, :, answer["posture"]], atol=1e-9)
         assert WARNINGS[answer["warning"]] == expected.warnings[0, answer["posture"]]
+
+
+@pytest.mark.parametrize("name, pose", [
+    ("tau", [-1945.831, -1223.741, -1357.706, 2.465, -12.176, -2.006]),  # two carriages' links cannot reach
+    ("tau", [-1324.87, -593.763, -1471.892, 13.688, -6.474, 4.456]),  # two carriages beyond their travel
+    ("exechon_wrist", [-372.916, -186.871, -1088.471, 184.93, -24.352, -4.012]),  # leg2 beyond its travel
+    ("tau", [-1587.2588745805463, -750.0, -1900.0, 0.0, 0.0, 0.0]),  # carriage1's link square to its rail
+])
+def test_the_limbs_colours_in_a_real_browser_are_the_references_statuses(name, pose, page_of, tmp_path):
+    """Each limb's colour key the page draws (unreachable, beyond its travel, singular, good) is
+    the one kingen.view.scene gives from the reference's radicands and the robot file's travel."""
+    require_browser()
+    robot = load_robot(name)
+    fragment = f"#pose={','.join(map(str, pose))}&posture={robot.working_posture}"
+    found = open_page(page_of(name), fragment, tmp_path / "shot.png", tmp_path / "profile")
+    expected, _, warning = machine_at(robot, t6_from_pose(np.array(pose)), robot.working_posture)
+    assert found["joints"]["warning"] == warning != "WARN_GOOD_SOLUTION"
+    assert [limb["status"] for limb in found["drawing"]["limbs"]] == [limb["status"] for limb in expected["limbs"]]

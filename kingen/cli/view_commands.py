@@ -23,6 +23,7 @@ def view(robot, pose, posture, out_dir):
     it (without a WebAssembly toolchain, the machine is drawn at the pose kingen computed and the
     page says what the sliders need). The address #pose=x,y,z,roll,pitch,yaw&posture=K sets the
     pose on load; the page writes what its routine computed into the element #kingen-joints."""
+    from ..hosts.wasm.build import wasm_toolchain
     from ..runtime.files import default_out_dir, write_atomic
     from ..view import page_html, scene
 
@@ -34,4 +35,8 @@ def view(robot, pose, posture, out_dir):
     target = out_dir / f"{model.name}.html"
     write_atomic(target, page)
     say(f"wrote {target} ({len(page.encode()) / 1e6:.2f} MB)")
+    toolchain = wasm_toolchain()
+    if not toolchain.ready:
+        say(f"the page draws the machine at the pose kingen computed; its sliders need the routine compiled to "
+            f"WebAssembly: {toolchain.problem}")
     return 0

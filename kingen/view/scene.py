@@ -6,14 +6,26 @@ value is in the routine's units (mm, or radians for a revolute joint), its trave
 file's (mm, or degrees). A matrix is a column-form homogeneous 4x4 H, row by row: H[r][3] the
 origin (mm), H[0..2][0..2] the rotation (kingen.conventions.matrix_from_pose; not a T6).
 
+Keys: ``robot`` and ``description``; ``coordinates`` (x y z roll pitch yaw) and ``free`` (those
+the page's fields set: a machine with task coordinates, its task coordinates); ``region`` {home,
+range} (the verification region, mm and degrees: the sliders' span); ``joint_names``,
+``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, or None);
+``postures`` and ``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
+``warning`` (the reference's there); ``size`` (mm, the robot's largest length: the drawing's
+scale); ``singular_across`` (the cosine of the angle between a limb's link and its base side's
+motion within which the page colours it singular: sqrt of the singular tolerance on its
+normalised radicand, which is that cosine squared); ``model`` and ``machine`` (below); ``no_routine`` (set by kingen.view.page: what the
+sliders need, on a page without the routine).
+
 What the page needs to draw the machine at a pose of its own is ``model``: per limb its
 platform point (platform frame), where its passive link starts on the base side as a function of
 its joint q, B(q) = c + q a + cos(q) u + sin(q) v (derived here from the limb model's
 ``base_side_point``, so the page knows no limb model by name), and its passive link's length
 l0 + l1 q; the wrist's axes and tool; the passive leg's base point. ``machine`` is that drawing
 computed here, with the reference (kingen.kinematics.reference), at the scene's pose:
-``{platform, limbs: [{base_side, platform_point, pivot, status}], tool, status}``. A ghost
-overlay has the same keys as ``machine``.
+``{platform (H), limbs: [{base_side, platform_point, status}], tool (H, or None without a wrist),
+status (the posture's warning)}``, a limb's status "good", "limits" (beyond its travel),
+"singular" or "unreachable". A ghost overlay has the same keys as ``machine``.
 
 Optional overlays (kingen.view.page draws each one it finds): ``frames`` [{t, pose: [6], joints,
 warning, label?}] (a path played on a timeline; ``label`` shown beside it, else ``t`` in s),
@@ -39,9 +51,6 @@ COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 FIT = 1e-9
 """How far (relative to the robot's size) B(q) = c + q a + cos(q) u + sin(q) v may miss a limb
 model's base-side point at the test joints; a model it misses is drawn from its base joint."""
-LIMB_STATUSES = ("good", "limits", "singular", "unreachable")
-"""A limb's colour key: within travel; beyond it; within the singular tolerance of its own
-singularity (a rail's or a crank's radicand); no real solution."""
 
 
 def _base_side_form(limb, size):
@@ -100,7 +109,9 @@ def model(robot):
 
 
 def _limb_statuses(robot, solution, joints, lower, upper):
-    """Per limb of the parallel part: its LIMB_STATUSES key at the first pose of ``solution``."""
+    """Per limb of the parallel part, its colour key at the first pose of ``solution``: "unreachable"
+    (no real solution), "singular" (within the singular tolerance of its own singularity: a rail's
+    or a crank's radicand), "limits" (beyond its travel) or "good"."""
     statuses = []
     for index in range(robot.parallel.dof):
         radicand = solution.radicands[0, index]
@@ -188,6 +199,7 @@ def scene(robot, pose=None, posture=None):
         "joints": [float(v) for v in joints],
         "warning": warning,
         "size": float(robot.size_mm),
+        "singular_across": math.sqrt(SINGULAR_TOLERANCE),
         "model": model(robot),
         "machine": drawing,
     }

@@ -10,6 +10,9 @@ const STATUS_COLOURS = {good: 0x4a7ab0, limits: 0xe08a00, singular: 0xb040c0, un
 const STATUS_WORDS = {good: "good", limits: "beyond its travel", singular: "singular",
                       unreachable: "unreachable"};
 const DEG = Math.PI / 180;
+const FORWARD_WORDS = {"-1": "the joints are not finite numbers", "-2": "no pose has them (an iterate unreachable or singular)",
+                       "-4": "the pose found lies in another assembly mode than this pose (a singularity between)",
+                       "-5": "no convergence within the routine's steps"};
 
 // ---- poses and matrices (column-form H as nested arrays, as scene.py writes them) ----
 
@@ -111,13 +114,14 @@ function gauss(a, b) {  // a x = b by elimination with partial pivoting; null wh
   return x;
 }
 
-// A limb's colour key (scene.py's LIMB_STATUSES): unreachable where its link cannot close,
-// beyond its travel, singular where the posture is and its base side moves across its link.
+// A limb's colour key (scene.py's machine): unreachable where its link cannot close, beyond its
+// travel, singular where the posture is and the link is within scene.singular_across (the cosine
+// of its angle) of square to its base side's motion (a rail's or a crank's radicand near 0).
 function limbStatus(scene, index, q, residual, warning, across) {
   const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? DEG : 1;
   if (Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
   if (travel && (q < travel[0] * unit - 1e-12 || q > travel[1] * unit + 1e-12)) return "limits";
-  return warning === "WARN_SINGULAR_SOLUTION" && across < 1e-3 ? "singular" : "good";
+  return warning === "WARN_SINGULAR_SOLUTION" && across <= scene.singular_across ? "singular" : "good";
 }
 
 // The drawing ({platform, limbs, tool, status}, scene.py's machine) for a pose the page asked for
@@ -325,13 +329,13 @@ class Drawing {
 
 // ---- the page ----
 
-function parseFragment(hash) {  // #pose=x,y,z,roll,pitch,yaw&posture=K
+function parseFragment(hash) {  // #pose=x,y,z,roll,pitch,yaw&posture=K, or #joints=q1,...,qn&posture=K
   const found = {};
   for (const part of hash.replace(/^#/, "").split("&")) {
     const [key, value] = part.split("=");
-    if (key === "pose" && value) {
-      const pose = value.split(",").map(Number);
-      if (pose.length === 6 && pose.every(Number.isFinite)) found.pose = pose;
+    if ((key === "pose" || key === "joints") && value) {
+      const numbers = value.split(",").map(Number);
+      if ((key === "joints" || numbers.length === 6) && numbers.every(Number.isFinite)) found[key] = numbers;
     } else if (key === "posture" && /^\d+$/.test(value || "")) {
       found.posture = Number(value);
     } else if (key === "bench" && /^\d+$/.test(value || "")) {
@@ -526,6 +530,18 @@ class View {
     this.show(frame.joints, frame.warning, "kingen");
   }
 
+  // The machine moved to these joints (mm, radians) on the page's posture: the pose the routine's
+  // forward kinematics finds from the page's pose, then answered as any pose; a note where none.
+  jog(joints) {
+    const found = this.routine.forward(joints, this.posture, this.pose);
+    const note = this.root.querySelector(".kingen-note");
+    if (found.status !== 0) {
+      note.textContent = `No pose found for these joints in posture ${this.posture}: ${FORWARD_WORDS[found.status] || `status ${found.status}`}.`;
+      return;
+    }
+    this.setPose(found.pose, this.posture);
+  }
+
   change(k, value) {
     this.pose[k] = value;
     this.update();
@@ -534,7 +550,7 @@ class View {
   setPose(pose, posture) {
     this.pose = pose.slice();
     if (posture !== undefined) this.posture = posture;
-    this.scene.coordinates.forEach((name, k) => { for (const field of this.fields[name]) field.value = this.pose[k]; });
+    this.scene.coordinates.forEach((name, k) => { for (const field of this.fields[name]) field.value = Number(this.pose[k].toFixed(6)); });
     this.root.querySelector(".kingen-posture").value = String(this.posture);
     this.update();
   }
@@ -547,7 +563,7 @@ class View {
       const machine = this.routine.machinePose(this.pose);
       if (machine && machine.status >= 0) this.pose = machine.pose;
       this.scene.coordinates.forEach((name, k) => {
-        if (!this.scene.free.includes(name)) for (const field of this.fields[name]) field.value = this.pose[k];
+        if (!this.scene.free.includes(name)) for (const field of this.fields[name]) field.value = Number(this.pose[k].toFixed(6));
       });
     }
     const answer = this.routine.inverse(this.pose, this.posture);
@@ -582,7 +598,21 @@ class View {
       const row = table.insertRow();
       row.className = `kingen-${status}`;
       row.insertCell().textContent = this.scene.joint_names[i];
-      row.insertCell().textContent = valueText(this.scene, i, q);
+      const cell = row.insertCell();
+      if (this.routine) {  // a joint typed in moves the machine there: forward kinematics, from this pose
+        const deg = this.scene.joint_units[i] === "rad";
+        const field = Object.assign(document.createElement("input"), {type: "number", step: "any", className: "kingen-joint",
+                                                                       value: Number((deg ? q / DEG : q).toFixed(6))});
+        field.title = `${this.scene.joint_names[i]} in ${deg ? "degrees" : "mm"}: type a value to move the joint`;
+        field.addEventListener("change", () => {
+          const joints = this.joints.slice();
+          joints[i] = Number(field.value) * (deg ? DEG : 1);
+          this.jog(joints);
+        });
+        cell.append(field, deg ? "°" : " mm");
+      } else {
+        cell.textContent = valueText(this.scene, i, q);
+      }
       row.insertCell().textContent = travelText(this.scene, i);
       row.insertCell().textContent = STATUS_WORDS[status];
     });
@@ -640,7 +670,10 @@ async function startView(root) {
   if (window.kingenRoutineReady) await window.kingenRoutineReady;
   const view = new View(root, scene, THREE);
   const asked = root.dataset.primary === "1" ? parseFragment(window.location.hash) : {};
-  if (asked.pose || asked.posture !== undefined) {
+  if (asked.joints && view.routine) {
+    if (asked.posture !== undefined) view.posture = asked.posture;
+    view.jog(asked.joints);
+  } else if (asked.pose || asked.joints || asked.posture !== undefined) {
     if (view.routine) view.setPose(asked.pose || view.pose, asked.posture ?? view.posture);
     else view.root.querySelector(".kingen-note").textContent += " The pose in the address is not drawn: it needs the routine.";
   } else if (Number.isInteger(scene.start_frame) && (scene.frames || [])[scene.start_frame]) {
