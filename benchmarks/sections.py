@@ -34,6 +34,7 @@ SECTIONS = {
     "loads": ("loads.py", ["--poses", "1000000", "--rows", "2000", "--rounds", "3"], "Loads"),
     "ncfiles": ("ncfiles.py", [], "LinuxCNC's sample programs"),
     "planner": ("planner.py", [], "Timing as LinuxCNC's planner moves"),
+    "view": ("view.py", ["--changes", "300"], "The 3D view"),
 }
 
 

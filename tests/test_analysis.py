@@ -26,7 +26,8 @@ CURVES = {name for _, curves in QUANTITIES for _, name, *_ in curves}
 SCREENSHOTS = Path(__file__).resolve().parent.parent / "build" / "screenshots"
 # One worker under -n N: the module's analyses (CEART's takes seconds) are then made once.
 pytestmark = pytest.mark.xdist_group("analysis")
-CHROMIUM = ["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+CHROMIUM = ["chromium", "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+            "--disable-quic", "--no-first-run",
             "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
 

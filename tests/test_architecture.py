@@ -84,6 +84,7 @@ LAYERS = (
     ("kinematics", ("kingen.kinematics",)),
     ("verify", ("kingen.verify",)),
     ("hosts", ("kingen.hosts",)),
+    ("view", ("kingen.view",)),
     ("design", ("kingen.design", "kingen.calibrate")),
     ("paths", ("kingen.paths",)),
     ("interface", ("kingen.cli", "kingen.pytest_plugin", "kingen")),

@@ -111,14 +111,21 @@ class Problem:
         blocks = jacobian.reshape(len(self.factor), -1, jacobian.shape[1])
         return np.einsum("nij,njc->nic", self.factor, blocks).reshape(jacobian.shape)
 
-    def errors(self, values):
-        """(position error (n,) mm, orientation error (n,) degrees or None, closed (n,)): what
-        ``values`` predict from the read joints against what was measured."""
+    def predicted(self, values):
+        """(predicted (n, 6 or 3), closed (n,)): what ``values`` predict the device measures
+        (mm, degrees, the device's frame) from the read joints, forward kinematics started at
+        the measured poses (position measurements: at the last solution)."""
         if self.parameters.measure == "pose":
             start = poses_of(t6_from_matrix(measured_platform(self.parameters, values, self.measurements)[1]))
         else:
             start = self.start
         predicted, _, closed = predicted_measurements(self.parameters, values, self.measurements.joints, start)
+        return predicted, closed
+
+    def errors(self, values):
+        """(position error (n,) mm, orientation error (n,) degrees or None, closed (n,)): what
+        ``values`` predict from the read joints against what was measured."""
+        predicted, closed = self.predicted(values)
         position, angle = errors(predicted, self.measurements.measured)
         return position, angle, closed
 

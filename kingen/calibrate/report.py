@@ -6,6 +6,7 @@ import base64
 from dataclasses import asdict
 
 import numpy as np
+from markupsafe import Markup
 from matplotlib.figure import Figure
 
 from ..design.figures import png
@@ -135,9 +136,11 @@ def parameter_chart(outcome, entries):
     return figure
 
 
-def report_html(robot_name, outcome, pngs, settings):
+def report_html(robot_name, outcome, pngs, settings, view=""):
     """The self-contained report; residuals written for people (kingen.units: a length in the
-    unit that suits it, no exponent)."""
+    unit that suits it, no exponent); the 3D ``view`` (HTML, kingen.view's fragment; "" for
+    none) after the residuals."""
     images = {name: base64.b64encode(data).decode("ascii") for name, data in pngs.items()}
     return template("calibration_report.html.j2").render(robot=robot_name, result=outcome, images=images,
-                                                         settings=settings, length=length_text, number=number_text)
+                                                         settings=settings, length=length_text, number=number_text,
+                                                         view=Markup(view))

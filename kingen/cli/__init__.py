@@ -1,5 +1,5 @@
 """The ``kingen`` command line: list, render, build, package, solve, verify, bench, fk, analyze,
-optimize, golden, info, check-path. Commands live in :mod:`.routine_commands`, :mod:`.solve_commands` and
+optimize, golden, info, check-path, view. Commands live in :mod:`.routine_commands`, :mod:`.solve_commands` and
 :mod:`.design_commands`; what
 they share (options, the host and routine to use, printing) in :mod:`.common`.
 
@@ -21,7 +21,7 @@ import click
 
 from ..errors import InternalError, KingenError, PluginDefect
 from . import (calibrate_commands, design_commands, loads_commands, path_commands, routine_commands,  # noqa: F401
-               solve_commands)  # (they register the commands)
+               solve_commands, view_commands)  # (they register the commands)
 from .common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERNAL, cli, say
 
 EXIT_TERMINATED = 128 + signal.SIGTERM

@@ -94,6 +94,7 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     from ..calibrate.output import calibrated_name, calibrated_yaml
     from ..calibrate.parameters import Parameters
     from ..runtime.files import default_out_dir, write_files
+    from .report_views import calibration_view
 
     refuse_special_files(measurements_path, validate_path)
     model, data, _ = load_model_and_data(robot)
@@ -130,7 +131,7 @@ def run(robot, measurements_path, measure, spec, validate_path, out_dir, json_pa
     settings = {"measure": measure, "measurements": str(measurements_path), "identify": spec}
     out_dir = out_dir or default_out_dir(model) / "calibrate"
     outputs = {f"{name}.yaml": robot_text, "calibration.json": text, **pngs,
-               "report.html": report.report_html(model.name, outcome, pngs, settings)}
+               "report.html": report.report_html(model.name, outcome, pngs, settings, calibration_view(parameters, fit))}
     write_files({**{out_dir / file_name: content for file_name, content in outputs.items()},
                  **({} if json_path is None else {json_path: text})})
     _say_outcome(model.name, outcome, fit)

@@ -148,8 +148,9 @@ def check_path(robot, program, host_name, posture, chord, ini, json_path, html_p
         write_atomic(json_path, json.dumps(finite(_plain(document)), indent=1, allow_nan=False) + "\n")
     if html_path is not None:
         from ..paths.page import page_html
+        from .report_views import path_view
 
-        write_atomic(html_path, page_html(outcome, document))
+        write_atomic(html_path, page_html(outcome, document, path_view(outcome)))
     say(verdict_line(outcome))
     if outcome.reading is not None:
         say(f"  {reading_line(outcome)}")

@@ -313,6 +313,7 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
     from ..kinematics.collision import model_problem
     from ..runtime.files import default_out_dir, write_files
     from ..design.figures import figures, report_html
+    from .report_views import analysis_view
 
     model = load_model(robot)
     if posture is not None and posture >= model.postures:
@@ -329,7 +330,8 @@ def analyze(robot, posture, out_dir, json_path, tilt_convention, tilt_step, azim
         pngs = figures(analysis)
     seconds = time.perf_counter() - start
     text = json.dumps(finite(analysis), indent=1, allow_nan=False) + "\n"
-    outputs = {"analysis.json": text, **pngs, "report.html": report_html(model, analysis, pngs, seconds)}
+    view = analysis_view(model, analysis, settings.tilt_convention)
+    outputs = {"analysis.json": text, **pngs, "report.html": report_html(model, analysis, pngs, seconds, view)}
     write_files({**{out_dir / name: data for name, data in outputs.items()},
                  **({} if json_path is None else {json_path: text})})
     say(f"analyze {model.name}, posture {analysis['posture']}: {_tilt_summary(analysis, settings)}")

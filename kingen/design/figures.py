@@ -12,6 +12,7 @@ import base64
 import io
 
 import numpy as np
+from markupsafe import Markup
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
@@ -373,13 +374,14 @@ def _reason(note):
     return note.split(": ", 1)[1] if note.startswith("not analysed: ") else note
 
 
-def report_html(robot, analysis, pngs, seconds):
+def report_html(robot, analysis, pngs, seconds, view=""):
     """The self-contained HTML report: summary, every setting, the counts behind each figure,
-    the figures it is given embedded as data URIs (a missing one is said, not drawn empty)."""
+    the figures it is given embedded as data URIs (a missing one is said, not drawn empty), and
+    the 3D ``view`` (HTML, kingen.view's fragment; "" for none) after the tilt limits."""
     images = {name: "data:image/png;base64," + base64.b64encode(data).decode("ascii") for name, data in pngs.items()}
     settings = {key: _setting_text(value) for key, value in analysis["settings"].items()}
     drawn = [" ".join(label.split()) for label, _ in _quantities(analysis["sweeps"])]
     missing = [" ".join(label.split()) for label, _ in QUANTITIES if " ".join(label.split()) not in drawn]
     return template("analysis_report.html.j2").render(
         robot=robot, analysis=analysis, images=images, labels=LABELS, colours=COLOURS, counts=counts(analysis),
-        settings=settings, drawn=drawn, missing=missing, seconds=f"{seconds:.1f}", reason=_reason)
+        settings=settings, drawn=drawn, missing=missing, seconds=f"{seconds:.1f}", reason=_reason, view=Markup(view))

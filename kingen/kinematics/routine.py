@@ -25,6 +25,17 @@ WARNINGS = {
 within a singularity's band (a limb's, or the platform's direct index)."""
 WARNING_NAMES = {value: name for name, value in WARNINGS.items()}
 
+
+def answer_frame(t, pose, joints, warning, **more):
+    """A routine's answer at one pose as plain JSON data (a frame of kingen.view's scene):
+    ``{t, pose, joints, warning, **more}``: ``pose`` (6) mm and degrees and ``joints`` (the
+    routine's units: mm, radians; None where not finite) rounded to 1e-9, ``warning`` its WARN_*
+    name."""
+    return {"t": float(t), "pose": [round(float(value), 9) + 0.0 for value in pose],
+            "joints": [round(float(value), 9) + 0.0 if np.isfinite(value) else None for value in joints],
+            "warning": WARNING_NAMES.get(int(warning), f"warning {int(warning)}"), **more}
+
+
 SINGULAR_TOLERANCE = 0.00001
 """Band |D| <= 1e-5 around a limb singularity (D: a limb's normalised radicand): the
 routine answers WARN_SINGULAR_SOLUTION there, WARN_UNREACHABLE below -1e-5."""

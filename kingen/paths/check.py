@@ -24,7 +24,7 @@ from .five_axis import FiveAxis
 from ..errors import located
 from .ini import load_ini
 from .interpreter import Reading, Setup, gcode_moves
-from .judging import has_accelerations, judge_margins, judge_rates, record
+from .judging import has_accelerations, judge_margins, judge_rates, record, sample_numbers
 from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
 from .manifold import Manifold
 from .planner import Plan, Stack, planned
@@ -235,9 +235,10 @@ class _Checker:
             self.manifold.observe(batch.poses, batch.warnings != WARNINGS["WARN_UNREACHABLE"])
         owned = np.concatenate(owned)
         lines = np.array([p.move.line for p in pieces])
-        judge_margins(self.findings, self.evaluator, batch, pieces, lines)
-        judge_rates(self.findings, self.limits, grid.take(owned), speeds[owned], accelerations[owned], pieces, lines)
-        record(self.findings, batch, grid.take(owned), speeds[owned], accelerations[owned], pieces, lines, self.sink)
+        owned_grid = grid.take(owned)
+        judge_margins(self.findings, self.evaluator, batch, pieces, lines, sample_numbers(self.findings, owned_grid, batch))
+        judge_rates(self.findings, self.limits, owned_grid, speeds[owned], accelerations[owned], pieces, lines)
+        record(self.findings, batch, owned_grid, speeds[owned], accelerations[owned], pieces, lines, self.sink)
         if self.progress is not None:
             self.progress(self.findings)
         self.pieces, self.samples = [], 0

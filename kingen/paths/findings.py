@@ -1,7 +1,7 @@
 """What a program's samples showed, kept in memory that does not grow with the program: each
 move's worst place per problem (up to MAX_PROBLEMS of them, the rest counted), the first and
 the worst place of each kind of problem, each joint's peaks, and a thinned trace for the
-report's figures.
+report's figures and its view.
 
 Joint values are reported in the robot file's joint units: mm for prismatic joints, degrees
 for revolute ones (speeds per s, accelerations per s^2).
@@ -24,8 +24,10 @@ class Place:
     program line, the pose (mm, degrees), the joints (mm or degrees), the offending ``value``
     and its ``limit`` (the quantity's units), the ``margin`` (below 0: beyond the limit; the
     smaller, the worse), for a joint speed the feed override at which it would fit, for a
-    collision the links whose clearance it is ('rods' or 'cranks'), and the file ``line`` is in
-    when it is not the program's own (a G-code subroutine's; None: the program's)."""
+    collision the links whose clearance it is ('rods' or 'cranks'), the file ``line`` is in
+    when it is not the program's own (a G-code subroutine's; None: the program's), where it
+    stands along the program (``sample``: in regular samples, on the trace's axis, fractional
+    between two of them; None: not known) and the routine's WARN_* code there (None: not known)."""
 
     kind: str
     joint: str
@@ -38,6 +40,8 @@ class Place:
     override: float = None
     between: str = None
     file: str = None
+    sample: float = None
+    warning: int = None
 
     def key(self):
         return self.kind, self.joint or self.between
@@ -73,21 +77,25 @@ class Findings:
     timed_moves: int = 0
     accelerated_moves: int = 0
     """Moves whose joint accelerations are judged (judging.has_accelerations)."""
-    trace: dict = field(default_factory=lambda: {"sample": [], "line": [], "joints": [], "speeds": [],
-                                                  "accelerations": [], "radicand": [], "direct_index": []})
+    trace: dict = field(default_factory=lambda: {"sample": [], "line": [], "poses": [], "joints": [], "warnings": [],
+                                                  "speeds": [], "accelerations": [], "radicand": [],
+                                                  "direct_index": []})
     trace_stride: int = 1
 
     def __post_init__(self):
         self.peaks = [Peak() for _ in self.joint_names]
 
-    def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None, between=None, file=None):
+    def place(self, kind, joint, line, pose, joints, value, limit, margin, override=None, between=None, file=None,
+              sample=None, warning=None):
         """A Place from internal units (joints in mm or rad) for joint index ``joint`` or None,
-        on ``line`` of ``file`` (None: the program)."""
+        on ``line`` of ``file`` (None: the program), at ``sample`` along the program with the
+        routine's ``warning`` there (each None: not known)."""
         scale = self.display_scale
         shown = float(scale[joint]) if joint is not None and kind not in UNSCALED else 1.0
         return Place(kind, None if joint is None else self.joint_names[joint], int(line),
                      [float(v) for v in pose], [float(v) for v in np.asarray(joints) * scale],
-                     float(value) * shown, float(limit) * shown, float(margin), override, between, file)
+                     float(value) * shown, float(limit) * shown, float(margin), override, between, file,
+                     None if sample is None else float(sample), None if warning is None else int(warning))
 
     def add(self, move_index, place):
         """Record ``place`` as its move's problem of its kind (the worst kept) and in the first
@@ -123,14 +131,16 @@ class Findings:
                     setattr(peak, name, float(size[row] * scale[index]))
                     setattr(peak, f"{name}_line", int(lines[row]))
 
-    def record_trace(self, lines, joints, speeds, accelerations, radicand, direct_index):
-        """Every trace_stride-th sample of a batch (on program ``lines`` (n,)) for the figures
-        (display units); when the trace is full it keeps every other point and the stride doubles."""
+    def record_trace(self, lines, poses, joints, warnings, speeds, accelerations, radicand, direct_index):
+        """Every trace_stride-th sample of a batch (on program ``lines`` (n,); poses (n, 6) mm and
+        degrees, the machine's; the routine's WARN_* codes (n,)) for the figures and the report's
+        view (display units); when the trace is full it keeps every other point and the stride doubles."""
         count = len(joints)
         take = (self.samples + np.arange(count)) % self.trace_stride == 0
         scale = self.display_scale
         columns = {"sample": self.samples + np.flatnonzero(take), "line": np.asarray(lines)[take],
-                   "joints": joints[take] * scale, "speeds": np.abs(speeds[take]) * scale,
+                   "poses": np.asarray(poses)[take], "joints": joints[take] * scale,
+                   "warnings": np.asarray(warnings)[take], "speeds": np.abs(speeds[take]) * scale,
                    "accelerations": np.abs(accelerations[take]) * scale, "radicand": radicand[take],
                    "direct_index": direct_index[take]}
         for name, values in columns.items():

@@ -16,8 +16,24 @@ def _by_piece(rows, pieces_of_rows):
     return zip(numbers, np.split(rows, firsts[1:]))
 
 
-def judge_margins(findings, evaluator, batch, pieces, lines):
-    """The first and the worst place of each piece beyond each decision quantity's boundary."""
+def _keys(batch):
+    """Each sample's place in its batch as one increasing number: 2 piece + u."""
+    return 2.0 * batch.piece + batch.u
+
+
+def sample_numbers(findings, grid, batch):
+    """Where the samples of ``batch`` stand along the program (n,), in regular samples on the
+    findings' trace axis: ``grid``'s samples (the batch's owned regular samples, before they are
+    recorded) are whole numbers, a refined sample between two of them a fraction."""
+    keys = _keys(grid)
+    if not len(keys):
+        return np.full(len(batch.u), float(findings.samples))
+    return findings.samples + np.interp(_keys(batch), keys, np.arange(len(keys), dtype=float))
+
+
+def judge_margins(findings, evaluator, batch, pieces, lines, samples):
+    """The first and the worst place of each piece beyond each decision quantity's boundary
+    (``samples``: where the batch's samples stand along the program, sample_numbers)."""
     for column, quantity in enumerate(evaluator.quantities):
         margins = batch.margins[:, column]
         beyond = np.flatnonzero(margins <= 0.0)
@@ -26,7 +42,8 @@ def judge_margins(findings, evaluator, batch, pieces, lines):
                 findings.add(pieces[number].index, findings.place(
                     quantity.kind, quantity.joint, lines[number], batch.poses[row], batch.joints[row],
                     evaluator.value_of(quantity, batch, row), evaluator.limit_of(quantity), margins[row],
-                    between=quantity.part, file=pieces[number].move.file))
+                    between=quantity.part, file=pieces[number].move.file, sample=samples[row],
+                    warning=batch.warnings[row]))
 
 
 def has_accelerations(move, timing):
@@ -51,16 +68,18 @@ def judge_rates(findings, limits, grid, speeds, accelerations, pieces, lines):
                 value, limit = size[row, joint], bounds[joint]
                 findings.add(pieces[number].index, findings.place(
                     kind, joint, lines[number], grid.poses[row], grid.joints[row], value, limit, (limit - value) / limit,
-                    float(limit / value) if kind == "joint speed" else None, file=pieces[number].move.file))
+                    float(limit / value) if kind == "joint speed" else None, file=pieces[number].move.file,
+                    sample=findings.samples + row, warning=grid.warnings[row]))
 
 
 def record(findings, batch, grid, speeds, accelerations, pieces, lines, sink):
     """Peaks, the trace, and every sample of ``batch`` to ``sink(lines, batch, rates)`` with the
     grid's rates where a sample is one of the grid's (NaN elsewhere)."""
     findings.update_peaks(batch.joints, lines[grid.piece], speeds, accelerations)
-    findings.record_trace(lines[grid.piece], grid.joints, speeds, accelerations, grid.radicand, grid.direct_index)
+    findings.record_trace(lines[grid.piece], grid.poses, grid.joints, grid.warnings, speeds, accelerations,
+                          grid.radicand, grid.direct_index)
     if sink is not None:
-        keys, wanted = 2.0 * grid.piece + grid.u, 2.0 * batch.piece + batch.u
+        keys, wanted = _keys(grid), _keys(batch)
         at = np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)
         on_grid = keys[at] == wanted
         rates = np.full((len(batch.u), 2, speeds.shape[1]), np.nan)

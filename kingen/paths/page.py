@@ -5,6 +5,7 @@ singularity indices, with the problems' lines marked."""
 import base64
 
 import numpy as np
+from markupsafe import Markup
 from matplotlib.figure import Figure
 
 from ..design.figures import png
@@ -82,9 +83,10 @@ def figure(outcome, document):
     return panels
 
 
-def page_html(outcome, document):
-    """The self-contained HTML page of ``outcome`` (its JSON ``document`` beside it)."""
+def page_html(outcome, document, view=""):
+    """The self-contained HTML page of ``outcome`` (its JSON ``document`` beside it), with the
+    3D ``view`` (HTML, kingen.view's fragment; "" for none) after the problems."""
     image = base64.b64encode(png(figure(outcome, document))).decode("ascii")
     return template("path_report.html.j2").render(
         verdict=verdict_line(outcome), document=document, checks=checks(outcome), rows=problem_rows(outcome),
-        image=image)
+        image=image, view=Markup(view))

@@ -1,0 +1,206 @@
+"""A robot at a pose as plain JSON data: what the view (kingen.view.page) draws.
+
+``scene(robot, pose, posture)`` is the whole contract between Python and the page's script.
+Every length is in mm and every point in the base frame unless a key says otherwise; a joint's
+value is in the routine's units (mm, or radians for a revolute joint), its travel in the robot
+file's (mm, or degrees). A matrix is a column-form homogeneous 4x4 H, row by row: H[r][3] the
+origin (mm), H[0..2][0..2] the rotation (kingen.conventions.matrix_from_pose; not a T6).
+
+Keys: ``robot`` and ``description``; ``coordinates`` (x y z roll pitch yaw) and ``free`` (those
+the page's fields set: a machine with task coordinates, its task coordinates); ``region`` {home,
+range} (the verification region, mm and degrees: the sliders' span); ``joint_names``,
+``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, or None);
+``postures`` and ``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
+``warning`` (the reference's there); ``size`` (mm, the robot's largest length: the drawing's
+scale); ``singular_across`` (the cosine of the angle between a limb's link and its base side's
+motion within which the page colours it singular: sqrt of the singular tolerance on its
+normalised radicand, which is that cosine squared); ``model`` and ``machine`` (below); ``no_routine`` (set by kingen.view.page: what the
+sliders need, on a page without the routine).
+
+What the page needs to draw the machine at a pose of its own is ``model``: per limb its
+platform point (platform frame), where its passive link starts on the base side as a function of
+its joint q, B(q) = c + q a + cos(q) u + sin(q) v (derived here from the limb model's
+``base_side_point``, so the page knows no limb model by name), and its passive link's length
+l0 + l1 q; the wrist's axes and tool; the passive leg's base point. ``machine`` is that drawing
+computed here, with the reference (kingen.kinematics.reference), at the scene's pose:
+``{platform (H), limbs: [{base_side, platform_point, status}], tool (H, or None without a wrist),
+status (the posture's warning)}``, a limb's status "good", "limits" (beyond its travel),
+"singular" or "unreachable". A ghost overlay has the same keys as ``machine``.
+
+Optional overlays (kingen.view.page draws each one it finds): ``frames`` [{t, pose: [6], joints,
+warning, label?}] (a path played on a timeline; ``label`` shown beside it, else ``t`` in s),
+``start_frame`` (the frame the timeline opens at), ``markers`` [{frame, label}] (findings on
+that timeline, numbered on it, each label shown at its frame),
+``arrows`` [{origin: [3], vector: [3], label}], ``ghost`` {label, scale, platform, limbs, tool},
+``surface`` {vertices: [[3]...], triangles: [[3]...], label}, ``points`` [{position: [3], label}].
+:func:`machine_at` gives a ghost's or a frame's drawing.
+"""
+
+import math
+
+import numpy as np
+
+from ..conventions import matrix_from_t6, pose_from_t6, t6_from_pose
+from ..errors import KingenError
+from ..kinematics.reference import solve
+from ..kinematics.routine import SINGULAR_TOLERANCE, WARNING_NAMES
+from ..kinematics.wrist import rotation_about
+
+COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
+"""The pose's coordinates, in order: mm, then degrees (R = Rz(yaw) Ry(pitch) Rx(roll))."""
+FIT = 1e-9
+"""How far (relative to the robot's size) B(q) = c + q a + cos(q) u + sin(q) v may miss a limb
+model's base-side point at the test joints; a model it misses is drawn from its base joint."""
+
+
+def _base_side_form(limb, size):
+    """{c, a, u, v} (3 each, mm, base frame) with B(q) = c + q a + cos(q) u + sin(q) v the limb's
+    base-side point (kingen.robot.limbs.base.LimbModel.base_side_point), fitted on a few joints
+    and checked on others; the limb's base joint, fixed, where the form does not fit."""
+    def at(q):
+        return np.asarray(limb.base_side_point(np.zeros((1, 3)), np.array([float(q)])), dtype=float).reshape(3)
+
+    if limb.joint_type.wraps:
+        c = (at(0.0) + at(math.pi)) / 2.0
+        form = {"c": c, "a": np.zeros(3), "u": at(0.0) - c, "v": at(math.pi / 2.0) - c}
+    else:
+        form = {"c": at(0.0), "a": at(1.0) - at(0.0), "u": np.zeros(3), "v": np.zeros(3)}
+    for q in (-2.3, 0.7, 41.0):
+        fitted = form["c"] + q * form["a"] + math.cos(q) * form["u"] + math.sin(q) * form["v"]
+        if np.linalg.norm(fitted - at(q)) > FIT * size:
+            form = {"c": np.asarray(limb.base_joint(), dtype=float), "a": np.zeros(3), "u": np.zeros(3),
+                    "v": np.zeros(3)}
+            break
+    return {key: value.tolist() for key, value in form.items()}
+
+
+def _passive_form(limb):
+    """[l0, l1]: the passive link's length l0 + l1 q (mm) at joint q."""
+    l0, l1 = (float(np.asarray(limb.passive_length(np.array([q]))).reshape(-1)[0]) for q in (0.0, 1.0))
+    return [l0, l1 - l0]
+
+
+def _travel(limits, index, scale):
+    """[lower, upper] of joint ``index`` in the robot file's units (mm or degrees), or None."""
+    lower, upper = limits[0][index], limits[1][index]
+    return [float(lower / scale), float(upper / scale)] if math.isfinite(lower) and math.isfinite(upper) else None
+
+
+def model(robot):
+    """What the page draws the machine from at any pose (module docstring): plain data."""
+    parallel = robot.parallel
+    limbs = []
+    for index, limb in enumerate(parallel.limbs):
+        form = _base_side_form(limb, parallel.size_mm)
+        moving = np.linalg.norm(form["a"]) + np.linalg.norm(form["u"]) > 0.0
+        limbs.append({"name": robot.joint_names[index], "platform_point": [float(v) for v in limb.platform_point],
+                      "base_side": form, "passive": _passive_form(limb),
+                      "pivot": np.asarray(limb.base_joint(), dtype=float).tolist(),
+                      "actuator": "arm" if limb.joint_type.wraps and moving else
+                      ("carriage" if moving else "telescopic")})
+    drawn = {"limbs": limbs, "passive_leg": None, "wrist": None}
+    if parallel.passive_leg is not None:
+        drawn["passive_leg"] = {"base_point": parallel.passive_leg.base_point.tolist()}
+    if robot.wrist is not None:
+        wrist = robot.wrist
+        drawn["wrist"] = {"axes": wrist.axes.tolist(), "zero": wrist.zero.tolist(), "tool": wrist.tool.tolist(),
+                          "reach": float(wrist.reach), "tip": wrist.tip.tolist(), "whole_pose": wrist.whole_pose}
+    return drawn
+
+
+def _limb_statuses(robot, solution, joints, lower, upper):
+    """Per limb of the parallel part, its colour key at the first pose of ``solution``: "unreachable"
+    (no real solution), "singular" (within the singular tolerance of its own singularity: a rail's
+    or a crank's radicand), "limits" (beyond its travel) or "good"."""
+    statuses = []
+    for index in range(robot.parallel.dof):
+        radicand = solution.radicands[0, index]
+        if radicand < -SINGULAR_TOLERANCE:
+            statuses.append("unreachable")
+        elif abs(radicand) <= SINGULAR_TOLERANCE:
+            statuses.append("singular")
+        elif not lower[index] <= joints[index] <= upper[index]:
+            statuses.append("limits")
+        else:
+            statuses.append("good")
+    return statuses
+
+
+def machine_at(robot, t6, posture):
+    """The machine's drawing (module docstring's ``machine``) at the T6 ``t6`` (4, 4) of
+    ``robot`` in ``posture``, with the joints and warning the reference gives there:
+    (drawing, joints (mm, rad), warning name)."""
+    t6 = np.asarray(t6, dtype=float).reshape(1, 4, 4)
+    solution = solve(robot, t6)
+    joints = solution.joints[0, :, posture]
+    warning = WARNING_NAMES[int(solution.warnings[0, posture])]
+    parallel = robot.parallel
+    if solution.platform is not None:
+        platform = matrix_from_t6(solution.platform[0])
+    elif parallel.task:
+        from ..kinematics.parasitic import solve_parasitic
+
+        platform = matrix_from_t6(solve_parasitic(parallel, t6).t6[0])
+    else:
+        platform = matrix_from_t6(t6[0])
+    lower, upper = robot.travel_limits()
+    statuses = _limb_statuses(robot, solution, joints, lower, upper)
+    limbs = []
+    for index, limb in enumerate(parallel.limbs):
+        q = np.array([joints[index]])
+        point = platform[:3, :3] @ np.asarray(limb.platform_point, dtype=float) + platform[:3, 3]
+        limbs.append({"base_side": np.asarray(limb.base_side_point(point[None], q), dtype=float).reshape(3).tolist(),
+                      "platform_point": point.tolist(), "status": statuses[index]})
+    tool = None
+    if robot.wrist is not None:
+        turned = platform[:3, :3]
+        for index, axis in enumerate(robot.wrist.axes):
+            turned = turned @ rotation_about(axis, [joints[robot.dof + index] + robot.wrist.zero[index]])[0]
+        tool = np.eye(4)
+        tool[:3, :3] = turned @ robot.wrist.tool[:3, :3]
+        tool[:3, 3] = platform[:3, 3] + turned @ robot.wrist.tool[:3, 3]
+        tool = tool.tolist()
+    drawing = {"platform": platform.tolist(), "limbs": limbs, "tool": tool, "status": warning}
+    return drawing, joints, warning
+
+
+def scene(robot, pose=None, posture=None):
+    """The scene of ``robot`` at ``pose`` (6: x y z mm, roll pitch yaw degrees; default the
+    verification home) in ``posture`` (default the working posture): plain JSON data (module
+    docstring). A machine with task coordinates takes the pose its constraints give for the
+    pose's task coordinates, as its routine does (kingen.kinematics.parasitic)."""
+    pose = np.asarray(robot.verification.home if pose is None else pose, dtype=float)
+    posture = robot.working_posture if posture is None else int(posture)
+    if not 0 <= posture < robot.postures:
+        raise KingenError(f"posture {posture} does not exist (the robot has {robot.postures})")
+    t6 = t6_from_pose(pose)
+    if robot.task:
+        from ..kinematics.parasitic import solve_parasitic
+
+        t6 = solve_parasitic(robot, t6[None]).t6[0]
+        pose = pose_from_t6(t6)
+    drawing, joints, warning = machine_at(robot, t6, posture)
+    limits = robot.travel_limits()
+    scales = robot.joint_scale()
+    region = robot.verification
+    return {
+        "robot": robot.name,
+        "description": " ".join(robot.description.split()),
+        "coordinates": list(COORDINATES),
+        "free": [name for name in COORDINATES if not robot.task or name in robot.task],
+        "region": {"home": [float(v) for v in region.home], "range": [float(v) for v in region.range]},
+        "joint_names": list(robot.joint_names),
+        "joint_units": ["rad" if t.wraps else "mm" for t in robot.joint_types],
+        "travel": [_travel(limits, index, scales[index]) for index in range(robot.joint_count)],
+        "postures": robot.postures,
+        "posture": posture,
+        "pose": [float(v) for v in pose],
+        "t6": t6.tolist(),
+        "joints": [float(v) for v in joints],
+        "warning": warning,
+        "size": float(robot.size_mm),
+        "singular_across": math.sqrt(SINGULAR_TOLERANCE),
+        "model": model(robot),
+        "machine": drawing,
+    }
+
