@@ -210,7 +210,7 @@ def test_a_slider_change_joints_and_a_machine_with_task_coordinates_in_a_real_br
     move the machine to the pose they were solved at (the routine's forward kinematics)."""
     require_browser()
     from kingen.conventions import pose_from_t6
-    from kingen.kinematics.parasitic import solve_parasitic
+    from kingen.kinematics.hybrid.parasitic import solve_parasitic
 
     hexapod_pose = np.array([12.0, -8.0, 490.0, 3.0, -2.0, 5.0])
     hexapod_joints = solve(load_robot("hexapod"), t6_from_pose(hexapod_pose[None])).joints[0, :, 0]

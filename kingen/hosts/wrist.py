@@ -60,9 +60,9 @@ def constraint_rows(robot):
     ``axis`` e (platform frame, unit), a base point or axis ``base`` b (base frame) and a
     ``weight``; at platform rotation R the wrench is [weight R e; b x R e] (base frame, moment
     about the base origin): a force along R e through the base point b (weight 1), or a couple
-    b x R e (weight 0). The same wrenches as kingen.kinematics.parasitic_axes.axes_wrenches
+    b x R e (weight 0). The same wrenches as kingen.kinematics.hybrid.parasitic_axes.axes_wrenches
     (the platform revolute axes, through their legs' base points) and
-    kingen.kinematics.parasitic_tube.tube_wrenches (the tube's two forces, its couple)."""
+    kingen.kinematics.hybrid.parasitic_tube.tube_wrenches (the tube's two forces, its couple)."""
     parallel = robot.parallel
     if family(parallel) == "tube":
         leg = parallel.passive_leg

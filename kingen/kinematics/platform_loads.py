@@ -77,7 +77,7 @@ def all_free(robot):
 
 def free_twists(robot, t6):
     """(n, 6, d) the twists per unit rate of each free coordinate at T6 (n, 4, 4) the machine
-    takes: its task coordinates (kingen.kinematics.parasitic.task_twists), else its ``forward.free``
+    takes: its task coordinates (kingen.kinematics.hybrid.parasitic.task_twists), else its ``forward.free``
     coordinates (all six when none are declared) with the other pose coordinates held
     (kingen.kinematics.forward.pose_jacobian), in pose order."""
     if robot.task:

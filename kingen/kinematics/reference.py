@@ -59,7 +59,7 @@ class Solution:
     """(n, dof, 3) each limb's platform point in the base frame, mm (0 for a non-finite T6)."""
     platform: np.ndarray = None
     """(n, 4, 4) a robot with a wrist: the parallel part's T6 (the platform's pose the machine
-    takes for each tool T6, kingen.kinematics.wrist); None for other robots."""
+    takes for each tool T6, kingen.kinematics.hybrid.wrist); None for other robots."""
     direct_index: np.ndarray = None
     """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
     (robots without six force lines, or not asked for). Computed for the warnings only (not

@@ -348,7 +348,7 @@ def wrist_error(robot, t6, expected, solutions):
     joints of each posture (``solutions`` (n, joint_count, postures)) against the asked tool T6
     ``t6`` (n, 4, 4): the larger of the tool tip's distance (mm) and the tool axes' (unit
     vectors; with two wrist joints the tool's z axis only, the turn about it free; with three
-    every axis: the whole pose, kingen.kinematics.wrist.tool_miss). Judged: postures the reference reaches,
+    every axis: the whole pose, kingen.kinematics.hybrid.wrist.tool_miss). Judged: postures the reference reaches,
     outside the wrist's singular bands (where its closest approach misses by design) and the
     parallel part's constraint's (where its platform's rotation is not determined); NaN
     joints count as infinitely wrong."""

@@ -44,7 +44,7 @@ from ..conventions import matrix_from_t6, pose_from_t6, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE, WARNING_NAMES
-from ..kinematics.wrist import rotation_about
+from ..kinematics.hybrid.wrist import rotation_about
 
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 """The pose's coordinates, in order: mm, then degrees (R = Rz(yaw) Ry(pitch) Rx(roll))."""
@@ -138,7 +138,7 @@ def machine_at(robot, t6, posture):
     if solution.platform is not None:
         platform = matrix_from_t6(solution.platform[0])
     elif parallel.task:
-        from ..kinematics.parasitic import solve_parasitic
+        from ..kinematics.hybrid.parasitic import solve_parasitic
 
         platform = matrix_from_t6(solve_parasitic(parallel, t6).t6[0])
     else:
@@ -168,14 +168,14 @@ def scene(robot, pose=None, posture=None):
     """The scene of ``robot`` at ``pose`` (6: x y z mm, roll pitch yaw degrees; default the
     verification home) in ``posture`` (default the working posture): plain JSON data (module
     docstring). A machine with task coordinates takes the pose its constraints give for the
-    pose's task coordinates, as its routine does (kingen.kinematics.parasitic)."""
+    pose's task coordinates, as its routine does (kingen.kinematics.hybrid.parasitic)."""
     pose = np.asarray(robot.verification.home if pose is None else pose, dtype=float)
     posture = robot.working_posture if posture is None else int(posture)
     if not 0 <= posture < robot.postures:
         raise KingenError(f"posture {posture} does not exist (the robot has {robot.postures})")
     t6 = t6_from_pose(pose)
     if robot.task:
-        from ..kinematics.parasitic import solve_parasitic
+        from ..kinematics.hybrid.parasitic import solve_parasitic
 
         t6 = solve_parasitic(robot, t6[None]).t6[0]
         pose = pose_from_t6(t6)

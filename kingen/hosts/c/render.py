@@ -86,7 +86,7 @@ def view_model(robot):
 ANGLE_RATE_ROWS = {"roll": "0.0, 0.0, 0.0, pose[0], pose[4], 0.0", "pitch": "0.0, 0.0, 0.0, -pose[4], pose[0], 0.0",
                    "yaw": "0.0, 0.0, 0.0, -pose[8] * pose[0], -pose[8] * pose[4], pose[0] * pose[0] + pose[4] * pose[4]"}
 """An angle's rate per twist [v; omega] at a row-major pose, up to a positive factor
-(kingen.kinematics.parasitic.task_rows): roll' = (c_yaw w_x + s_yaw w_y) / c_pitch, pitch' = -s_yaw w_x +
+(kingen.kinematics.hybrid.parasitic.task_rows): roll' = (c_yaw w_x + s_yaw w_y) / c_pitch, pitch' = -s_yaw w_x +
 c_yaw w_y, yaw' = w_z + t_pitch (c_yaw w_x + s_yaw w_y), times cos(pitch)^2, cos(pitch) and cos(pitch)^2."""
 
 

@@ -68,7 +68,7 @@ def home_yaw(robot):
 
 def solve_parasitic(robot, t6):
     """The machine's pose for each T6 (n, 4, 4), mm: see the module docstring (an Exechon-type
-    machine's: kingen.kinematics.parasitic_axes, a Tricept-type one's: kingen.kinematics.parasitic_tube,
+    machine's: kingen.kinematics.hybrid.parasitic_axes, a Tricept-type one's: kingen.kinematics.hybrid.parasitic_tube,
     its T6's position kept). Non-finite T6 give
     non-finite results (the caller's finite test catches them)."""
     if family(robot) in ("axes", "tube"):
@@ -132,7 +132,7 @@ def pose_constraint_residuals(robot, t6):
     """(n, 3) mm: each constraint equation's residual with the platform at T6 (n, 4, 4) as given
     (not moved onto the manifold), computed forward from the constraints' own statement:
     a_i.(C_i - c_i) for revolute axes fixed in the base, (R e).(b - p) - e.n for axes fixed in
-    the platform, the tube's (kingen.kinematics.parasitic_tube.tube_residuals) for a passive leg."""
+    the platform, the tube's (kingen.kinematics.hybrid.parasitic_tube.tube_residuals) for a passive leg."""
     t6 = np.asarray(t6, dtype=float)
     if family(robot) == "tube":
         return tube_residuals(robot, t6)
@@ -160,7 +160,7 @@ def task_twists(robot, t6):
     """(n, 6, 3) the platform twist [v; omega] (v: the velocity of the point at the base origin,
     mm; omega rad) per unit rate of each task coordinate (robot.task), moving on the manifold,
     at T6 (n, 4, 4) on it: the solution t of G t = 0 (each plane's row [a_i, C_i x a_i], or each
-    platform axis's, kingen.kinematics.parasitic_axes) and S t = e_k (S: task_rows); NaN at a
+    platform axis's, kingen.kinematics.hybrid.parasitic_axes) and S t = e_k (S: task_rows); NaN at a
     pose where that system is singular (the constraints and the task coordinates dependent
     there: the manifold has no tangent of the task's dimension)."""
     t6 = np.asarray(t6, dtype=float)

@@ -4,7 +4,7 @@ pose, in closed form (kingen.robot.wrist says which wrists; docs/how-to/hybrid.m
 The tool pose is read as a five-axis machine reads it: the tool tip q and the tool's z axis w
 (the T6's third row); the turn about the tool axis is free. With the tool tip on the tool's z
 axis at ``reach`` from the wrist centre, the wrist centre is p = q - reach w; the parallel
-part's closed form (kingen.kinematics.parasitic) gives its rotation R for p, and the reference
+part's closed form (kingen.kinematics.hybrid.parasitic) gives its rotation R for p, and the reference
 its legs' joints. The wrist must then turn the tool's zero-joint axis z0 onto w_p = R^T w
 (platform frame): Rot(a1, t1) Rot(a2, t2) z0 = w_p. The intermediate c = Rot(a2, t2) z0 has
 a2.c = a2.z0, a1.c = a1.w_p and |c| = 1: c = alpha a1 + beta a2 + g (a1 x a2), with

@@ -1,6 +1,6 @@
 """Forward kinematics of a machine with a wrist (kingen.robot.wrist), numpy only: the parallel
 part's forward (kingen.kinematics.forward's Newton, along the manifold of a machine with task
-coordinates) from the legs' joints, then the wrist's forward (kingen.kinematics.wrist.tool_t6)
+coordinates) from the legs' joints, then the wrist's forward (kingen.kinematics.hybrid.wrist.tool_t6)
 from the wrist's; and the joint rates per tool twist from central differences of that map,
 independent of the inverse's closed form (what verify's ``jacobian`` check compares with).
 Every assembly mode of such a machine: kingen.kinematics.forward.assemblies.
@@ -33,7 +33,7 @@ def tool_rates(robot, joints, near, step_mm, step_rad):
     for the legs, ``step_rad`` for the wrist, and half of them), is solved by least squares for
     the tip's rate v + omega x tip and the axis's rate omega x axis: the five driven directions;
     the twist about the tool axis asks neither and gets zero rates. With three wrist joints
-    every tool axis's rate is asked (kingen.kinematics.wrist.orientation_rows): all six twists."""
+    every tool axis's rate is asked (kingen.kinematics.hybrid.wrist.orientation_rows): all six twists."""
     joints = np.asarray(joints, dtype=float)
     count, total = joints.shape
     rows = (3, *orientation_rows(robot.wrist))

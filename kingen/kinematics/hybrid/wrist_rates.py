@@ -5,7 +5,7 @@ Twists are [v; omega] (base frame; v the velocity of the point at the base origi
 rad), as in kingen.kinematics.singularity.twist_poses. The tool tip q moves at v + omega x q,
 the tool axis w at omega x w; the wrist centre p = q - reach w at v + omega x p. The legs
 follow the platform's twist on the parallel part's manifold for that wrist-centre velocity
-(kingen.kinematics.parasitic.task_twists); the wrist's two joints turn the tool axis by the
+(kingen.kinematics.hybrid.parasitic.task_twists); the wrist's two joints turn the tool axis by the
 rest of omega, (t1' A1 + t2' B2) x w = (omega - omega_platform) x w, solved by least squares.
 A twist about the tool axis through the tip moves neither p nor w: zero rates (the five-axis
 reading). A three-axis wrist turns by all of it: t1' A1 + t2' A2 + t3' A3 = omega -
