@@ -158,13 +158,14 @@ def first_diagnostic(stderr, status=1):
     return f"the compiler failed without a message (exit status {status})"
 
 
-def compile_given_source(source, out_dir, flags, timeout=DEFAULT_TIMEOUT):
-    """Compile a user's C source (a regular file, else KingenError) into ``out_dir`` as
-    ``<stem>.so`` with ``flags``; the library's path."""
+def compile_given_source(source, out_dir, flags, timeout=DEFAULT_TIMEOUT, *, suffix=".so", compiler=None, extra=()):
+    """Compile a user's C source (a regular file, else KingenError), with kingen's ``extra``
+    sources, into ``out_dir`` as ``<stem><suffix>`` with ``flags`` and ``compiler`` (default
+    :func:`compiler_command`); the output's path."""
     source = Path(source)
     refuse_special_file(source)
     if not source.is_file():
         raise KingenError(f"{source}: no such C source")
-    library = Path(out_dir) / f"{source.stem}.so"
-    compile_c([source], library, list(flags), timeout=timeout)
+    library = Path(out_dir) / f"{source.stem}{suffix}"
+    compile_c([source, *extra], library, list(flags), compiler=compiler, timeout=timeout)
     return library

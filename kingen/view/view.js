@@ -561,7 +561,7 @@ class View {
     const started = performance.now();
     if (this.scene.free.length < 6) {
       const machine = this.routine.machinePose(this.pose);
-      if (machine && machine.status >= 0) this.pose = machine.pose;
+      if (machine && machine.pose) this.pose = machine.pose;
       this.scene.coordinates.forEach((name, k) => {
         if (!this.scene.free.includes(name)) for (const field of this.fields[name]) field.value = Number(this.pose[k].toFixed(6));
       });

@@ -130,7 +130,7 @@ class Library:
         warnings = np.full((count, self.postures), -1, dtype=np.intc)
         returns = np.empty(count, dtype=np.intc)
         self.driver.kingen_c_inverse_batch(self._function("inverse"), self._geometry(), count,
-                                           self._pointer("double *", poses), self._pointer("double *", joints),
+                                           self._pointer("const double *", poses), self._pointer("double *", joints),
                                            self.dof * self.postures, self._pointer("int *", warnings), self.postures,
                                            self._pointer("int *", returns))
         return joints, warnings, returns
@@ -145,8 +145,8 @@ class Library:
         poses, iterations = np.full((count, 16), np.nan), np.zeros(count, dtype=np.intc)
         returns = np.empty(count, dtype=np.intc)
         self.driver.kingen_c_forward_batch(self._function("forward"), self._geometry(), count,
-                                           self._pointer("double *", joints), self.dof,
-                                           self._pointer("int *", postures), self._pointer("double *", seeds),
+                                           self._pointer("const double *", joints), self.dof,
+                                           self._pointer("const int *", postures), self._pointer("const double *", seeds),
                                            self._pointer("double *", poses), self._pointer("int *", iterations),
                                            self._pointer("int *", returns))
         return poses, iterations, returns
@@ -165,7 +165,7 @@ class Library:
         poses = np.ascontiguousarray(poses, dtype=float)
         machines, returns = np.full((len(poses), 16), np.nan), np.empty(len(poses), dtype=np.intc)
         self.driver.kingen_c_machine_pose_batch(self._function("machine_pose"), len(poses),
-                                                self._pointer("double *", poses), self._pointer("double *", machines),
+                                                self._pointer("const double *", poses), self._pointer("double *", machines),
                                                 self._pointer("int *", returns))
         return machines, returns
 
@@ -233,7 +233,7 @@ class Library:
         joints, warnings = np.empty(self.dof * self.postures), np.empty(self.postures, dtype=np.intc)
         ns = np.empty(calls)
         self.driver.kingen_c_timed_batch(self._function("inverse"), self._geometry(), calls, len(poses),
-                                         self._pointer("double *", poses), self._pointer("double *", joints),
+                                         self._pointer("const double *", poses), self._pointer("double *", joints),
                                          self._pointer("int *", warnings), self._pointer("double *", ns))
         return ns
 

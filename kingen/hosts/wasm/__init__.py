@@ -17,13 +17,15 @@ class WasmHost(CHost):
     per_call = "wasmtime"
 
     def out_dir(self, robot):
-        from ..c.build import default_dir
+        from .build import default_dir
 
-        return default_dir(robot).with_name("wasm")
+        return default_dir(robot)
 
     def build(self, robot, out_dir=None, *, target=None, defines=(), timeout=DEFAULT_TIMEOUT):
         from .build import build_wasm
 
+        if defines:
+            raise KingenError("--debug: --host wasm has no debug build (the module cannot print)")
         return build_wasm(robot, out_dir, timeout=timeout)
 
     def build_source(self, source, out_dir, *, timeout=DEFAULT_TIMEOUT):

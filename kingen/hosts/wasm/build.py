@@ -8,6 +8,7 @@ kept in kingen's cache per content, flags and compiler. The toolchain is Debian'
 
 import functools
 import re
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,9 +16,8 @@ from typing import Optional
 
 from ...defaults import DEFAULT_TIMEOUT, VERSION
 from ...errors import KingenError
-from ...runtime.compiler import compile_c, compiler_command, first_diagnostic, run_compiler
-from ...runtime.file_gate import refuse_special_file
-from ...runtime.files import cache_dir, cached, digest, write_atomic, write_files
+from ...runtime.compiler import compile_c, compile_given_source, compiler_command, first_diagnostic, run_compiler
+from ...runtime.files import cache_dir, cached, default_out_dir, digest, write_atomic, write_files
 from ..base import BuildResult
 from ..c.build import STRICT_FLAGS
 from ..c.render import file_names, prefix, render
@@ -30,10 +30,13 @@ EXPORTED = ("inverse", "inverse_posture", "forward", "jacobian", "direct_index",
 BATCH_EXPORTS = ("kingen_c_inverse_batch", "kingen_c_forward_batch", "kingen_c_machine_pose_batch",
                  "kingen_c_timed_batch")
 TARGET_FLAGS = ("--target=wasm32-wasi", "-mexec-model=reactor")
-LINK_FLAGS = ("-Wl,--export=__heap_base", "-Wl,--export-table", "-Wl,--growable-table")
-"""A reactor's memory's free start exported (``__heap_base``: the library allocates nothing, a
-caller's buffers go there) and its function table, growable (a caller adds an exported function
-to it to pass it to the batch driver)."""
+LINK_FLAGS = ("-Wl,--export=malloc", "-Wl,--export=free", "-Wl,--export-table", "-Wl,--growable-table")
+"""A reactor's own allocator exported (``malloc`` and ``free``: a caller's buffers come from it,
+so they never overlap what the library itself allocates) and its function table, growable (a
+caller adds an exported function to it to pass it to the batch driver)."""
+SOURCE_FLAGS = (*TARGET_FLAGS, "-std=c99", "-O2", "-fvisibility=default", "-Wl,--export-dynamic", *LINK_FLAGS)
+"""A hand-written source's flags: warnings allowed, and every symbol of default visibility
+exported, so its names are exported whatever the file is called (``--routine`` names them)."""
 WASM_FLAGS = (*TARGET_FLAGS, *STRICT_FLAGS, "-O2", "-fno-fast-math", *LINK_FLAGS)
 """The generated library's flags: the C library's strict C99, as its shared library compiles."""
 GLUE = Path(__file__).resolve().parent / "templates" / "kingen_wasm.js"
@@ -44,8 +47,10 @@ PACKAGES = {"clang": "clang", "wasm-ld": "lld", "wasi-libc": "wasi-libc",
 """What each part of the toolchain is installed with, on Debian."""
 PROBE = "#include <math.h>\ndouble kingen_probe(double x) { return sqrt(x) + fmod(x, 3.0); }\n"
 _MISSING = (("compiler-rt", re.compile(r"libclang_rt\.builtins-wasm32")),
-            ("wasm-ld", re.compile(r"wasm-ld")),
-            ("wasi-libc", re.compile(r"math\.h' file not found|crt1|-lc\b|libc\.a|wasm32-wasi")))
+            ("wasi-libc", re.compile(r"math\.h' file not found|cannot open crt1|unable to find library -l[cm]\b|libc\.a")),
+            ("wasm-ld", re.compile(r"Executable \"wasm-ld[^\"]*\" doesn't exist|invalid linker name")))
+"""Which part a failed probe lacks, by what clang or wasm-ld says: tried in this order (a
+missing library is a linker error too, so the linker is named only when clang cannot run it)."""
 
 
 @dataclass(frozen=True)
@@ -64,15 +69,17 @@ def wasm_compiler():
 
 @functools.lru_cache(maxsize=None)
 def _probe(command, timeout):
+    """The toolchain's state for ``command``, kept for the process: a compiler not found, or the
+    probe's compile and link judged (:data:`_MISSING`). KingenError, kept for no one, when the
+    compiler did not finish within ``timeout`` s (a slow machine is not a missing part)."""
+    if shutil.which(command[0]) is None:
+        return WasmToolchain(False, f"WebAssembly toolchain: {command[0]} is not installed "
+                                    f"(Debian package {PACKAGES['clang']}; or set $KINGEN_WASM_CC)")
     with tempfile.TemporaryDirectory(prefix="kingen-wasm-probe-") as folder:
         source = Path(folder) / "probe.c"
         source.write_text(PROBE)
-        try:
-            status, output = run_compiler([*command, *TARGET_FLAGS, "-Wl,--export=kingen_probe", str(source), "-o",
-                                           str(Path(folder) / "probe.wasm"), "-lm"], timeout)
-        except KingenError:
-            return WasmToolchain(False, f"WebAssembly toolchain: {command[0]} is not installed "
-                                        f"(Debian package {PACKAGES['clang']}; or set $KINGEN_WASM_CC)")
+        status, output = run_compiler([*command, *TARGET_FLAGS, "-Wl,--export=kingen_probe", str(source), "-o",
+                                       str(Path(folder) / "probe.wasm"), "-lm"], timeout)
     if status == 0:
         return WasmToolchain(True)
     part = next((part for part, pattern in _MISSING if pattern.search(output)), None)
@@ -85,8 +92,13 @@ def _probe(command, timeout):
 
 def wasm_toolchain(timeout=DEFAULT_TIMEOUT):
     """Whether the WebAssembly toolchain works (a small C file with ``<math.h>`` compiled and
-    linked for wasm32-wasi, once per process and compiler command) and, if not, why."""
-    return _probe(tuple(wasm_compiler()), timeout)
+    linked for wasm32-wasi, once per process and compiler command) and, if not, why. A probe
+    that timed out is said as such and tried again on the next call."""
+    command = tuple(wasm_compiler())
+    try:
+        return _probe(command, timeout)
+    except KingenError as error:
+        return WasmToolchain(False, f"WebAssembly toolchain: {command[0]} --target=wasm32-wasi: {error}")
 
 
 def require_toolchain(timeout=DEFAULT_TIMEOUT):
@@ -135,11 +147,14 @@ def module_meta(robot):
     return {"prefix": prefix(robot), "dof": robot.joint_count, "postures": robot.postures}
 
 
-def build_wasm(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
-    """``robot``'s header, source and module written into ``out_dir`` (default build/<name>/wasm)."""
-    from ..c.build import default_dir
+def default_dir(robot):
+    """Where ``kingen build ROBOT --host wasm`` writes: build/<name>/wasm."""
+    return default_out_dir(robot) / "wasm"
 
-    out_dir = Path(out_dir or default_dir(robot).with_name("wasm"))
+
+def build_wasm(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
+    """``robot``'s header, source and module written into ``out_dir`` (default :func:`default_dir`)."""
+    out_dir = Path(out_dir or default_dir(robot))
     module = compile_wasm(robot, timeout)
     write_files({out_dir / name: text for name, text in render(robot).items()})
     target = out_dir / module.name
@@ -148,16 +163,13 @@ def build_wasm(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
 
 
 def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
-    """A hand-written library source (``kingen_<name>.c``, its header beside it, the generated
-    one's names) compiled to ``<stem>.wasm`` in ``out_dir``; warnings allowed. The module's path."""
-    source = Path(source)
-    refuse_special_file(source)
-    if not source.is_file():
-        raise KingenError(f"{source}: no such C source")
-    module = Path(out_dir) / f"{source.stem}.wasm"
-    compile_module([source], module, source.stem, (*TARGET_FLAGS, "-std=c99", "-O2", f"-I{source.parent}", *LINK_FLAGS),
-                   timeout=timeout)
-    return module
+    """A hand-written library source (its header beside it, the generated one's names under
+    any prefix) compiled with the batch driver to ``<stem>.wasm`` in ``out_dir``; warnings
+    allowed. The module's path."""
+    return compile_given_source(source, out_dir, [*SOURCE_FLAGS, f"-I{Path(source).parent}",
+                                                  *(f"-Wl,--export={name}" for name in BATCH_EXPORTS)],
+                                timeout=timeout, suffix=".wasm", compiler=require_toolchain(timeout), extra=(BATCH,))
 
 
-__all__ = ["GLUE", "WasmToolchain", "module_meta", "build_source", "build_wasm", "compile_wasm", "wasm_toolchain"]
+__all__ = ["GLUE", "WasmToolchain", "module_meta", "build_source", "build_wasm", "compile_wasm", "default_dir",
+           "wasm_toolchain"]

@@ -2,10 +2,10 @@
 it as the C host's :class:`~kingen.hosts.c.loader.Library` calls its shared library: the same
 methods, the same checks (:data:`kingen.hosts.c.checks.CHECKS`), the batch driver compiled into
 the module (:mod:`.build`). What differs is only how arguments reach the code: a NumPy array
-handed to a module's function is copied into the module's memory from ``__heap_base`` on
-(the library allocates nothing, so nothing of its own lives there), the function runs, and the
-array is copied back (:class:`Call`). Function pointers are indices into the module's function
-table, where an exported function is added once.
+handed to a module's function is copied into a block of the module's memory obtained from the
+module's own ``malloc`` (so a library that allocates cannot be handed the same bytes), the
+function runs, and the outputs are copied back (:class:`Call`). Function pointers are indices
+into the module's function table, where an exported function is added once.
 
 Imports: a module may import WASI functions only (any other import is a defect), answered by
 wasmtime's WASI with nothing granted: no files, no environment, no arguments, no standard streams.
@@ -18,32 +18,39 @@ import numpy as np
 
 from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
-from ..c.loader import Library, entry_points
+from ..c.loader import Library, entry_points, poses_of
 from .build import BATCH_EXPORTS
 
 WASI = "wasi_snapshot_preview1"
 MAGIC = b"\0asm"
 """A WebAssembly binary's first bytes (wasmtime would read anything else as the text format)."""
 ALIGNMENT = 16
-PAGE = 65536
-REQUIRED = ("memory", "__heap_base", "__indirect_function_table", *BATCH_EXPORTS)
-"""What kingen calls in every module besides the library's own functions."""
+REQUIRED = {"memory": "Memory", "malloc": "Func", "free": "Func", "__indirect_function_table": "Table",
+            **{name: "Func" for name in BATCH_EXPORTS}}
+"""What kingen calls in every module besides the library's own functions, and the kind of each export."""
+KINDS = {"Func": "a function", "Global": "a global", "Memory": "a memory", "Table": "a table"}
+
+
+def aligned(size):
+    """``size`` bytes rounded up to :data:`ALIGNMENT`."""
+    return -(-size // ALIGNMENT) * ALIGNMENT
 
 
 class Buffer:
-    """A NumPy array handed to a module's function, copied into its memory before the call and
-    back after it (unless read-only); ``[i]`` reads its element i (a ``double *`` out-argument)."""
+    """A NumPy array handed to a module's function, copied into its memory before the call and,
+    when ``output`` (and writable), back after it; ``[i]`` reads its element i (a ``double *``
+    out-argument)."""
 
-    def __init__(self, array):
-        self.array = array
+    def __init__(self, array, output=True):
+        self.array, self.output = array, output and array.flags.writeable
 
     def __getitem__(self, index):
         return self.array.reshape(-1)[index]
 
 
-class Foreign:
-    """What :class:`~kingen.hosts.c.loader.Library`'s methods ask of cffi, answered for a
-    module: ``from_buffer`` and ``new`` make :class:`Buffer` arguments."""
+class CffiStandIn:
+    """Stands in for cffi where :class:`~kingen.hosts.c.loader.Library`'s methods ask it for
+    arguments: ``from_buffer`` and ``new`` make :class:`Buffer` arguments for a module."""
 
     @staticmethod
     def from_buffer(ctype, array):
@@ -55,7 +62,8 @@ class Foreign:
 
 
 class Module:
-    """A module instantiated in its own wasmtime store: its exports and its memory as NumPy bytes."""
+    """A module instantiated in its own wasmtime store: its exports (each of the kind kingen
+    calls it as, else PluginDefect), its memory as NumPy bytes, blocks of it from its own malloc."""
 
     def __init__(self, path):
         import wasmtime
@@ -84,30 +92,81 @@ class Module:
         except (wasmtime.WasmtimeError, wasmtime.Trap) as error:
             raise PluginDefect(f"the module cannot be instantiated: {str(error).splitlines()[0]}") from None
         self.exports = instance.exports(self.store)
-        missing = [name for name in REQUIRED if name not in self.exports]
-        if missing:
-            raise PluginDefect(f"the module does not export {missing[0]} (kingen build --host wasm exports it)")
-        self.memory = self.exports["memory"]
-        self.base = self.exports["__heap_base"].value(self.store)
-        self._bytes = None
         self.failures = (wasmtime.Trap, wasmtime.WasmtimeError)
+        for name, kind in REQUIRED.items():
+            self.export(name, kind, "kingen build --host wasm exports it")
+        self.memory = self.exports["memory"]
+        self._bytes, self._workspace = None, (0, 0)
         if "_initialize" in self.exports:
+            self.export("_initialize", "Func")
             Call(self, "_initialize")()
 
-    def bytes(self, end):
-        """The memory as uint8, grown to hold ``end`` bytes at least (the library itself never
-        grows it: it allocates nothing, so a view stays valid until this grows it)."""
-        if self._bytes is None or len(self._bytes) < end:
-            size = self.memory.data_len(self.store)
-            if size < end:
-                self.memory.grow(self.store, -(-(end - size) // PAGE))
-            self._bytes = np.ctypeslib.as_array(self.memory.data_ptr(self.store),
-                                                shape=(self.memory.data_len(self.store),))
+    def export(self, name, kind, hint=None):
+        """The export ``name``, of ``kind`` (a wasmtime class name); PluginDefect when it is missing or another kind."""
+        if name not in self.exports:
+            raise PluginDefect(f"the module does not export {name}" + (f" ({hint})" if hint else ""))
+        found = self.exports[name]
+        if type(found).__name__ != kind:
+            raise PluginDefect(f"the module's export {name} is {KINDS.get(type(found).__name__, 'something else')}, "
+                               f"not {KINDS[kind]}")
+        return found
+
+    def bytes(self):
+        """The whole memory as uint8 (a new view once the memory grew)."""
+        size = self.memory.data_len(self.store)
+        if self._bytes is None or len(self._bytes) != size:
+            self._bytes = np.ctypeslib.as_array(self.memory.data_ptr(self.store), shape=(size,))
         return self._bytes
 
+    def address(self, value, size, what):
+        """An i32 ``value`` read unsigned as the address of ``size`` bytes inside the memory; PluginDefect if it is not."""
+        address = int(value) & 0xFFFFFFFF
+        if address == 0 or address + size > self.memory.data_len(self.store):
+            raise PluginDefect(f"{what} is {address}, not the address of {size} bytes of the module's memory")
+        return address
+
+    def allocate(self, size):
+        """The address of ``size`` bytes from the module's own malloc (kept for the module's life)."""
+        try:
+            value = self.exports["malloc"](self.store, size)
+        except self.failures as error:
+            raise PluginDefect(f"the module trapped in malloc: {trap_reason(error)}", check="crash") from None
+        return self.address(value, size, f"the module's malloc({size})")
+
+    def workspace(self, size):
+        """The address of a block of ``size`` bytes at least, from the module's malloc, reused by
+        every call's arguments (freed and allocated again when a call needs more)."""
+        address, held = self._workspace
+        if size > held:
+            if address:
+                Call(self, "free")(address)
+            self._workspace = (self.allocate(size), size)
+        return self._workspace[0]
+
+    def place(self, *arrays):
+        """The addresses of ``arrays`` copied into one block from the module's malloc (kept for the module's life)."""
+        sizes = [aligned(array.nbytes) for array in arrays]
+        start = self.allocate(max(sum(sizes), ALIGNMENT))
+        addresses = [start + sum(sizes[:index]) for index in range(len(arrays))]
+        for address, array in zip(addresses, arrays):
+            self.copy_in(address, array)
+        return addresses
+
+    def copy_in(self, address, array):
+        """``array``'s bytes written at ``address``."""
+        self.bytes()[address:address + array.nbytes] = np.ascontiguousarray(array).view(np.uint8).reshape(-1)
+
+    def copy_out(self, address, array):
+        """``array`` (writable, contiguous) filled from the bytes at ``address``."""
+        array.reshape(-1)[...] = self.bytes()[address:address + array.nbytes].view(array.dtype)
+
     def table_index(self, name):
-        """The function table's index of the exported function ``name`` (added to the table)."""
-        return self.exports["__indirect_function_table"].grow(self.store, 1, self.exports[name])
+        """The function table's index of the exported function ``name`` (added to the table);
+        PluginDefect when the table cannot grow."""
+        try:
+            return self.exports["__indirect_function_table"].grow(self.store, 1, self.exports[name])
+        except self.failures as error:
+            raise PluginDefect(f"the module's function table cannot take {name}: {trap_reason(error)}") from None
 
 
 def trap_reason(error):
@@ -117,31 +176,31 @@ def trap_reason(error):
 
 
 class Call:
-    """An exported function called with :class:`Buffer` arguments laid out from ``__heap_base``;
-    a trap (or the module's exit through WASI) is a PluginDefect of the check ``crash``."""
+    """An exported function called with :class:`Buffer` arguments laid out in the module's
+    workspace (:meth:`Module.workspace`), integers passed as they are; a trap (or the module's
+    exit through WASI, or a call its signature refuses) is a PluginDefect of the check ``crash``."""
 
     def __init__(self, module, name):
         self.module, self.name, self.function = module, name, module.exports[name]
 
     def __call__(self, *arguments):
-        buffers, addresses, end = [], [], self.module.base
+        buffers, end = [], 0
         for argument in arguments:
             if isinstance(argument, Buffer):
-                buffers.append((end, argument.array))
-                addresses.append(end)
-                end += -(-argument.array.nbytes // ALIGNMENT) * ALIGNMENT
-            else:
-                addresses.append(int(argument))
-        memory = self.module.bytes(end)
-        for address, array in buffers:
-            memory[address:address + array.nbytes] = np.ascontiguousarray(array).view(np.uint8).reshape(-1)
+                buffers.append((end, argument))
+                end += aligned(argument.array.nbytes)
+        start = self.module.workspace(end) if buffers else 0
+        for offset, buffer in buffers:
+            self.module.copy_in(start + offset, buffer.array)
+        laid = iter(start + offset for offset, _ in buffers)
+        addresses = [next(laid) if isinstance(argument, Buffer) else int(argument) for argument in arguments]
         try:
             returned = self.function(self.module.store, *addresses)
         except self.module.failures as error:
             raise PluginDefect(f"the module trapped in {self.name}: {trap_reason(error)}", check="crash") from None
-        for address, array in buffers:
-            if array.flags.writeable:
-                array.reshape(-1)[...] = memory[address:address + array.nbytes].view(array.dtype)
+        for offset, buffer in buffers:
+            if buffer.output:
+                self.module.copy_out(start + offset, buffer.array)
         return returned
 
 
@@ -159,7 +218,7 @@ class WasmLibrary(Library):
     """A WebAssembly module of the C library for ``robot``, loaded through wasmtime: the C host's
     :class:`~kingen.hosts.c.loader.Library` with the module in place of the shared library.
     KingenError for no such file; PluginDefect for a module that does not load, imports anything
-    but WASI, or lacks a function of the header."""
+    but WASI, or lacks a function of the header (or exports it as another kind)."""
 
     def __init__(self, library, routine, robot):
         path = Path(library).resolve()
@@ -167,15 +226,15 @@ class WasmLibrary(Library):
         if not path.is_file():
             raise KingenError(f"{path}: no such module")
         self.module = Module(path)
-        self.ffi = Foreign()
+        self.ffi = CffiStandIn()
         self.functions, self.indices = {}, {}
         for name in entry_points(robot):
             symbol = f"{routine}_{name}"
-            if symbol not in self.module.exports:
-                raise PluginDefect(f"the module does not export {symbol}")
             if name == "default_geometry":
-                self.geometry = self.module.exports[symbol].value(self.module.store)
+                value = self.module.export(symbol, "Global").value(self.module.store)
+                self.geometry = self.module.address(value, 1, f"{symbol} (the geometry's address)")
             else:
+                self.module.export(symbol, "Func")
                 self.functions[name] = Call(self.module, symbol)
                 self.indices[name] = self.module.table_index(symbol)
         self.routine, self.robot = routine, robot
@@ -183,10 +242,26 @@ class WasmLibrary(Library):
         self.driver = Driver(self.module)
 
     def _pointer(self, ctype, array):
-        return Buffer(array)
+        return Buffer(array, output=not ctype.startswith("const"))
 
     def _function(self, name):
         return self.indices[name]
 
     def _geometry(self):
         return self.geometry
+
+    def batch_runner(self, t6):
+        """The C host's batch runner (strides 0: every call writes the same joints and warnings)
+        with its buffers laid out in the module's memory once: a run is the batch driver's call alone."""
+        poses = poses_of(t6)
+        count = len(poses)
+        buffers = self.module.place(poses, np.empty(self.dof * self.postures), np.empty(self.postures, dtype=np.intc),
+                                    np.empty(count, dtype=np.intc))
+        inverse_batch, function, geometry = self.driver.kingen_c_inverse_batch, self._function("inverse"), self.geometry
+        at_poses, at_joints, at_warnings, at_returns = buffers
+
+        def run():
+            inverse_batch(function, geometry, count, at_poses, at_joints, 0, at_warnings, 0, at_returns)
+            return poses
+
+        return run

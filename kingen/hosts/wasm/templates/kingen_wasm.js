@@ -9,6 +9,11 @@
  *   kin.inverseAll([0, 0, 800, 5, 0, 0])   // -> {joints: [[...] per posture], warnings: [...], status: 0}
  *   kin.forward(joints, 0, seedPose)       // -> {pose: [x, y, z, roll, pitch, yaw], matrix, status, iterations}
  *   kin.machinePose(pose)                  // a machine with task coordinates: -> {pose, matrix, status}, else null
+ *   kin.setGeometry(bytes)                 // a calibrated geometry struct's bytes: every later call uses it
+ *
+ * A pose is an array of 6 numbers and joints of dof numbers: any other length is a RangeError.
+ * Where the C function finds no pose (forward's status != 0; machinePose's -1 or
+ * WARN_UNREACHABLE 2), pose and matrix are null.
  *
  * Units and frames (kingen's conventions, docs/reference/conventions.md): a pose is the platform
  * (a wrist's: the tool) frame in the base frame as x y z in mm and roll pitch yaw in degrees,
@@ -20,8 +25,8 @@
  * The module (clang --target=wasm32-wasi -mexec-model=reactor, wasi-libc) exports:
  *   memory                        its linear memory
  *   _initialize()                 run once before any call (its constructors)
- *   __heap_base                   global: the first free byte; the library allocates nothing, so
- *                                 this glue keeps its buffers from there on (growing memory)
+ *   malloc(size) -> pointer, free(pointer)   the module's own allocator: this glue takes its
+ *                                 buffers (and a calibrated geometry's copy) from it
  *   __indirect_function_table     its function table (growable: the batch driver's pointers)
  *   <prefix>_inverse(geometry, pose, joints, warnings) -> int   every posture: joints[i * postures + k]
  *   <prefix>_inverse_posture(geometry, pose, posture, joints) -> int   the posture's warning, -1 out of range
@@ -85,15 +90,53 @@
         this.dof = meta.dof;
         this.postures = meta.postures;
         if (this.exports._initialize) this.exports._initialize();
-        this.geometry = this.exports[this.prefix + "_default_geometry"].value;
-        /* Buffers from __heap_base: pose[16], seed[16], out[16] doubles, joints[dof * postures]
-         * doubles, warnings[postures] ints, iterations int. */
-        var base = this.exports.__heap_base.value, doubles = 48 + this.dof * this.postures;
+        this.geometry = this.exports[this.prefix + "_default_geometry"].value >>> 0;
+        /* One block from the module's malloc: pose[16], seed[16], out[16] doubles,
+         * joints[dof * postures] doubles, warnings[postures] ints, iterations int. */
+        var doubles = 48 + this.dof * this.postures, base = this.allocate(8 * doubles + 4 * this.postures + 4);
         this.at = {pose: base, seed: base + 128, out: base + 256, joints: base + 384,
                    warnings: base + 8 * doubles, iterations: base + 8 * doubles + 4 * this.postures};
-        var end = this.at.iterations + 4, memory = this.exports.memory;
-        if (memory.buffer.byteLength < end) memory.grow(Math.ceil((end - memory.buffer.byteLength) / 65536));
     }
+
+    /* The address of size bytes from the module's own malloc (an Error if it has none or it fails). */
+    Kingen.prototype.allocate = function (size) {
+        if (typeof this.exports.malloc !== "function")
+            throw new Error("the module exports no malloc: build it with kingen build --host wasm");
+        var address = this.exports.malloc(size) >>> 0;
+        if (address === 0 || address + size > this.exports.memory.buffer.byteLength)
+            throw new Error("the module's malloc(" + size + ") gave no block of its memory");
+        return address;
+    };
+
+    /* Every later call takes this geometry: bytes (ArrayBuffer or typed array) of the header's
+     * geometry struct, copied into a block of the module's malloc (the previous copy freed). */
+    Kingen.prototype.setGeometry = function (bytes) {
+        var view = ArrayBuffer.isView(bytes) ? new Uint8Array(bytes.buffer, bytes.byteOffset, bytes.byteLength)
+                                             : new Uint8Array(bytes);
+        var address = this.allocate(view.length);
+        new Uint8Array(this.exports.memory.buffer, address, view.length).set(view);
+        if (this.copied) this.exports.free(this.copied);
+        this.geometry = this.copied = address;
+    };
+
+    /* The default geometry struct's first size bytes, copied (to change and pass to setGeometry). */
+    Kingen.prototype.defaultGeometry = function (size) {
+        var address = this.exports[this.prefix + "_default_geometry"].value >>> 0;
+        return new Uint8Array(this.exports.memory.buffer.slice(address, address + size));
+    };
+
+    /* values as an array of count numbers; a RangeError naming what for any other length. */
+    function numbers(values, count, what) {
+        if (!values || values.length !== count)
+            throw new RangeError(what + ": give " + count + " numbers, not " + (values ? values.length : values));
+        return values;
+    }
+
+    /* The result of a C function that wrote the matrix at out, or found none (found false): nulls. */
+    Kingen.prototype.answer = function (found, status) {
+        var matrix = found ? Array.from(this.doubles(this.at.out, 16)) : null;
+        return {pose: matrix && matrixPose(matrix), matrix: matrix, status: status};
+    };
 
     Kingen.prototype.doubles = function (address, count) {
         return new Float64Array(this.exports.memory.buffer, address, count);
@@ -111,7 +154,7 @@
 
     /* One posture's joints at pose [x y z roll pitch yaw] (mm, degrees): {joints, warning}. */
     Kingen.prototype.inverse = function (pose, posture) {
-        this.doubles(this.at.pose, 16).set(poseMatrix(pose));
+        this.doubles(this.at.pose, 16).set(poseMatrix(numbers(pose, 6, "pose")));
         var code = this.exports[this.prefix + "_inverse_posture"](this.geometry, this.at.pose, this.posture(posture),
                                                                   this.at.joints);
         return {joints: Array.from(this.doubles(this.at.joints, this.dof)), warning: WARNINGS[code]};
@@ -119,7 +162,7 @@
 
     /* Every posture at pose: {joints: [posture][joint], warnings: [posture], status: 0 or 1 (none reachable)}. */
     Kingen.prototype.inverseAll = function (pose) {
-        this.doubles(this.at.pose, 16).set(poseMatrix(pose));
+        this.doubles(this.at.pose, 16).set(poseMatrix(numbers(pose, 6, "pose")));
         var status = this.exports[this.prefix + "_inverse"](this.geometry, this.at.pose, this.at.joints,
                                                              this.at.warnings);
         var values = this.doubles(this.at.joints, this.dof * this.postures), joints = [], k, i;
@@ -133,27 +176,30 @@
     };
 
     /* The pose with these joints (the library's units) on posture's branches, nearest seed (a pose,
-     * mm and degrees): {pose, matrix (row-major, 16), status (0, -1 bad input, -2 none), iterations}. */
+     * mm and degrees): {pose, matrix (row-major, 16), status (0, -1 bad input, -2 none), iterations};
+     * pose and matrix null when status is not 0. */
     Kingen.prototype.forward = function (joints, posture, seed) {
-        this.doubles(this.at.joints, this.dof).set(joints);
-        this.doubles(this.at.seed, 16).set(poseMatrix(seed));
+        this.doubles(this.at.joints, this.dof).set(numbers(joints, this.dof, "joints"));
+        this.doubles(this.at.seed, 16).set(poseMatrix(numbers(seed, 6, "seed")));
+        this.ints(this.at.iterations, 1)[0] = 0;
         var status = this.exports[this.prefix + "_forward"](this.geometry, this.at.joints, this.posture(posture),
                                                             this.at.seed, this.at.out, this.at.iterations);
-        var matrix = Array.from(this.doubles(this.at.out, 16));
-        return {pose: matrixPose(matrix), matrix: matrix, status: status,
-                iterations: this.ints(this.at.iterations, 1)[0]};
+        var answer = this.answer(status === 0, status);
+        answer.iterations = this.ints(this.at.iterations, 1)[0];
+        return answer;
     };
 
     /* A machine with task coordinates (the module exports <prefix>_machine_pose): the machine's whole
      * pose for the task coordinates of pose (mm, degrees), its other coordinates solved from its
      * constraints: {pose, matrix (row-major, 16), status (the C function's: a warning code, or -1 for
-     * a pose holding NaN or infinity)}; null for a robot without one. */
+     * a pose holding NaN or infinity)}, pose and matrix null for -1 and WARN_UNREACHABLE (2: no pose
+     * has these task coordinates); null for a robot without one. */
     Kingen.prototype.machinePose = function (pose) {
         var solve = this.exports[this.prefix + "_machine_pose"];
         if (!solve) return null;
-        this.doubles(this.at.pose, 16).set(poseMatrix(pose));
-        var status = solve(this.at.pose, this.at.out), matrix = Array.from(this.doubles(this.at.out, 16));
-        return {pose: matrixPose(matrix), matrix: matrix, status: status};
+        this.doubles(this.at.pose, 16).set(poseMatrix(numbers(pose, 6, "pose")));
+        var status = solve(this.at.pose, this.at.out);
+        return this.answer(status !== -1 && status !== 2, status);
     };
 
     var KingenWasm = {
