@@ -99,3 +99,13 @@ def test_a_host_the_tests_removed_is_gone(tmp_path):
     host = hosts.register(ToyHost())
     hosts.unregister(host)
     assert "toy" not in hosts.HOSTS and "delmia" in hosts.HOSTS
+
+
+def test_host_help_names_every_registered_host(toy, capsys):
+    """--host's help lists the hosts registered when it is shown, a plugin's included."""
+    code, out, _ = run(capsys, "verify", "--help")
+    assert code == 0
+    said = " ".join(out.split())
+    for name, host in hosts.HOSTS.items():
+        assert f"{name}, {' '.join(host.description.split())}" in said, name
+    assert {"c", "delmia", "linuxcnc", "toy", "wasm"} <= set(hosts.HOSTS)

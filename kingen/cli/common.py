@@ -152,8 +152,19 @@ def HOST(function):
     with_host = click.option("--units", type=click.Choice(["mm", "inch"]), default=None,
                              help="The machine's LINEAR_UNITS (linuxcnc) [default: the robot file's units; mm for a file in metres].")(with_host)
     return click.option("--host", "host_name", default=DEFAULT_HOST, show_default=True, metavar="NAME",
-                        help="The host the routine is for: delmia (DELMIA V5 / IGRIP), linuxcnc (a LinuxCNC "
-                             "kinematics module), or one a plugin registered.")(with_host)
+                        cls=HostOption)(with_host)
+
+
+class HostOption(click.Option):
+    """--host, its help naming every registered host (kingen.hosts), read when help is shown:
+    importing the hosts is left to the commands that use one."""
+
+    def get_help_record(self, context):
+        from ..hosts import HOSTS
+
+        self.help = ("The host the routine is for, one of: "
+                     + "; ".join(f"{name}, {host.description}" for name, host in HOSTS.items()) + ".")
+        return super().get_help_record(context)
 
 
 def _setp(context, parameter, values):
