@@ -112,10 +112,8 @@ class Module:
         return found
 
     def bytes(self):
-        """The whole memory as uint8 (a new view once the memory grew)."""
-        size = self.memory.data_len(self.store)
-        if self._bytes is None or len(self._bytes) != size:
-            self._bytes = np.ctypeslib.as_array(self.memory.data_ptr(self.store), shape=(size,))
+        """The memory as uint8, as long as it was at the last :meth:`allocate`: it holds every
+        block kingen allocated (the memory never moves or shrinks, so the view stays valid)."""
         return self._bytes
 
     def address(self, value, size, what):
@@ -131,7 +129,11 @@ class Module:
             value = self.exports["malloc"](self.store, size)
         except self.failures as error:
             raise PluginDefect(f"the module trapped in malloc: {trap_reason(error)}", check="crash") from None
-        return self.address(value, size, f"the module's malloc({size})")
+        address = self.address(value, size, f"the module's malloc({size})")
+        length = self.memory.data_len(self.store)
+        if self._bytes is None or len(self._bytes) != length:
+            self._bytes = np.ctypeslib.as_array(self.memory.data_ptr(self.store), shape=(length,))
+        return address
 
     def workspace(self, size):
         """The address of a block of ``size`` bytes at least, from the module's malloc, reused by
@@ -148,17 +150,9 @@ class Module:
         sizes = [aligned(array.nbytes) for array in arrays]
         start = self.allocate(max(sum(sizes), ALIGNMENT))
         addresses = [start + sum(sizes[:index]) for index in range(len(arrays))]
-        for address, array in zip(addresses, arrays):
-            self.copy_in(address, array)
+        copy_in(self.bytes(), addresses, arrays)
         return addresses
 
-    def copy_in(self, address, array):
-        """``array``'s bytes written at ``address``."""
-        self.bytes()[address:address + array.nbytes] = np.ascontiguousarray(array).view(np.uint8).reshape(-1)
-
-    def copy_out(self, address, array):
-        """``array`` (writable, contiguous) filled from the bytes at ``address``."""
-        array.reshape(-1)[...] = self.bytes()[address:address + array.nbytes].view(array.dtype)
 
     def table_index(self, name):
         """The function table's index of the exported function ``name`` (added to the table);
@@ -167,6 +161,12 @@ class Module:
             return self.exports["__indirect_function_table"].grow(self.store, 1, self.exports[name])
         except self.failures as error:
             raise PluginDefect(f"the module's function table cannot take {name}: {trap_reason(error)}") from None
+
+
+def copy_in(memory, addresses, arrays):
+    """Each array's bytes written into ``memory`` (uint8) at its address."""
+    for address, array in zip(addresses, arrays):
+        memory[address:address + array.nbytes] = np.ascontiguousarray(array).view(np.uint8).reshape(-1)
 
 
 def trap_reason(error):
@@ -184,23 +184,25 @@ class Call:
         self.module, self.name, self.function = module, name, module.exports[name]
 
     def __call__(self, *arguments):
-        buffers, end = [], 0
+        buffers, offsets, end = [], [], 0
         for argument in arguments:
             if isinstance(argument, Buffer):
-                buffers.append((end, argument))
+                buffers.append(argument)
+                offsets.append(end)
                 end += aligned(argument.array.nbytes)
         start = self.module.workspace(end) if buffers else 0
-        for offset, buffer in buffers:
-            self.module.copy_in(start + offset, buffer.array)
-        laid = iter(start + offset for offset, _ in buffers)
-        addresses = [next(laid) if isinstance(argument, Buffer) else int(argument) for argument in arguments]
+        laid = [start + offset for offset in offsets]
+        copy_in(self.module.bytes(), laid, [buffer.array for buffer in buffers])
+        at = iter(laid)
+        addresses = [next(at) if isinstance(argument, Buffer) else int(argument) for argument in arguments]
         try:
             returned = self.function(self.module.store, *addresses)
         except self.module.failures as error:
             raise PluginDefect(f"the module trapped in {self.name}: {trap_reason(error)}", check="crash") from None
-        for offset, buffer in buffers:
+        memory = self.module.bytes()
+        for address, buffer in zip(laid, buffers):
             if buffer.output:
-                self.module.copy_out(start + offset, buffer.array)
+                buffer.array.reshape(-1)[...] = memory[address:address + buffer.array.nbytes].view(buffer.array.dtype)
         return returned
 
 
