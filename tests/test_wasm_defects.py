@@ -40,6 +40,29 @@ def test_a_source_named_otherwise_that_allocates_passes(tmp_path):
         dict.fromkeys(("values", "warnings", "forward", "determinism"), "ok")
 
 
+def test_the_glue_answers_as_the_reference_from_a_library_that_allocates(tmp_path):
+    """The same allocating library, compiled with build_source and driven by the JavaScript glue
+    in Node: its buffers come from the module's malloc, so every posture's joints are the reference's."""
+    require_wasm()
+    require_tool("node", "nodejs")
+    from kingen.hosts.wasm.build import build_source
+    from test_wasm_host import NODE_SCRIPT
+
+    planted = planted_source(tmp_path, INVERSE_BODY, INVERSE_BODY + ALLOCATES, before="#include <stdlib.h>\n")
+    robot = load_robot("tau")
+    poses, t6 = random_t6(robot, 12, seed=3)
+    expected = solve(robot, t6)
+    given = {"module": str(build_source(planted, tmp_path / "out")), "meta": module_meta(robot), "poses": poses.tolist(),
+             "posture": 0}
+    ran = subprocess.run(["node", "-e", NODE_SCRIPT, str(GLUE)], input=json.dumps(given), capture_output=True,
+                         text=True, timeout=60, check=True)
+    for index, answer in enumerate(json.loads(ran.stdout)):
+        assert answer["all"]["warnings"] == [WARNING_NAMES[code] for code in expected.warnings[index]]
+        reachable = expected.warnings[index] != 2
+        np.testing.assert_allclose(np.array(answer["all"]["joints"]).T[:, reachable], expected.joints[index][:, reachable],
+                                   rtol=0, atol=1e-9, err_msg=f"pose {poses[index]}")
+
+
 def hostile_module(memory="(memory 1)", table="(table 8 funcref)", malloc="i32.const 1024",
                    inverse='(func (export "kingen_tau_inverse") (param i32 i32 i32 i32) (result i32) i32.const 0)'):
     """The text of a module exporting every name verify tau --host wasm looks up, each doing nothing."""
