@@ -21,7 +21,7 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   pose and its status against kingen's (:func:`kingen.kinematics.parasitic.solve_parasitic`) on
   the sampled poses, those off the machine's manifold and those beside the warnings' boundaries
   among them.
-- ``c loads``: for robots without a wrist or task coordinates, the library's static loads
+- ``c loads``: the library's static loads (a wrist's joints' torques after the legs' loads)
   against kingen's (:func:`kingen.kinematics.loads.loads`) on regular postures of the sample,
   holding the robot file's payload (or, where it gives none, a stand-in: 10 kg whose centre lies
   a tenth of the robot's size off the platform origin, so that every term is exercised).
@@ -46,7 +46,6 @@ from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSM
 from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, forward_seeds, pose_conditioning, seed_offsets
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
-from .render import has_static_loads
 
 FORWARD_POSES = 500
 JACOBIAN_PAIRS = 200
@@ -256,11 +255,6 @@ class CMachinePose(VerifyCheck, name="c machine pose", needs="compared poses"):
 
 class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
     poses = JACOBIAN_PAIRS
-
-    def refusal(self, context):
-        if not has_static_loads(context.robot):
-            return "the library computes static loads for machines without a wrist or task coordinates"
-        return None
 
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine

@@ -10,7 +10,9 @@ from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
 from ...robot.limbs import c_double, c_vector
+from ...robot.constraints import constraint_table, family
 from ..render import newton_step, refuse, robot_view, template
+from ..wrist import platform_constraints
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -104,23 +106,37 @@ def held_row(name):
     return ", ".join(force + moment)
 
 
-def has_static_loads(robot):
-    """Whether the library exports ``<prefix>_static_loads``: a robot without a wrist or task coordinates."""
-    return robot.wrist is None and not robot.task
+def constraint_wrenches(robot):
+    """The wrenches the constraints of ``robot``'s parallel part carry (one with task coordinates),
+    as C text: each an ``axis`` (unit) and a ``point`` (mm), ``turns`` 1 where the axis is in the
+    platform frame (else the base's), ``moves`` 1 where the point is (else the base's), and a
+    ``weight``; at the machine's pose (R, p) the wrench is [weight d; c x d] (base frame, moment
+    about the base origin), d the axis and c the point in the base frame: a force along d
+    through c (weight 1) or a couple c x d (weight 0). The same wrenches as
+    kingen.kinematics.parasitic.task_twists' constraint rows: a plane's force along its base
+    axis through the limb's platform point, a platform revolute axis's force through its leg's
+    base point (kingen.hosts.wrist.constraint_rows), the tube's two forces and its couple."""
+    parallel = robot.parallel
+    if family(parallel) == "planes":
+        table = constraint_table(parallel)
+        rows = [(axis, point, 1.0, 0, 1) for axis, point in zip(table.axes, table.points)]
+    else:
+        rows = [(axis, base, weight, 1, 0) for axis, base, weight in platform_constraints(robot)]
+    return [{"axis": c_vector(axis), "point": c_vector(point), "weight": c_double(weight), "turns": turns, "moves": moves}
+            for axis, point, weight, turns, moves in rows]
 
 
 def loads_view(robot, free):
-    """The static loads' part of the view: ``loads`` (has_static_loads), the payload's initializer
-    (mass kg, centre mm, gravity m/s^2) and the held coordinates' rows."""
-    if not has_static_loads(robot):
-        return {"loads": False}
+    """The static loads' part of the view: the payload's initializer (mass kg, centre mm, gravity
+    m/s^2); for a machine without task coordinates the held coordinates' rows, else its
+    constraints' wrenches (:func:`constraint_wrenches`)."""
     payload = robot.payload
-    held = [name for index, name in enumerate(COORDINATES) if not free[index]]
-    return {"loads": True,
-            "payload": {"mass": c_double(payload.mass if payload else 0.0),
+    held = [] if robot.parallel.task else [name for index, name in enumerate(COORDINATES) if not free[index]]
+    return {"payload": {"mass": c_double(payload.mass if payload else 0.0),
                         "centre": c_vector(payload.centre if payload else (0.0, 0.0, 0.0)),
                         "gravity": c_vector(robot.gravity)},
-            "held": [held_row(name) for name in held], "held_names": " ".join(held)}
+            "held": [held_row(name) for name in held], "held_names": " ".join(held),
+            "constraint_wrenches": constraint_wrenches(robot) if robot.parallel.task else []}
 
 
 def render(robot):
