@@ -2,6 +2,7 @@
 template, the shared view-model (:func:`kingen.hosts.render.robot_view`) and the limb models'
 partials (with their force lines and transmissions, for the forward Jacobian). Pure."""
 
+import hashlib
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -25,7 +26,10 @@ STOCK_MODULES = frozenset({
 """LinuxCNC's own kinematics modules (Debian's linuxcnc-uspace 2.9): a generated module may
 not take their names."""
 HAL_NAME_LEN = 47
-"""The longest pin or parameter name LinuxCNC's HAL accepts (hal.h's HAL_NAME_LEN)."""
+"""The longest component, pin or parameter name LinuxCNC's HAL accepts (hal.h's HAL_NAME_LEN)."""
+SHORTEST_PREFIX = 9
+"""The shortest HAL component name :func:`hal_prefix` cuts to: 4 of the module's name's
+characters, a '-' and 4 hex digits."""
 SETTINGS = ("max-iterations", "tolerance", "max-step", "max-step-angle", "status", "iterations")
 """The module's own pins and parameters, besides the geometry."""
 MAX_ITERATIONS = 20
@@ -70,11 +74,10 @@ def robot_problem(robot):
     if robot.dof != 6 and not translating(robot) and not robot.task and robot.wrist is None:
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
-    names = [f"{module_name(robot)}.{name}" for name in (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot)))]
-    longest = max(names, key=len)
+    longest = f"{_cut(module_name(robot), SHORTEST_PREFIX)}.{max(hal_suffixes(robot), key=len)}"
     if len(longest) > HAL_NAME_LEN:
-        return (f"name: the HAL name '{longest}' has {len(longest)} characters; LinuxCNC takes at most "
-                f"{HAL_NAME_LEN}: shorten the robot's or its limbs' names")
+        return (f"name: the HAL name '{longest}' has {len(longest)} characters with the HAL component cut to its "
+                f"shortest; LinuxCNC takes at most {HAL_NAME_LEN}: shorten the limbs' names")
     if robot.postures > 1 and not robot.working_posture_given:
         return (f"working_posture: LinuxCNC's inverse kinematics has one answer: name the posture the machine "
                 f"is built in (working_posture: 0 to {robot.postures - 1})")
@@ -83,6 +86,28 @@ def robot_problem(robot):
 
 def check_robot(robot):
     refuse(robot, robot_problem(robot))
+
+
+def hal_suffixes(robot):
+    """What follows ``<component>.`` in the names of the module's pins and parameters."""
+    parallel = robot.parallel
+    return (*SETTINGS, *(parameter["name"] for parameter in _parameters(parallel)))
+
+
+def hal_prefix(robot):
+    """The module's HAL component name, which starts every name of its pins and parameters: the
+    module's name (<name>kins) where every such name then fits LinuxCNC's HAL_NAME_LEN, else its
+    first characters, a '-' and the first 4 hex digits of its sha256, as long as the longest
+    name allows (at least SHORTEST_PREFIX characters: robot_problem refuses a robot whose limbs'
+    names leave less)."""
+    module = module_name(robot)
+    room = HAL_NAME_LEN - 1 - max(len(suffix) for suffix in hal_suffixes(robot))
+    return module if len(module) <= room else _cut(module, room)
+
+
+def _cut(module, length):
+    """``module`` cut to ``length`` characters, the last five a '-' and 4 hex digits of its sha256."""
+    return f"{module[:length - 5]}-{hashlib.sha256(module.encode()).hexdigest()[:4]}"
 
 
 def _parameters(robot):
@@ -136,6 +161,7 @@ def view_model(robot, units="mm"):
     return {
         **view,
         "module": module_name(robot),
+        "component": hal_prefix(robot),
         "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                 ("posture", robot.working_posture))),
         "unit_name": units,
