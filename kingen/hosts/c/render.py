@@ -9,10 +9,9 @@ from pathlib import Path
 from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
-from ...robot.limbs import c_double, c_vector
-from ...robot.constraints import constraint_table, family
+from ...robot.limbs import c_double
 from ..render import newton_step, refuse, robot_view, template
-from ..wrist import platform_constraints
+from ..loads import loads_view
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -82,61 +81,8 @@ def view_model(robot):
         "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": newton_step(robot),
-        **loads_view(robot, free),
+        **loads_view(robot, free, lambda row, column: f"pose[{4 * row + column}]"),
     }
-
-
-ANGLE_RATE_ROWS = {"roll": "0.0, 0.0, 0.0, pose[0], pose[4], 0.0", "pitch": "0.0, 0.0, 0.0, -pose[4], pose[0], 0.0",
-                   "yaw": "0.0, 0.0, 0.0, -pose[8] * pose[0], -pose[8] * pose[4], pose[0] * pose[0] + pose[4] * pose[4]"}
-"""An angle's rate per twist [v; omega] at a row-major pose, up to a positive factor
-(kingen.kinematics.parasitic.task_rows): roll' = (c_yaw w_x + s_yaw w_y) / c_pitch, pitch' = -s_yaw w_x +
-c_yaw w_y, yaw' = w_z + t_pitch (c_yaw w_x + s_yaw w_y), times cos(pitch)^2, cos(pitch) and cos(pitch)^2."""
-
-
-def held_row(name):
-    """C initializer of a pose coordinate's rate per twist at a row-major pose (up to a positive
-    factor: only the held coordinates' span matters, the wrenches they carry): for x, y, z the
-    platform origin's velocity component, v_k + omega . (p x e_k)."""
-    if name not in "xyz":
-        return ANGLE_RATE_ROWS[name]
-    axis, position = "xyz".index(name), ("pose[3]", "pose[7]", "pose[11]")
-    force, moment = ["0.0"] * 3, ["0.0"] * 3
-    force[axis] = "1.0"
-    moment[(axis + 1) % 3], moment[(axis + 2) % 3] = position[(axis + 2) % 3], "-" + position[(axis + 1) % 3]
-    return ", ".join(force + moment)
-
-
-def constraint_wrenches(robot):
-    """The wrenches the constraints of ``robot``'s parallel part carry (one with task coordinates),
-    as C text: each an ``axis`` (unit) and a ``point`` (mm), ``turns`` 1 where the axis is in the
-    platform frame (else the base's), ``moves`` 1 where the point is (else the base's), and a
-    ``weight``; at the machine's pose (R, p) the wrench is [weight d; c x d] (base frame, moment
-    about the base origin), d the axis and c the point in the base frame: a force along d
-    through c (weight 1) or a couple c x d (weight 0). The same wrenches as
-    kingen.kinematics.parasitic.task_twists' constraint rows: a plane's force along its base
-    axis through the limb's platform point, a platform revolute axis's force through its leg's
-    base point (kingen.hosts.wrist.constraint_rows), the tube's two forces and its couple."""
-    parallel = robot.parallel
-    if family(parallel) == "planes":
-        table = constraint_table(parallel)
-        rows = [(axis, point, 1.0, 0, 1) for axis, point in zip(table.axes, table.points)]
-    else:
-        rows = [(axis, base, weight, 1, 0) for axis, base, weight in platform_constraints(robot)]
-    return [{"axis": c_vector(axis), "point": c_vector(point), "weight": c_double(weight), "turns": turns, "moves": moves}
-            for axis, point, weight, turns, moves in rows]
-
-
-def loads_view(robot, free):
-    """The static loads' part of the view: the payload's initializer (mass kg, centre mm, gravity
-    m/s^2); for a machine without task coordinates the held coordinates' rows, else its
-    constraints' wrenches (:func:`constraint_wrenches`)."""
-    payload = robot.payload
-    held = [] if robot.parallel.task else [name for index, name in enumerate(COORDINATES) if not free[index]]
-    return {"payload": {"mass": c_double(payload.mass if payload else 0.0),
-                        "centre": c_vector(payload.centre if payload else (0.0, 0.0, 0.0)),
-                        "gravity": c_vector(robot.gravity)},
-            "held": [held_row(name) for name in held], "held_names": " ".join(held),
-            "constraint_wrenches": constraint_wrenches(robot) if robot.parallel.task else []}
 
 
 def render(robot):
