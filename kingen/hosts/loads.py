@@ -5,6 +5,7 @@ as C text. Pure, like kingen.hosts.render."""
 from ..kinematics.forward import COORDINATES
 from ..robot.constraints import constraint_table, family
 from ..robot.limbs import c_double, c_vector
+from ..robot.loads_schema import Payload
 from .wrist import platform_constraints
 
 ANGLE_RATE_ROWS = {"roll": "0.0, 0.0, 0.0, {r00}, {r10}, 0.0", "pitch": "0.0, 0.0, 0.0, -{r10}, {r00}, 0.0",
@@ -61,3 +62,16 @@ def loads_view(robot, free, element, per_mm=1.0):
                         "gravity": c_vector(robot.gravity)},
             "held": [held_row(name, element) for name in held], "held_names": " ".join(held),
             "constraint_wrenches": constraint_wrenches(robot) if robot.parallel.task else []}
+
+
+def checked_payload(robot):
+    """The payload the hosts' loads checks hold: the robot file's, or where it gives none a
+    stand-in, 10 kg whose centre lies a tenth of the robot's size off the platform origin (so
+    that every term is exercised)."""
+    return robot.payload or Payload(mass=10.0, centre=(0.1 * robot.size_mm, -0.05 * robot.size_mm, 0.07 * robot.size_mm),
+                                    inertia=((0.0,) * 3,) * 3)
+
+
+def payload_words(robot):
+    """Which payload :func:`checked_payload` holds, in words."""
+    return "the robot file's payload" if robot.payload else "a stand-in payload (10 kg off the platform origin)"

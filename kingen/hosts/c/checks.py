@@ -39,13 +39,13 @@ from ...kinematics.reference import solve
 from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNING_BAND, WARNINGS, warning_codes
 from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
 from ...kinematics.wrist_rates import tool_jacobian
-from ...robot.loads_schema import Payload
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)
 from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
 from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, forward_seeds, pose_conditioning, seed_offsets
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
+from ..loads import checked_payload, payload_words
 
 FORWARD_POSES = 500
 JACOBIAN_PAIRS = 200
@@ -259,8 +259,7 @@ class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
         pose_index, posture, _, _, _, _ = pairs
-        payload = robot.payload or Payload(mass=10.0, centre=(0.1 * robot.size_mm, -0.05 * robot.size_mm,
-                                                              0.07 * robot.size_mm), inertia=((0.0,) * 3,) * 3)
+        payload = checked_payload(robot)
         expected = loads(replace(robot, payload=payload), t6[pose_index]).forces[np.arange(len(pose_index)), posture]
         given = [payload.mass, *payload.centre, *robot.gravity]
         worst, refused = 0.0, 0
@@ -270,9 +269,8 @@ class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
             scale = np.max(np.abs(expected[number]))
             if returned >= 0 and np.isfinite(scale) and scale > 0:
                 worst = max(worst, float(np.max(np.abs(forces - expected[number])) / scale))
-        whose = "the robot file's payload" if robot.payload else "a stand-in payload (10 kg off the platform origin)"
         return Check(self.name, worst <= C_LOADS_TOLERANCE and not refused,
-                     f"the library's static loads against kingen's holding {whose} on {len(pose_index)} regular "
+                     f"the library's static loads against kingen's holding {payload_words(robot)} on {len(pose_index)} regular "
                      f"postures of {len(t6)} poses: max relative difference {worst:.3g} (at most {C_LOADS_TOLERANCE:g}); "
                      f"{refused} refused", judged=len(pose_index))
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
+from ..loads import loads_view
 from ..render import refuse, build_info, gram_lines, newton_step, robot_view, schur_test_lines, template
 from . import LinuxcncHost
 from .five_axis import wrist_view
@@ -32,6 +33,8 @@ SHORTEST_PREFIX = 9
 characters, a '-' and 4 hex digits."""
 SETTINGS = ("max-iterations", "tolerance", "max-step", "max-step-angle", "status", "iterations")
 """The module's own pins and parameters, besides the geometry."""
+LOAD_SETTINGS = ("payload.mass", *(f"payload.centre.{axis}" for axis in "xyz"), *(f"gravity.{axis}" for axis in "xyz"))
+"""The parameters of the payload whose static loads the pins load.N give (a module without a wrist)."""
 MAX_ITERATIONS = 20
 MAX_STEP = 25.0
 MAX_STEP_ANGLE = 10.0
@@ -91,7 +94,8 @@ def check_robot(robot):
 def hal_suffixes(robot):
     """What follows ``<component>.`` in the names of the module's pins and parameters."""
     parallel = robot.parallel
-    return (*SETTINGS, *(parameter["name"] for parameter in _parameters(parallel)))
+    loads = () if robot.wrist is not None else (*LOAD_SETTINGS, *(f"load.{index}" for index in range(robot.dof)))
+    return (*SETTINGS, *loads, *(parameter["name"] for parameter in _parameters(parallel)))
 
 
 def hal_prefix(robot):
@@ -187,6 +191,9 @@ def view_model(robot, units="mm"):
         "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),
         "max_step_angle": c_double(MAX_STEP_ANGLE),
         "degree": c_double(math.pi / 180.0),
+        "metres_per_unit": c_double(LENGTH_UNITS[units] / 1000.0),
+        **loads_view(robot, [index in free for index in range(6)], lambda row, column: f"T6[{column}][{row}]",
+                     1.0 / LENGTH_UNITS[units]),
     }
 
 
