@@ -350,7 +350,9 @@ def test_a_name_past_linuxcncs_hal_limit_gets_a_shorter_hal_component_that_verif
     assert setp and all(name.startswith(f"{component}.") and len(name) <= 47 for name in setp)
     assert max(map(len, setp)) == 47
     module = host.load(built.library, built.routine, host.as_seen(robot))
-    assert sorted(module.hal_names()) == sorted({*setp, f"{component}.status", f"{component}.iterations"})
+    own = ["status", "iterations", "payload.mass", *(f"{part}.{axis}" for part in ("payload.centre", "gravity")
+                                                     for axis in "xyz"), *(f"load.{index}" for index in range(6))]
+    assert sorted(module.hal_names()) == sorted({*setp, *(f"{component}.{name}" for name in own)})
     report = verify_library(host.as_seen(robot), built.library, built.routine, VerifyOptions(samples=300), host=host)
     assert report.passed, [(check.name, check.detail) for check in report.failures]
 
