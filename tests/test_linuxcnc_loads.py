@@ -19,10 +19,12 @@ def linuxcnc_headers():
     require_linuxcnc_headers()
 
 
-@pytest.mark.parametrize("name", ["tau", "linuxcnc_hexapod", "prs_head", "tricept", "rotary_delta"])
+@pytest.mark.parametrize("name", ["tau", "linuxcnc_hexapod", "prs_head", "tricept", "rotary_delta", "exechon_wrist",
+                                  "tricept_wrist3"])
 def test_the_load_pins_are_held_to_the_reference_and_a_wrong_one_fails(tmp_path, name):
     """verify --host linuxcnc reads load.N after each inverse (a translating platform, a hexapod in
-    inches, a 3-PRS head, a Tricept, revolute cranks); a module whose loads are 1e-4 off fails its
+    inches, a 3-PRS head, a Tricept, revolute cranks, five- and six-axis wrists); a module whose
+    loads are 1e-4 off fails its
     'hal loads' check."""
     robot = load_robot(name)
     host = get_host("linuxcnc")

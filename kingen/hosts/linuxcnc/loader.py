@@ -180,9 +180,9 @@ class Module:
         return (joints, *_batch(self.library.kinematicsInverse, 0, world, joints, self.status_pin))
 
     def static_loads(self, world, payload):
-        """The pins load.0 .. load.<dof - 1> (N or N m) after kinematicsInverse at each of the
+        """The pins load.0 .. load.<joints - 1> (N or N m) after kinematicsInverse at each of the
         EmcPose numbers ``world`` (n, 9), holding ``payload`` (mass kg, centre (3,) machine units
-        in the platform frame, gravity (3,) m/s^2) set into the parameters payload.mass,
+        in the platform frame, a wrist's tool frame, gravity (3,) m/s^2) set into the parameters payload.mass,
         payload.centre.x|y|z and gravity.x|y|z first: (loads (n, dof), returns (n,)), NaN where
         the module has no such pin."""
         mass, centre, gravity = payload
@@ -191,8 +191,8 @@ class Module:
                                                             "gravity.x", "gravity.y", "gravity.z"), (*centre, *gravity))):
             hal.kingen_hal_set(f"{self.routine}.{suffix}".encode(), float(value))
         world = np.ascontiguousarray(world, dtype=float)
-        loads, returns = np.full((len(world), self.robot.dof), np.nan), np.zeros(len(world), dtype=np.intc)
-        for index in range(self.robot.dof):  # each pin read after every call: one pass per pin
+        loads, returns = np.full((len(world), self.dof), np.nan), np.zeros(len(world), dtype=np.intc)
+        for index in range(self.dof):  # each pin read after every call: one pass per pin
             pin = self._pin(f"load.{index}")
             if pin != ffi.NULL:
                 returns, loads[:, index] = _batch(self.library.kinematicsInverse, 0, world.copy(),

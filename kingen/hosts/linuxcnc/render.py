@@ -34,7 +34,7 @@ characters, a '-' and 4 hex digits."""
 SETTINGS = ("max-iterations", "tolerance", "max-step", "max-step-angle", "status", "iterations")
 """The module's own pins and parameters, besides the geometry."""
 LOAD_SETTINGS = ("payload.mass", *(f"payload.centre.{axis}" for axis in "xyz"), *(f"gravity.{axis}" for axis in "xyz"))
-"""The parameters of the payload whose static loads the pins load.N give (a module without a wrist)."""
+"""The parameters of the payload whose static loads the pins load.N give."""
 MAX_ITERATIONS = 20
 MAX_STEP = 25.0
 MAX_STEP_ANGLE = 10.0
@@ -94,8 +94,8 @@ def check_robot(robot):
 def hal_suffixes(robot):
     """What follows ``<component>.`` in the names of the module's pins and parameters."""
     parallel = robot.parallel
-    loads = () if robot.wrist is not None else (*LOAD_SETTINGS, *(f"load.{index}" for index in range(robot.dof)))
-    return (*SETTINGS, *loads, *(parameter["name"] for parameter in _parameters(parallel)))
+    return (*SETTINGS, *LOAD_SETTINGS, *(f"load.{index}" for index in range(robot.joint_count)),
+            *(parameter["name"] for parameter in _parameters(parallel)))
 
 
 def hal_prefix(robot):
@@ -135,10 +135,11 @@ def _parameters(robot):
 def view_model(robot, units="mm"):
     """What the module's source shows, in the machine's ``units``; ``branch_words`` names the
     working posture's branches in the limb models' words (true at the verification home). With
-    a wrist: its parallel part's at the working posture's, and the wrist (:mod:`.five_axis`)."""
+    a wrist: its parallel part's at the working posture's (carrying the robot's payload, on the
+    tool), and the wrist (:mod:`.five_axis`)."""
     check_robot(robot)
     if robot.wrist is not None:
-        parallel = replace(robot.parallel, working_posture_given=True)
+        parallel = replace(robot.parallel, working_posture_given=True, payload=robot.payload, gravity=robot.gravity)
         return {**view_model(parallel, units), "wrist": wrist_view(robot),
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}

@@ -13,7 +13,7 @@ from .refusal import Refusal
 CHECKS = (Definition(), Refusal(), Values(), Warnings(), Closure(), Jacobian(), RoundTrip(), Forward(),
           HalLoads(), Determinism(), Machine(), Golden())
 """Every check a LinuxCNC module gets, in report order."""
-WRIST_CHECKS = (Definition(), Refusal(), Values(), Warnings(), FiveAxisForward(), Determinism(), Golden())
+WRIST_CHECKS = (Definition(), Refusal(), Values(), Warnings(), FiveAxisForward(), HalLoads(), Determinism(), Golden())
 """The checks of a five-axis module (a robot with a wrist): its forward is judged by
 :class:`.five_axis.FiveAxisForward` (tool tip and axis, then the inverse of what it returns)."""
 

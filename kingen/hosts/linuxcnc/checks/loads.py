@@ -1,4 +1,4 @@
-"""``hal loads``: the pins load.N a module without a wrist writes in each kinematicsInverse
+"""``hal loads``: the pins load.N a module writes in each kinematicsInverse (a wrist's joints after the legs)
 against kingen's static loads (:func:`kingen.kinematics.loads.loads`, at rest) at the regular
 poses of the sample, holding the robot file's payload (or a stand-in,
 kingen.hosts.loads.checked_payload) set through the module's payload parameters: within
@@ -11,6 +11,8 @@ import numpy as np
 
 from ....conventions import pose_from_t6, t6_from_pose
 from ....kinematics.loads import loads
+from ....kinematics.reference import solve
+from ....kinematics.routine import WARNINGS
 from ....verify.checks.base import Check, VerifyCheck
 from ....verify.report import not_exercised
 from ...loads import checked_payload, payload_words
@@ -26,11 +28,14 @@ class HalLoads(VerifyCheck, name="hal loads", needs="compared poses"):
         robot, module = context.robot, context.routine
         if module.parameter(f"{module.routine}.load.0") is None:
             return [not_exercised(self.name, f"the module has no load pins ({module.routine}.load.0)")]
-        poses, _ = regular_poses(robot, pose_from_t6(context.tally.first[0][:LOAD_POSES]))
-        if not len(poses):
+        t6 = context.tally.first[0][:LOAD_POSES]
+        if robot.wrist is None:
+            t6 = t6_from_pose(regular_poses(robot, pose_from_t6(t6))[0])
+        else:  # the legs' conditioning is judged by the loads' own scale below
+            t6 = t6[solve(robot, t6).warnings[:, 0] == WARNINGS["WARN_GOOD_SOLUTION"]]
+        if not len(t6):
             return [not_exercised(self.name, "no regular, reachable pose among the sampled ones")]
         payload = checked_payload(robot)
-        t6 = t6_from_pose(poses)
         expected = loads(replace(robot, payload=payload), t6).forces[:, 0]
         found, returns = module.static_loads(module.emc_poses(t6), (payload.mass, np.asarray(payload.centre) / module.scale,
                                                                      robot.gravity))
@@ -40,7 +45,7 @@ class HalLoads(VerifyCheck, name="hal loads", needs="compared poses"):
         missing = int(np.count_nonzero(np.isnan(found).any(axis=1)))
         passed = worst <= LOAD_TOLERANCE and not missing and bool(np.any(judged))
         return [Check(self.name, passed,
-                      f"the pins load.0 .. load.{robot.dof - 1} after each inverse against kingen's static loads holding "
+                      f"the pins load.0 .. load.{robot.joint_count - 1} after each inverse against kingen's static loads holding "
                       f"{payload_words(robot)}, set through the module's payload parameters, on {int(np.count_nonzero(judged))} "
-                      f"regular poses of {len(poses)}: max relative difference {worst:.3g} (at most {LOAD_TOLERANCE:g})"
+                      f"regular poses of {len(t6)}: max relative difference {worst:.3g} (at most {LOAD_TOLERANCE:g})"
                       f"{f'; {missing} poses without the pins' if missing else ''}", judged=int(np.count_nonzero(judged)))]
