@@ -45,7 +45,7 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     the verification home (no rotation) a payload at the platform origin loads each leg of the
     symmetric hexapod with m g / (6 cos theta), theta the leg's tilt from vertical (from the
     robot file's points), pushing up (positive: the legs lengthen upwards); a failed inverse
-    writes 0."""
+    and a payload of mass 0 write 0."""
     robot = load_robot("hexapod")
     host = get_host("linuxcnc")
     built = host.build(robot, tmp_path / "b")
@@ -62,3 +62,5 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     assert returns[0] == 0 and returns[1] != 0
     assert np.allclose(loads[0], mass * 9.81 / (6 * cosine), rtol=1e-12, atol=0)
     assert np.all(loads[1] == 0.0)
+    unloaded, _ = module.static_loads(world[:1], (0.0, (0.0, 0.0, 0.0), (0.0, 0.0, -9.81)))
+    assert np.all(unloaded == 0.0)
