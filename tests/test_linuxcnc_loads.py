@@ -12,6 +12,7 @@ from conftest import require_linuxcnc_headers
 from kingen.hosts import get_host
 from kingen.hosts.linuxcnc.render import render
 from kingen.robot.model import load_robot
+from kingen.runtime.resources import robots_dir
 
 
 @pytest.fixture(autouse=True)
@@ -64,3 +65,22 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     assert np.all(loads[1] == 0.0)
     unloaded, _ = module.static_loads(world[:1], (0.0, (0.0, 0.0, 0.0), (0.0, 0.0, -9.81)))
     assert np.all(unloaded == 0.0)
+
+
+def test_the_payload_parameters_default_to_the_robot_files_in_the_machines_units(tmp_path):
+    """linuxcnc_hexapod is in inches: the robot file's payload centre (its own units) is the
+    parameters' default in the module's inches, its mass and gravity as given."""
+    path = tmp_path / "loaded.yaml"
+    path.write_text((robots_dir() / "linuxcnc_hexapod.yaml").read_text().replace(
+        "name: linuxcnc_hexapod\n", "name: loaded\npayload: {mass: 7.5, centre: [1.0, -0.5, 2.0]}\ngravity: [0, 0.5, -9.8]\n"))
+    robot = load_robot(path)
+    host = get_host("linuxcnc")
+    assert host.machine_units(robot) == "inch"
+    built = host.build(robot, tmp_path / "b")
+    module = host.load(built.library, built.routine, host.as_seen(robot))
+    read = {name: module.parameter(f"loadedkins.{name}") for name in
+            ("payload.mass", "payload.centre.x", "payload.centre.y", "payload.centre.z", "gravity.x", "gravity.y",
+             "gravity.z")}
+    assert read == pytest.approx({"payload.mass": 7.5, "payload.centre.x": 1.0, "payload.centre.y": -0.5,
+                                  "payload.centre.z": 2.0, "gravity.x": 0.0, "gravity.y": 0.5, "gravity.z": -9.8},
+                                 rel=1e-15, abs=1e-15)
