@@ -265,7 +265,14 @@ class Drawing {
     const vertices = [];
     for (let i = 0; i < ordered.length; i++) vertices.push(...centre, ...ordered[i], ...ordered[(i + 1) % ordered.length]);
     const mesh = this.mesh("plate", () => new THREE.Mesh(new THREE.BufferGeometry()));
-    mesh.geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
+    const kept = mesh.geometry.getAttribute("position");
+    if (kept && kept.array.length === vertices.length) {  // the same buffer, its numbers replaced
+      kept.array.set(vertices);
+      kept.needsUpdate = true;
+    } else {
+      mesh.geometry.dispose();
+      mesh.geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
+    }
     mesh.geometry.computeVertexNormals();
     mesh.material = this.material(colour, Math.min(this.opacity, opacity));
     for (let i = 0; i < ordered.length; i++) this.rod(ordered[i], ordered[(i + 1) % ordered.length], this.radius * 0.6, colour);
@@ -591,33 +598,38 @@ class View {
     if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by, pose: this.pose, posture: this.posture});
     const drawn = document.getElementById("kingen-drawing");
     if (drawn && this.root.dataset.primary === "1") drawn.textContent = JSON.stringify(this.drawn);
-    const table = this.root.querySelector(".kingen-table tbody");
-    table.innerHTML = "";
+    if (!this.rows) this.rows = joints.map((_, i) => this.tableRow(i));
     joints.forEach((q, i) => {
       const status = i < this.drawn.limbs.length ? this.drawn.limbs[i].status : wristStatus(this.scene, i, q);
-      const row = table.insertRow();
+      const [row, value, words] = this.rows[i], deg = this.scene.joint_units[i] === "rad";
       row.className = `kingen-${status}`;
-      row.insertCell().textContent = this.scene.joint_names[i];
-      const cell = row.insertCell();
-      if (this.routine) {  // a joint typed in moves the machine there: forward kinematics, from this pose
-        const deg = this.scene.joint_units[i] === "rad";
-        const field = Object.assign(document.createElement("input"), {type: "number", step: "any", className: "kingen-joint",
-                                                                       value: Number((deg ? q / DEG : q).toFixed(6))});
-        field.title = `${this.scene.joint_names[i]} in ${deg ? "degrees" : "mm"}: type a value to move the joint`;
-        field.addEventListener("change", () => {
-          const joints = this.joints.slice();
-          joints[i] = Number(field.value) * (deg ? DEG : 1);
-          this.jog(joints);
-        });
-        cell.append(field, deg ? "°" : " mm");
-      } else {
-        cell.textContent = valueText(this.scene, i, q);
-      }
-      row.insertCell().textContent = travelText(this.scene, i);
-      row.insertCell().textContent = STATUS_WORDS[status];
+      if (value.tagName === "INPUT") value.value = Number((deg ? q / DEG : q).toFixed(6));
+      else value.textContent = valueText(this.scene, i, q);
+      words.textContent = STATUS_WORDS[status];
     });
     this.root.querySelector(".kingen-warning").textContent = `posture ${this.posture}: ${warning}`;
     this.render();
+  }
+
+  // Joint i's row of the table, made once: [row, its value (a field where the routine can move
+  // the joint there: forward kinematics from the pose shown), its status].
+  tableRow(i) {
+    const row = this.root.querySelector(".kingen-table tbody").insertRow(), deg = this.scene.joint_units[i] === "rad";
+    row.insertCell().textContent = this.scene.joint_names[i];
+    const cell = row.insertCell();
+    let value = cell;
+    if (this.routine) {
+      value = Object.assign(document.createElement("input"), {type: "number", step: "any", className: "kingen-joint"});
+      value.title = `${this.scene.joint_names[i]} in ${deg ? "degrees" : "mm"}: type a value to move the joint`;
+      value.addEventListener("change", () => {
+        const joints = this.joints.slice();
+        joints[i] = Number(value.value) * (deg ? DEG : 1);
+        this.jog(joints);
+      });
+      cell.append(value, deg ? "°" : " mm");
+    }
+    row.insertCell().textContent = travelText(this.scene, i);
+    return [row, value, row.insertCell()];
   }
 
   render() {
