@@ -603,7 +603,7 @@ class View {
       const status = i < this.drawn.limbs.length ? this.drawn.limbs[i].status : wristStatus(this.scene, i, q);
       const [row, value, words] = this.rows[i], deg = this.scene.joint_units[i] === "rad";
       row.className = `kingen-${status}`;
-      if (value.tagName === "INPUT") value.value = Number((deg ? q / DEG : q).toFixed(6));
+      if (value.tagName === "INPUT") value.value = (deg ? q / DEG : q).toFixed(3);
       else value.textContent = valueText(this.scene, i, q);
       words.textContent = STATUS_WORDS[status];
     });
