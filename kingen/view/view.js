@@ -169,9 +169,13 @@ function drawingAt(scene, pose, joints, warning, previous) {
 
 // ---- text ----
 
-function valueText(scene, index, value) {  // a joint's value in mm or degrees, no -0.000
-  const deg = scene.joint_units[index] === "rad", shown = deg ? value / DEG : value;
-  return `${(Math.abs(shown) < 5e-4 ? 0 : shown).toFixed(3)}${deg ? "°" : " mm"}`;
+function valueDigits(scene, index, value) {  // a joint's value in mm or degrees to 3 decimals, no -0.000
+  const shown = scene.joint_units[index] === "rad" ? value / DEG : value;
+  return (Math.abs(shown) < 5e-4 ? 0 : shown).toFixed(3);
+}
+
+function valueText(scene, index, value) {
+  return `${valueDigits(scene, index, value)}${scene.joint_units[index] === "rad" ? "°" : " mm"}`;
 }
 
 function travelText(scene, index) {
@@ -601,9 +605,9 @@ class View {
     if (!this.rows) this.rows = joints.map((_, i) => this.tableRow(i));
     joints.forEach((q, i) => {
       const status = i < this.drawn.limbs.length ? this.drawn.limbs[i].status : wristStatus(this.scene, i, q);
-      const [row, value, words] = this.rows[i], deg = this.scene.joint_units[i] === "rad";
+      const [row, value, words] = this.rows[i];
       row.className = `kingen-${status}`;
-      if (value.tagName === "INPUT") value.value = (deg ? q / DEG : q).toFixed(3);
+      if (value.tagName === "INPUT") value.value = valueDigits(this.scene, i, q);
       else value.textContent = valueText(this.scene, i, q);
       words.textContent = STATUS_WORDS[status];
     });
