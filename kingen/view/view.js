@@ -658,7 +658,9 @@ class View {
         const h = this.drawn.platform;
         place(div, add([h[0][3], h[1][3], h[2][3]], [0, 0, this.scene.size * 0.06 * (i - this.drawn.limbs.length + 1)]));
       }
-      div.textContent = `${this.scene.joint_names[i]} ${valueText(this.scene, i, this.joints[i])}`;
+      const travel = this.scene.travel[i];
+      div.textContent = `${this.scene.joint_names[i]} ${valueText(this.scene, i, this.joints[i])}`
+        + (travel ? ` [${travel[0]}, ${travel[1]}]` : "");
     });
     for (const [position, div] of this.extraLabels) place(div, position);
   }
