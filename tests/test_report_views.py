@@ -244,3 +244,27 @@ def test_analyzes_report_draws_its_tilt_surface_in_a_real_browser(tmp_path):
     home = solve(robot, t6_from_pose(robot.verification.home)).joints[0, :, robot.working_posture]
     assert console == [] and seen["ready"] == "1" and seen["canvas"] == "1"
     assert seen["joints"]["joints"] == pytest.approx(home, abs=1e-9)
+
+
+def test_a_five_axis_programs_frames_hold_the_tool_poses_it_commands(tmp_path):
+    """G-code on the Exechon with a wrist (LinuxCNC's interpreter): along line 3, from X0 Y50 Z-1450
+    A20 C30 to X50 Y20 Z-1400 A25 C60, every frame's tool tip is on the segment and its tool axis
+    is Rz(C) Rx(A) w0 (w0 the home tool axis) at the same fraction of the move (Rodrigues here)."""
+    from test_check_path import needs_interpreter
+
+    needs_interpreter()
+    program = tmp_path / "inside.ngc"
+    program.write_text("G21 G90\nG1 F2000 X0 Y50 Z-1450 A20 C30\nG1 X50 Y20 Z-1400 A25 C60\nM2\n")
+    robot = load_robot("exechon_wrist")
+    frames = [frame for frame in playback(check_program(robot, program))["frames"] if frame["line"] == 3]
+    start, end = np.array([0.0, 50.0, -1450.0]), np.array([50.0, 20.0, -1400.0])
+    home = np.array(robot.verification.home, dtype=float)
+    w0 = (rodrigues([0, 0, 1], home[5]) @ rodrigues([0, 1, 0], home[4]) @ rodrigues([1, 0, 0], home[3]))[:, 2]
+    assert len(frames) > 10
+    for frame in frames:
+        pose = np.array(frame["pose"])
+        fraction = (pose[0] - start[0]) / (end[0] - start[0])
+        assert pose[:3] == pytest.approx(start + fraction * (end - start), abs=1e-6)
+        a, c = 20.0 + 5.0 * fraction, 30.0 + 30.0 * fraction
+        turned = rodrigues([0, 0, 1], pose[5]) @ rodrigues([0, 1, 0], pose[4]) @ rodrigues([1, 0, 0], pose[3])
+        assert turned[:, 2] == pytest.approx(rodrigues([0, 0, 1], c) @ rodrigues([1, 0, 0], a) @ w0, abs=1e-9)

@@ -43,7 +43,7 @@ def _labelled(rows):
     """Per row whether its point is labelled: its cause differs from the previous row's (the
     first row's from the last's), or it has the least tilt (the first such)."""
     least = min(range(len(rows)), key=lambda index: rows[index]["max_tilt_deg"])
-    return [index == least or row["cause"] != rows[index - 1]["cause"] or len(rows) == 1
+    return [index == least or row["cause"] != rows[index - 1]["cause"]
             for index, row in enumerate(rows)]
 
 

@@ -3,16 +3,16 @@
 computed there, and each problem of the table marked at its own place.
 
 Frames: ``{t, pose, joints, warning, line, label}``; ``t`` where the frame stands along the
-program in regular samples (the figures' x axis), ``line`` its program line, ``label`` both in words, ``pose`` the machine's pose
-(mm, degrees, base frame: a wrist machine's tool pose, a constrained machine's on its manifold),
-``joints`` in the routine's units (mm, radians; None where a limb has no solution),
-``warning`` the routine's warning name (WARN_*). At most FRAMES frames of the path, evenly
-thinned from the findings' trace (its first and last kept), plus one frame at each problem's own
-place (at most findings.MAX_PROBLEMS), in the order of ``t``.
+program in regular samples (the figures' x axis), ``line`` its program line, ``label`` both in
+words, ``pose`` the machine's pose (mm, degrees, base frame: a wrist machine's tool pose, a
+constrained machine's on its manifold), ``joints`` in the routine's units (mm, radians; None
+where a limb has no solution), ``warning`` the routine's warning name (WARN_*). At most
+FRAMES frames of the path, evenly thinned from the findings' trace (its first and last kept),
+plus one frame at each problem's own place (at most findings.MAX_PROBLEMS), in the order of ``t``.
 
 Travel: per joint the travel the check judged (the robot file's and the .ini's), ``[lower,
-upper]`` in the robot file's units (mm, degrees), None where a side is unlimited: the view colours
-a limb beyond it.
+upper]`` in the robot file's units (mm, degrees), None where either side is unlimited: the view
+colours a limb beyond it.
 
 Markers: ``{frame, label}``, one per problem of the report's table (report.problem_rows), in
 its order; ``frame`` indexes ``frames``: the problem's own place, or, for one with no joints
@@ -53,6 +53,7 @@ def path_frames(outcome):
 
 
 def _frame(t, pose, joints, warning, line):
+    """A frame (module docstring) at sample ``t`` on program ``line``."""
     sample = f"{float(t):.0f}" if float(t).is_integer() else f"{float(t):.2f}"
     return answer_frame(t, pose, joints, warning, line=line, label=f"line {line}, sample {sample}")
 

@@ -66,7 +66,10 @@ def page_html(robot, scene, *, title, routine=True):
 
 def view_fragment(robot, scene, *, title, routine=True, height=640):
     """The view of :func:`page_html` as an ``<iframe srcdoc>`` ``height`` px high, for another
-    HTML page to hold (module docstring)."""
+    HTML page to hold (module docstring). The attribute is single-quoted, only ``&``, ``'`` and
+    ``<`` escaped in it: the scene's JSON, all double quotes, keeps its size, and no tag of the
+    page stands in the report's text."""
     page = page_html(robot, scene, title=title, routine=routine)
+    inside = page.replace("&", "&amp;").replace("'", "&#39;").replace("<", "&lt;")
     return (f'<iframe class="kingen-view-frame" title="{html.escape(title)}" style="width:100%;height:{int(height)}px;'
-            f'border:1px solid #ddd" srcdoc="{html.escape(page, quote=True)}"></iframe>')
+            f"border:1px solid #ddd\" srcdoc='{inside}'></iframe>")
