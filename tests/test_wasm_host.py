@@ -263,3 +263,23 @@ def test_without_wasmtime_verify_says_what_to_install(tmp_path):
     assert result.returncode == 2, result.stdout + result.stderr
     assert result.stderr == ("kingen: error: --host wasm: loading a module needs the Python package wasmtime "
                              "(pip install 'kingen[wasm]')\n")
+
+
+def test_a_file_that_is_no_kingen_module_fails_load(tmp_path):
+    """Given with --plugin: bytes that are no WebAssembly binary, and a module of the library linked
+    without kingen's exports (its memory's free start, the batch driver): check ``load``, exit 1."""
+    require_wasm()
+    require_wasmtime()
+    from kingen.hosts.wasm.build import TARGET_FLAGS, wasm_compiler
+
+    junk = tmp_path / "junk.wasm"
+    junk.write_text("(module)\n")  # the text format, which wasmtime itself would read
+    source = planted_source(tmp_path, INVERSE_BODY, INVERSE_BODY)
+    bare = tmp_path / "bare.wasm"
+    subprocess.run([*wasm_compiler(), *TARGET_FLAGS, "-O2", "-Wl,--export=kingen_tau_inverse", str(source), "-o",
+                    str(bare), "-lm"], check=True, capture_output=True, timeout=120)
+    for module, said in ((junk, "the module cannot be loaded: not a WebAssembly binary (it does not start with \\0asm)"),
+                         (bare, "the module does not export __heap_base (kingen build --host wasm exports it)")):
+        result = kingen_process("verify", "tau", "--host", "wasm", "--plugin", module, "--samples", "50", cwd=tmp_path)
+        assert result.returncode == 1, result.stdout + result.stderr
+        assert f"  FAILED load: {said}\n" in result.stdout

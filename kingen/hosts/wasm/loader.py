@@ -19,10 +19,15 @@ import numpy as np
 from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
 from ..c.loader import Library, entry_points
+from .build import BATCH_EXPORTS
 
 WASI = "wasi_snapshot_preview1"
+MAGIC = b"\0asm"
+"""A WebAssembly binary's first bytes (wasmtime would read anything else as the text format)."""
 ALIGNMENT = 16
 PAGE = 65536
+REQUIRED = ("memory", "__heap_base", "__indirect_function_table", *BATCH_EXPORTS)
+"""What kingen calls in every module besides the library's own functions."""
 
 
 class Buffer:
@@ -38,7 +43,7 @@ class Buffer:
 
 class Foreign:
     """What :class:`~kingen.hosts.c.loader.Library`'s methods ask of cffi, answered for a
-    module: ``from_buffer`` and ``new`` make :class:`Buffer` arguments, ``cast`` passes values on."""
+    module: ``from_buffer`` and ``new`` make :class:`Buffer` arguments."""
 
     @staticmethod
     def from_buffer(ctype, array):
@@ -47,10 +52,6 @@ class Foreign:
     @staticmethod
     def new(ctype):
         return Buffer(np.zeros(1))
-
-    @staticmethod
-    def cast(ctype, value):
-        return value
 
 
 class Module:
@@ -64,8 +65,11 @@ class Module:
         config.memory_may_move = False  # a view of the memory stays valid however the memory grows
         self.engine = wasmtime.Engine(config)
         self.store = wasmtime.Store(self.engine)
+        binary = Path(path).read_bytes()
+        if not binary.startswith(MAGIC):
+            raise PluginDefect("the module cannot be loaded: not a WebAssembly binary (it does not start with \\0asm)")
         try:
-            module = wasmtime.Module.from_file(self.engine, str(path))
+            module = wasmtime.Module(self.engine, binary)
         except wasmtime.WasmtimeError as error:
             raise PluginDefect(f"the module cannot be loaded: {str(error).splitlines()[0]}") from None
         for wanted in module.imports:
@@ -80,12 +84,15 @@ class Module:
         except (wasmtime.WasmtimeError, wasmtime.Trap) as error:
             raise PluginDefect(f"the module cannot be instantiated: {str(error).splitlines()[0]}") from None
         self.exports = instance.exports(self.store)
+        missing = [name for name in REQUIRED if name not in self.exports]
+        if missing:
+            raise PluginDefect(f"the module does not export {missing[0]} (kingen build --host wasm exports it)")
         self.memory = self.exports["memory"]
         self.base = self.exports["__heap_base"].value(self.store)
-        if "_initialize" in self.exports:
-            self.exports["_initialize"](self.store)
         self._bytes = None
         self.failures = (wasmtime.Trap, wasmtime.WasmtimeError)
+        if "_initialize" in self.exports:
+            Call(self, "_initialize")()
 
     def bytes(self, end):
         """The memory as uint8, grown to hold ``end`` bytes at least (the library itself never
