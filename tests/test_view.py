@@ -45,6 +45,7 @@ def test_the_drawing_forms_are_the_limb_models(name):
     drawn = scene(robot)["model"]["limbs"]
     joints = np.random.default_rng(51).uniform(-3.0, 3.0, 7)
     for limb, form in zip(robot.parallel.limbs, drawn):
+        assert form["exact"], (name, form["name"])
         f = {key: np.asarray(value) for key, value in form["base_side"].items()}
         fitted = f["c"] + joints[:, None] * f["a"] + np.cos(joints)[:, None] * f["u"] + np.sin(joints)[:, None] * f["v"]
         expected = np.asarray(limb.base_side_point(np.zeros((len(joints), 3)), joints))
@@ -250,3 +251,25 @@ def test_the_limbs_colours_in_a_real_browser_are_the_references_statuses(name, p
     expected, _, warning = machine_at(robot, t6_from_pose(np.array(pose)), robot.working_posture)
     assert found["joints"]["warning"] == warning != "WARN_GOOD_SOLUTION"
     assert [limb["status"] for limb in found["drawing"]["limbs"]] == [limb["status"] for limb in expected["limbs"]]
+
+
+def test_a_registered_limb_model_is_drawn_from_the_forms_its_methods_give(tmp_path):
+    """The toy Plumb (tests/test_limb_registry.py: its base side follows the platform point, its
+    link's length is |q|) is drawn without naming it: its forms marked not exact (the page does
+    not judge its closure), a leg's exact; the scene is JSON and the page is written."""
+    from kingen.robot import limbs
+    from kingen.view import page_html
+
+    from test_limb_registry import ROBOT, Plumb
+
+    limbs.register(Plumb)
+    try:
+        path = tmp_path / "toy.yaml"
+        path.write_text(ROBOT)
+        robot = load_robot(path)
+        shown = json.loads(json.dumps(scene(robot), allow_nan=False))
+        assert [limb["exact"] for limb in shown["model"]["limbs"]] == [False, True, False]
+        assert shown["joints"] == pytest.approx(solve(robot, t6_from_pose(np.zeros((1, 6)))).joints[0, :, 0].tolist())
+        assert "kingen-scene" in page_html(robot, shown, title="toy", routine=False)
+    finally:
+        limbs.unregister(Plumb)

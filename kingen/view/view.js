@@ -119,7 +119,7 @@ function gauss(a, b) {  // a x = b by elimination with partial pivoting; null wh
 // of its angle) of square to its base side's motion (a rail's or a crank's radicand near 0).
 function limbStatus(scene, index, q, residual, warning, across) {
   const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? DEG : 1;
-  if (Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
+  if (scene.model.limbs[index].exact && Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
   if (travel && (q < travel[0] * unit - 1e-12 || q > travel[1] * unit + 1e-12)) return "limits";
   return warning === "WARN_SINGULAR_SOLUTION" && across <= scene.singular_across ? "singular" : "good";
 }
