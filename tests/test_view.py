@@ -273,3 +273,38 @@ def test_a_registered_limb_model_is_drawn_from_the_forms_its_methods_give(tmp_pa
         assert "kingen-scene" in page_html(robot, shown, title="toy", routine=False)
     finally:
         limbs.unregister(Plumb)
+
+
+def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
+    """A scene with every overlay (a path's frames with markers, arrows, a ghost, a surface,
+    points) opens without a word on the console: the timeline holds one button per marker, the
+    legend names the ghost with its factor and the surface, each arrow and point is labelled, and
+    the page opens at start_frame with that frame's joints."""
+    require_tool("chromium", "chromium")
+    from kingen.view import page_html
+
+    robot = load_robot("hexapod")
+    shown = scene(robot)
+    frames = []
+    for t in np.linspace(0.0, 2.0, 21):
+        pose = np.array(shown["pose"]) + [30 * np.sin(3 * t), 30 * np.cos(3 * t) - 30, 20 * t, 4 * np.sin(2 * t), 0, 10 * t]
+        _, joints, warning = machine_at(robot, t6_from_pose(pose), shown["posture"])
+        frames.append({"t": float(t), "pose": pose.tolist(), "joints": joints.tolist(), "warning": warning})
+    ghost, _, _ = machine_at(robot, t6_from_pose(np.array(shown["pose"]) + [0, 0, 40, 0, 6, 0]), shown["posture"])
+    shown.update(frames=frames, start_frame=5, markers=[{"frame": 5, "label": "line 8"}, {"frame": 15, "label": "line 12"}],
+                 arrows=[{"origin": [200.0, 0.0, 0.0], "vector": [0.0, 0.0, 150.0], "label": "residual x1000"}],
+                 points=[{"position": [0.0, 0.0, 600.0], "label": "tilt limit"}],
+                 surface={"vertices": [[-300, -300, 700], [300, -300, 700], [0, 300, 700]], "triangles": [[0, 1, 2]],
+                          "label": "tilt limits"},
+                 ghost=dict(ghost, label="identified changes", scale=100))
+    page = tmp_path / "overlays.html"
+    page.write_text(page_html(robot, shown, title="overlays", routine=False))
+    done = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr", "--v=0",
+                           "--dump-dom", page.as_uri()], capture_output=True, text=True, timeout=120)
+    assert [line for line in done.stderr.splitlines() if ":CONSOLE" in line and "GL Driver Message" not in line] == []
+    dom = done.stdout
+    assert len(re.findall(r'<button class="kingen-marker"', dom)) == 2
+    assert "identified changes (changes shown ×100)" in dom and "tilt limits" in dom
+    assert "residual x1000" in dom and "tilt limit" in dom
+    answer = json.loads(re.search(r'<pre id="kingen-joints" hidden="">([^<]*)</pre>', dom).group(1))
+    assert answer["by"] == "kingen" and answer["joints"] == pytest.approx(frames[5]["joints"], abs=1e-12)
