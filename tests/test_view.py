@@ -308,3 +308,16 @@ def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
     assert "residual x1000" in dom and "tilt limit" in dom
     answer = json.loads(re.search(r'<pre id="kingen-joints" hidden="">([^<]*)</pre>', dom).group(1))
     assert answer["by"] == "kingen" and answer["joints"] == pytest.approx(frames[5]["joints"], abs=1e-12)
+
+
+def test_the_postures_are_named_by_their_branches_as_solve_prints_them():
+    from kingen.view.scene import posture_branches
+
+    ceart = posture_branches(load_robot("ceart"))
+    assert len(ceart) == 64 and ceart[0] == "000000" and ceart[1] == "000001" and ceart[62] == "111110"
+    assert posture_branches(load_robot("exechon_wrist")) == ["0", "1"]  # legs of one branch, the wrist's last
+    assert posture_branches(load_robot("hexapod")) == ["-"]
+    tau = load_robot("tau")
+    assert posture_branches(tau) == [f"{k:03b}" for k in range(8)]
+    for posture, branches in enumerate(posture_branches(tau)):  # the digit is the limb's branch in that posture
+        assert tau.posture_branches(posture) == tuple(int(digit) for digit in branches)

@@ -10,7 +10,8 @@ Keys: ``robot`` and ``description``; ``coordinates`` (x y z roll pitch yaw) and 
 the page's fields set: a machine with task coordinates, its task coordinates); ``region`` {home,
 range} (the verification region, mm and degrees: the sliders' span); ``joint_names``,
 ``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, or None);
-``postures`` and ``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
+``postures``, ``posture_branches`` (per posture, its branches as `kingen solve` prints them) and
+``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
 ``warning`` (the reference's there); ``size`` (mm, the robot's largest length: the drawing's
 scale); ``singular_across`` (the cosine of the angle between a limb's link and its base side's
 motion within which the page colours it singular: sqrt of the singular tolerance on its
@@ -40,7 +41,7 @@ import math
 
 import numpy as np
 
-from ..conventions import matrix_from_t6, pose_from_t6, t6_from_pose
+from ..conventions import branch_of_posture, matrix_from_t6, pose_from_t6, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE, WARNING_NAMES
@@ -80,6 +81,18 @@ def _forms(limb, size):
                 and abs(passive[0] + passive[1] * q - length(q)) <= FIT * size
                 for q in TEST_JOINTS for point in (np.zeros(3), off))
     return {key: value.tolist() for key, value in form.items()}, passive, exact
+
+
+def posture_branches(robot):
+    """Per posture, its branches as `kingen solve` prints them: each two-branch limb's digit (0 or 1)
+    in the robot file's order, then a wrist's branch; "-" for a robot of one posture's limbs."""
+    digits = [bit for bit in robot.branch_bits if bit >= 0]
+    words = []
+    for k in range(robot.postures):
+        wrist = str(k % 2) if robot.wrist is not None and robot.wrist.branch is None else ""
+        limbs = k // 2 if wrist else k
+        words.append("".join(str(branch_of_posture(limbs, bit)) for bit in digits) + wrist or "-")
+    return words
 
 
 def _travel(limits, index, scale):
@@ -195,6 +208,7 @@ def scene(robot, pose=None, posture=None):
         "joint_units": ["rad" if t.wraps else "mm" for t in robot.joint_types],
         "travel": [_travel(limits, index, scales[index]) for index in range(robot.joint_count)],
         "postures": robot.postures,
+        "posture_branches": posture_branches(robot),
         "posture": posture,
         "pose": [float(v) for v in pose],
         "t6": t6.tolist(),

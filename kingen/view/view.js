@@ -421,6 +421,8 @@ class View {
       last = [e.clientX, e.clientY];
       this.render();
     });
+    const home = {...this.orbit};
+    canvas.addEventListener("dblclick", () => { Object.assign(this.orbit, home); this.render(); });
     canvas.addEventListener("wheel", e => {
       e.preventDefault();
       this.orbit.distance *= Math.exp(e.deltaY * 0.001);
@@ -447,7 +449,10 @@ class View {
       this.fields[name] = [slider, number];
     });
     const posture = this.root.querySelector(".kingen-posture");
-    for (let k = 0; k < this.scene.postures; k++) posture.append(new Option(String(k), String(k)));
+    for (let k = 0; k < this.scene.postures; k++) {
+      const branches = (this.scene.posture_branches || [])[k];
+      posture.append(new Option(branches && branches !== "-" ? `${k} (branches ${branches})` : String(k), String(k)));
+    }
     posture.value = String(this.posture);
     posture.disabled = this.routine === null;
     posture.addEventListener("change", () => { this.posture = Number(posture.value); this.update(); });
