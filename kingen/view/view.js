@@ -610,8 +610,12 @@ class View {
     if (!this.rows) this.rows = joints.map((_, i) => this.tableRow(i));
     joints.forEach((q, i) => {
       const status = i < this.drawn.limbs.length ? this.drawn.limbs[i].status : wristStatus(this.scene, i, q);
-      const [row, value, words] = this.rows[i];
+      const [row, value, words, gauge] = this.rows[i], travel = this.scene.travel[i];
       row.className = `kingen-${status}`;
+      if (travel) {
+        const shown = this.scene.joint_units[i] === "rad" ? q / DEG : q;
+        gauge.firstChild.style.left = `${100 * Math.max(0, Math.min(1, (shown - travel[0]) / (travel[1] - travel[0])))}%`;
+      }
       if (value.tagName === "INPUT") value.value = valueDigits(this.scene, i, q);
       else value.textContent = valueText(this.scene, i, q);
       words.textContent = STATUS_WORDS[status];
@@ -637,8 +641,14 @@ class View {
       });
       cell.append(value, deg ? "°" : " mm");
     }
-    row.insertCell().textContent = travelText(this.scene, i);
-    return [row, value, row.insertCell()];
+    const travel = row.insertCell(), gauge = document.createElement("span");
+    travel.textContent = travelText(this.scene, i);
+    if (this.scene.travel[i]) {  // where the joint is in its travel: a mark on a bar, as a jog dialog shows it
+      gauge.className = "kingen-gauge";
+      gauge.append(document.createElement("i"));
+      travel.append(gauge);
+    }
+    return [row, value, row.insertCell(), gauge];
   }
 
   render() {
