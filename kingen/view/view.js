@@ -594,6 +594,7 @@ class View {
       const changes = this.times.slice(1), routine = this.routineTimes.slice(1);
       timing.textContent = JSON.stringify({load_ms: this.times[0], changes: changes.length, median_ms: quantile(changes, 0.5),
                                            p95_ms: quantile(changes, 0.95), max_ms: quantile(changes, 1),
+                                           over_50_ms: changes.filter(spent => spent > 50).length,
                                            routine_median_ms: quantile(routine, 0.5), routine_max_ms: quantile(routine, 1)});
     }
   }
