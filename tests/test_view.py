@@ -89,6 +89,16 @@ def test_the_command_writes_one_page_and_refuses_bad_input(tmp_path):
         assert not (tmp_path / "no").exists()
 
 
+def test_a_scene_refuses_a_pose_or_posture_it_cannot_show():
+    from kingen.errors import KingenError
+
+    robot = load_robot("tau")
+    for pose, posture, words in (([0, 0, float("nan"), 0, 0, 0], None, "six finite numbers"), ([1, 2, 3], None, "six"),
+                                 (None, 8, "posture 8 does not exist")):
+        with pytest.raises(KingenError, match=words):
+            scene(robot, pose, posture)
+
+
 def test_the_fragment_holds_the_page_apart():
     robot = load_robot("tau")
     fragment = view_fragment(robot, scene(robot), title="tau <view>", routine=False)

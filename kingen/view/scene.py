@@ -185,6 +185,8 @@ def scene(robot, pose=None, posture=None):
     docstring). A machine with task coordinates takes the pose its constraints give for the
     pose's task coordinates, as its routine does (kingen.kinematics.parasitic)."""
     pose = np.asarray(robot.verification.home if pose is None else pose, dtype=float)
+    if pose.shape != (6,) or not np.all(np.isfinite(pose)):
+        raise KingenError(f"pose: expected six finite numbers (x y z mm, roll pitch yaw degrees), got {pose.tolist()}")
     posture = robot.working_posture if posture is None else int(posture)
     if not 0 <= posture < robot.postures:
         raise KingenError(f"posture {posture} does not exist (the robot has {robot.postures})")
