@@ -443,7 +443,11 @@ class View {
       const enabled = free && this.routine !== null;
       slider.disabled = number.disabled = !enabled;
       slider.addEventListener("input", () => { number.value = slider.value; this.change(k, Number(slider.value)); });
-      number.addEventListener("change", () => { slider.value = number.value; this.change(k, Number(number.value)); });
+      number.addEventListener("change", () => {
+        if (number.value === "" || !Number.isFinite(Number(number.value))) { number.value = this.pose[k]; return; }
+        slider.value = number.value;
+        this.change(k, Number(number.value));
+      });
       row.append(slider, number);
       form.append(row);
       this.fields[name] = [slider, number];
@@ -636,6 +640,7 @@ class View {
       value = Object.assign(document.createElement("input"), {type: "number", step: "any", className: "kingen-joint"});
       value.title = `${this.scene.joint_names[i]} in ${deg ? "degrees" : "mm"}: type a value to move the joint`;
       value.addEventListener("change", () => {
+        if (value.value === "" || !Number.isFinite(Number(value.value))) { value.value = valueDigits(this.scene, i, this.joints[i]); return; }
         const joints = this.joints.slice();
         joints[i] = Number(value.value) * (deg ? DEG : 1);
         this.jog(joints);
