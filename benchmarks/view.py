@@ -120,14 +120,16 @@ def measure(robot, changes, folder):
 def markdown(figures):
     """The figures as one Markdown table."""
     rows = [["robot", "page (MB)", "first answer, at load (ms)", "changes", "median ms", "95% ms", "worst ms",
-             "routine median ms", "routine worst ms"]]
+             "over 50 ms", "routine median ms", "routine worst ms"]]
     rows += [[row["robot"], f"{row['bytes'] / 1e6:.2f}", f"{row['load_ms']:.1f}", str(row["changes"]), f"{row['median_ms']:.1f}",
-              f"{row['p95_ms']:.1f}", f"{row['max_ms']:.1f}", f"{row['routine_median_ms']:.2f}",
+              f"{row['p95_ms']:.1f}", f"{row['max_ms']:.1f}", str(row["over_50_ms"]), f"{row['routine_median_ms']:.2f}",
               f"{row['routine_max_ms']:.2f}"] for row in figures["pages"]]
     table = ["| " + " | ".join(row) + " |" for row in rows]
     table.insert(1, "|" + " --- |" * len(rows[0]))
     return (f"Each page's first free coordinate moved {figures['changes']} times by input events; every answer timed "
-            "in the page (performance.now(), 0.1 ms resolution); the first answer, at load, compiles the shaders.\n\n" + "\n".join(table))
+            "in the page (performance.now(), 0.1 ms resolution); the first answer, at load, compiles the shaders. "
+            f"The machine's load average over a minute, at the end: {figures['load_average']:.1f} (its other work "
+            "makes the worst changes).\n\n" + "\n".join(table))
 
 
 def main():
@@ -136,9 +138,9 @@ def main():
     parser.add_argument("--changes", type=int, default=300)
     parser.add_argument("--json", type=Path, default=None)
     arguments = parser.parse_args()
-    with tempfile.TemporaryDirectory() as scratch:
+    with tempfile.TemporaryDirectory() as scratch:  # the machine's load average: the other work the pages shared it with
         pages = [measure(robot, arguments.changes, Path(scratch) / robot) for robot in arguments.robots.split(",")]
-    figures = {"changes": arguments.changes, "pages": pages}
+    figures = {"changes": arguments.changes, "pages": pages, "load_average": os.getloadavg()[0]}
     print(markdown(figures))
     if arguments.json is not None:
         arguments.json.write_text(json.dumps(figures, indent=2) + "\n")

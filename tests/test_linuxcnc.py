@@ -5,6 +5,7 @@ posture; its forward Newton from seeds a servo cycle and 10 mm / 5 degrees away)
 cannot drive are refused with a located error; its package's snippets hold the robot file's
 numbers. LinuxCNC's headers come from Debian's linuxcnc-uspace-dev (.ci/run installs it)."""
 
+import hashlib
 import os
 import re
 import subprocess
@@ -327,13 +328,47 @@ def test_the_packages_setp_lines_give_back_the_verified_geometry(name, modules):
     assert len(setp) > 4 * robot.dof
 
 
-def test_a_name_past_linuxcncs_hal_limit_is_refused(tmp_path):
+def test_a_name_past_linuxcncs_hal_limit_gets_a_shorter_hal_component_that_verifies(tmp_path):
+    """linuxcnc_hexapod_calibrated (calibrate's name) would make 55-character pin names: its HAL
+    component is cut to its module name's first characters and 4 hex digits of its sha256, every
+    pin and parameter fits LinuxCNC's 47 characters, the package's setp lines name them, and the
+    module verifies through the HAL stand-in (which refuses a longer name, as LinuxCNC does)."""
+    import hashlib
+
+    path = tmp_path / "linuxcnc_hexapod_calibrated.yaml"
+    path.write_text((robots_dir() / "linuxcnc_hexapod.yaml").read_text().replace(
+        "name: linuxcnc_hexapod\n", "name: linuxcnc_hexapod_calibrated\n"))
+    robot = load_robot(path)
+    host = get_host("linuxcnc")
+    longest = len(".strut0.platform-point.x")
+    component = "linuxcnc_hexapod_calibratedkins"[:47 - longest - 5] + "-" + hashlib.sha256(
+        b"linuxcnc_hexapod_calibratedkins").hexdigest()[:4]
+    built = host.build(robot, tmp_path / "b")
+    assert f'#define KINGEN_COMPONENT "{component}"' in built.source.read_text()
+    setp = [line.split()[1] for line in render_package(robot, host.machine_units(robot))[
+        "linuxcnc_hexapod_calibratedkins.hal"].splitlines() if line.startswith("setp ")]
+    assert setp and all(name.startswith(f"{component}.") and len(name) <= 47 for name in setp)
+    assert max(map(len, setp)) == 47
+    module = host.load(built.library, built.routine, host.as_seen(robot))
+    own = ["status", "iterations", "payload.mass", *(f"{part}.{axis}" for part in ("payload.centre", "gravity")
+                                                     for axis in "xyz"), *(f"load.{index}" for index in range(6))]
+    assert sorted(module.hal_names()) == sorted({*setp, *(f"{component}.{name}" for name in own)})
+    report = verify_library(host.as_seen(robot), built.library, built.routine, VerifyOptions(samples=300), host=host)
+    assert report.passed, [(check.name, check.detail) for check in report.failures]
+
+
+def test_limb_names_no_hal_component_leaves_room_for_are_refused_in_one_line(tmp_path, capsys):
     path = tmp_path / "robot.yaml"
-    path.write_text((robots_dir() / "stewart_gough_example.yaml").read_text().replace(
-        "name: stewart_gough_example", "name: stewart_gough_example_v2"))
-    with pytest.raises(KingenError, match=r"name: the HAL name 'stewart_gough_example_v2kins.leg1.platform-point.x' "
-                                          r"has 50 characters; LinuxCNC takes at most 47"):
-        build_module(load_robot(path), tmp_path / "b")
+    path.write_text((robots_dir() / "linuxcnc_hexapod.yaml").read_text().replace(
+        "name: strut0", "name: the_first_strut_of_the_hexapod_ab"))
+    assert main(["build", str(path), "--host", "linuxcnc", "-o", str(tmp_path / "b")]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "Traceback" not in error
+    cut = "linu-" + hashlib.sha256(b"linuxcnc_hexapodkins").hexdigest()[:4]
+    longest = f"{cut}.the_first_strut_of_the_hexapod_ab.platform-point.x"
+    assert (f"{path}:3: name: the HAL name '{longest}' has {len(longest)} "
+            f"characters with the HAL component cut to its shortest; LinuxCNC takes at most 47: shorten the limbs' "
+            f"names") in error
 
 
 def test_golden_values_of_other_postures_are_said_to_be_unchecked(modules):

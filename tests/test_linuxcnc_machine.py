@@ -12,6 +12,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,9 @@ from kingen.hosts.linuxcnc.five_axis import axis_of_world, home_axis
 from kingen.hosts.linuxcnc.package import render_package
 from kingen.robot.model import load_robot
 from kingen.kinematics.hybrid.parasitic import on_manifold
+from kingen.kinematics.loads import loads
 from kingen.kinematics.reference import solve
+from kingen.robot.loads_schema import Payload
 
 DRIVER = Path(__file__).parent / "linuxcnc" / "driver.py"
 MODULES = Path("/usr/lib/linuxcnc/modules")
@@ -60,6 +63,8 @@ TOOL_TABLE = sim.tbl
 {axes}
 {kins}
 """
+PAYLOAD_KG = 50.0
+"""The payload the load pins hold in a real LinuxCNC (at the platform origin)."""
 CASES = {
     "linuxcnc_hexapod": {"moves": [[0.5, 0.3, 21, 2, -1, 3], [-0.4, 0.2, 19.5, -3, 2, -1]], "jog": 0.05},
     "linear_delta": {"moves": [[10, -5, 20], [-30, 25, 5]], "jog": 1.0},
@@ -142,7 +147,7 @@ def run_machine(name, tmp_path, case=None):
     environment = {**os.environ, "RTAPI_UID": "65534", "RTAPI_FIFO_PATH": str(fifo / "rtapi_fifo"),
                    "KINGEN_RESULT": str(result), "KINGEN_MOVES": json.dumps(machine_moves(robot, case["moves"])),
                    "KINGEN_JOG": str(case["jog"]), "KINGEN_MODULE": built.routine, "KINGEN_AXES": case.get("axes", "XYZABC"),
-                   "KINGEN_FIRST_JOG": case.get("first_jog", "")}
+                   "KINGEN_FIRST_JOG": case.get("first_jog", ""), "KINGEN_PAYLOAD": str(PAYLOAD_KG)}
     with open("/tmp/kingen-linuxcnc-test.lock", "w") as lock:  # one LinuxCNC at a time on a machine
         fcntl.flock(lock, fcntl.LOCK_EX)
         run = subprocess.run(["unshare", "-m", "sh", "-c", f"mount --bind '{modules}' '{MODULES}' && exec linuxcnc '{ini}'"],
@@ -173,14 +178,22 @@ def pose_in_mm(robot, world):
 @pytest.mark.xdist_group("linuxcnc")
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_linuxcnc_runs_kingens_module_to_the_reference(name, tmp_path):
+    """LinuxCNC moves the machine where the reference says, jogs a joint and reads the pose back;
+    after each move the load pins hold kingen's static loads for the commanded pose, the payload
+    (PAYLOAD_KG at the platform origin) set with halcmd."""
     robot, outcome = run_machine(name, tmp_path)
     posture = robot.working_posture
     assert f"{name}kins.iterations" in outcome["pins"] and f"{name}kins.status" in outcome["pins"]
+    held = replace(robot, payload=Payload(mass=PAYLOAD_KG, centre=(0.0, 0.0, 0.0), inertia=((0.0,) * 3,) * 3))
     for move in outcome["moves"]:
         pose = pose_in_mm(robot, move["pose"] + [0.0] * (6 - len(move["pose"])))
         expected = solve(robot, t6_from_pose(pose[None])).joints[0, :, posture]
         assert np.max(np.abs(in_mm(robot, move["joints"]) - expected)) <= 1e-9, move
         assert np.max(np.abs(pose_in_mm(robot, move["world"]) - pose)) <= 1e-9, move
+        forces = loads(held, t6_from_pose(pose[None]), postures=[posture]).forces[0, 0]
+        assert len(move["loads"]) == robot.dof and np.max(np.abs(forces)) > 1.0, move
+        # halcmd prints a float pin with 7 significant digits
+        assert np.max(np.abs(np.array(move["loads"]) - forces)) <= 1e-6 * np.max(np.abs(forces)), (move, forces)
     before, after = outcome["jog"]["before"], outcome["jog"]["after"]
     # LinuxCNC's free-mode planner ends an incremental jog within about 1e-9 of the increment.
     assert after["joints"][0] - before["joints"][0] == pytest.approx(CASES[name]["jog"], abs=1e-6)

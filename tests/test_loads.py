@@ -312,21 +312,23 @@ def test_the_python_api_gives_the_loads_and_checks_what_the_command_line_checks(
             kingen.loads(robot, **{"poses": bad.pop("poses"), **bad})
 
 
-@pytest.mark.parametrize("name", ["tau", "hexapod"])
+@pytest.mark.parametrize("name", ["tau", "hexapod", "prs_head", "exechon_constrained", "tricept", "tricept_wrist",
+                                  "tricept_wrist3"])
 def test_the_c_librarys_static_loads_are_held_to_the_reference_and_a_wrong_one_fails(tmp_path, name):
-    """verify --host c compares the library's <prefix>_static_loads with kingen.kinematics.loads;
+    """verify --host c compares the library's <prefix>_static_loads (a translating platform, a
+    hexapod, each constrained family, two- and three-axis wrists) with kingen.kinematics.loads;
     a library whose loads are 1e-4 off fails its 'c loads' check."""
     from kingen.hosts.c.render import render
 
     robot = load_robot(name)
     source = render(robot)[f"kingen_{name}.c"]
-    assert source.count("        forces[i] = wrench[i];") == 1
-    for text, verdict in ((source, 0), (source.replace("        forces[i] = wrench[i];",
-                                                        "        forces[i] = 1.0001 * wrench[i];"), 1)):
+    weight = "        weight[i] = mass * gravity[i];"
+    assert source.count(weight) == 1
+    for text, verdict in ((source, 0), (source.replace(weight, weight.replace("mass *", "1.0001 * mass *")), 1)):
         (tmp_path / f"kingen_{name}.h").write_text(render(robot)[f"kingen_{name}.h"])
         (tmp_path / "routine.c").write_text(text)
         result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", name, "--host", "c", "--source",
-                                 str(tmp_path / "routine.c"), "--samples", "500", "--out-dir", str(tmp_path / "out")],
+                                 str(tmp_path / "routine.c"), "--samples", "300", "--out-dir", str(tmp_path / "out")],
                                 capture_output=True, text=True, timeout=300)
         assert result.returncode == verdict, result.stdout + result.stderr
         assert ("FAILED c loads:" if verdict else "ok     c loads:") in result.stdout

@@ -45,6 +45,7 @@ def test_the_drawing_forms_are_the_limb_models(name):
     drawn = scene(robot)["model"]["limbs"]
     joints = np.random.default_rng(51).uniform(-3.0, 3.0, 7)
     for limb, form in zip(robot.parallel.limbs, drawn):
+        assert form["exact"], (name, form["name"])
         f = {key: np.asarray(value) for key, value in form["base_side"].items()}
         fitted = f["c"] + joints[:, None] * f["a"] + np.cos(joints)[:, None] * f["u"] + np.sin(joints)[:, None] * f["v"]
         expected = np.asarray(limb.base_side_point(np.zeros((len(joints), 3)), joints))
@@ -86,6 +87,16 @@ def test_the_command_writes_one_page_and_refuses_bad_input(tmp_path):
         refused = kingen("view", "tau", *arguments, "-o", str(tmp_path / "no"))
         assert refused.returncode == 2 and field in refused.stderr and "Traceback" not in refused.stderr
         assert not (tmp_path / "no").exists()
+
+
+def test_a_scene_refuses_a_pose_or_posture_it_cannot_show():
+    from kingen.errors import KingenError
+
+    robot = load_robot("tau")
+    for pose, posture, words in (([0, 0, float("nan"), 0, 0, 0], None, "six finite numbers"), ([1, 2, 3], None, "six"),
+                                 (None, 8, "posture 8 does not exist")):
+        with pytest.raises(KingenError, match=words):
+            scene(robot, pose, posture)
 
 
 def test_the_fragment_holds_the_page_apart():
@@ -250,3 +261,73 @@ def test_the_limbs_colours_in_a_real_browser_are_the_references_statuses(name, p
     expected, _, warning = machine_at(robot, t6_from_pose(np.array(pose)), robot.working_posture)
     assert found["joints"]["warning"] == warning != "WARN_GOOD_SOLUTION"
     assert [limb["status"] for limb in found["drawing"]["limbs"]] == [limb["status"] for limb in expected["limbs"]]
+
+
+def test_a_registered_limb_model_is_drawn_from_the_forms_its_methods_give(tmp_path):
+    """The toy Plumb (tests/test_limb_registry.py: its base side follows the platform point, its
+    link's length is |q|) is drawn without naming it: its forms marked not exact (the page does
+    not judge its closure), a leg's exact; the scene is JSON and the page is written."""
+    from kingen.robot import limbs
+    from kingen.view import page_html
+
+    from test_limb_registry import ROBOT, Plumb
+
+    limbs.register(Plumb)
+    try:
+        path = tmp_path / "toy.yaml"
+        path.write_text(ROBOT)
+        robot = load_robot(path)
+        shown = json.loads(json.dumps(scene(robot), allow_nan=False))
+        assert [limb["exact"] for limb in shown["model"]["limbs"]] == [False, True, False]
+        assert shown["joints"] == pytest.approx(solve(robot, t6_from_pose(np.zeros((1, 6)))).joints[0, :, 0].tolist())
+        assert "kingen-scene" in page_html(robot, shown, title="toy", routine=False)
+    finally:
+        limbs.unregister(Plumb)
+
+
+def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
+    """A scene with every overlay (a path's frames with markers, arrows, a ghost, a surface,
+    points) opens without a word on the console: the timeline holds one button per marker, the
+    legend names the ghost with its factor and the surface, each arrow and point is labelled, and
+    the page opens at start_frame with that frame's joints."""
+    require_tool("chromium", "chromium")
+    from kingen.view import page_html
+
+    robot = load_robot("hexapod")
+    shown = scene(robot)
+    frames = []
+    for t in np.linspace(0.0, 2.0, 21):
+        pose = np.array(shown["pose"]) + [30 * np.sin(3 * t), 30 * np.cos(3 * t) - 30, 20 * t, 4 * np.sin(2 * t), 0, 10 * t]
+        _, joints, warning = machine_at(robot, t6_from_pose(pose), shown["posture"])
+        frames.append({"t": float(t), "pose": pose.tolist(), "joints": joints.tolist(), "warning": warning})
+    ghost, _, _ = machine_at(robot, t6_from_pose(np.array(shown["pose"]) + [0, 0, 40, 0, 6, 0]), shown["posture"])
+    shown.update(frames=frames, start_frame=5, markers=[{"frame": 5, "label": "line 8"}, {"frame": 15, "label": "line 12"}],
+                 arrows=[{"origin": [200.0, 0.0, 0.0], "vector": [0.0, 0.0, 150.0], "label": "residual x1000"}],
+                 points=[{"position": [0.0, 0.0, 600.0], "label": "tilt limit"}],
+                 surface={"vertices": [[-300, -300, 700], [300, -300, 700], [0, 300, 700]], "triangles": [[0, 1, 2]],
+                          "label": "tilt limits"},
+                 ghost=dict(ghost, label="identified changes", scale=100))
+    page = tmp_path / "overlays.html"
+    page.write_text(page_html(robot, shown, title="overlays", routine=False))
+    done = subprocess.run([*CHROMIUM, f"--user-data-dir={tmp_path / 'profile'}", "--enable-logging=stderr", "--v=0",
+                           "--dump-dom", page.as_uri()], capture_output=True, text=True, timeout=120)
+    assert [line for line in done.stderr.splitlines() if ":CONSOLE" in line and "GL Driver Message" not in line] == []
+    dom = done.stdout
+    assert len(re.findall(r'<button class="kingen-marker"', dom)) == 2
+    assert "identified changes (changes shown ×100)" in dom and "tilt limits" in dom
+    assert "residual x1000" in dom and "tilt limit" in dom
+    answer = json.loads(re.search(r'<pre id="kingen-joints" hidden="">([^<]*)</pre>', dom).group(1))
+    assert answer["by"] == "kingen" and answer["joints"] == pytest.approx(frames[5]["joints"], abs=1e-12)
+
+
+def test_the_postures_are_named_by_their_branches_as_solve_prints_them():
+    from kingen.view.scene import posture_branches
+
+    ceart = posture_branches(load_robot("ceart"))
+    assert len(ceart) == 64 and ceart[0] == "000000" and ceart[1] == "000001" and ceart[62] == "111110"
+    assert posture_branches(load_robot("exechon_wrist")) == ["0", "1"]  # legs of one branch, the wrist's last
+    assert posture_branches(load_robot("hexapod")) == ["-"]
+    tau = load_robot("tau")
+    assert posture_branches(tau) == [f"{k:03b}" for k in range(8)]
+    for posture, branches in enumerate(posture_branches(tau)):  # the digit is the limb's branch in that posture
+        assert tau.posture_branches(posture) == tuple(int(digit) for digit in branches)

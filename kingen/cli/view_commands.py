@@ -21,8 +21,10 @@ def view(robot, pose, posture, out_dir):
     value and travel beside it, fields and sliders for the pose, the limbs coloured by their
     warnings. One self-contained file: three.js and the routine compiled to WebAssembly are inside
     it (without a WebAssembly toolchain, the machine is drawn at the pose kingen computed and the
-    page says what the sliders need). The address #pose=x,y,z,roll,pitch,yaw&posture=K sets the
-    pose on load; the page writes what its routine computed into the element #kingen-joints."""
+    page says what the sliders need). A joint typed in the page's table moves the machine there
+    (the routine's forward kinematics). The address #pose=x,y,z,roll,pitch,yaw&posture=K (or
+    #joints=q1,...,qn, mm and radians) sets the pose on load; the page writes what its routine
+    computed into the element #kingen-joints."""
     from ..hosts.wasm.build import wasm_toolchain
     from ..runtime.files import default_out_dir, write_atomic
     from ..view import page_html, scene

@@ -54,23 +54,28 @@ def _third_table(wrist):
             "second_normal": c_vector(second - (second @ third) * third)}
 
 
-def constraint_rows(robot):
-    """The parallel part's three constraint wrenches of ``robot`` (with a wrist) as C text, for
-    the C library's Jacobian (templates/wrist.c.j2, ``wrist_rates``): each row a platform axis
-    ``axis`` e (platform frame, unit), a base point or axis ``base`` b (base frame) and a
-    ``weight``; at platform rotation R the wrench is [weight R e; b x R e] (base frame, moment
-    about the base origin): a force along R e through the base point b (weight 1), or a couple
-    b x R e (weight 0). The same wrenches as kingen.kinematics.hybrid.parasitic_axes.axes_wrenches
-    (the platform revolute axes, through their legs' base points) and
+def platform_constraints(robot):
+    """The parallel part's three constraint wrenches of ``robot`` (task coordinates x, y, z: a
+    platform revolute axis per leg, or a passive tube), numbers: (e, b, weight) each, e a
+    platform axis (platform frame, unit), b a base point or axis (base frame), weight 1 or 0;
+    at platform rotation R the wrench is [weight R e; b x R e] (base frame, moment about the
+    base origin): a force along R e through the base point b (weight 1), or a couple b x R e
+    (weight 0). The same wrenches as kingen.kinematics.hybrid.parasitic_axes.axes_wrenches (the
+    platform revolute axes, through their legs' base points) and
     kingen.kinematics.hybrid.parasitic_tube.tube_wrenches (the tube's two forces, its couple)."""
     parallel = robot.parallel
     if family(parallel) == "tube":
         leg = parallel.passive_leg
-        rows = [(leg.second_axis, leg.base_point, 1.0), (leg.frame[:, 2], leg.base_point, 1.0),
+        return [(leg.second_axis, leg.base_point, 1.0), (leg.frame[:, 2], leg.base_point, 1.0),
                 (leg.second_axis, leg.first_axis, 0.0)]
-    else:
-        rows = [(axis, base, 1.0) for _, (axis, base, _) in platform_axes(parallel.limbs)]
-    return [{"axis": c_vector(axis), "base": c_vector(base), "weight": c_double(weight)} for axis, base, weight in rows]
+    return [(axis, base, 1.0) for _, (axis, base, _) in platform_axes(parallel.limbs)]
+
+
+def constraint_rows(robot):
+    """:func:`platform_constraints` of ``robot`` (with a wrist) as C text, for the C library's
+    Jacobian (templates/wrist.c.j2, ``wrist_rates``): ``axis`` e, ``base`` b, ``weight``."""
+    return [{"axis": c_vector(axis), "base": c_vector(base), "weight": c_double(weight)}
+            for axis, base, weight in platform_constraints(robot)]
 
 
 def wrist_joint_rows(robot):

@@ -31,7 +31,7 @@ def _json_in_script(data):
     return json.dumps(data, allow_nan=False, separators=(",", ":")).replace("<", "\\u003c")
 
 
-def routine_script(robot):
+def _routine_script(robot):
     """(script, note): the <script> elements that set ``window.kingenRoutine`` (the robot's C
     library compiled to WebAssembly, base64, started by the wasm host's JS glue) and None; ("",
     what the sliders need) where the WebAssembly toolchain is not installed."""
@@ -53,7 +53,7 @@ def page_html(robot, scene, *, title, routine=True):
     """The whole self-contained page (module docstring) of ``scene`` (kingen.view.scene.scene of
     ``robot``, with any overlays), titled ``title``; ``routine`` False leaves the WebAssembly
     routine out (the page then draws the scene's poses only)."""
-    script, note = routine_script(robot) if routine else ("", "The machine is drawn at the poses kingen computed.")
+    script, note = _routine_script(robot) if routine else ("", "The machine is drawn at the poses kingen computed.")
     scene = dict(scene, no_routine=note) if note else scene
     page = string.Template((HERE / "page.html").read_text())
     return page.substitute(

@@ -10,7 +10,8 @@ Keys: ``robot`` and ``description``; ``coordinates`` (x y z roll pitch yaw) and 
 the page's fields set: a machine with task coordinates, its task coordinates); ``region`` {home,
 range} (the verification region, mm and degrees: the sliders' span); ``joint_names``,
 ``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, or None);
-``postures`` and ``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
+``postures``, ``posture_branches`` (per posture, its branches as `kingen solve` prints them) and
+``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
 ``warning`` (the reference's there); ``size`` (mm, the robot's largest length: the drawing's
 scale); ``singular_across`` (the cosine of the angle between a limb's link and its base side's
 motion within which the page colours it singular: sqrt of the singular tolerance on its
@@ -20,8 +21,8 @@ sliders need, on a page without the routine).
 What the page needs to draw the machine at a pose of its own is ``model``: per limb its
 platform point (platform frame), where its passive link starts on the base side as a function of
 its joint q, B(q) = c + q a + cos(q) u + sin(q) v (derived here from the limb model's
-``base_side_point``, so the page knows no limb model by name), and its passive link's length
-l0 + l1 q; the wrist's axes and tool; the passive leg's base point. ``machine`` is that drawing
+``base_side_point``, so the page knows no limb model by name), its passive link's length
+l0 + l1 q, and whether these forms are the model's (``exact``); the wrist's axes and tool; the passive leg's base point. ``machine`` is that drawing
 computed here, with the reference (kingen.kinematics.reference), at the scene's pose:
 ``{platform (H), limbs: [{base_side, platform_point, status}], tool (H, or None without a wrist),
 status (the posture's warning)}``, a limb's status "good", "limits" (beyond its travel),
@@ -40,7 +41,7 @@ import math
 
 import numpy as np
 
-from ..conventions import matrix_from_t6, pose_from_t6, t6_from_pose
+from ..conventions import branch_of_posture, matrix_from_t6, pose_from_t6, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE, WARNING_NAMES
@@ -49,35 +50,49 @@ from ..kinematics.hybrid.wrist import rotation_about
 COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 """The pose's coordinates, in order: mm, then degrees (R = Rz(yaw) Ry(pitch) Rx(roll))."""
 FIT = 1e-9
-"""How far (relative to the robot's size) B(q) = c + q a + cos(q) u + sin(q) v may miss a limb
-model's base-side point at the test joints; a model it misses is drawn from its base joint."""
+"""How far (relative to the robot's size) the drawing's forms may miss a limb model's base-side
+point and passive length at the test joints and platform points and still be exact."""
+TEST_JOINTS = (-2.3, 0.7, 41.0)
+"""Joints (mm or rad) the forms are checked at, none of those they are fitted on."""
 
 
-def _base_side_form(limb, size):
-    """{c, a, u, v} (3 each, mm, base frame) with B(q) = c + q a + cos(q) u + sin(q) v the limb's
-    base-side point (kingen.robot.limbs.base.LimbModel.base_side_point), fitted on a few joints
-    and checked on others; the limb's base joint, fixed, where the form does not fit."""
-    def at(q):
-        return np.asarray(limb.base_side_point(np.zeros((1, 3)), np.array([float(q)])), dtype=float).reshape(3)
+def _forms(limb, size):
+    """(base_side, passive, exact): {c, a, u, v} (3 each, mm, base frame) with B(q) = c + q a +
+    cos(q) u + sin(q) v the limb's base-side point (kingen.robot.limbs.base.LimbModel.base_side_point),
+    [l0, l1] with l0 + l1 q its passive link's length (mm), fitted on a few joints; ``exact`` whether
+    both hold at TEST_JOINTS for platform points at the origin and off it (a model whose base side
+    follows the platform point, or whose link's length is no line in q, is drawn from these forms
+    without the page judging its closure)."""
+    def at(q, point=np.zeros(3)):
+        return np.asarray(limb.base_side_point(point[None], np.array([float(q)])), dtype=float).reshape(3)
+
+    def length(q):
+        return float(np.asarray(limb.passive_length(np.array([float(q)]))).reshape(-1)[0])
 
     if limb.joint_type.wraps:
         c = (at(0.0) + at(math.pi)) / 2.0
         form = {"c": c, "a": np.zeros(3), "u": at(0.0) - c, "v": at(math.pi / 2.0) - c}
     else:
         form = {"c": at(0.0), "a": at(1.0) - at(0.0), "u": np.zeros(3), "v": np.zeros(3)}
-    for q in (-2.3, 0.7, 41.0):
-        fitted = form["c"] + q * form["a"] + math.cos(q) * form["u"] + math.sin(q) * form["v"]
-        if np.linalg.norm(fitted - at(q)) > FIT * size:
-            form = {"c": np.asarray(limb.base_joint(), dtype=float), "a": np.zeros(3), "u": np.zeros(3),
-                    "v": np.zeros(3)}
-            break
-    return {key: value.tolist() for key, value in form.items()}
+    passive = [length(0.0), length(1.0) - length(0.0)]
+    off = np.array([size / 3.0, -size / 5.0, size / 7.0])
+    exact = all(np.linalg.norm(form["c"] + q * form["a"] + math.cos(q) * form["u"] + math.sin(q) * form["v"]
+                               - at(q, point)) <= FIT * size
+                and abs(passive[0] + passive[1] * q - length(q)) <= FIT * size
+                for q in TEST_JOINTS for point in (np.zeros(3), off))
+    return {key: value.tolist() for key, value in form.items()}, passive, exact
 
 
-def _passive_form(limb):
-    """[l0, l1]: the passive link's length l0 + l1 q (mm) at joint q."""
-    l0, l1 = (float(np.asarray(limb.passive_length(np.array([q]))).reshape(-1)[0]) for q in (0.0, 1.0))
-    return [l0, l1 - l0]
+def posture_branches(robot):
+    """Per posture, its branches as `kingen solve` prints them: each two-branch limb's digit (0 or 1)
+    in the robot file's order, then a wrist's branch; "-" for a robot of one posture's limbs."""
+    digits = [bit for bit in robot.branch_bits if bit >= 0]
+    words = []
+    for k in range(robot.postures):
+        wrist = str(k % 2) if robot.wrist is not None and robot.wrist.branch is None else ""
+        limbs = k // 2 if wrist else k
+        words.append("".join(str(branch_of_posture(limbs, bit)) for bit in digits) + wrist or "-")
+    return words
 
 
 def _travel(limits, index, scale):
@@ -91,10 +106,10 @@ def model(robot):
     parallel = robot.parallel
     limbs = []
     for index, limb in enumerate(parallel.limbs):
-        form = _base_side_form(limb, parallel.size_mm)
+        form, passive, exact = _forms(limb, parallel.size_mm)
         moving = np.linalg.norm(form["a"]) + np.linalg.norm(form["u"]) > 0.0
         limbs.append({"name": robot.joint_names[index], "platform_point": [float(v) for v in limb.platform_point],
-                      "base_side": form, "passive": _passive_form(limb),
+                      "base_side": form, "passive": passive, "exact": exact,
                       "pivot": np.asarray(limb.base_joint(), dtype=float).tolist(),
                       "actuator": "arm" if limb.joint_type.wraps and moving else
                       ("carriage" if moving else "telescopic")})
@@ -170,6 +185,8 @@ def scene(robot, pose=None, posture=None):
     docstring). A machine with task coordinates takes the pose its constraints give for the
     pose's task coordinates, as its routine does (kingen.kinematics.hybrid.parasitic)."""
     pose = np.asarray(robot.verification.home if pose is None else pose, dtype=float)
+    if pose.shape != (6,) or not np.all(np.isfinite(pose)):
+        raise KingenError(f"pose: expected six finite numbers (x y z mm, roll pitch yaw degrees), got {pose.tolist()}")
     posture = robot.working_posture if posture is None else int(posture)
     if not 0 <= posture < robot.postures:
         raise KingenError(f"posture {posture} does not exist (the robot has {robot.postures})")
@@ -193,6 +210,7 @@ def scene(robot, pose=None, posture=None):
         "joint_units": ["rad" if t.wraps else "mm" for t in robot.joint_types],
         "travel": [_travel(limits, index, scales[index]) for index in range(robot.joint_count)],
         "postures": robot.postures,
+        "posture_branches": posture_branches(robot),
         "posture": posture,
         "pose": [float(v) for v in pose],
         "t6": t6.tolist(),

@@ -119,7 +119,7 @@ function gauss(a, b) {  // a x = b by elimination with partial pivoting; null wh
 // of its angle) of square to its base side's motion (a rail's or a crank's radicand near 0).
 function limbStatus(scene, index, q, residual, warning, across) {
   const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? DEG : 1;
-  if (Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
+  if (scene.model.limbs[index].exact && Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
   if (travel && (q < travel[0] * unit - 1e-12 || q > travel[1] * unit + 1e-12)) return "limits";
   return warning === "WARN_SINGULAR_SOLUTION" && across <= scene.singular_across ? "singular" : "good";
 }
@@ -169,9 +169,13 @@ function drawingAt(scene, pose, joints, warning, previous) {
 
 // ---- text ----
 
-function valueText(scene, index, value) {  // a joint's value in mm or degrees, no -0.000
-  const deg = scene.joint_units[index] === "rad", shown = deg ? value / DEG : value;
-  return `${(Math.abs(shown) < 5e-4 ? 0 : shown).toFixed(3)}${deg ? "°" : " mm"}`;
+function valueDigits(scene, index, value) {  // a joint's value in mm or degrees to 3 decimals, no -0.000
+  const shown = scene.joint_units[index] === "rad" ? value / DEG : value;
+  return (Math.abs(shown) < 5e-4 ? 0 : shown).toFixed(3);
+}
+
+function valueText(scene, index, value) {
+  return `${valueDigits(scene, index, value)}${scene.joint_units[index] === "rad" ? "°" : " mm"}`;
 }
 
 function travelText(scene, index) {
@@ -265,7 +269,14 @@ class Drawing {
     const vertices = [];
     for (let i = 0; i < ordered.length; i++) vertices.push(...centre, ...ordered[i], ...ordered[(i + 1) % ordered.length]);
     const mesh = this.mesh("plate", () => new THREE.Mesh(new THREE.BufferGeometry()));
-    mesh.geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
+    const kept = mesh.geometry.getAttribute("position");
+    if (kept && kept.array.length === vertices.length) {  // the same buffer, its numbers replaced
+      kept.array.set(vertices);
+      kept.needsUpdate = true;
+    } else {
+      mesh.geometry.dispose();
+      mesh.geometry.setAttribute("position", new THREE.Float32BufferAttribute(vertices, 3));
+    }
     mesh.geometry.computeVertexNormals();
     mesh.material = this.material(colour, Math.min(this.opacity, opacity));
     for (let i = 0; i < ordered.length; i++) this.rod(ordered[i], ordered[(i + 1) % ordered.length], this.radius * 0.6, colour);
@@ -410,6 +421,8 @@ class View {
       last = [e.clientX, e.clientY];
       this.render();
     });
+    const home = {...this.orbit};
+    canvas.addEventListener("dblclick", () => { Object.assign(this.orbit, home); this.render(); });
     canvas.addEventListener("wheel", e => {
       e.preventDefault();
       this.orbit.distance *= Math.exp(e.deltaY * 0.001);
@@ -430,13 +443,20 @@ class View {
       const enabled = free && this.routine !== null;
       slider.disabled = number.disabled = !enabled;
       slider.addEventListener("input", () => { number.value = slider.value; this.change(k, Number(slider.value)); });
-      number.addEventListener("change", () => { slider.value = number.value; this.change(k, Number(number.value)); });
+      number.addEventListener("change", () => {
+        if (number.value === "" || !Number.isFinite(Number(number.value))) { number.value = this.pose[k]; return; }
+        slider.value = number.value;
+        this.change(k, Number(number.value));
+      });
       row.append(slider, number);
       form.append(row);
       this.fields[name] = [slider, number];
     });
     const posture = this.root.querySelector(".kingen-posture");
-    for (let k = 0; k < this.scene.postures; k++) posture.append(new Option(String(k), String(k)));
+    for (let k = 0; k < this.scene.postures; k++) {
+      const branches = (this.scene.posture_branches || [])[k];
+      posture.append(new Option(branches && branches !== "-" ? `${k} (branches ${branches})` : String(k), String(k)));
+    }
     posture.value = String(this.posture);
     posture.disabled = this.routine === null;
     posture.addEventListener("change", () => { this.posture = Number(posture.value); this.update(); });
@@ -578,6 +598,7 @@ class View {
       const changes = this.times.slice(1), routine = this.routineTimes.slice(1);
       timing.textContent = JSON.stringify({load_ms: this.times[0], changes: changes.length, median_ms: quantile(changes, 0.5),
                                            p95_ms: quantile(changes, 0.95), max_ms: quantile(changes, 1),
+                                           over_50_ms: changes.filter(spent => spent > 50).length,
                                            routine_median_ms: quantile(routine, 0.5), routine_max_ms: quantile(routine, 1)});
     }
   }
@@ -591,33 +612,49 @@ class View {
     if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by, pose: this.pose, posture: this.posture});
     const drawn = document.getElementById("kingen-drawing");
     if (drawn && this.root.dataset.primary === "1") drawn.textContent = JSON.stringify(this.drawn);
-    const table = this.root.querySelector(".kingen-table tbody");
-    table.innerHTML = "";
+    if (!this.rows) this.rows = joints.map((_, i) => this.tableRow(i));
     joints.forEach((q, i) => {
       const status = i < this.drawn.limbs.length ? this.drawn.limbs[i].status : wristStatus(this.scene, i, q);
-      const row = table.insertRow();
+      const [row, value, words, gauge] = this.rows[i], travel = this.scene.travel[i];
       row.className = `kingen-${status}`;
-      row.insertCell().textContent = this.scene.joint_names[i];
-      const cell = row.insertCell();
-      if (this.routine) {  // a joint typed in moves the machine there: forward kinematics, from this pose
-        const deg = this.scene.joint_units[i] === "rad";
-        const field = Object.assign(document.createElement("input"), {type: "number", step: "any", className: "kingen-joint",
-                                                                       value: Number((deg ? q / DEG : q).toFixed(6))});
-        field.title = `${this.scene.joint_names[i]} in ${deg ? "degrees" : "mm"}: type a value to move the joint`;
-        field.addEventListener("change", () => {
-          const joints = this.joints.slice();
-          joints[i] = Number(field.value) * (deg ? DEG : 1);
-          this.jog(joints);
-        });
-        cell.append(field, deg ? "°" : " mm");
-      } else {
-        cell.textContent = valueText(this.scene, i, q);
+      if (travel) {
+        const shown = this.scene.joint_units[i] === "rad" ? q / DEG : q;
+        gauge.firstChild.style.left = `${100 * Math.max(0, Math.min(1, (shown - travel[0]) / (travel[1] - travel[0])))}%`;
       }
-      row.insertCell().textContent = travelText(this.scene, i);
-      row.insertCell().textContent = STATUS_WORDS[status];
+      if (value.tagName === "INPUT") value.value = valueDigits(this.scene, i, q);
+      else value.textContent = valueText(this.scene, i, q);
+      words.textContent = STATUS_WORDS[status];
     });
     this.root.querySelector(".kingen-warning").textContent = `posture ${this.posture}: ${warning}`;
     this.render();
+  }
+
+  // Joint i's row of the table, made once: [row, its value (a field where the routine can move
+  // the joint there: forward kinematics from the pose shown), its status].
+  tableRow(i) {
+    const row = this.root.querySelector(".kingen-table tbody").insertRow(), deg = this.scene.joint_units[i] === "rad";
+    row.insertCell().textContent = this.scene.joint_names[i];
+    const cell = row.insertCell();
+    let value = cell;
+    if (this.routine) {
+      value = Object.assign(document.createElement("input"), {type: "number", step: "any", className: "kingen-joint"});
+      value.title = `${this.scene.joint_names[i]} in ${deg ? "degrees" : "mm"}: type a value to move the joint`;
+      value.addEventListener("change", () => {
+        if (value.value === "" || !Number.isFinite(Number(value.value))) { value.value = valueDigits(this.scene, i, this.joints[i]); return; }
+        const joints = this.joints.slice();
+        joints[i] = Number(value.value) * (deg ? DEG : 1);
+        this.jog(joints);
+      });
+      cell.append(value, deg ? "°" : " mm");
+    }
+    const travel = row.insertCell(), gauge = document.createElement("span");
+    travel.textContent = travelText(this.scene, i);
+    if (this.scene.travel[i]) {  // where the joint is in its travel: a mark on a bar, as a jog dialog shows it
+      gauge.className = "kingen-gauge";
+      gauge.append(document.createElement("i"));
+      travel.append(gauge);
+    }
+    return [row, value, row.insertCell(), gauge];
   }
 
   render() {
@@ -642,7 +679,9 @@ class View {
         const h = this.drawn.platform;
         place(div, add([h[0][3], h[1][3], h[2][3]], [0, 0, this.scene.size * 0.06 * (i - this.drawn.limbs.length + 1)]));
       }
-      div.textContent = `${this.scene.joint_names[i]} ${valueText(this.scene, i, this.joints[i])}`;
+      const travel = this.scene.travel[i];
+      div.textContent = `${this.scene.joint_names[i]} ${valueText(this.scene, i, this.joints[i])}`
+        + (travel ? ` [${travel[0]}, ${travel[1]}]` : "");
     });
     for (const [position, div] of this.extraLabels) place(div, position);
   }

@@ -2,7 +2,8 @@
 """A headless LinuxCNC display for tests/test_linuxcnc_machine.py: LinuxCNC starts it as its
 [DISPLAY] program. It homes, jogs joint j by v in joint mode first when $KINGEN_FIRST_JOG is "j v", makes the
 MDI moves of $KINGEN_MOVES (on the axes $KINGEN_AXES, default XYZABC), jogs joint 0
-by $KINGEN_JOG in joint mode, reads joint and world positions back after each, reads the
+by $KINGEN_JOG in joint mode, reads joint and world positions back after each (and after each
+move the module's load pins, its payload.mass set to $KINGEN_PAYLOAD kg first when given), reads the
 kinematics module's pins with halcmd, and writes everything as JSON to $KINGEN_RESULT; then it
 exits, and LinuxCNC shuts down. Runs under Debian's /usr/bin/python3 (the linuxcnc module)."""
 
@@ -25,6 +26,18 @@ def settled():
     return {"joints": list(status.joint_actual_position[:status.joints]), "world": list(status.actual_position[:6])}
 
 
+def load_pins():
+    """The module's pins load.0, load.1, ... (N or N m) as halcmd reads them."""
+    loads, index = [], 0
+    while True:
+        read = subprocess.run(["halcmd", "-s", "getp", f"{os.environ['KINGEN_MODULE']}.load.{index}"],
+                              capture_output=True, text=True)
+        if read.returncode != 0:
+            return loads
+        loads.append(float(read.stdout))
+        index += 1
+
+
 def jog_joint(joint, increment):
     """Jog ``joint`` by ``increment`` in joint (free) mode; (before, after) positions."""
     command.mode(linuxcnc.MODE_MANUAL)
@@ -39,6 +52,9 @@ def jog_joint(joint, increment):
 
 
 try:
+    if os.environ.get("KINGEN_PAYLOAD"):  # the payload's mass (kg) at the platform origin, for the load pins
+        subprocess.run(["halcmd", "setp", f"{os.environ['KINGEN_MODULE']}.payload.mass", os.environ["KINGEN_PAYLOAD"]],
+                       check=True)
     power_on_and_home()
     result["homed"] = settled()
     if os.environ.get("KINGEN_FIRST_JOG"):  # "joint increment": off a home where world moves cannot start
@@ -50,7 +66,7 @@ try:
         axes = os.environ.get("KINGEN_AXES", "XYZABC")
         command.mdi("G90 G0 " + " ".join(f"{axis}{value:.12f}" for axis, value in zip(axes, pose)))
         command.wait_complete(60)
-        result["moves"].append({"pose": pose, **settled()})
+        result["moves"].append({"pose": pose, **settled(), "loads": load_pins()})
     result["jog"] = jog_joint(0, float(os.environ["KINGEN_JOG"]))
     pins = subprocess.run(["halcmd", "-s", "show", "pin", os.environ["KINGEN_MODULE"]], capture_output=True, text=True)
     result["pins"] = pins.stdout

@@ -21,7 +21,7 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   pose and its status against kingen's (:func:`kingen.kinematics.hybrid.parasitic.solve_parasitic`) on
   the sampled poses, those off the machine's manifold and those beside the warnings' boundaries
   among them.
-- ``c loads``: for robots without a wrist or task coordinates, the library's static loads
+- ``c loads``: the library's static loads (a wrist's joints' torques after the legs' loads)
   against kingen's (:func:`kingen.kinematics.loads.loads`) on regular postures of the sample,
   holding the robot file's payload (or, where it gives none, a stand-in: 10 kg whose centre lies
   a tenth of the robot's size off the platform origin, so that every term is exercised).
@@ -39,14 +39,13 @@ from ...kinematics.reference import solve
 from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNING_BAND, WARNINGS, warning_codes
 from ...kinematics.singularity import direct_index, jacobian, posture_wrenches
 from ...kinematics.hybrid.wrist_rates import tool_jacobian
-from ...robot.loads_schema import Payload
 from ...verify.checks import (Check, Closure, Definition, Determinism, Golden, Jacobian, Machine, RoundTrip, Snapshot,
                               Values, VerifyCheck, Warnings)
 from ...verify.checks.jacobian import JACOBIAN_MIN_RADICAND, JACOBIAN_MIN_TRANSMISSION
 from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, forward_seeds, pose_conditioning, seed_offsets
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
-from .render import has_static_loads
+from ..loads import checked_payload, payload_words
 
 FORWARD_POSES = 500
 JACOBIAN_PAIRS = 200
@@ -257,16 +256,10 @@ class CMachinePose(VerifyCheck, name="c machine pose", needs="compared poses"):
 class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
     poses = JACOBIAN_PAIRS
 
-    def refusal(self, context):
-        if not has_static_loads(context.robot):
-            return "the library computes static loads for machines without a wrist or task coordinates"
-        return None
-
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
         pose_index, posture, _, _, _, _ = pairs
-        payload = robot.payload or Payload(mass=10.0, centre=(0.1 * robot.size_mm, -0.05 * robot.size_mm,
-                                                              0.07 * robot.size_mm), inertia=((0.0,) * 3,) * 3)
+        payload = checked_payload(robot)
         expected = loads(replace(robot, payload=payload), t6[pose_index]).forces[np.arange(len(pose_index)), posture]
         given = [payload.mass, *payload.centre, *robot.gravity]
         worst, refused = 0.0, 0
@@ -276,9 +269,8 @@ class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
             scale = np.max(np.abs(expected[number]))
             if returned >= 0 and np.isfinite(scale) and scale > 0:
                 worst = max(worst, float(np.max(np.abs(forces - expected[number])) / scale))
-        whose = "the robot file's payload" if robot.payload else "a stand-in payload (10 kg off the platform origin)"
         return Check(self.name, worst <= C_LOADS_TOLERANCE and not refused,
-                     f"the library's static loads against kingen's holding {whose} on {len(pose_index)} regular "
+                     f"the library's static loads against kingen's holding {payload_words(robot)} on {len(pose_index)} regular "
                      f"postures of {len(t6)} poses: max relative difference {worst:.3g} (at most {C_LOADS_TOLERANCE:g}); "
                      f"{refused} refused", judged=len(pose_index))
 

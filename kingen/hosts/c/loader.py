@@ -19,20 +19,17 @@ from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, digest, write_atomic
 from ...defaults import DEFAULT_TIMEOUT, VERSION
 from .checks import CHECKS
-from .render import has_static_loads
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
-ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "default_geometry")
+ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "static_loads", "default_geometry")
 """What the header declares for every robot (``<routine>_<name>``); six-limb robots add
-``direct_index``, machines with task coordinates and no wrist ``machine_pose``, robots without a
-wrist or task coordinates ``static_loads`` (render.has_static_loads)."""
+``direct_index``, machines with task coordinates and no wrist ``machine_pose``."""
 
 
 def entry_points(robot):
     """What ``robot``'s library exports (``<routine>_<name>``): :data:`ENTRY_POINTS` and its own."""
     return (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ()),
-            *(("machine_pose",) if robot.task and robot.wrist is None else ()),
-            *(("static_loads",) if has_static_loads(robot) else ()))
+            *(("machine_pose",) if robot.task and robot.wrist is None else ()))
 _batch_ffi = cffi.FFI()
 _batch_ffi.cdef("""
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,

@@ -9,7 +9,8 @@ from pathlib import Path
 from ...kinematics.forward import COORDINATES, free_mask
 from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
-from ...robot.limbs import c_double, c_vector
+from ...robot.limbs import c_double
+from ..loads import loads_view
 from ..render import closed_form_model, newton_step, refuse, robot_view, template
 from . import CHost
 
@@ -79,47 +80,8 @@ def view_model(robot):
         "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": newton_step(robot),
-        **loads_view(robot, free),
+        **loads_view(robot, free, lambda row, column: f"pose[{4 * row + column}]"),
     }
-
-
-ANGLE_RATE_ROWS = {"roll": "0.0, 0.0, 0.0, pose[0], pose[4], 0.0", "pitch": "0.0, 0.0, 0.0, -pose[4], pose[0], 0.0",
-                   "yaw": "0.0, 0.0, 0.0, -pose[8] * pose[0], -pose[8] * pose[4], pose[0] * pose[0] + pose[4] * pose[4]"}
-"""An angle's rate per twist [v; omega] at a row-major pose, up to a positive factor
-(kingen.kinematics.hybrid.parasitic.task_rows): roll' = (c_yaw w_x + s_yaw w_y) / c_pitch, pitch' = -s_yaw w_x +
-c_yaw w_y, yaw' = w_z + t_pitch (c_yaw w_x + s_yaw w_y), times cos(pitch)^2, cos(pitch) and cos(pitch)^2."""
-
-
-def held_row(name):
-    """C initializer of a pose coordinate's rate per twist at a row-major pose (up to a positive
-    factor: only the held coordinates' span matters, the wrenches they carry): for x, y, z the
-    platform origin's velocity component, v_k + omega . (p x e_k)."""
-    if name not in "xyz":
-        return ANGLE_RATE_ROWS[name]
-    axis, position = "xyz".index(name), ("pose[3]", "pose[7]", "pose[11]")
-    force, moment = ["0.0"] * 3, ["0.0"] * 3
-    force[axis] = "1.0"
-    moment[(axis + 1) % 3], moment[(axis + 2) % 3] = position[(axis + 2) % 3], "-" + position[(axis + 1) % 3]
-    return ", ".join(force + moment)
-
-
-def has_static_loads(robot):
-    """Whether the library exports ``<prefix>_static_loads``: a robot without a wrist or task coordinates."""
-    return robot.wrist is None and not robot.task
-
-
-def loads_view(robot, free):
-    """The static loads' part of the view: ``loads`` (has_static_loads), the payload's initializer
-    (mass kg, centre mm, gravity m/s^2) and the held coordinates' rows."""
-    if not has_static_loads(robot):
-        return {"loads": False}
-    payload = robot.payload
-    held = [name for index, name in enumerate(COORDINATES) if not free[index]]
-    return {"loads": True,
-            "payload": {"mass": c_double(payload.mass if payload else 0.0),
-                        "centre": c_vector(payload.centre if payload else (0.0, 0.0, 0.0)),
-                        "gravity": c_vector(robot.gravity)},
-            "held": [held_row(name) for name in held], "held_names": " ".join(held)}
 
 
 def render(robot):

@@ -20,7 +20,7 @@ from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
 from ...kinematics.routine import WARNINGS, Calls
 from .build import harness
-from .render import translating
+from .render import hal_prefix, module_name, translating
 from .checks import CHECKS, WRIST_CHECKS
 from .five_axis import world_of_t6
 
@@ -71,8 +71,9 @@ def _batch(routine, forward, poses, joints, pin):
 class Module:
     """A loaded kinematics module for ``robot`` (a one-posture view: the joints LinuxCNC sees).
 
-    ``routine`` is the HAL module name (``<name>kins``, ``genhexkins``): its pins and
-    parameters start with it. ``setp`` is {name: value} set after ``rtapi_app_main``.
+    ``routine`` is the HAL module name (``<name>kins``, ``genhexkins``); ``self.routine`` its HAL
+    component's, which starts its pins' and parameters' names (kingen's own may be shorter:
+    kingen.hosts.linuxcnc.render.hal_prefix). ``setp`` is {name: value} set after ``rtapi_app_main``.
     Raises KingenError for what is the user's (no such file, not a library) and PluginDefect
     for a module that lacks an entry point or whose rtapi_app_main fails."""
 
@@ -89,6 +90,8 @@ class Module:
         folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))
         copy = folder / path.name  # a fresh copy: each load gets the module's own static state
         shutil.copy2(path, copy)
+        if robot is not None and routine == module_name(robot):  # kingen's own: its HAL component may be shorter
+            routine = hal_prefix(robot)
         hal.kingen_hal_forget(f"{routine}.".encode())
         try:
             self.library = ffi.dlopen(str(copy), ffi.RTLD_NOW)
@@ -175,6 +178,26 @@ class Module:
         world = np.ascontiguousarray(world, dtype=float)
         joints = np.full((len(world), JOINT_SLOTS), np.nan)
         return (joints, *_batch(self.library.kinematicsInverse, 0, world, joints, self.status_pin))
+
+    def static_loads(self, world, payload):
+        """The pins load.0 .. load.<joints - 1> (N or N m) after kinematicsInverse at each of the
+        EmcPose numbers ``world`` (n, 9), holding ``payload`` (mass kg, centre (3,) machine units
+        in the platform frame, a wrist's tool frame, gravity (3,) m/s^2) set into the parameters payload.mass,
+        payload.centre.x|y|z and gravity.x|y|z first: (loads (n, dof), returns (n,)), NaN where
+        the module has no such pin."""
+        mass, centre, gravity = payload
+        hal = _hal()
+        for suffix, value in (("payload.mass", mass), *zip(("payload.centre.x", "payload.centre.y", "payload.centre.z",
+                                                            "gravity.x", "gravity.y", "gravity.z"), (*centre, *gravity))):
+            hal.kingen_hal_set(f"{self.routine}.{suffix}".encode(), float(value))
+        world = np.ascontiguousarray(world, dtype=float)
+        loads, returns = np.full((len(world), self.dof), np.nan), np.zeros(len(world), dtype=np.intc)
+        for index in range(self.dof):  # each pin read after every call: one pass per pin
+            pin = self._pin(f"load.{index}")
+            if pin != ffi.NULL:
+                returns, loads[:, index] = _batch(self.library.kinematicsInverse, 0, world.copy(),
+                                                  np.full((len(world), JOINT_SLOTS), np.nan), pin)
+        return loads, returns
 
     def forward(self, joints, seeds):
         """kinematicsForward on joints (n, 16) from seeds (n, 9): (poses (n, 9), returns, iterations)."""

@@ -2,12 +2,14 @@
 template, the shared view-model (:func:`kingen.hosts.render.robot_view`) and the limb models'
 partials (with their force lines and transmissions, for the forward Jacobian). Pure."""
 
+import hashlib
 import math
 from dataclasses import replace
 from pathlib import Path
 
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
+from ..loads import loads_view
 from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_step, robot_view, schur_test_lines,
                       template)
 from . import LinuxcncHost
@@ -26,9 +28,14 @@ STOCK_MODULES = frozenset({
 """LinuxCNC's own kinematics modules (Debian's linuxcnc-uspace 2.9): a generated module may
 not take their names."""
 HAL_NAME_LEN = 47
-"""The longest pin or parameter name LinuxCNC's HAL accepts (hal.h's HAL_NAME_LEN)."""
+"""The longest component, pin or parameter name LinuxCNC's HAL accepts (hal.h's HAL_NAME_LEN)."""
+SHORTEST_PREFIX = 9
+"""The shortest HAL component name :func:`hal_prefix` cuts to: 4 of the module's name's
+characters, a '-' and 4 hex digits."""
 SETTINGS = ("max-iterations", "tolerance", "max-step", "max-step-angle", "status", "iterations")
 """The module's own pins and parameters, besides the geometry."""
+LOAD_SETTINGS = ("payload.mass", *(f"payload.centre.{axis}" for axis in "xyz"), *(f"gravity.{axis}" for axis in "xyz"))
+"""The parameters of the payload whose static loads the pins load.N give."""
 MAX_ITERATIONS = 20
 MAX_STEP = 25.0
 MAX_STEP_ANGLE = 10.0
@@ -71,11 +78,10 @@ def robot_problem(robot):
     if robot.dof != 6 and not translating(robot) and not robot.task and robot.wrist is None:
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
-    names = [f"{module_name(robot)}.{name}" for name in (*SETTINGS, *(parameter["name"] for parameter in _parameters(robot)))]
-    longest = max(names, key=len)
+    longest = f"{_cut(module_name(robot), SHORTEST_PREFIX)}.{max(hal_suffixes(robot), key=len)}"
     if len(longest) > HAL_NAME_LEN:
-        return (f"name: the HAL name '{longest}' has {len(longest)} characters; LinuxCNC takes at most "
-                f"{HAL_NAME_LEN}: shorten the robot's or its limbs' names")
+        return (f"name: the HAL name '{longest}' has {len(longest)} characters with the HAL component cut to its "
+                f"shortest; LinuxCNC takes at most {HAL_NAME_LEN}: shorten the limbs' names")
     if robot.postures > 1 and not robot.working_posture_given:
         return (f"working_posture: LinuxCNC's inverse kinematics has one answer: name the posture the machine "
                 f"is built in (working_posture: 0 to {robot.postures - 1})")
@@ -84,6 +90,29 @@ def robot_problem(robot):
 
 def check_robot(robot):
     refuse(robot, robot_problem(robot))
+
+
+def hal_suffixes(robot):
+    """What follows ``<component>.`` in the names of the module's pins and parameters."""
+    parallel = robot.parallel
+    return (*SETTINGS, *LOAD_SETTINGS, *(f"load.{index}" for index in range(robot.joint_count)),
+            *(parameter["name"] for parameter in _parameters(parallel)))
+
+
+def hal_prefix(robot):
+    """The module's HAL component name, which starts every name of its pins and parameters: the
+    module's name (<name>kins) where every such name then fits LinuxCNC's HAL_NAME_LEN, else its
+    first characters, a '-' and the first 4 hex digits of its sha256, as long as the longest
+    name allows (at least SHORTEST_PREFIX characters: robot_problem refuses a robot whose limbs'
+    names leave less)."""
+    module = module_name(robot)
+    room = HAL_NAME_LEN - 1 - max(len(suffix) for suffix in hal_suffixes(robot))
+    return module if len(module) <= room else _cut(module, room)
+
+
+def _cut(module, length):
+    """``module`` cut to ``length`` characters, the last five a '-' and 4 hex digits of its sha256."""
+    return f"{module[:length - 5]}-{hashlib.sha256(module.encode()).hexdigest()[:4]}"
 
 
 def _parameters(robot):
@@ -107,10 +136,11 @@ def _parameters(robot):
 def view_model(robot, units="mm"):
     """What the module's source shows, in the machine's ``units``; ``branch_words`` names the
     working posture's branches in the limb models' words (true at the verification home). With
-    a wrist: its parallel part's at the working posture's, and the wrist (:mod:`.five_axis`)."""
+    a wrist: its parallel part's at the working posture's (carrying the robot's payload, on the
+    tool), and the wrist (:mod:`.five_axis`)."""
     check_robot(robot)
     if robot.wrist is not None:
-        parallel = replace(robot.parallel, working_posture_given=True)
+        parallel = replace(robot.parallel, working_posture_given=True, payload=robot.payload, gravity=robot.gravity)
         return {**view_model(parallel, units), "wrist": wrist_view(robot),
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}
@@ -137,6 +167,7 @@ def view_model(robot, units="mm"):
     return {
         **view,
         "module": module_name(robot),
+        "component": hal_prefix(robot),
         "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                 ("posture", robot.working_posture))),
         "unit_name": units,
@@ -162,6 +193,9 @@ def view_model(robot, units="mm"):
         "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),
         "max_step_angle": c_double(MAX_STEP_ANGLE),
         "degree": c_double(math.pi / 180.0),
+        "metres_per_unit": c_double(LENGTH_UNITS[units] / 1000.0),
+        **loads_view(robot, [index in free for index in range(6)], lambda row, column: f"T6[{column}][{row}]",
+                     1.0 / LENGTH_UNITS[units]),
     }
 
 
