@@ -46,7 +46,7 @@ def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
         solution = solve(robot, machine)
     else:  # the pose the caller's solution was solved at: the machine's already
         machine = t6
-    return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion))
+    return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion), motion)
 
 
 def machine_pose(loads_result):

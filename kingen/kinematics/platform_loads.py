@@ -20,8 +20,8 @@ the payload's rate of change of momentum, d'Alembert):
 Positive tau is the force or torque the actuator exerts in the direction that increases its
 joint. The constraints (passive joints, a machine's held coordinates) carry the rest,
 -(W + J^T tau). With each actuator's stiffness k_i, the platform's deflection under W is
-T ds with ds = ((J T)^T K (J T))^-1 T^T W (the passive joints rigid). The limbs' own masses
-are not modelled.
+T ds with ds = ((J T)^T K (J T))^-1 T^T W (the passive joints rigid). The limbs' parts add
+their weight and d'Alembert forces to W (kingen.kinematics.limb_parts).
 """
 
 from dataclasses import dataclass
@@ -30,12 +30,11 @@ import numpy as np
 
 from ..conventions import t6_from_pose
 from .forward import free_mask, pose_jacobian, poses_of
+from .limb_parts import MM_PER_M, with_parts
 from .parasitic import solve_parasitic, task_twists
 from .reference import solve
 from .routine import WARNINGS
 from .singularity import branch_table, branch_values, limb_wrenches
-
-MM_PER_M = 1000.0
 
 
 @dataclass(frozen=True)
@@ -130,10 +129,12 @@ def applied_wrenches(robot, t6, wrench=None, motion=None):
     return static, (static if motion is None else payload_wrench(robot, t6, motion) + external)
 
 
-def platform_loads(robot, machine, solution, chosen, static, applied):
+def platform_loads(robot, machine, solution, chosen, static, applied, motion=None):
     """:class:`Loads` of ``robot`` (no wrist) at the T6 ``machine`` (n, 4, 4) it takes, from the
     reference's ``solution`` there, in postures ``chosen``, holding the wrenches ``static`` (at
-    rest) and ``applied`` (n, 6) [N; N mm about the base origin] applied to the platform."""
+    rest) and ``applied`` (n, 6) [N; N mm about the base origin] applied to the platform, and
+    the limbs' parts under gravity and, with ``motion`` (the platform origin's), moving."""
+    static, applied = with_parts(robot, machine, solution, chosen, static, applied, motion)  # (n, 1 or p, 6)
     wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
     table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
     limbs = np.arange(robot.dof)
@@ -144,9 +145,9 @@ def platform_loads(robot, machine, solution, chosen, static, applied):
     if twists is None:  # six free coordinates: J^T tau = -W
         reduced, generalized = rows, -applied
     else:
-        reduced, generalized = rows @ twists[:, None], -np.einsum("nkd,nk->nd", twists, applied)
-    forces = _solve_each(np.swapaxes(reduced, 2, 3), generalized[:, None, :])  # (n, p, m)
-    carried = -(applied[:, None, :] + (np.swapaxes(rows, 2, 3) @ forces[..., None])[..., 0])
+        reduced, generalized = rows @ twists[:, None], -np.einsum("nkd,npk->npd", twists, applied)
+    forces = _solve_each(np.swapaxes(reduced, 2, 3), generalized)  # (n, p, m)
+    carried = -(applied + (np.swapaxes(rows, 2, 3) @ forces[..., None])[..., 0])
     constraint = about_origin(carried, machine)
     scale = np.where(np.array([t.wraps for t in robot.joint_types[:robot.dof]]), 1.0 / MM_PER_M, 1.0)
     warnings = solution.warnings[:, chosen]
@@ -195,16 +196,16 @@ def _stiffness(robot):
 
 def _deflection(robot, t6, reduced, twists, static):
     """(n, p, 6) the platform origin's displacement (mm) and rotation vector (rad) under the
-    static wrench (module docstring), or None without every limb's stiffness; ``twists`` None:
+    static wrench (n, 1 or p, 6) (module docstring), or None without every limb's stiffness; ``twists`` None:
     the six coordinates free (T the identity's change of basis, left out)."""
     stiffness = _stiffness(robot)
     if stiffness is None or reduced.shape[-1] != reduced.shape[-2]:
         return None
     matrix = np.swapaxes(reduced, 2, 3) @ (stiffness[:, None] * reduced)
     if twists is None:
-        twist = _solve_each(matrix, static[:, None, :])  # (n, p, 6)
+        twist = _solve_each(matrix, static)  # (n, p, 6)
     else:
-        moves = _solve_each(matrix, np.einsum("nkd,nk->nd", twists, static)[:, None, :])  # (n, p, d)
+        moves = _solve_each(matrix, np.einsum("nkd,npk->npd", twists, static))  # (n, p, d)
         twist = np.einsum("nkd,npd->npk", twists, moves)
     displacement = twist[..., :3] + np.cross(twist[..., 3:], t6[:, None, 3, :3])
     return np.concatenate([displacement, twist[..., 3:]], axis=-1)
