@@ -71,6 +71,9 @@ class LimbModel(Strict):
     """N: a prismatic actuator's largest force either way; absent: not limited (``kingen loads``)."""
     max_torque: Optional[ForceLimit] = None
     """N m: a revolute actuator's largest torque either way; absent: not limited."""
+    max_power: Optional[ForceLimit] = None
+    """W: the actuator's largest power (load times joint speed) either way; absent: not limited
+    (``kingen check-path`` judges the power a program needs against it)."""
     stiffness: Optional[ForceLimit] = None
     """The actuator's stiffness along its joint: N/mm (prismatic) or N m/rad (revolute); absent: rigid
     is not assumed, and no deflection is computed."""
