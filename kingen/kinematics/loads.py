@@ -5,7 +5,6 @@ kingen.kinematics.wrist_loads, and what verify and check-path judge of them."""
 import numpy as np
 
 from ..conventions import pose_from_t6
-from .parasitic import solve_parasitic
 from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platform_loads
 from .reference import solve
 from .wrist_loads import wrist_loads
@@ -42,8 +41,8 @@ def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
     if robot.wrist is not None:
         return wrist_loads(robot, t6, wrench, motion, chosen)
     if solution is None:
-        machine = solve_parasitic(robot, t6).t6 if robot.task else t6
-        solution = solve(robot, machine)
+        solution = solve(robot, t6)
+        machine = solution.machine if robot.task else t6
     else:  # the pose the caller's solution was solved at: the machine's already
         machine = t6
     return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion), motion)

@@ -81,7 +81,15 @@ def free_twists(robot, t6):
     (kingen.kinematics.forward.pose_jacobian), in pose order."""
     if robot.task:
         return task_twists(robot, t6)
+    if _translating(robot):
+        return np.broadcast_to(np.eye(6)[:, free_mask(robot)], (len(t6), 6, int(free_mask(robot).sum())))
     return pose_jacobian(poses_of(t6))[:, :, free_mask(robot)]
+
+
+def _translating(robot):
+    """Whether the platform's free coordinates are translations only (no task coordinates):
+    each column of T is then a constant unit twist [e_k; 0]."""
+    return not robot.task and not free_mask(robot)[3:].any()
 
 
 def payload_wrench(robot, t6, motion=None):
@@ -135,19 +143,21 @@ def platform_loads(robot, machine, solution, chosen, static, applied, motion=Non
     rest) and ``applied`` (n, 6) [N; N mm about the base origin] applied to the platform, and
     the limbs' parts under gravity and, with ``motion`` (the platform origin's), moving."""
     static, applied = with_parts(robot, machine, solution, chosen, static, applied, motion)  # (n, 1 or p, 6)
-    wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
-    table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
-    limbs = np.arange(robot.dof)
+    lines, transmissions = _force_lines(robot, solution, chosen)
     with np.errstate(divide="ignore", invalid="ignore"):
-        lines = wrenches[:, limbs, table]  # (n, p, m, 6): each limb's unit force line [f; C x f]
-        rows = lines / transmissions[:, limbs, table][..., None]
+        rows = lines / transmissions[..., None]
     twists = None if all_free(robot) else free_twists(robot, machine)
     if twists is None:  # six free coordinates: J^T tau = -W
         reduced, generalized = rows, -applied
+    elif _translating(robot):  # T's columns are unit twists: J T and T^T W pick their components
+        columns = np.flatnonzero(free_mask(robot))
+        reduced, generalized = rows[..., columns], -applied[..., columns]
     else:
         reduced, generalized = rows @ twists[:, None], -np.einsum("nkd,npk->npd", twists, applied)
     forces = _solve_each(np.swapaxes(reduced, 2, 3), generalized)  # (n, p, m)
-    carried = -(applied + (np.swapaxes(rows, 2, 3) @ forces[..., None])[..., 0])
+    carried = -applied
+    for limb in range(robot.dof):  # minus J^T tau, limb by limb (a matmul of tiny stacks is slower)
+        carried = carried - rows[..., limb, :] * forces[..., limb, None]
     constraint = about_origin(carried, machine)
     scale = np.where(np.array([t.wraps for t in robot.joint_types[:robot.dof]]), 1.0 / MM_PER_M, 1.0)
     warnings = solution.warnings[:, chosen]
@@ -159,6 +169,26 @@ def platform_loads(robot, machine, solution, chosen, static, applied, motion=Non
                  deflection=_deflection(robot, machine, reduced, twists, static), warnings=warnings)
 
 
+def _force_lines(robot, solution, chosen):
+    """((n, p, m, 6), (n, p, m)): each limb's unit force line [f; C x f] and its transmission in
+    each posture of ``chosen`` (p,), from the reference's ``solution``; one posture: from its own
+    joints, one line per limb; else from both branches' lines (kingen.kinematics.singularity)."""
+    if len(chosen) == 1:
+        count = len(solution.points)
+        lines, transmissions = np.empty((count, 1, robot.dof, 6)), np.empty((count, 1, robot.dof))
+        for index, limb in enumerate(robot.limbs[:robot.dof]):
+            point, joint = solution.points[:, index], solution.joints[:, index, chosen[0]]
+            direction = limb.force_direction(point, joint)
+            lines[:, 0, index, :3] = direction
+            lines[:, 0, index, 3:] = _cross(point, direction)
+            transmissions[:, 0, index] = limb.transmission(direction, joint)
+        return lines, transmissions
+    wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
+    table = branch_table(robot)[chosen, :robot.dof]  # (p, m): each chosen posture's branch of each limb
+    limbs = np.arange(robot.dof)
+    return wrenches[:, limbs, table], transmissions[:, limbs, table]
+
+
 HADAMARD_FLOOR = 1e-13
 """A matrix counts as singular (loads undefined, NaN) where |det| is at most this fraction of
 the product of its rows' norms (Hadamard's bound)."""
@@ -167,6 +197,8 @@ the product of its rows' norms (Hadamard's bound)."""
 def _solve_each(matrices, right):
     """Solutions x of matrices (..., d, d) x = right (..., d), NaN where a matrix is not finite
     or singular (HADAMARD_FLOOR)."""
+    if matrices.shape[-2:] == (3, 3):
+        return _solve_each_3(matrices, right)
     matrices, right = np.broadcast_arrays(matrices, right[..., None])
     out = np.full(right.shape[:-1], np.nan)
     if matrices.shape[-2] != matrices.shape[-1]:
@@ -176,6 +208,29 @@ def _solve_each(matrices, right):
     good = finite & (np.abs(np.linalg.det(np.where(finite[..., None, None], matrices, 0.0))) > HADAMARD_FLOOR * bound)
     out[good] = np.linalg.solve(matrices[good], right[good])[..., 0]
     return out
+
+
+def _solve_each_3(matrices, right):
+    """_solve_each for 3 x 3 matrices, in closed form (x = adj(M) right / det M, the cofactors
+    written out over the stacks); NaN where a matrix is not finite or singular (HADAMARD_FLOOR)."""
+    m = [[matrices[..., row, column] for column in range(3)] for row in range(3)]
+    r = [right[..., row] for row in range(3)]
+    cofactor = [[m[(i + 1) % 3][(j + 1) % 3] * m[(i + 2) % 3][(j + 2) % 3]
+                 - m[(i + 1) % 3][(j + 2) % 3] * m[(i + 2) % 3][(j + 1) % 3] for j in range(3)] for i in range(3)]
+    determinant = m[0][0] * cofactor[0][0] + m[0][1] * cofactor[0][1] + m[0][2] * cofactor[0][2]
+    bound = np.ones_like(determinant)
+    for row in m:
+        bound = bound * np.sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inverse = np.where(np.abs(determinant) > HADAMARD_FLOOR * bound, 1.0 / determinant, np.nan)  # NaN: not finite
+        return np.stack([(cofactor[0][i] * r[0] + cofactor[1][i] * r[1] + cofactor[2][i] * r[2]) * inverse
+                         for i in range(3)], axis=-1)
+
+
+def _cross(a, b):
+    """a x b over the last axis (3,), written out (numpy.cross is slower on large stacks)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
 def about_origin(wrench, t6):
@@ -214,8 +269,9 @@ def _deflection(robot, t6, reduced, twists, static):
 def _in_both_frames(directions, t6):
     """(directions, the same in the platform frame): each limb's passive-link direction (n, p, m, 3)
     (unit, from the base side to the platform point: its force line's, base frame) at T6 (n, 4, 4)."""
-    rotation = np.swapaxes(np.asarray(t6, dtype=float)[:, :3, :3], 1, 2)
-    return directions, np.einsum("nji,npmj->npmi", rotation, directions)
+    t6 = np.asarray(t6, dtype=float)
+    turned = [sum(t6[:, None, None, row, column] * directions[..., column] for column in range(3)) for row in range(3)]
+    return directions, np.stack(turned, axis=-1)  # R^T f, R = t6[:3, :3]^T
 
 
 def neutral_axes(robot):
