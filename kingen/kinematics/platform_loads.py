@@ -24,6 +24,7 @@ T ds with ds = ((J T)^T K (J T))^-1 T^T W (the passive joints rigid). The limbs'
 their weight and d'Alembert forces to W (kingen.kinematics.limb_parts).
 """
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +32,7 @@ import numpy as np
 from ..conventions import t6_from_pose
 from .forward import free_mask, pose_jacobian, poses_of
 from .limb_parts import MM_PER_M, with_parts
-from .parasitic import solve_parasitic, task_twists
+from .parasitic import constraint_rows, solve_parasitic, task_twists
 from .reference import solve
 from .routine import WARNINGS
 from .singularity import branch_table, branch_values, limb_wrenches
@@ -75,12 +76,12 @@ def all_free(robot):
 
 
 def free_twists(robot, t6):
-    """(n, 6, d) the twists per unit rate of each free coordinate at T6 (n, 4, 4) the machine
-    takes: its task coordinates (kingen.kinematics.parasitic.task_twists), else its ``forward.free``
+    """(n, 6, d) a basis of the platform's free twists at T6 (n, 4, 4) the machine takes: a task
+    machine's along its manifold (_task_tangents), else the twists per unit rate of its ``forward.free``
     coordinates (all six when none are declared) with the other pose coordinates held
     (kingen.kinematics.forward.pose_jacobian), in pose order."""
     if robot.task:
-        return task_twists(robot, t6)
+        return _task_tangents(robot, t6)
     if _translating(robot):
         return np.broadcast_to(np.eye(6)[:, free_mask(robot)], (len(t6), 6, int(free_mask(robot).sum())))
     return pose_jacobian(poses_of(t6))[:, :, free_mask(robot)]
@@ -210,21 +211,69 @@ def _solve_each(matrices, right):
     return out
 
 
-def _solve_each_3(matrices, right):
-    """_solve_each for 3 x 3 matrices, in closed form (x = adj(M) right / det M, the cofactors
-    written out over the stacks); NaN where a matrix is not finite or singular (HADAMARD_FLOOR)."""
+def _cofactors(matrices):
+    """(cofactors, det, bound) of 3 x 3 matrices (..., 3, 3), written out over the stacks:
+    cofactors[i][j] (...), det (...) and Hadamard's bound, the product of the rows' norms."""
     m = [[matrices[..., row, column] for column in range(3)] for row in range(3)]
-    r = [right[..., row] for row in range(3)]
     cofactor = [[m[(i + 1) % 3][(j + 1) % 3] * m[(i + 2) % 3][(j + 2) % 3]
                  - m[(i + 1) % 3][(j + 2) % 3] * m[(i + 2) % 3][(j + 1) % 3] for j in range(3)] for i in range(3)]
     determinant = m[0][0] * cofactor[0][0] + m[0][1] * cofactor[0][1] + m[0][2] * cofactor[0][2]
     bound = np.ones_like(determinant)
     for row in m:
         bound = bound * np.sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2])
+    return cofactor, determinant, bound
+
+
+def _solve_each_3(matrices, right):
+    """_solve_each for 3 x 3 matrices, in closed form (x = adj(M) right / det M); NaN where a
+    matrix is not finite or singular (HADAMARD_FLOOR)."""
+    cofactor, determinant, bound = _cofactors(matrices)
+    r = [right[..., row] for row in range(3)]
     with np.errstate(invalid="ignore", divide="ignore"):
         inverse = np.where(np.abs(determinant) > HADAMARD_FLOOR * bound, 1.0 / determinant, np.nan)  # NaN: not finite
         return np.stack([(cofactor[0][i] * r[0] + cofactor[1][i] * r[1] + cofactor[2][i] * r[2]) * inverse
                          for i in range(3)], axis=-1)
+
+
+def _inverse_3(matrices):
+    """((n, 3, 3), (n,)): the inverses of 3 x 3 matrices and how well conditioned each is,
+    |det| over Hadamard's bound (0 to 1; 0 where singular or not finite)."""
+    cofactor, determinant, bound = _cofactors(matrices)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quality = np.nan_to_num(np.abs(determinant) / bound)
+        inverse = np.stack([np.stack([cofactor[j][i] for j in range(3)], axis=-1) for i in range(3)], axis=-2)
+        return inverse / determinant[:, None, None], quality
+
+
+WELL_CONDITIONED = 1e-6
+"""How well conditioned (_inverse_3) a task machine's constraint block must be to give its tangents
+in closed form; elsewhere kingen.kinematics.parasitic.task_twists solves for them."""
+
+
+def _task_tangents(robot, t6):
+    """(n, 6, 3) a basis of the twists along a task machine's manifold at T6 (n, 4, 4) on it: with
+    its constraints' rows G (kingen.kinematics.parasitic.constraint_rows) split into three twist
+    components A and the other three B, G t = 0 gives t_A = -G_A^-1 G_B t_B (t_B free); A is the
+    split best conditioned over the first poses, and task_twists answers where G_A is poorly
+    conditioned (WELL_CONDITIONED; loads do not depend on the basis)."""
+    rows = constraint_rows(robot, t6)
+    splits = [np.array(columns) for columns in itertools.combinations(range(6), 3)]
+    sample = rows[:SAMPLED]
+    chosen = max(splits, key=lambda columns: np.min(_inverse_3(sample[:, :, columns])[1], initial=1.0))
+    others = np.setdiff1d(np.arange(6), chosen)
+    inverse, quality = _inverse_3(rows[:, :, chosen])
+    basis = np.empty((len(t6), 6, 3))
+    with np.errstate(invalid="ignore"):
+        basis[:, chosen] = -(inverse @ rows[:, :, others])
+    basis[:, others] = np.eye(3)
+    poor = quality < WELL_CONDITIONED
+    if np.any(poor):
+        basis[poor] = task_twists(robot, t6[poor])
+    return basis
+
+
+SAMPLED = 16
+"""The poses whose constraint rows choose _task_tangents' split."""
 
 
 def _cross(a, b):
