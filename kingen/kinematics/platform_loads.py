@@ -319,8 +319,7 @@ def _in_both_frames(directions, t6):
     """(directions, the same in the platform frame): each limb's passive-link direction (n, p, m, 3)
     (unit, from the base side to the platform point: its force line's, base frame) at T6 (n, 4, 4)."""
     t6 = np.asarray(t6, dtype=float)
-    turned = [sum(t6[:, None, None, row, column] * directions[..., column] for column in range(3)) for row in range(3)]
-    return directions, np.stack(turned, axis=-1)  # R^T f, R = t6[:3, :3]^T
+    return directions, (t6[:, None, None, :3, :3] @ directions[..., None])[..., 0]  # R^T f, R = t6[:3, :3]^T
 
 
 def neutral_axes(robot):

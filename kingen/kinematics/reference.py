@@ -60,6 +60,8 @@ class Solution:
     platform: np.ndarray = None
     """(n, 4, 4) a robot with a wrist: the parallel part's T6 (the platform's pose the machine
     takes for each tool T6, kingen.kinematics.wrist); None for other robots."""
+    parallel: object = None
+    """A robot with a wrist: the parallel part's own Solution at ``platform``; None for other robots."""
     machine: np.ndarray = None
     """(n, 4, 4) a machine with task coordinates: the T6 it takes for each T6 asked (its pose
     on its manifold for the task coordinates, kingen.kinematics.parasitic); None for other robots."""

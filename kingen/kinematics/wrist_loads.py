@@ -37,7 +37,7 @@ def wrist_loads(robot, t6, wrench, motion, chosen):
     parallel, dof = robot.parallel, robot.dof
     solution = solve(robot, t6)
     platform = solution.platform
-    legs = solve(parallel, platform)
+    legs = solution.parallel
     parts = []
     for posture in chosen:
         readings = solution.joints[:, dof:, posture]
