@@ -164,7 +164,7 @@ def platform_loads(robot, machine, solution, chosen, static, applied, motion=Non
     warnings = solution.warnings[:, chosen]
     unreachable = warnings == WARNINGS["WARN_UNREACHABLE"]
     forces = np.where(unreachable[..., None], np.nan, forces * scale)
-    base_angles, platform_angles = _angles(robot, _in_both_frames(lines[..., :3], machine))
+    base_angles, platform_angles = _angles(robot, lines[..., :3], machine)
     return Loads(machine=machine, forces=forces, constraint=np.where(unreachable[..., None], np.nan, constraint),
                  base_angles=base_angles, platform_angles=platform_angles,
                  deflection=_deflection(robot, machine, reduced, twists, static), warnings=warnings)
@@ -344,10 +344,12 @@ def machine_t6(robot, poses):
     return solve_parasitic(robot, t6).t6 if robot.task else t6
 
 
-def _angles(robot, directions):
-    """((n, p, m), (n, p, m)) rad: each limb's base and platform passive joint's angle between
-    its link (``directions``: _link_directions) and its neutral axis (neutral_axes)."""
-    base, platform = directions
+def _angles(robot, directions, t6):
+    """((n, p, m), (n, p, m)) rad: each limb's base and platform passive joint's angle between its
+    link's direction (n, p, m, 3) (unit, base frame) at T6 (n, 4, 4) and its neutral axis
+    (neutral_axes; the platform's turned into the base frame, R a, rather than every link into the
+    platform's)."""
     base_axes, platform_axes = neutral_axes(robot)
-    return (np.arccos(np.clip(np.einsum("npmi,mi->npm", base, base_axes), -1.0, 1.0)),
-            np.arccos(np.clip(np.einsum("npmi,mi->npm", platform, platform_axes), -1.0, 1.0)))
+    turned = platform_axes @ np.asarray(t6, dtype=float)[:, None, :3, :3]  # (n, 1, m, 3): R a, R = t6[:3, :3]^T
+    rows = directions[..., None, :]  # dot products as (1, 3) @ (3, 1) matmuls: faster than reductions here
+    return tuple(np.arccos(np.clip((rows @ axes[..., None])[..., 0, 0], -1.0, 1.0)) for axes in (base_axes, turned))
