@@ -261,11 +261,13 @@ def _task_tangents(robot, t6):
     sample = rows[:SAMPLED]
     chosen = max(splits, key=lambda columns: np.min(_inverse_3(sample[:, :, columns])[1], initial=1.0))
     others = np.setdiff1d(np.arange(6), chosen)
-    inverse, quality = _inverse_3(rows[:, :, chosen])
-    basis = np.empty((len(t6), 6, 3))
-    with np.errstate(invalid="ignore"):
-        basis[:, chosen] = -(inverse @ rows[:, :, others])
-    basis[:, others] = np.eye(3)
+    cofactor, determinant, bound = _cofactors(rows[:, :, chosen])
+    basis = np.zeros((len(t6), 6, 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        quality, inverse = np.nan_to_num(np.abs(determinant) / bound), 1.0 / determinant
+        for i, k in itertools.product(range(3), range(3)):  # -(G_A^-1 G_B)[i, k], G_A^-1[i, j] = cofactor[j][i] / det
+            basis[:, chosen[i], k] = -sum(cofactor[j][i] * rows[:, j, others[k]] for j in range(3)) * inverse
+    basis[:, others, np.arange(3)] = 1.0
     poor = quality < WELL_CONDITIONED
     if np.any(poor):
         basis[poor] = task_twists(robot, t6[poor])
