@@ -25,7 +25,7 @@ from ..errors import located
 from .ini import load_ini
 from .interpreter import Reading, Setup, gcode_moves
 from .judging import has_accelerations, judge_margins, judge_power, judge_rates, record
-from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
+from .limits import ini_files, ini_keys, ini_subroutine_path, limits_for
 from .manifold import Manifold
 from .planner import Plan, Stack, planned
 from .power import actuator_power, platform_motion, power_limited
@@ -143,7 +143,7 @@ class _Checker:
         length unit and subroutine path, the settings' offset and time."""
         files = ini_files(read) if read is not None else {}
         return Setup(files.get(("EMCIO", "TOOL_TABLE")), files.get(("RS274NGC", "PARAMETER_FILE")),
-                     self.settings.offset, ini_unit(read) if read is not None else 1.0,
+                     self.settings.offset, self.limits.machine.unit if read is not None else 1.0,
                      self.settings.interpreter_seconds, ini_subroutine_path(read) if read is not None else ())
 
     def add(self, index, move, timing, program):
