@@ -7,9 +7,9 @@ velocity v of the platform point at the base origin (mm/s) and the angular veloc
 origin (N mm), base frame: W . t is a power (N mm/s). Limb i's row J_i = w_i / t_i (its unit
 force line over its transmission, kingen.kinematics.singularity) gives its joint rate per twist.
 
-The platform moves in d free directions, the columns of T (6, d): the twists per unit rate of
-each free coordinate (a constrained machine's task coordinates, kingen.kinematics.parasitic.
-task_twists; otherwise the robot's ``forward.free`` coordinates with the others held, all six
+The platform moves in d free directions, the columns of T (6, d): a basis of the twists along
+a constrained machine's manifold (any basis gives the same loads; _task_tangents), otherwise the
+twists per unit rate of the robot's ``forward.free`` coordinates with the others held (all six
 for a six-limb machine). Virtual work over those motions gives the actuators' generalized forces
 tau (N for a prismatic joint; N mm per rad for a revolute one, reported in N m) that hold the
 platform against the wrench W applied to it (gravity on the payload, an external wrench, minus
