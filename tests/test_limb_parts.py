@@ -138,3 +138,15 @@ def test_kingen_loads_reads_a_layouts_parts_and_refuses_a_negative_mass(tmp_path
         refused = subprocess.run(run, capture_output=True, text=True, timeout=120)
         assert refused.returncode == 2 and refused.stderr.count("\n") == 1, refused.stderr
         assert fragment in refused.stderr and "parts.actuator" in refused.stderr, refused.stderr
+
+
+def test_the_c_librarys_static_loads_hold_the_payload_alone_when_the_limbs_have_parts(tmp_path):
+    """The C library's static loads hold the payload alone: verify's 'c loads' compares them with
+    kingen's for massless limbs, and passes on a robot file whose legs have parts."""
+    path = tmp_path / "parts.yaml"
+    path.write_text(HEXAPOD.read_text().replace(
+        "reference_length: 399.413}", "reference_length: 399.413, parts: {actuator: {mass: 2, centre: 50}}}"))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", str(path), "--host", "c", "--samples", "300",
+                             "--out-dir", str(tmp_path / "out")], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "ok     c loads:" in result.stdout

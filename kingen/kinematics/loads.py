@@ -2,6 +2,8 @@
 over any number of poses in blocks, a machine with a serial wrist through
 kingen.kinematics.wrist_loads, and what verify and check-path judge of them."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..conventions import pose_from_t6
@@ -10,7 +12,7 @@ from .reference import solve
 from .wrist_loads import wrist_loads
 
 __all__ = ["Loads", "Motion", "beyond_limits", "held_problem", "held_text", "load_limited", "load_unit", "loads",
-           "machine_pose", "machine_t6", "static_loads_of"]
+           "machine_pose", "machine_t6", "static_loads_of", "without_parts"]
 SIDES = ("base", "platform")
 """A limb's passive joints, as joint_limits names them."""
 
@@ -58,6 +60,12 @@ def static_loads_of(robot, t6, solution, posture=0, wrench=None):
     platform origin) at T6 (n, 4, 4) the machine takes, from the reference's ``solution`` there
     (no solve again): what check-path and analyze judge per sample."""
     return _block_loads(robot, np.asarray(t6, dtype=float), wrench, None, np.array([posture]), solution)
+
+
+def without_parts(robot):
+    """``robot`` with its limbs' moving parts left out (massless limbs): what the C library's
+    static loads hold, the payload alone."""
+    return replace(robot, limbs=tuple(limb.model_copy(update={"parts": None}) for limb in robot.limbs))
 
 
 def load_limited(robot):
