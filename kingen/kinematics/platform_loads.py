@@ -181,7 +181,10 @@ def _force_lines(robot, solution, chosen):
             point, joint = solution.points[:, index], solution.joints[:, index, chosen[0]]
             direction = limb.force_direction(point, joint)
             lines[:, 0, index, :3] = direction
-            lines[:, 0, index, 3:] = _cross(point, direction)
+            for axis in range(3):  # C x f, into place
+                first, second = (axis + 1) % 3, (axis + 2) % 3
+                np.subtract(point[:, first] * direction[:, second], point[:, second] * direction[:, first],
+                            out=lines[:, 0, index, 3 + axis])
             transmissions[:, 0, index] = limb.transmission(direction, joint)
         return lines, transmissions
     wrenches, transmissions = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints))
@@ -278,12 +281,6 @@ SAMPLED = 16
 """The poses whose constraint rows choose _task_tangents' split."""
 
 
-def _cross(a, b):
-    """a x b over the last axis (3,), written out (numpy.cross is slower on large stacks)."""
-    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
-
-
 def about_origin(wrench, t6):
     """Wrenches (n, p, 6) [N; N mm about the base origin] as [N; N m about the platform origin]."""
     force = wrench[..., :3]
@@ -354,4 +351,8 @@ def _angles(robot, directions, t6):
     base_axes, platform_axes = neutral_axes(robot)
     turned = platform_axes @ np.asarray(t6, dtype=float)[:, None, :3, :3]  # (n, 1, m, 3): R a, R = t6[:3, :3]^T
     rows = directions[..., None, :]  # dot products as (1, 3) @ (3, 1) matmuls: faster than reductions here
-    return tuple(np.arccos(np.clip((rows @ axes[..., None])[..., 0, 0], -1.0, 1.0)) for axes in (base_axes, turned))
+    angles = []
+    for axes in (base_axes, turned):
+        cosine = (rows @ axes[..., None])[..., 0, 0]
+        angles.append(np.arccos(np.clip(cosine, -1.0, 1.0, out=cosine), out=cosine))
+    return tuple(angles)
