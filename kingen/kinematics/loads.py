@@ -32,7 +32,8 @@ def loads(robot, t6, wrench=None, motion=None, postures=None):
     blocks = [_block_loads(robot, t6[start:start + step], wrench, motion, chosen) for start in range(0, len(t6), step)]
     if len(blocks) == 1:
         return blocks[0]
-    return Loads(**{field: (None if blocks[0].__dict__[field] is None
+    given = not robot.task and robot.wrist is None  # the machine takes each T6 as asked: its loads' machine, no copy
+    return Loads(**{field: (t6 if field == "machine" and given else None if blocks[0].__dict__[field] is None
                             else np.concatenate([block.__dict__[field] for block in blocks]))
                     for field in blocks[0].__dict__})
 
