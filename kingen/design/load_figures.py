@@ -15,6 +15,8 @@ TITLES = {"load_fraction": "largest actuator load / its limit (1: at the limit)"
 """Each quantity's name and unit, as the figure's colour bars and the report say them."""
 WORST = {"load_fraction": np.nanargmax, "min_stiffness_n_per_mm": np.nanargmin}
 """Which end of a quantity is its worst: the largest load fraction, the least stiffness."""
+ANGLES = ("roll", "pitch", "yaw")
+"""The sweeps whose values are degrees (the others' are mm)."""
 COLOUR_MAPS = {"load_fraction": "magma_r", "min_stiffness_n_per_mm": "viridis"}
 LOADED = ("none", "actuator_load", "joint_angle")
 """The causes of poses whose loads count: within every limit, or stopped by loads alone (a pose
@@ -35,7 +37,7 @@ def load_extremes(analysis):
     in words ('x sweep at 12.5 mm', 'xy slice at x 10 mm, y -4 mm')."""
     extremes = []
     for key in LOAD_KEYS:
-        candidates = [(entry[key], f"{name} sweep at {entry['value']:g} {'deg' if name in ('roll', 'pitch', 'yaw') else 'mm'}")
+        candidates = [(entry[key], f"{name} sweep at {entry['value']:g} {'deg' if name in ANGLES else 'mm'}")
                       for name, entries in analysis["sweeps"].items() for entry in entries
                       if entry.get(key) is not None and entry["cause"] in LOADED]
         for name, data in analysis["slices"].items():

@@ -257,12 +257,12 @@ def _task_tangents(robot, t6):
     """(n, 6, 3) a basis of the twists along a task machine's manifold at T6 (n, 4, 4) on it: with
     its constraints' rows G (kingen.kinematics.parasitic.constraint_rows) split into three twist
     components A and the other three B, G t = 0 gives t_A = -G_A^-1 G_B t_B (t_B free); A is the
-    split best conditioned over the first poses, and task_twists answers where G_A is poorly
+    split best conditioned on average over the first poses (SAMPLED), and task_twists answers where G_A is poorly
     conditioned (WELL_CONDITIONED; loads do not depend on the basis)."""
     rows = constraint_rows(robot, t6)
     splits = [np.array(columns) for columns in itertools.combinations(range(6), 3)]
     sample = rows[:SAMPLED]
-    chosen = max(splits, key=lambda columns: np.min(_inverse_3(sample[:, :, columns])[1], initial=1.0))
+    chosen = max(splits, key=lambda columns: np.mean(_inverse_3(sample[:, :, columns])[1]))  # an unreachable pose: 0
     others = np.setdiff1d(np.arange(6), chosen)
     cofactor, determinant, bound = _cofactors(rows[:, :, chosen])
     basis = np.zeros((len(t6), 6, 3))
