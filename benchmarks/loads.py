@@ -9,8 +9,9 @@ Each machine's poses are drawn uniformly in its verification region (seed 0); a 
 ``kingen.kinematics.reference.solve`` on them, then ``loads`` in the machine's working posture
 (which solves the reference itself: the ratio is the whole cost against the joints alone), in
 turns; figures are medians over the rounds. The check-path pair runs ``kingen check-path`` on a
-CSV of ``--rows`` poses along a circle about the hexapod's home, once with the hexapod's file as
-shipped and once with a payload and every leg's joint_limits and max_force, in turns.
+CSV of ``--rows`` poses along a circle about the hexapod's home at a feed of 600 mm/min, once with
+the hexapod's file as shipped and once with a payload and every leg's joint_limits, max_force and
+max_power (power needs the feed's timing), in turns.
 """
 
 import argparse
@@ -26,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 ABOUT = ("What [loads](how-to/loads.md) cost: actuator forces, constraint wrenches and passive-joint angles over a "
-         "million poses against the reference's own cost for their joints, and check-path with its `joint angle` and "
-         "`actuator load` checks against the same program without them. Goal: loads within 2 times the reference's "
+         "million poses against the reference's own cost for their joints, and check-path with its `joint angle`, "
+         "`actuator load` and `actuator power` checks against the same program without them. Goal: loads within 2 times the reference's "
          "cost.")
 """What the section measures, for the performance page (links relative to docs/)."""
 MACHINES = ("hexapod", "ceart", "tau", "exechon_constrained", "tricept_wrist")
@@ -67,13 +68,15 @@ def time_check_path(rows, rounds):
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
         text = (ROBOTS / "hexapod.yaml").read_text()
-        limited = text.replace(LEG, "reference_length: 399.413, max_force: 2000, joint_limits: {base: 30, platform: 30}}")
+        limited = text.replace(LEG, "reference_length: 399.413, max_force: 2000, max_power: 1000, "
+                                      "joint_limits: {base: 30, platform: 30}}")
         (folder / "plain.yaml").write_text(text.replace("name: hexapod", "name: hexapod_plain", 1))
         (folder / "limited.yaml").write_text(limited.replace("verification:", LIMITS, 1))
         angles = np.linspace(0.0, 2.0 * np.pi, rows)
         program = folder / "circle.csv"
-        program.write_text("x,y,z,roll,pitch,yaw\n" + "".join(
-            f"{20 * np.cos(a):.6f},{20 * np.sin(a):.6f},465,{3 * np.sin(a):.6f},{3 * np.cos(a):.6f},0\n" for a in angles))
+        program.write_text("x,y,z,roll,pitch,yaw,feed\n" + "".join(
+            f"{20 * np.cos(a):.6f},{20 * np.sin(a):.6f},465,{3 * np.sin(a):.6f},{3 * np.cos(a):.6f},0,600\n"
+            for a in angles))
         seconds = {"plain": [], "limited": []}
         for _ in range(rounds):
             for label in seconds:
@@ -97,7 +100,7 @@ def markdown(figures):
     path = figures["check_path"]
     lines += ["", f"`kingen check-path` on the hexapod, a CSV of {path['rows']:,} poses along a circle: "
                   f"{path['plain_s']:.2f} s without load limits, {path['loads_s']:.2f} s with a payload and every "
-                  f"leg's `joint_limits` and `max_force` ({path['ratio']:.2f} times)."]
+                  f"leg's `joint_limits`, `max_force` and `max_power` ({path['ratio']:.2f} times)."]
     return "\n".join(lines) + "\n"
 
 

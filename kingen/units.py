@@ -16,14 +16,16 @@ def _scaled(value, scale):
 
 
 def scaled_limbs(limbs, scale):
-    """``limbs`` with every length field (:attr:`LimbModel.length_fields`) and the travel, top
-    speed and top acceleration of prismatic joints multiplied by ``scale``."""
+    """``limbs`` with every length field (:attr:`LimbModel.length_fields`), their parts' centres
+    and the travel, top speed and top acceleration of prismatic joints multiplied by ``scale``."""
     converted = []
     for limb in limbs:
         update = {name: _scaled(getattr(limb, name), scale) for name in limb.length_fields}
         if not limb.joint_type.wraps:
             update.update({name: _scaled(getattr(limb, name), scale) for name in ("travel", "max_speed", "max_acceleration")
                            if getattr(limb, name) is not None})
+        if limb.parts is not None:
+            update["parts"] = limb.parts.scaled(scale)
         converted.append(limb.model_copy(update=update))
     return converted
 

@@ -111,3 +111,64 @@ def test_an_actuator_load_beyond_max_force_is_found_where_kingen_loads_puts_it(t
                 key=lambda place: place["pose"][0])
     assert place["pose"][0] == pytest.approx(crossing, abs=1e-6)
     assert place["units"] == "N" and place["value"] == pytest.approx(300.0, rel=1e-9)
+
+
+POWER_PAYLOAD = 100.0  # kg at the platform origin
+CRUISE, RAMP = 50.0, 2000.0  # mm/s (feed 3000 mm/min), mm/s^2 (the .ini's path acceleration)
+
+
+def power_check(folder, max_power, capsys):
+    """check-path on the hexapod with ``max_power`` W on every leg, a 100 kg payload at the
+    platform origin and one CSV move straight up from home, timed by an .ini's path acceleration."""
+    text = HEXAPOD.read_text().replace(LEG, f"reference_length: 399.413, max_power: {max_power}}}")
+    robot = Path(folder) / "powered.yaml"
+    robot.write_text(text.replace("verification:", f"payload: {{mass: {POWER_PAYLOAD}}}\nverification:", 1))
+    ini = Path(folder) / "machine.ini"
+    ini.write_text(f"[TRAJ]\nLINEAR_UNITS = mm\nMAX_LINEAR_VELOCITY = 1000\nMAX_LINEAR_ACCELERATION = {RAMP}\n"
+                   + "".join(f"[JOINT_{joint}]\nMAX_VELOCITY = 1e6\nMAX_ACCELERATION = 1e9\n" for joint in range(6)))
+    program = Path(folder) / "up.csv"
+    program.write_text(f"x,y,z,roll,pitch,yaw,feed\n0,0,{HOME_Z},0,0,0,{CRUISE * 60}\n0,0,{HOME_Z + 20},0,0,0,"
+                       f"{CRUISE * 60}\n")
+    report = Path(folder) / "report.json"
+    code = main(["check-path", str(robot), str(program), "--ini", str(ini), "--json", str(report)])
+    capsys.readouterr()
+    return code, json.loads(report.read_text())
+
+
+def leg_power(speed, acceleration):
+    """W per leg lifting the centred payload straight up: each leg pushes m (g + a) / (6 cos t)
+    along itself and extends at v cos t (t its tilt), so its power is m (g + a) v / 6, whatever
+    its tilt (speed mm/s, acceleration mm/s^2)."""
+    return POWER_PAYLOAD * (9.81 + acceleration / 1000.0) * speed / 1000.0 / 6.0
+
+
+@pytest.mark.parametrize("max_power", [9.0, 8.0])
+def test_check_path_judges_each_actuators_power_with_the_programs_accelerations(tmp_path, capsys, max_power):
+    """At 9 W the legs fit while cruising (8.2 W) and not while the platform speeds up (up to
+    9.84 W); at 8 W not even cruising. The worst place is the end of the speeding up, its value
+    the power there and the feed that fits gives max_power at that sample's speed and acceleration."""
+    assert leg_power(CRUISE, 0.0) < 9.0 < leg_power(CRUISE, RAMP)
+    code, document = power_check(tmp_path, max_power, capsys)
+    assert code == 1 and document["checks"]["actuator power"] == "failed"
+    places = [place for place in document["worst"] if place["kind"] == "actuator power"]
+    assert len(places) == 6 and {place["line"] for place in places} == {3}
+    for place in places:
+        assert place["limit"] == max_power
+        assert leg_power(CRUISE, RAMP) * 0.97 <= place["value"] <= leg_power(CRUISE, RAMP) * (1 + 1e-3)
+        speed = 1000.0 * 6.0 * place["value"] / (POWER_PAYLOAD * (9.81 + RAMP / 1000.0))  # the sample's, mm/s
+        feed = place["override"]
+        assert 0.0 < feed < 1.0
+        assert leg_power(feed * speed, feed ** 2 * RAMP) == pytest.approx(max_power, rel=1e-9)
+    if max_power == 9.0:  # cruising fits: every place beyond is where the platform speeds up
+        rising = [place for place in document["problems"] if place["kind"] == "actuator power"]
+        assert all(place["pose"][2] - HOME_Z <= CRUISE ** 2 / (2 * RAMP) + 0.2 for place in rising)
+
+
+def test_the_power_check_is_not_exercised_without_max_power(tmp_path, capsys):
+    program = tmp_path / "up.csv"
+    program.write_text(f"x,y,z,roll,pitch,yaw,feed\n0,0,{HOME_Z},0,0,0,600\n0,0,{HOME_Z + 5},0,0,0,600\n")
+    report = tmp_path / "report.json"
+    assert main(["check-path", str(HEXAPOD), str(program), "--json", str(report)]) == 0
+    capsys.readouterr()
+    verdict = json.loads(report.read_text())["checks"]["actuator power"]
+    assert verdict == "not exercised: the robot file gives no limb max_power"

@@ -98,3 +98,49 @@ def test_optimize_judges_designs_with_their_actuator_loads(tmp_path):
     objective, table, _ = evaluate(problem, problem.start())
     assert {cause for _, cause in table} == {"actuator_load"}
     assert objective == min(tilt for tilt, _ in table) < 40
+
+
+def test_the_report_draws_the_loads_and_names_their_worst_pose(tmp_path):
+    """The slices carry each cell's load fraction and stiffness; the report's worst load fraction
+    is kingen.loads' largest |force| / max_force over the sweeps' and slices' poses that only
+    loads may stop, at the pose it names; the sweep and loads figures are drawn."""
+    from kingen.design.figures import figures, report_html
+    from kingen.design.load_figures import LOADED, load_extremes
+
+    robot = loaded(tmp_path, "max_force: 600, stiffness: 20000")
+    analysis = analyze(robot, settings=Settings(tilt_step_deg=2.0, azimuth_step_deg=180.0, tilt_max_deg=10.0))
+    home = np.array(robot.verification.home, dtype=float)
+    poses = []
+    for name, entries in analysis["sweeps"].items():
+        axis = ("x", "y", "z", "roll", "pitch", "yaw").index(name)
+        for entry in entries:
+            if entry["cause"] in LOADED:
+                pose = home.copy()
+                pose[axis] = entry["value"]
+                poses.append(pose)
+    for data in analysis["slices"].values():
+        axes = [("x", "y", "z").index(axis) for axis in data["axes"]]
+        for i, first in enumerate(data["first"]):
+            for j, second in enumerate(data["second"]):
+                if analysis_cause(data, i, j) in LOADED:
+                    pose = home.copy()
+                    pose[axes[0]], pose[axes[1]] = first, second
+                    poses.append(pose)
+    forces = kingen.loads(robot, np.array(poses)).forces[:, 0]
+    fractions = np.max(np.abs(forces), axis=1) / 600.0
+    worst = {item["key"]: item for item in load_extremes(analysis)}
+    assert worst["load_fraction"]["value"] == pytest.approx(np.max(fractions), rel=1e-9)
+    named = [float(word) for word in worst["load_fraction"]["where"].replace(",", " ").split()
+             if word.lstrip("-").replace(".", "").isdigit()]
+    best = np.array(poses)[np.argmax(fractions)]
+    assert all(np.any(np.isclose(value, best[:3], atol=1e-3)) for value in named)
+    assert worst["min_stiffness_n_per_mm"]["value"] > 0
+    pngs = figures(analysis)
+    assert {"sweeps.png", "loads.png"} <= set(pngs)
+    html = report_html(robot, analysis, pngs, 1.0)
+    assert "largest actuator load / its limit" in html and "least stiffness of the platform origin (N/mm)" in html
+
+
+def analysis_cause(data, i, j):
+    from kingen.design.analysis import CAUSES
+    return CAUSES[data["causes"][i][j]]

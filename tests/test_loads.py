@@ -389,3 +389,20 @@ def test_kingen_loads_answers_a_tricept_with_its_wrist_legs_then_wrist_torques(t
     assert entries[0]["units"] == ["N", "N", "N", "N m", "N m"]
     expected = loads(load_robot(path), t6_from_pose(np.array([[60.0, -40, -1250, 170, 10, 30]]))).forces[0]
     assert np.allclose([entry["forces"] for entry in entries], expected, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("name", ["exechon_constrained", "prs_head", "tricept", "rps_table"])
+def test_a_task_machines_loads_do_not_depend_on_the_basis_of_its_tangents(name, monkeypatch):
+    """The closed-form tangents (the constraints' best split) and the task coordinates' own
+    twists (parasitic.task_twists) are two bases of the same tangent: the same loads."""
+    from kingen.kinematics import platform_loads
+    from kingen.kinematics.hybrid.parasitic import task_twists
+
+    robot = with_payload(name)
+    t6 = machine_t6(robot, poses_of(robot, 20, seed=5))
+    fast = loads(robot, t6).forces
+    monkeypatch.setattr(platform_loads, "free_twists", task_twists)
+    slow = loads(robot, t6).forces
+    both = np.isfinite(fast) & np.isfinite(slow)
+    assert np.mean(both) > 0.5
+    assert np.max(np.abs(fast[both] - slow[both])) <= 1e-9 * np.max(np.abs(slow[both]))

@@ -28,7 +28,7 @@ from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from ..kinematics.singularity import direct_index_of_entries, limb_wrenches, posture_gram_entries
 from ..kinematics.hybrid.wrist import rotation_about
-from .load_analysis import load_quantities, loads_available, stiffness_given
+from .load_analysis import LOAD_KEYS, load_quantities, loads_available, stiffness_given
 from .wrist_analysis import at_pole, beyond_travel, radicand_stops, tool_moving, wrist_available
 
 CAUSES = ("unreachable", "joint_limits", "direct_singularity", "collision", "none", "actuator_load", "joint_angle")
@@ -144,7 +144,7 @@ def evaluate(robot, t6, posture, settings=Settings(), home=None):
     return {"cause": cause, "warning": warning, "direct_index_mm": index, "det_sign": sign,
             "min_inverse_index": np.where(np.isfinite(expected.min_inverse_index), expected.min_inverse_index, np.nan),
             "min_rod_distance_mm": rods, "min_crank_distance_mm": cranks, "joints": joints, "singular": singular,
-            **{key: held.get(key, np.full(len(t6), np.nan)) for key in ("load_fraction", "min_stiffness_n_per_mm")}}
+            **{key: held.get(key, np.full(len(t6), np.nan)) for key in LOAD_KEYS}}
 
 
 def _det_sign(robot, t6, points, joints):
@@ -294,7 +294,8 @@ def workspace_extent(robot, posture, axes, settings=Settings(), home=None):
 def slices(robot, posture, settings=Settings(), home=None):
     """{'xy', 'xz'} for each plane of two free position coordinates: grids at home
     orientation over the workspace's extent in that plane plus a tenth (equal cell size on
-    both axes), each {axes, first, second, causes, extent_mm, capped}."""
+    both axes), each {axes, first, second, causes, extent_mm, capped} and, where loads give
+    them, the grids of LOAD_KEYS (null in an unreachable cell)."""
     start = np.array(robot.verification.home, dtype=float)
     free = set(free_coordinates(robot))
     result = {}
@@ -309,10 +310,13 @@ def slices(robot, posture, settings=Settings(), home=None):
         grid_first, grid_second = np.meshgrid(*spans, indexing="ij")
         poses = np.tile(start, (grid_first.size, 1))
         poses[:, axes[0]], poses[:, axes[1]] = grid_first.ravel(), grid_second.ravel()
-        causes = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)["cause"]
+        evaluated = evaluate(robot, t6_from_matrix(matrix_from_pose(poses)), posture, settings, home)
         result[name] = {"axes": [COORDINATES[axes[0]], COORDINATES[axes[1]]], "first": spans[0].tolist(),
-                        "second": spans[1].tolist(), "causes": causes.reshape(grid_first.shape).tolist(),
+                        "second": spans[1].tolist(), "causes": evaluated["cause"].reshape(grid_first.shape).tolist(),
                         "extent_mm": [list(pair) for pair in extent], "capped": capped}
+        result[name].update({key: [[_finite_or_none(value) for value in row] for row in values.reshape(grid_first.shape)]
+                             for key, values in ((key, evaluated[key]) for key in LOAD_KEYS)
+                             if np.any(np.isfinite(values))})
     return result
 
 

@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
 from .analysis import CAUSES
+from .load_figures import TITLES, load_extremes, loads_figure
 from ..runtime.templates import template
 
 COLOURS = {"unreachable": "#d62728", "joint_limits": "#ff7f0e", "direct_singularity": "#9467bd",
@@ -33,6 +34,8 @@ QUANTITIES = (
     ("clearance (mm)", (("min_rod_distance_mm", "rod clearance", "-", "#17becf"),
                         ("min_crank_distance_mm", "crank clearance", "--", "#bcbd22"))),
     ("least inverse index D\n(0: limb singularity)", (("min_inverse_index", "least inverse index D", "-", "#555555"),)),
+    ("actuator load / limit", (("load_fraction", TITLES["load_fraction"], "-", "#e377c2"),)),
+    ("least stiffness (N/mm)", (("min_stiffness_n_per_mm", TITLES["min_stiffness_n_per_mm"], "-", "#2ca02c"),)),
 )
 """Rows of the sweep figure: an axis label (one quantity) and its curves (key, label, style, colour)."""
 
@@ -230,6 +233,8 @@ def _row_scale(analysis, sweeps, curves):
     if limit is not None:
         lines.append((*limit, "#333333"))
     bottom = min(0.0, float(values.min()) * 1.08) if len(values) else 0.0
+    if key == "load_fraction":
+        lines.append((1.0, "actuator load limit", "#333333"))
     if key == "min_rod_distance_mm" and bottom < 0.0:
         lines.append((0.0, "collision below 0 mm clearance", "#333333"))
     top = max([float(values.max()) if len(values) else 0.0, 1.0 if key == "min_inverse_index" else 1e-9]
@@ -320,7 +325,7 @@ def figure_objects(analysis):
     """{file name: matplotlib Figure} of every figure the analysis has data for: no tilt
     limits, no polar graph."""
     made = {"tilt_limits.png": polar_figure(analysis), "sweeps.png": sweep_figure(analysis),
-            "slices.png": slice_figure(analysis)}
+            "slices.png": slice_figure(analysis), "loads.png": loads_figure(analysis)}
     return {name: figure for name, figure in made.items() if figure is not None}
 
 
@@ -384,4 +389,5 @@ def report_html(robot, analysis, pngs, seconds, view=""):
     missing = [" ".join(label.split()) for label, _ in QUANTITIES if " ".join(label.split()) not in drawn]
     return template("analysis_report.html.j2").render(
         robot=robot, analysis=analysis, images=images, labels=LABELS, colours=COLOURS, counts=counts(analysis),
-        settings=settings, drawn=drawn, missing=missing, seconds=f"{seconds:.1f}", reason=_reason, view=Markup(view))
+        settings=settings, drawn=drawn, missing=missing, extremes=load_extremes(analysis), seconds=f"{seconds:.1f}",
+        reason=_reason, view=Markup(view))

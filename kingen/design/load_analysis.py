@@ -11,6 +11,8 @@ import numpy as np
 
 from ..kinematics.loads import SIDES, load_limited, static_loads_of
 
+LOAD_KEYS = ("load_fraction", "min_stiffness_n_per_mm")
+"""What analyze records of loads per pose: the largest |load| / limit, and the least stiffness (N/mm)."""
 UNIT_FORCES = np.eye(3)
 """The forces (N) at the platform origin whose displacements give its compliance's columns."""
 

@@ -2,16 +2,17 @@
 over any number of poses in blocks, a machine with a serial wrist through
 kingen.kinematics.hybrid.wrist_loads, and what verify and check-path judge of them."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..conventions import pose_from_t6
-from .hybrid.parasitic import solve_parasitic
 from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platform_loads
 from .reference import solve
 from .hybrid.wrist_loads import wrist_loads
 
 __all__ = ["Loads", "Motion", "beyond_limits", "held_problem", "held_text", "load_limited", "load_unit", "loads",
-           "machine_pose", "machine_t6", "static_loads_of"]
+           "machine_pose", "machine_t6", "static_loads_of", "without_parts"]
 SIDES = ("base", "platform")
 """A limb's passive joints, as joint_limits names them."""
 
@@ -31,7 +32,8 @@ def loads(robot, t6, wrench=None, motion=None, postures=None):
     blocks = [_block_loads(robot, t6[start:start + step], wrench, motion, chosen) for start in range(0, len(t6), step)]
     if len(blocks) == 1:
         return blocks[0]
-    return Loads(**{field: (None if blocks[0].__dict__[field] is None
+    given = not robot.task and robot.wrist is None  # the machine takes each T6 as asked: its loads' machine, no copy
+    return Loads(**{field: (t6 if field == "machine" and given else None if blocks[0].__dict__[field] is None
                             else np.concatenate([block.__dict__[field] for block in blocks]))
                     for field in blocks[0].__dict__})
 
@@ -42,11 +44,11 @@ def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
     if robot.wrist is not None:
         return wrist_loads(robot, t6, wrench, motion, chosen)
     if solution is None:
-        machine = solve_parasitic(robot, t6).t6 if robot.task else t6
-        solution = solve(robot, machine)
+        solution = solve(robot, t6)
+        machine = solution.machine if robot.task else t6
     else:  # the pose the caller's solution was solved at: the machine's already
         machine = t6
-    return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion))
+    return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion), motion)
 
 
 def machine_pose(loads_result):
@@ -59,6 +61,12 @@ def static_loads_of(robot, t6, solution, posture=0, wrench=None):
     platform origin) at T6 (n, 4, 4) the machine takes, from the reference's ``solution`` there
     (no solve again): what check-path and analyze judge per sample."""
     return _block_loads(robot, np.asarray(t6, dtype=float), wrench, None, np.array([posture]), solution)
+
+
+def without_parts(robot):
+    """``robot`` with its limbs' moving parts left out (massless limbs): what the C library's
+    static loads hold, the payload alone."""
+    return replace(robot, limbs=tuple(limb.model_copy(update={"parts": None}) for limb in robot.limbs))
 
 
 def load_limited(robot):

@@ -60,6 +60,11 @@ class Solution:
     platform: np.ndarray = None
     """(n, 4, 4) a robot with a wrist: the parallel part's T6 (the platform's pose the machine
     takes for each tool T6, kingen.kinematics.hybrid.wrist); None for other robots."""
+    parallel: object = None
+    """A robot with a wrist: the parallel part's own Solution at ``platform``; None for other robots."""
+    machine: np.ndarray = None
+    """(n, 4, 4) a machine with task coordinates: the T6 it takes for each T6 asked (its pose
+    on its manifold for the task coordinates, kingen.kinematics.hybrid.parasitic); None for other robots."""
     direct_index: np.ndarray = None
     """(n, postures) the direct index in mm (NaN where unreachable), or None when not computed
     (robots without six force lines, or not asked for). Computed for the warnings only (not
@@ -194,7 +199,7 @@ def certificate_settles(robot, t6):
         return False
     t6 = np.asarray(t6, dtype=float).reshape(-1, 4, 4)[:CERTIFY_PROBE_POSES]
     with np.errstate(all="ignore"):
-        points, branch_joints, _, _, _, _ = _limb_solutions(robot.calibrated(), t6)
+        points, branch_joints, *_ = _limb_solutions(robot.calibrated(), t6)
         return _settling_probe(robot, _force_lines(robot, points, branch_joints)[1]) is not None
 
 
@@ -206,7 +211,7 @@ def limb_solution(robot, t6):
     if robot.wrist is not None:
         return solve(robot, t6)
     with np.errstate(all="ignore"):
-        points, branch_joints, radicands, finite, overflow, _ = _limb_solutions(
+        points, branch_joints, radicands, finite, overflow, *_ = _limb_solutions(
             robot, np.asarray(t6, dtype=float).reshape(-1, 4, 4))
     return Solution(branch_joints=branch_joints, warnings=None, radicands=radicands, finite=finite & ~np.any(overflow, axis=1),
                     posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points)
@@ -214,14 +219,15 @@ def limb_solution(robot, t6):
 
 def _limb_solutions(robot, t6):
     """(points (n, dof, 3), branch_joints (n, dof, 2), radicands (n, dof), finite (n,),
-    overflow (n, dof), constraint (n,) or None: Solution.constraint) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
+    overflow (n, dof), constraint (n,) or None: Solution.constraint, machine: Solution.machine) of every limb for T6 arrays (n, 4, 4): joints 0 where the T6 is not
     finite or the limb's value overflows (see the module docstring)."""
     count = t6.shape[0]
     finite = np.all(np.isfinite(t6[:, :, :3].reshape(count, 12)), axis=1)
-    constraint = None
+    constraint, machine = None, None
     if robot.task:  # the machine's pose for the task coordinates; off the manifold or unsolvable: unreachable
         parasitic = solve_parasitic(robot, t6)
         t6, constraint = parasitic.t6, np.where(parasitic.off & robot.parasitic_given, -np.inf, parasitic.radicand)
+        machine = t6
     rows = _t6_rows(t6)
     if not np.all(finite):
         rows[:, :, ~finite] = 0.0
@@ -236,12 +242,12 @@ def _limb_solutions(robot, t6):
             radicands[:, index] = limb_solution.radicand
     overflow = ~(np.isfinite(branch_joints[..., 0]) & np.isfinite(branch_joints[..., 1]))  # (n, dof)
     branch_joints[overflow | ~finite[:, None]] = 0.0
-    return points, branch_joints, radicands, finite, overflow, constraint
+    return points, branch_joints, radicands, finite, overflow, constraint, machine
 
 
 def _solve(robot, t6, indices):
     count = t6.shape[0]
-    points, branch_joints, radicands, finite, overflow, constraint = _limb_solutions(robot, t6)
+    points, branch_joints, radicands, finite, overflow, constraint, machine = _limb_solutions(robot, t6)
 
     lower, upper = robot.travel_limits()
     limited = np.isfinite(lower) | np.isfinite(upper)
@@ -267,4 +273,4 @@ def _solve(robot, t6, indices):
 
     return Solution(branch_joints=branch_joints, warnings=warning_codes(outside, singular, unreachable), radicands=radicands, constraint=constraint,
                     finite=finite, posture_branches=tuple(map(tuple, branch_table(robot).tolist())), points=points,
-                    direct_index=index)
+                    direct_index=index, machine=machine)

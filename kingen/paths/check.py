@@ -24,10 +24,11 @@ from .five_axis import FiveAxis
 from ..errors import located
 from .ini import load_ini
 from .interpreter import Reading, Setup, gcode_moves
-from .judging import has_accelerations, judge_margins, judge_rates, record, sample_numbers
-from .limits import ini_files, ini_keys, ini_subroutine_path, ini_unit, limits_for
+from .judging import has_accelerations, judge_margins, judge_power, judge_rates, record, sample_numbers
+from .limits import ini_files, ini_keys, ini_subroutine_path, limits_for
 from .manifold import Manifold
 from .planner import Plan, Stack, planned
+from .power import actuator_power, platform_motion, power_limited
 from .program import csv_moves, is_gcode, source_lines
 from .refinement import refined
 from .routine import RoutineSolver
@@ -142,7 +143,7 @@ class _Checker:
         length unit and subroutine path, the settings' offset and time."""
         files = ini_files(read) if read is not None else {}
         return Setup(files.get(("EMCIO", "TOOL_TABLE")), files.get(("RS274NGC", "PARAMETER_FILE")),
-                     self.settings.offset, ini_unit(read) if read is not None else 1.0,
+                     self.settings.offset, self.limits.machine.unit if read is not None else 1.0,
                      self.settings.interpreter_seconds, ini_subroutine_path(read) if read is not None else ())
 
     def add(self, index, move, timing, program):
@@ -225,7 +226,8 @@ class _Checker:
             regions.append(np.arange(first + piece.begin, first + piece.end + 1))
             owned.append(np.arange(first + piece.begin + (piece.index > 0 and piece.begin == 0),
                                    first + piece.end + (piece.end == piece.count)))
-        speeds, accelerations = self._rates(grid)
+        path = self._path_rates(grid)
+        speeds, accelerations = self._rates(grid, path)
         batch, _ = refined(grid.take(np.concatenate(regions)), self.evaluate)
         ends = np.array([p.end / p.count if p.end < p.count else np.inf for p in pieces])[batch.piece]
         keep = batch.u < ends
@@ -238,6 +240,10 @@ class _Checker:
         owned_grid = grid.take(owned)
         judge_margins(self.findings, self.evaluator, batch, pieces, lines, sample_numbers(self.findings, owned_grid, batch))
         judge_rates(self.findings, self.limits, owned_grid, speeds[owned], accelerations[owned], pieces, lines)
+        if power_limited(self.robot):
+            t6 = self.five_axis.t6(grid.poses) if self.world else t6_from_pose(grid.poses)
+            power = actuator_power(self.evaluator.robot, t6, platform_motion(t6, *path), speeds)
+            judge_power(self.findings, self.robot, owned_grid, *(part[owned] for part in power), pieces, lines)
         record(self.findings, batch, owned_grid, speeds[owned], accelerations[owned], pieces, lines, self.sink)
         if self.progress is not None:
             self.progress(self.findings)
@@ -265,8 +271,10 @@ class _Checker:
             self.signs[number] = (1.0 if signs[number] >= 0 else -1.0) if number in signs else self.move_sign
             self.move_sign = self.signs[number]
 
-    def _rates(self, grid):
-        """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed)."""
+    def _path_rates(self, grid):
+        """(s, runs, rate, change) (n,) at every grid sample: the path coordinate (mm or degrees),
+        the runs of samples differenced together, the path's speed ds/dt and its change d2s/dt2
+        (NaN for moves not timed)."""
         s = grid.u * self.lengths[grid.piece]
         profiles = [piece.timing if isinstance(piece.timing, Profile) else None for piece in self.pieces]
         length, speed, acceleration = (np.array([np.nan if timing is None or getattr(timing, name) is None
@@ -279,6 +287,12 @@ class _Checker:
         if len(planned):
             rate[planned], change[planned], part = self.stack.rates(self.plan_of[grid.piece[planned]], s[planned])
             runs[planned] += part
+        return s, runs, rate, change
+
+    def _rates(self, grid, path):
+        """(speeds, accelerations) (n, dof) at every grid sample (NaN for moves not timed), from
+        its _path_rates ``path``."""
+        s, runs, rate, change = path
         bounds = np.searchsorted(grid.piece, np.arange(len(self.pieces) + 1))
         speeds, accelerations = joint_rates(grid.joints, s, runs, self.robot.revolute, rate, change)
         for number, piece in enumerate(self.pieces):

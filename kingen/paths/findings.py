@@ -14,8 +14,8 @@ import numpy as np
 MAX_PROBLEMS = 1000
 TRACE_POINTS = 4000
 """The figures' samples at most: the trace keeps every k-th sample, k doubling as it fills."""
-UNSCALED = ("unreachable", "limb singular", "joint angle", "actuator load")
-"""Kinds whose values are not the joint's (radicands; degrees, N or N m already in display units)."""
+UNSCALED = ("unreachable", "limb singular", "joint angle", "actuator load", "actuator power")
+"""Kinds whose values are not the joint's (radicands; degrees, N, N m or W already in display units)."""
 
 
 @dataclass
@@ -23,7 +23,7 @@ class Place:
     """One offending place: the check ``kind``, the joint's name (None: the platform's), the
     program line, the pose (mm, degrees), the joints (mm or degrees), the offending ``value``
     and its ``limit`` (the quantity's units), the ``margin`` (below 0: beyond the limit; the
-    smaller, the worse), for a joint speed the feed override at which it would fit, for a
+    smaller, the worse), for a joint speed or an actuator power the feed override at which it would fit, for a
     collision the links whose clearance it is ('rods' or 'cranks'), the file ``line`` is in
     when it is not the program's own (a G-code subroutine's; None: the program's), where it
     stands along the program (``sample``: in regular samples, on the trace's axis, fractional

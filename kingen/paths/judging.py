@@ -5,6 +5,8 @@ each joint's peaks, the figures' trace, and every sample to the CSV sink."""
 
 import numpy as np
 
+from .power import fitting_feed
+
 RATE_ROUNDING = 1e-9
 """A joint speed or acceleration above its limit by at most this fraction of it is rounding
 (a joint that follows the path one to one, at the path's own limit), not a problem."""
@@ -70,6 +72,25 @@ def judge_rates(findings, limits, grid, speeds, accelerations, pieces, lines):
                     kind, joint, lines[number], grid.poses[row], grid.joints[row], value, limit, (limit - value) / limit,
                     float(limit / value) if kind == "joint speed" else None, file=pieces[number].move.file,
                     sample=findings.samples + row, warning=grid.warnings[row]))
+
+
+def judge_power(findings, robot, grid, power, resting, pieces, lines):
+    """Each piece's first and worst actuator power (W; kingen.paths.power.actuator_power's
+    ``power`` and its part at rest ``resting``, (n, m)) beyond its limb's max_power, with the
+    feed override at which it fits."""
+    bounds = np.array([np.inf if limb.max_power is None else limb.max_power for limb in robot.limbs])
+    size = np.abs(power)
+    with np.errstate(invalid="ignore"):
+        beyond = size > bounds * (1.0 + RATE_ROUNDING)
+    for joint in np.flatnonzero(np.any(beyond, axis=0)):
+        rows = np.flatnonzero(beyond[:, joint])
+        for number, piece_rows in _by_piece(rows, grid.piece[rows]):
+            for row in dict.fromkeys((piece_rows[0], piece_rows[np.argmax(size[piece_rows, joint])])):
+                value, limit = size[row, joint], bounds[joint]
+                findings.add(pieces[number].index, findings.place(
+                    "actuator power", joint, lines[number], grid.poses[row], grid.joints[row], value, limit,
+                    (limit - value) / limit, fitting_feed(power[row, joint], resting[row, joint], limit),
+                    file=pieces[number].move.file))
 
 
 def record(findings, batch, grid, speeds, accelerations, pieces, lines, sink):

@@ -62,11 +62,13 @@ class Machine:
 
     axis_speed: np.ndarray
     axis_acceleration: np.ndarray
-    arc_blends: bool = True
-    depth: int = 50
-    kink_ratio: float = 0.1
+    arc_blends: bool = PLANNER_KEYS["ARC_BLEND_ENABLE"] != 0.0
+    depth: int = int(PLANNER_KEYS["ARC_BLEND_OPTIMIZATION_DEPTH"])
+    kink_ratio: float = PLANNER_KEYS["ARC_BLEND_KINK_RATIO"]
     cycle: float = 0.001
     feed_scale: float = 1.0
+    unit: float = 1.0
+    """mm per the .ini's [TRAJ] LINEAR_UNITS (ini_unit): what the interpreter reads lengths in."""
 
     @property
     def accelerated(self):
@@ -199,7 +201,7 @@ def _machine(ini, unit):
     period = number("EMCMOT", "SERVO_PERIOD", 1e6)
     return Machine(*rates, arc_blends=settings["ARC_BLEND_ENABLE"] != 0.0,
                    depth=int(settings["ARC_BLEND_OPTIMIZATION_DEPTH"]), kink_ratio=settings["ARC_BLEND_KINK_RATIO"],
-                   cycle=period * 1e-9, feed_scale=number("DISPLAY", "MAX_FEED_OVERRIDE", 1.0))
+                   cycle=period * 1e-9, feed_scale=number("DISPLAY", "MAX_FEED_OVERRIDE", 1.0), unit=unit)
 
 
 def combined(first, second):

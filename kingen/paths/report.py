@@ -11,6 +11,7 @@ import numpy as np
 from ..runtime.text import counted, one_line
 from ..units import number_text
 from .manifold import OFF_MANIFOLD
+from .power import power_limited
 from .program import POSE_COLUMNS, is_gcode
 
 BLENDING = ("G-code timed as LinuxCNC's trajectory planner moves it (G61, G61.1, G64 blend arcs, look-ahead, the "
@@ -36,7 +37,8 @@ def checks(outcome):
         "actuator load": "the robot file gives no limb max_force or max_torque",
     }
     if findings.samples == 0:
-        return {kind: "not exercised: the program has no move" for kind in list(reasons) + list(SPEED_KINDS)}
+        return {kind: "not exercised: the program has no move" for kind in list(reasons) + list(SPEED_KINDS)
+                + ["actuator power"]}
     kinds = evaluator.kinds()
     for kind in reasons:
         verdicts[kind] = ("failed" if kind in failed else "passed") if kind in kinds else f"not exercised: {reasons[kind]}"
@@ -51,6 +53,10 @@ def checks(outcome):
                               "acceleration, .ini [TRAJ], or CSV times)")
         else:
             verdicts[kind] = "failed" if kind in failed else "passed"
+    verdicts["actuator power"] = (
+        "not exercised: the robot file gives no limb max_power" if not power_limited(outcome.robot)
+        else "not exercised: no move is timed (feeds and rapids need a feed or t, or an .ini)"
+        if findings.timed_moves == 0 else "failed" if "actuator power" in failed else "passed")
     if outcome.manifold is not None:
         verdicts[OFF_MANIFOLD] = outcome.manifold.verdict()
     return verdicts
@@ -127,6 +133,8 @@ def _joint_units(outcome, joint, kind, between=None):
         return "deg"
     if kind == "actuator load":
         return "N m" if outcome.robot.revolute[index] else "N"
+    if kind == "actuator power":
+        return "W"
     return {"joint speed": f"{base}/s", "joint acceleration": f"{base}/s^2"}.get(kind, base)
 
 

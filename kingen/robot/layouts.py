@@ -12,7 +12,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import Field, field_validator, model_validator
 
 from .limbs import Crank, Leg, Rail, model_name
-from .loads_schema import ForceLimit, JointLimits, refuse_wrong_limit
+from .loads_schema import ForceLimit, JointLimits, LimbParts, refuse_wrong_limit
 from .schema import MAX_MM, Coordinate, CalibrationField, Length, ReferenceLength, SixAngles, Strict, Travel
 
 class _Layout(Strict):
@@ -22,8 +22,10 @@ class _Layout(Strict):
     calibrate: dict[str, Annotated[list[CalibrationField], Field(min_length=6, max_length=6)]] = {}
     max_force: Optional[ForceLimit] = Field(None, description="N: every limb's actuator force limit (prismatic).")
     max_torque: Optional[ForceLimit] = Field(None, description="N m: every limb's actuator torque limit (revolute).")
+    max_power: Optional[ForceLimit] = Field(None, description="W: every limb's actuator power limit.")
     stiffness: Optional[ForceLimit] = Field(None, description="Every limb's actuator stiffness: N/mm or N m/rad.")
     joint_limits: Optional[JointLimits] = Field(None, description="Every limb's passive joints' limits (degrees).")
+    parts: Optional[LimbParts] = Field(None, description="Every limb's moving masses (kg, centres in the file's unit).")
     limb_class: ClassVar[type] = None
 
     @field_validator("calibrate")
@@ -44,7 +46,7 @@ class _Layout(Strict):
     def _shared(self, index):
         """The keys every generated limb takes from the layout: travel, its calibration fields and
         the load fields given."""
-        loads = {name: getattr(self, name) for name in ("max_force", "max_torque", "stiffness", "joint_limits")
+        loads = {name: getattr(self, name) for name in ("max_force", "max_torque", "max_power", "stiffness", "joint_limits", "parts")
                  if getattr(self, name) is not None}
         return {"travel": self.travel, **loads,
                 "calibrate": {parameter: fields[index] for parameter, fields in self.calibrate.items()}}

@@ -11,6 +11,7 @@ from typing import Annotated, Optional, Union
 import numpy as np
 from pydantic import AfterValidator, Field
 
+from ..defaults import MAX_MM
 from .schema import Strict, Vec3
 
 MAX_MASS_KG = 1e6
@@ -107,6 +108,34 @@ class Payload:
     @property
     def inertia_matrix(self):
         return np.array(self.inertia, dtype=float)
+
+
+class Part(Strict):
+    """One moving part of a limb, a point mass: ``mass`` kg and ``centre``, its distance (in the
+    file's length unit) along the part from the joint it is measured from."""
+
+    mass: Mass
+    """kg, above 0."""
+    centre: Annotated[float, Field(ge=0, le=MAX_MM)] = 0.0
+    """The distance of its centre of mass from the joint it is measured from (in the file's length unit)."""
+
+
+class LimbParts(Strict):
+    """``parts:`` of a limb: the masses it moves (docs/explanation/loads.md, 'The limbs' parts')."""
+
+    actuator: Optional[Part] = None
+    """The part the actuator moves: a leg's cylinder (its centre measured from the base joint along
+    the leg), a crank (from its pivot along the crank), a rail's carriage (the carriage moves
+    rigidly: its centre does not matter)."""
+    link: Optional[Part] = None
+    """The passive link: a leg's rod, a crank's or a carriage's rod (its centre measured from the
+    platform joint along the link toward the base side)."""
+
+    def scaled(self, scale):
+        """These parts with their centres multiplied by ``scale`` (mm per the file's unit)."""
+        return self.model_copy(update={name: part.model_copy(update={"centre": part.centre * scale})
+                                       for name, part in (("actuator", self.actuator), ("link", self.link))
+                                       if part is not None})
 
 
 def payload_of(document, mm_per_unit):

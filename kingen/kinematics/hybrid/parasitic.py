@@ -165,13 +165,7 @@ def task_twists(robot, t6):
     there: the manifold has no tangent of the task's dimension)."""
     t6 = np.asarray(t6, dtype=float)
     rows = np.zeros((len(t6), 6, 6))
-    if family(robot) in ("axes", "tube"):
-        rows[:, :3] = (axes_wrenches if family(robot) == "axes" else tube_wrenches)(robot, t6)
-    else:
-        table = constraint_table(robot)
-        points = np.einsum("nji,kj->nki", t6[:, :3, :3], table.points) + t6[:, 3, None, :3]
-        rows[:, :3, :3] = table.axes
-        rows[:, :3, 3:] = np.cross(points, table.axes)
+    rows[:, :3] = constraint_rows(robot, t6)
     rows[:, 3:] = task_rows(t6, robot.task)
     right = np.zeros((len(t6), 6, len(TASK)))
     right[:, 3:, :] = np.eye(len(TASK))
@@ -179,6 +173,17 @@ def task_twists(robot, t6):
         return np.linalg.solve(rows, right)
     except np.linalg.LinAlgError:  # some pose's system is singular: those answer NaN, the others as above
         return np.array([_solved_or_nan(matrix, column) for matrix, column in zip(rows, right)])
+
+
+def constraint_rows(robot, t6):
+    """(n, 3, 6) the constraints' rows G at T6 (n, 4, 4) on the manifold: a twist t [v; omega]
+    (v: the velocity of the point at the base origin) keeps them while G t = 0 (each plane's row
+    [a_i, C_i x a_i], or each platform axis's, kingen.kinematics.hybrid.parasitic_axes)."""
+    if family(robot) in ("axes", "tube"):
+        return (axes_wrenches if family(robot) == "axes" else tube_wrenches)(robot, t6)
+    table = constraint_table(robot)
+    points = np.einsum("nji,kj->nki", t6[:, :3, :3], table.points) + t6[:, 3, None, :3]
+    return np.concatenate([np.broadcast_to(table.axes, points.shape), np.cross(points, table.axes)], axis=-1)
 
 
 def _solved_or_nan(matrix, right):

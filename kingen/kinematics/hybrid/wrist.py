@@ -119,7 +119,8 @@ def solve_tool(robot, t6, solve_parallel, solution_type):
                              (legs_codes == WARNINGS["WARN_UNREACHABLE"]) | wrist_unreachable)
     branches = tuple(tuple(limbs) + (branch,) * len(wrist.names) for limbs in legs.posture_branches for branch in kept)
     return solution_type(branch_joints=branch_joints, warnings=warnings, radicands=radicands, finite=legs.finite,
-                         posture_branches=branches, constraint=legs.constraint, points=legs.points, platform=machine)
+                         posture_branches=branches, constraint=legs.constraint, points=legs.points, platform=machine,
+                         parallel=legs)
 
 
 def _spherical_branches(wrist, platform_rotation, tool_rotation):

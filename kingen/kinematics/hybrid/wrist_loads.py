@@ -7,7 +7,7 @@ joint j (the tool, the payload and the joints after j; their own masses not mode
 by the joint's reaction, which has no moment along the joint's axis z_j, and by its actuator:
 its torque is tau_j = -z_j . M_c, M_c the applied wrench's moment about the centre (N m; positive
 turns the joint's reading up). The platform, with the wrist on it, receives the whole applied
-wrench."""
+wrench; the legs' parts are weighed, their inertia left out (the platform's motion is not the tool's)."""
 
 import numpy as np
 
@@ -37,7 +37,7 @@ def wrist_loads(robot, t6, wrench, motion, chosen):
     parallel, dof = robot.parallel, robot.dof
     solution = solve(robot, t6)
     platform = solution.platform
-    legs = solve(parallel, platform)
+    legs = solution.parallel
     parts = []
     for posture in chosen:
         readings = solution.joints[:, dof:, posture]

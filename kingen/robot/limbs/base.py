@@ -16,7 +16,7 @@ from pydantic import field_validator, model_validator
 
 from ...conventions import PRISMATIC, JointType
 from ...runtime.resources import templates_dir
-from ..loads_schema import ForceLimit, JointLimits, refuse_wrong_limit
+from ..loads_schema import ForceLimit, JointLimits, LimbParts, refuse_wrong_limit
 from ..schema import CalibrationField, Identifier, PositiveRate, Strict, Travel, UnitVec3, Vec3
 
 
@@ -71,6 +71,9 @@ class LimbModel(Strict):
     """N: a prismatic actuator's largest force either way; absent: not limited (``kingen loads``)."""
     max_torque: Optional[ForceLimit] = None
     """N m: a revolute actuator's largest torque either way; absent: not limited."""
+    max_power: Optional[ForceLimit] = None
+    """W: the actuator's largest power (load times joint speed) either way; absent: not limited
+    (``kingen check-path`` judges the power a program needs against it)."""
     stiffness: Optional[ForceLimit] = None
     """The actuator's stiffness along its joint: N/mm (prismatic) or N m/rad (revolute); absent: rigid
     is not assumed, and no deflection is computed."""
@@ -82,6 +85,9 @@ class LimbModel(Strict):
     platform_axis: Optional[UnitVec3] = None
     """The platform joint's neutral axis (platform frame); absent: the link's direction at the
     verification home in the working posture."""
+    parts: Optional[LimbParts] = None
+    """The limb's moving masses (its actuator's part and its passive link), point masses; absent:
+    massless (``kingen loads``)."""
     calibrate: dict[str, CalibrationField] = {}
     """Parameter -> calibration field read at run time; a zero field keeps the built-in value."""
 
@@ -175,6 +181,16 @@ class LimbModel(Strict):
     def base_side_velocity(self, joint):
         """d(base-side point)/d(joint) (n, 3), base frame: mm per mm, or mm per rad."""
         return np.zeros(np.shape(joint) + (3,))
+
+    def base_side_acceleration(self, joint):
+        """d^2(base-side point)/d(joint)^2 (n, 3), base frame: mm per mm^2, or mm per rad^2."""
+        return np.zeros(np.shape(joint) + (3,))
+
+    def actuator_part_gain(self, distance):
+        """How the centre of the actuator's moving part, ``distance`` mm from the actuator's joint
+        (LimbParts.actuator), moves: as the base-side point times this factor (a carriage: 1), or
+        None: it turns with the passive link about the base-side point (a leg's cylinder)."""
+        return 1.0
 
     link_length_rate: ClassVar[float] = 0.0
     """d(link length)/d(joint): 1 for a prismatic leg whose joint is its length, else 0."""

@@ -106,6 +106,14 @@ class Crank(TwoBranchModel):
     def base_side_velocity(self, joint):
         return self.crank_length * self._direction(joint, derivative=True)
 
+    def base_side_acceleration(self, joint):
+        """-r (cos theta cos beta, cos theta sin beta, -sin theta): the tip's second derivative."""
+        return -self.crank_length * self._direction(joint, derivative=False)
+
+    def actuator_part_gain(self, distance):
+        """A point of the crank ``distance`` mm from its pivot moves as its tip times distance / r."""
+        return distance / self.crank_length
+
     def c_row(self):
         beta = math.radians(self.crank_direction)
         return {"pivot": c_vector(self.pivot), "cos_direction": c_double(math.cos(beta)),

@@ -54,6 +54,10 @@ class Leg(LimbModel):
     def passive_length(self, joint):
         return self.reference_length + np.asarray(joint)
 
+    def actuator_part_gain(self, distance):
+        """None: the cylinder turns with the leg about its base joint."""
+        return None
+
     def constraint_plane(self):
         if self.revolute_axis is None:
             return None
