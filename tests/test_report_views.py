@@ -163,24 +163,30 @@ window.addEventListener("load", function () { setTimeout(function () {
   document.body.setAttribute("data-joints", out ? out.textContent : "none");
   document.body.setAttribute("data-frame", (inner.querySelector(".kingen-frame") || {}).textContent || "");
   document.body.setAttribute("data-canvas", inner.querySelectorAll("canvas").length);
+  document.body.setAttribute("data-drawing", (inner.getElementById("kingen-drawing") || {}).textContent || "none");
+  document.body.setAttribute("data-about", (inner.querySelector(".kingen-about") || {}).textContent || "");
+  document.body.setAttribute("data-travel", Array.from(inner.querySelectorAll(".kingen-table tbody tr"),
+                                                       row => row.cells[2].textContent).join("|"));
 }, 2000); });
 </script></body>"""
 
 
 def in_browser(report, scratch):
-    """What the report's view wrote once loaded in headless Chromium: {ready, joints (the
-    parsed #kingen-joints), frame (the timeline's words), canvas (how many)}, and Chromium's
-    console lines (none: no JS error)."""
+    """What the report's view wrote once loaded in headless Chromium: {ready, joints and drawing
+    (the parsed #kingen-joints and #kingen-drawing), frame (the timeline's words), canvas (how
+    many), about (the note under the table), travel (the table's travel cells, "|"-joined)}, and
+    Chromium's console lines (none: no JS error)."""
     require_tool("chromium", "chromium")
     probe = scratch / "probe.html"
     probe.write_text(report.read_text().replace("</body>", PROBE))
     done = subprocess.run([*CHROMIUM, f"--user-data-dir={scratch / 'profile'}", "--enable-logging=stderr", "--v=0",
                            "--virtual-time-budget=15000", "--window-size=1200,900", "--dump-dom", probe.as_uri()],
                           capture_output=True, text=True, timeout=120)
-    found = {name: html.unescape(value) for name, value in re.findall(r'data-(ready|joints|frame|canvas)="([^"]*)"',
-                                                                        done.stdout)}
+    found = {name: html.unescape(value) for name, value in
+             re.findall(r'data-(ready|joints|frame|canvas|drawing|about|travel)="([^"]*)"', done.stdout)}
     console = [line for line in done.stderr.splitlines() if "CONSOLE" in line]
-    return {**found, "joints": json.loads(found["joints"]) if found.get("joints", "none") != "none" else None}, console
+    parsed = {key: json.loads(found[key]) if found.get(key, "none") != "none" else None for key in ("joints", "drawing")}
+    return {**found, **parsed}, console
 
 
 def test_check_paths_report_opens_its_view_at_the_first_problem_in_a_real_browser(tmp_path):
@@ -199,6 +205,31 @@ def test_check_paths_report_opens_its_view_at_the_first_problem_in_a_real_browse
     assert seen["joints"]["joints"] == pytest.approx(strut_lengths([first["pose"]])[0], abs=1e-6)
     assert f"1: line {first['line']}: {first['kind']} {first['joint']}" in seen["frame"]
     assert report.stat().st_size < 3_000_000
+
+
+def test_check_paths_view_judges_a_travel_limited_on_one_side_and_names_the_ini(tmp_path):
+    """LinuxCNC's sample hexapod's robot file gives no strut travel; the .ini only MAX_LIMIT (31 in).
+    The report's view, opened at the first problem (a strut beyond 31 in), colours exactly the
+    struts longer than 787.4 mm as beyond their travel, shows each travel as "up to 787.4 mm",
+    and says the travel comes from the robot file and that .ini."""
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,60\n0,0,560,0,0,0,60\n")
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(maximum=31.0, velocity=100.0, acceleration=10000.0))
+    report = tmp_path / "report.html"
+    assert main(["check-path", "linuxcnc_hexapod", str(program), "--ini", str(ini), "--html", str(report),
+                 "--json", str(tmp_path / "r.json")]) == 1
+    first = json.loads((tmp_path / "r.json").read_text())["problems"][0]
+    assert first["kind"] == "travel"
+    seen, console = in_browser(report, tmp_path)
+    assert console == [] and seen["ready"] == "1"
+    lengths = strut_lengths([first["pose"]])[0]
+    assert seen["joints"]["joints"] == pytest.approx(lengths, abs=1e-6)
+    beyond = [length > 31.0 * INCH for length in lengths]
+    assert any(beyond)
+    assert [limb["status"] for limb in seen["drawing"]["limbs"]] == ["limits" if over else "good" for over in beyond]
+    assert seen["travel"].split("|") == [f"up to {31.0 * INCH:g} mm"] * 6
+    assert f"travel from the robot file and {ini}" in seen["about"]
 
 
 def test_calibrates_report_draws_its_arrows_and_ghost_in_a_real_browser(tmp_path):

@@ -331,3 +331,22 @@ def test_the_postures_are_named_by_their_branches_as_solve_prints_them():
     assert posture_branches(tau) == [f"{k:03b}" for k in range(8)]
     for posture, branches in enumerate(posture_branches(tau)):  # the digit is the limb's branch in that posture
         assert tau.posture_branches(posture) == tuple(int(digit) for digit in branches)
+
+
+def test_an_address_the_page_cannot_read_is_said_and_the_rest_shown_in_a_real_browser(page_of, tmp_path):
+    """hexapod (one posture): an address that is not six numbers, or names a posture the robot has
+    not, leaves the page at what it can read (the home pose, or the address's pose in the working
+    posture) with the reference's joints there; #kingen-joints carries ``address_warning`` naming
+    each part left out (the note says the same), and nothing is written on the console."""
+    require_browser()
+    robot = load_robot("hexapod")
+    home = np.asarray(robot.verification.home, dtype=float)
+    for fragment, pose, words in (("#pose=1,2,3&posture=banana", home, ["pose=1,2,3 is not 6 numbers",
+                                                                       "posture=banana is not one of 0 to 0"]),
+                                  ("#pose=0,0,400,0,0,0&posture=7", [0.0, 0, 400, 0, 0, 0],
+                                   ["posture=7 is not one of 0 to 0"])):
+        answer = open_page(page_of("hexapod"), fragment, tmp_path / "shot.png", tmp_path / "profile")["joints"]
+        assert answer["by"] == "wasm" and answer["posture"] == 0 and answer["pose"] == pytest.approx(pose)
+        expected = solve(robot, t6_from_pose(np.array([pose])))
+        np.testing.assert_allclose(answer["joints"], expected.joints[0, :, 0], atol=1e-9)
+        assert all(word in answer["address_warning"] for word in words), answer
