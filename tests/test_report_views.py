@@ -165,6 +165,12 @@ window.addEventListener("load", function () { setTimeout(function () {
   document.body.setAttribute("data-canvas", inner.querySelectorAll("canvas").length);
   document.body.setAttribute("data-drawing", (inner.getElementById("kingen-drawing") || {}).textContent || "none");
   document.body.setAttribute("data-about", (inner.querySelector(".kingen-about") || {}).textContent || "");
+  var boxes = Array.from(inner.querySelectorAll(".kingen-label"), function (div) {
+    return div.style.visibility === "hidden" || !div.textContent ? null : div.getBoundingClientRect(); }).filter(Boolean);
+  var overlaps = 0;
+  boxes.forEach(function (a, i) { boxes.slice(i + 1).forEach(function (b) {
+    if (a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom) overlaps += 1; }); });
+  document.body.setAttribute("data-labels", boxes.length + " " + overlaps);
   document.body.setAttribute("data-travel", Array.from(inner.querySelectorAll(".kingen-table tbody tr"),
                                                        row => row.cells[2].textContent).join("|"));
 }, 2000); });
@@ -174,7 +180,8 @@ window.addEventListener("load", function () { setTimeout(function () {
 def in_browser(report, scratch):
     """What the report's view wrote once loaded in headless Chromium: {ready, joints and drawing
     (the parsed #kingen-joints and #kingen-drawing), frame (the timeline's words), canvas (how
-    many), about (the note under the table), travel (the table's travel cells, "|"-joined)}, and
+    many), about (the note under the table), travel (the table's travel cells, "|"-joined),
+    labels ("shown overlapping": the labels shown, the pairs of them that overlap)}, and
     Chromium's console lines (none: no JS error)."""
     require_tool("chromium", "chromium")
     probe = scratch / "probe.html"
@@ -183,7 +190,7 @@ def in_browser(report, scratch):
                            "--virtual-time-budget=15000", "--window-size=1200,900", "--dump-dom", probe.as_uri()],
                           capture_output=True, text=True, timeout=120)
     found = {name: html.unescape(value) for name, value in
-             re.findall(r'data-(ready|joints|frame|canvas|drawing|about|travel)="([^"]*)"', done.stdout)}
+             re.findall(r'data-(ready|joints|frame|canvas|drawing|about|travel|labels)="([^"]*)"', done.stdout)}
     console = [line for line in done.stderr.splitlines() if "CONSOLE" in line]
     parsed = {key: json.loads(found[key]) if found.get(key, "none") != "none" else None for key in ("joints", "drawing")}
     return {**found, **parsed}, console
@@ -234,7 +241,8 @@ def test_check_paths_view_judges_a_travel_limited_on_one_side_and_names_the_ini(
 
 def test_calibrates_report_draws_its_arrows_and_ghost_in_a_real_browser(tmp_path):
     """30 exact measurements of the hexapod with one leg's base point 0.4 mm off: the report's view
-    starts, writes the nominal machine's joints at home (the reference's) and states the factors."""
+    starts, writes the nominal machine's joints at home (the reference's), states the factors, and
+    shows no label over another."""
     from kingen.calibrate.identification import region_poses
     from kingen.calibrate.measurements import write_measurements
     from kingen.calibrate.prediction import synthesize
@@ -260,6 +268,8 @@ def test_calibrates_report_draws_its_arrows_and_ghost_in_a_real_browser(tmp_path
     home = solve(robot, t6_from_pose(robot.verification.home)).joints[0, :, robot.working_posture]
     assert console == [] and seen["ready"] == "1" and seen["canvas"] == "1"
     assert seen["joints"]["joints"] == pytest.approx(home, abs=1e-9)
+    shown, overlapping = map(int, seen["labels"].split())
+    assert shown >= 1 and overlapping == 0  # a label that would cover another is hidden
 
 
 def test_analyzes_report_draws_its_tilt_surface_in_a_real_browser(tmp_path):

@@ -706,6 +706,21 @@ class View {
         + (this.scene.travel[i] ? ` [${this.scene.travel[i][0] ?? "-∞"}, ${this.scene.travel[i][1] ?? "∞"}]` : "");
     });
     for (const [position, div] of this.extraLabels) place(div, position);
+    this.unclutter();
+  }
+
+  // A label that would cover one before it is hidden (the table and the timeline hold every
+  // value): the overlays' labels (a report's findings) first, then the joints'. The boxes are all
+  // read in one layout, then the hidden ones hidden.
+  unclutter() {
+    const divs = [...this.extraLabels.map(([, div]) => div), ...this.labels];
+    divs.forEach(div => { div.style.visibility = ""; });
+    const boxes = divs.map(div => div.getBoundingClientRect()), kept = [];
+    const covers = (a, b) => a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
+    boxes.forEach((box, i) => {
+      if (box.width && kept.some(other => covers(box, other))) divs[i].style.visibility = "hidden";
+      else kept.push(box);
+    });
   }
 }
 
