@@ -309,3 +309,20 @@ def test_a_five_axis_programs_frames_hold_the_tool_poses_it_commands(tmp_path):
         a, c = 20.0 + 5.0 * fraction, 30.0 + 30.0 * fraction
         turned = rodrigues([0, 0, 1], pose[5]) @ rodrigues([0, 1, 0], pose[4]) @ rodrigues([1, 0, 0], pose[3])
         assert turned[:, 2] == pytest.approx(rodrigues([0, 0, 1], c) @ rodrigues([1, 0, 0], a) @ w0, abs=1e-9)
+
+
+def test_check_paths_view_counts_its_problems_in_words(tmp_path):
+    """The view's heading counts what the timeline marks in words: "no problem to mark" on a clean
+    program, else the problems' number (one in the singular): the sample hexapod past 31 in."""
+    from kingen.cli.report_views import path_view
+
+    program = tmp_path / "p.csv"
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(maximum=31.0, velocity=100.0, acceleration=10000.0, joints=6))
+    for rows in ("0,0,508,0,0,0,60\n0,0,520,0,0,0,60\n", "0,0,508,0,0,0,60\n0,0,560,0,0,0,60\n"):
+        program.write_text("x,y,z,roll,pitch,yaw,feed\n" + rows)
+        outcome = check_program(load_robot("linuxcnc_hexapod"), program, CheckSettings(ini=ini))
+        count = len(outcome.findings.sorted_problems())
+        expected = (f"{count} problem{'s' if count > 1 else ''} numbered on the timeline" if count
+                    else "no problem to mark on the timeline")
+        assert re.search(r"[\d,]+ frames along the program, " + re.escape(expected), html.unescape(path_view(outcome)))

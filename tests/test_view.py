@@ -350,3 +350,20 @@ def test_an_address_the_page_cannot_read_is_said_and_the_rest_shown_in_a_real_br
         expected = solve(robot, t6_from_pose(np.array([pose])))
         np.testing.assert_allclose(answer["joints"], expected.joints[0, :, 0], atol=1e-9)
         assert all(word in answer["address_warning"] for word in words), answer
+
+
+@pytest.mark.parametrize("name", ("linear_delta", "tau"))
+def test_the_view_opens_with_the_whole_machine_in_sight(name, page_of, tmp_path):
+    """The rails are framed with the rest (a linear delta's towers rise far above its platform):
+    in the screenshot at load, the 3D stage's outer 12 px are its background on every side
+    (nothing of the machine cut off by the stage's edge) and the machine is drawn."""
+    require_browser()
+    from matplotlib.image import imread
+
+    shot = tmp_path / "shot.png"
+    open_page(page_of(name), "", shot, tmp_path / "profile")
+    pixels = np.round(imread(shot)[:, :, :3] * 255)
+    drawn = np.any(pixels[60:695, 2:605] != BACKGROUND, axis=-1)  # the stage, below the title, left of the side panel
+    edges = {"top": drawn[:12], "bottom": drawn[-12:], "left": drawn[:, :12], "right": drawn[:, -12:]}
+    assert {side: float(band.mean()) for side, band in edges.items()} == dict.fromkeys(edges, 0.0)
+    assert drawn.mean() > 0.02

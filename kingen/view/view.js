@@ -174,6 +174,12 @@ function drawingAt(scene, pose, joints, warning, previous) {
   return {platform, limbs, tool, status: warning};
 }
 
+// A carriage's rail as drawn (base frame, mm): its ends at the joint's travel, a side without a
+// limit 100 mm beyond both 0 and the joint's value q.
+function railEnds(limb, travel, q) {
+  return [baseSide(limb, travel?.[0] ?? Math.min(0, q) - 100), baseSide(limb, travel?.[1] ?? Math.max(0, q) + 100)];
+}
+
 // ---- text ----
 
 function valueDigits(scene, index, value) {  // a joint's value in mm or degrees to 3 decimals, no -0.000
@@ -304,8 +310,7 @@ class Drawing {
       const shown = drawing.limbs[i], colour = STATUS_COLOURS[shown.status] || STATUS_COLOURS.good;
       const travel = this.scene.travel[i];
       if (limb.actuator === "carriage") {
-        const ends = [travel?.[0] ?? Math.min(0, joints[i]) - 100, travel?.[1] ?? Math.max(0, joints[i]) + 100];
-        this.rod(baseSide(limb, ends[0]), baseSide(limb, ends[1]), r * 0.8, 0x5a5f66);
+        this.rod(...railEnds(limb, travel, joints[i]), r * 0.8, 0x5a5f66);
         this.ball(shown.base_side, r * 2.2, colour);
       } else if (limb.actuator === "arm") {
         this.ball(limb.pivot, r * 1.8, 0x5a5f66);
@@ -411,7 +416,11 @@ class View {
     const base = new THREE.Group();  // the base frame at its origin: x red, y green, z blue
     this.world.add(base);
     new Drawing(THREE, scene, base, 1).frame([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], scene.size / 6);
-    const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point)];
+    const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point),
+                    ...scene.machine.limbs.map(l => l.base_side)];
+    scene.model.limbs.forEach((limb, i) => {  // a rail whole: the view opens with every part of the machine in sight
+      if (limb.actuator === "carriage") points.push(...railEnds(limb, scene.travel[i], scene.joints[i]));
+    });
     if (scene.machine.tool) points.push([0, 1, 2].map(r => scene.machine.tool[r][3]));
     for (const arrow of scene.arrows || []) points.push(arrow.origin, add(arrow.origin, arrow.vector));
     points.push(...(scene.points || []).map(point => point.position), ...(scene.surface ? scene.surface.vertices : []));
