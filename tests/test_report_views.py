@@ -273,7 +273,8 @@ def test_calibrates_report_draws_its_arrows_and_ghost_in_a_real_browser(tmp_path
 
 
 def test_analyzes_report_draws_its_tilt_surface_in_a_real_browser(tmp_path):
-    """CEART's report at a coarse step: the view starts and writes the reference's joints at home."""
+    """CEART's report at a coarse step: the view starts and writes the reference's joints at home,
+    its timeline says it holds the 8 azimuths' limits, and no label covers another."""
     from kingen.conventions import t6_from_pose
     from kingen.kinematics.reference import solve
 
@@ -285,6 +286,8 @@ def test_analyzes_report_draws_its_tilt_surface_in_a_real_browser(tmp_path):
     home = solve(robot, t6_from_pose(robot.verification.home)).joints[0, :, robot.working_posture]
     assert console == [] and seen["ready"] == "1" and seen["canvas"] == "1"
     assert seen["joints"]["joints"] == pytest.approx(home, abs=1e-9)
+    assert seen["frame"] == "as it opened; move the slider to see the 8 frames"  # one per azimuth's limit
+    assert int(seen["labels"].split()[1]) == 0
 
 
 def test_a_five_axis_programs_frames_hold_the_tool_poses_it_commands(tmp_path):

@@ -567,6 +567,7 @@ class View {
       button.addEventListener("click", () => { slider.value = marker.frame; this.showFrame(marker.frame); });
     });
     if (Number.isInteger(this.scene.start_frame)) slider.value = this.scene.start_frame;  // startView shows it
+    else box.querySelector(".kingen-frame").textContent = `as it opened; move the slider to see the ${frames.length} frames`;
   }
 
   showFrame(index) {
