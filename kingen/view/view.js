@@ -371,7 +371,8 @@ function parseFragment(hash, scene) {
       else found.problems.push(`${key}=${value} is not ${count} numbers`);
     } else if (key === "posture" || key === "bench") {
       const number = /^\d+$/.test(value) ? Number(value) : NaN;
-      if (key === "posture" && !(number < scene.postures)) found.problems.push(`posture=${value} is not one of 0 to ${scene.postures - 1}`);
+      const postures = scene.postures === 1 ? "the robot has posture 0 only" : `the robot's are 0 to ${scene.postures - 1}`;
+      if (key === "posture" && !(number < scene.postures)) found.problems.push(`posture=${value} is not a posture (${postures})`);
       else if (Number.isInteger(number)) found[key] = number;
       else found.problems.push(`bench=${value} is not a count`);
     } else {
