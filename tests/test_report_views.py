@@ -52,6 +52,8 @@ def test_a_findings_frame_is_at_its_place_with_the_strut_lengths_there(tmp_path)
     assert times == sorted(times) and frames[0]["pose"] == [0.0, 0.0, 508.0, 0.0, 0.0, 0.0]
     assert len(frames) <= FRAMES + len(problems)
     assert json.loads(json.dumps(view, allow_nan=False)) == view
+    assert view["travel"] == [[None, pytest.approx(31.0 * INCH)]] * 6  # the .ini's MAX_LIMIT only: no lower side
+    assert view["travel_from"].startswith(f"the robot file and {ini} (read by ")
 
 
 def test_a_long_path_is_thinned_to_the_frame_bound_keeping_every_finding(tmp_path):
