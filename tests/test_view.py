@@ -301,7 +301,8 @@ def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
         _, joints, warning = machine_at(robot, t6_from_pose(pose), shown["posture"])
         frames.append({"t": float(t), "pose": pose.tolist(), "joints": joints.tolist(), "warning": warning})
     ghost, _, _ = machine_at(robot, t6_from_pose(np.array(shown["pose"]) + [0, 0, 40, 0, 6, 0]), shown["posture"])
-    shown.update(frames=frames, start_frame=5, markers=[{"frame": 5, "label": "line 8"}, {"frame": 15, "label": "line 12"}],
+    shown.update(frames=frames, start_frame=5, markers=[{"frame": 5, "label": "line 8"}, {"frame": 15, "label": "line 12"},
+                                                   {"frame": 15, "label": "line 12 too"}],
                  arrows=[{"origin": [200.0, 0.0, 0.0], "vector": [0.0, 0.0, 150.0], "label": "residual x1000"}],
                  points=[{"position": [0.0, 0.0, 600.0], "label": "tilt limit"}],
                  surface={"vertices": [[-300, -300, 700], [300, -300, 700], [0, 300, 700]], "triangles": [[0, 1, 2]],
@@ -313,7 +314,8 @@ def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
                            "--dump-dom", page.as_uri()], capture_output=True, text=True, timeout=120)
     assert [line for line in done.stderr.splitlines() if ":CONSOLE" in line and "GL Driver Message" not in line] == []
     dom = done.stdout
-    assert len(re.findall(r'<button class="kingen-marker"', dom)) == 2
+    buttons = re.findall(r'<button class="kingen-marker" title="([^"]*)"[^>]*>([^<]*)</button>', dom)
+    assert buttons == [("1: line 8", "1"), ("2: line 12\n3: line 12 too", "2-3")]  # one button per place
     assert "identified changes (changes shown ×100)" in dom and "tilt limits" in dom
     assert "residual x1000" in dom and "tilt limit" in dom
     answer = json.loads(re.search(r'<pre id="kingen-joints" hidden="">([^<]*)</pre>', dom).group(1))

@@ -559,21 +559,31 @@ class View {
         this.showFrame(next);
       }, 40);
     });
+    // One button per place of the path (the markers' frames' t): several problems at one place
+    // share it, numbered "1-6" (or "2,5"); the labels in full on hover and beside the slider there.
+    const places = new Map();
     (this.scene.markers || []).forEach((marker, n) => {
+      const t = frames[marker.frame].t;
+      places.set(t, [...(places.get(t) || []), [marker, n]]);
+    });
+    for (const group of places.values()) {
+      const numbers = group.map(([, n]) => n + 1), frame = group[0][0].frame;
       const button = marks.appendChild(document.createElement("button"));
       button.className = "kingen-marker";
-      button.textContent = String(n + 1);  // the label in full on hover and beside the slider at its frame
-      button.title = `${n + 1}: ${marker.label}`;
-      button.style.left = `${100 * marker.frame / Math.max(1, frames.length - 1)}%`;
-      button.addEventListener("click", () => { slider.value = marker.frame; this.showFrame(marker.frame); });
-    });
+      button.textContent = numbers.length === 1 ? String(numbers[0])
+        : numbers.every((v, i) => i === 0 || v === numbers[i - 1] + 1) ? `${numbers[0]}-${numbers.at(-1)}` : numbers.join(",");
+      button.title = group.map(([marker, n]) => `${n + 1}: ${marker.label}`).join("\n");
+      button.style.left = `${100 * frame / Math.max(1, frames.length - 1)}%`;
+      button.addEventListener("click", () => { slider.value = frame; this.showFrame(frame); });
+    }
     if (Number.isInteger(this.scene.start_frame)) slider.value = this.scene.start_frame;  // startView shows it
     else box.querySelector(".kingen-frame").textContent = `as it opened; move the slider to see the ${frames.length} frames`;
   }
 
   showFrame(index) {
     const frame = this.scene.frames[index];
-    const marked = (this.scene.markers || []).map((marker, n) => [marker, n]).filter(([marker]) => marker.frame === index);
+    const marked = (this.scene.markers || []).map((marker, n) => [marker, n])
+      .filter(([marker]) => this.scene.frames[marker.frame].t === frame.t);  // every problem at this place
     this.root.querySelector(".kingen-frame").textContent = [frame.label ?? `t = ${Number(frame.t).toFixed(3)} s`,
       ...marked.map(([marker, n]) => `${n + 1}: ${marker.label}`)].join("; ");
     if (this.routine) { this.setPose(frame.pose, frame.posture ?? this.posture); return; }
