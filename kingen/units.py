@@ -106,3 +106,11 @@ def length_text(mm, digits=3):
         return f"{number_text(mm, digits)} mm"
     unit, scale = next(((unit, scale) for unit, scale in LENGTH_STEPS if abs(mm) / scale >= 0.1), LENGTH_STEPS[-1])
     return f"{number_text(mm / scale, digits)} {unit}"
+
+
+def travel_ends(lower, upper, factor):
+    """A joint's travel for people and pages: [lower, upper] (``lower`` and ``upper`` in the
+    routine's units, mm or rad, times ``factor``: mm, or degrees), a side without a limit
+    (-inf or +inf) as None; None when neither side is limited."""
+    ends = [float(end * factor) if math.isfinite(end) else None for end in (lower, upper)]
+    return None if ends == [None, None] else ends

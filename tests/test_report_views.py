@@ -52,6 +52,8 @@ def test_a_findings_frame_is_at_its_place_with_the_strut_lengths_there(tmp_path)
     assert times == sorted(times) and frames[0]["pose"] == [0.0, 0.0, 508.0, 0.0, 0.0, 0.0]
     assert len(frames) <= FRAMES + len(problems)
     assert json.loads(json.dumps(view, allow_nan=False)) == view
+    assert view["travel"] == [[None, pytest.approx(31.0 * INCH)]] * 6  # the .ini's MAX_LIMIT only: no lower side
+    assert view["travel_from"].startswith(f"the robot file and {ini} (read by ")
 
 
 def test_a_long_path_is_thinned_to_the_frame_bound_keeping_every_finding(tmp_path):
@@ -163,24 +165,37 @@ window.addEventListener("load", function () { setTimeout(function () {
   document.body.setAttribute("data-joints", out ? out.textContent : "none");
   document.body.setAttribute("data-frame", (inner.querySelector(".kingen-frame") || {}).textContent || "");
   document.body.setAttribute("data-canvas", inner.querySelectorAll("canvas").length);
+  document.body.setAttribute("data-drawing", (inner.getElementById("kingen-drawing") || {}).textContent || "none");
+  document.body.setAttribute("data-about", (inner.querySelector(".kingen-about") || {}).textContent || "");
+  var boxes = Array.from(inner.querySelectorAll(".kingen-label"), function (div) {
+    return div.style.visibility === "hidden" || !div.textContent ? null : div.getBoundingClientRect(); }).filter(Boolean);
+  var overlaps = 0;
+  boxes.forEach(function (a, i) { boxes.slice(i + 1).forEach(function (b) {
+    if (a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom) overlaps += 1; }); });
+  document.body.setAttribute("data-labels", boxes.length + " " + overlaps);
+  document.body.setAttribute("data-travel", Array.from(inner.querySelectorAll(".kingen-table tbody tr"),
+                                                       row => row.cells[2].textContent).join("|"));
 }, 2000); });
 </script></body>"""
 
 
 def in_browser(report, scratch):
-    """What the report's view wrote once loaded in headless Chromium: {ready, joints (the
-    parsed #kingen-joints), frame (the timeline's words), canvas (how many)}, and Chromium's
-    console lines (none: no JS error)."""
+    """What the report's view wrote once loaded in headless Chromium: {ready, joints and drawing
+    (the parsed #kingen-joints and #kingen-drawing), frame (the timeline's words), canvas (how
+    many), about (the note under the table), travel (the table's travel cells, "|"-joined),
+    labels ("shown overlapping": the labels shown, the pairs of them that overlap)}, and
+    Chromium's console lines (none: no JS error)."""
     require_tool("chromium", "chromium")
     probe = scratch / "probe.html"
     probe.write_text(report.read_text().replace("</body>", PROBE))
     done = subprocess.run([*CHROMIUM, f"--user-data-dir={scratch / 'profile'}", "--enable-logging=stderr", "--v=0",
                            "--virtual-time-budget=15000", "--window-size=1200,900", "--dump-dom", probe.as_uri()],
                           capture_output=True, text=True, timeout=120)
-    found = {name: html.unescape(value) for name, value in re.findall(r'data-(ready|joints|frame|canvas)="([^"]*)"',
-                                                                        done.stdout)}
+    found = {name: html.unescape(value) for name, value in
+             re.findall(r'data-(ready|joints|frame|canvas|drawing|about|travel|labels)="([^"]*)"', done.stdout)}
     console = [line for line in done.stderr.splitlines() if "CONSOLE" in line]
-    return {**found, "joints": json.loads(found["joints"]) if found.get("joints", "none") != "none" else None}, console
+    parsed = {key: json.loads(found[key]) if found.get(key, "none") != "none" else None for key in ("joints", "drawing")}
+    return {**found, **parsed}, console
 
 
 def test_check_paths_report_opens_its_view_at_the_first_problem_in_a_real_browser(tmp_path):
@@ -201,9 +216,35 @@ def test_check_paths_report_opens_its_view_at_the_first_problem_in_a_real_browse
     assert report.stat().st_size < 3_000_000
 
 
+def test_check_paths_view_judges_a_travel_limited_on_one_side_and_names_the_ini(tmp_path):
+    """LinuxCNC's sample hexapod's robot file gives no strut travel; the .ini only MAX_LIMIT (31 in).
+    The report's view, opened at the first problem (a strut beyond 31 in), colours exactly the
+    struts longer than 787.4 mm as beyond their travel, shows each travel as "up to 787.4 mm",
+    and says the travel comes from the robot file and that .ini."""
+    program = tmp_path / "p.csv"
+    program.write_text("x,y,z,roll,pitch,yaw,feed\n0,0,508,0,0,0,60\n0,0,560,0,0,0,60\n")
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(maximum=31.0, velocity=100.0, acceleration=10000.0))
+    report = tmp_path / "report.html"
+    assert main(["check-path", "linuxcnc_hexapod", str(program), "--ini", str(ini), "--html", str(report),
+                 "--json", str(tmp_path / "r.json")]) == 1
+    first = json.loads((tmp_path / "r.json").read_text())["problems"][0]
+    assert first["kind"] == "travel"
+    seen, console = in_browser(report, tmp_path)
+    assert console == [] and seen["ready"] == "1"
+    lengths = strut_lengths([first["pose"]])[0]
+    assert seen["joints"]["joints"] == pytest.approx(lengths, abs=1e-6)
+    beyond = [length > 31.0 * INCH for length in lengths]
+    assert any(beyond)
+    assert [limb["status"] for limb in seen["drawing"]["limbs"]] == ["limits" if over else "good" for over in beyond]
+    assert seen["travel"].split("|") == [f"up to {31.0 * INCH:g} mm"] * 6
+    assert f"travel from the robot file and {ini}" in seen["about"]
+
+
 def test_calibrates_report_draws_its_arrows_and_ghost_in_a_real_browser(tmp_path):
     """30 exact measurements of the hexapod with one leg's base point 0.4 mm off: the report's view
-    starts, writes the nominal machine's joints at home (the reference's) and states the factors."""
+    starts, writes the nominal machine's joints at home (the reference's), states the factors, and
+    shows no label over another."""
     from kingen.calibrate.identification import region_poses
     from kingen.calibrate.measurements import write_measurements
     from kingen.calibrate.prediction import synthesize
@@ -229,10 +270,13 @@ def test_calibrates_report_draws_its_arrows_and_ghost_in_a_real_browser(tmp_path
     home = solve(robot, t6_from_pose(robot.verification.home)).joints[0, :, robot.working_posture]
     assert console == [] and seen["ready"] == "1" and seen["canvas"] == "1"
     assert seen["joints"]["joints"] == pytest.approx(home, abs=1e-9)
+    shown, overlapping = map(int, seen["labels"].split())
+    assert shown >= 1 and overlapping == 0  # a label that would cover another is hidden
 
 
 def test_analyzes_report_draws_its_tilt_surface_in_a_real_browser(tmp_path):
-    """CEART's report at a coarse step: the view starts and writes the reference's joints at home."""
+    """CEART's report at a coarse step: the view starts and writes the reference's joints at home,
+    its timeline says it holds the 8 azimuths' limits, and no label covers another."""
     from kingen.conventions import t6_from_pose
     from kingen.kinematics.reference import solve
 
@@ -244,6 +288,8 @@ def test_analyzes_report_draws_its_tilt_surface_in_a_real_browser(tmp_path):
     home = solve(robot, t6_from_pose(robot.verification.home)).joints[0, :, robot.working_posture]
     assert console == [] and seen["ready"] == "1" and seen["canvas"] == "1"
     assert seen["joints"]["joints"] == pytest.approx(home, abs=1e-9)
+    assert seen["frame"] == "as it opened; move the slider to see the 8 frames"  # one per azimuth's limit
+    assert int(seen["labels"].split()[1]) == 0
 
 
 def test_a_five_axis_programs_frames_hold_the_tool_poses_it_commands(tmp_path):
@@ -268,3 +314,20 @@ def test_a_five_axis_programs_frames_hold_the_tool_poses_it_commands(tmp_path):
         a, c = 20.0 + 5.0 * fraction, 30.0 + 30.0 * fraction
         turned = rodrigues([0, 0, 1], pose[5]) @ rodrigues([0, 1, 0], pose[4]) @ rodrigues([1, 0, 0], pose[3])
         assert turned[:, 2] == pytest.approx(rodrigues([0, 0, 1], c) @ rodrigues([1, 0, 0], a) @ w0, abs=1e-9)
+
+
+def test_check_paths_view_counts_its_problems_in_words(tmp_path):
+    """The view's heading counts what the timeline marks in words: "no problem to mark" on a clean
+    program, else the problems' number (one in the singular): the sample hexapod past 31 in."""
+    from kingen.cli.report_views import path_view
+
+    program = tmp_path / "p.csv"
+    ini = tmp_path / "machine.ini"
+    ini.write_text(ini_text(maximum=31.0, velocity=100.0, acceleration=10000.0, joints=6))
+    for rows in ("0,0,508,0,0,0,60\n0,0,520,0,0,0,60\n", "0,0,508,0,0,0,60\n0,0,560,0,0,0,60\n"):
+        program.write_text("x,y,z,roll,pitch,yaw,feed\n" + rows)
+        outcome = check_program(load_robot("linuxcnc_hexapod"), program, CheckSettings(ini=ini))
+        count = len(outcome.findings.sorted_problems())
+        expected = (f"{count} problem{'s' if count > 1 else ''} numbered on the timeline" if count
+                    else "no problem to mark on the timeline")
+        assert re.search(r"[\d,]+ frames along the program, " + re.escape(expected), html.unescape(path_view(outcome)))

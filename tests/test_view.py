@@ -301,7 +301,8 @@ def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
         _, joints, warning = machine_at(robot, t6_from_pose(pose), shown["posture"])
         frames.append({"t": float(t), "pose": pose.tolist(), "joints": joints.tolist(), "warning": warning})
     ghost, _, _ = machine_at(robot, t6_from_pose(np.array(shown["pose"]) + [0, 0, 40, 0, 6, 0]), shown["posture"])
-    shown.update(frames=frames, start_frame=5, markers=[{"frame": 5, "label": "line 8"}, {"frame": 15, "label": "line 12"}],
+    shown.update(frames=frames, start_frame=5, markers=[{"frame": 5, "label": "line 8"}, {"frame": 15, "label": "line 12"},
+                                                   {"frame": 15, "label": "line 12 too"}],
                  arrows=[{"origin": [200.0, 0.0, 0.0], "vector": [0.0, 0.0, 150.0], "label": "residual x1000"}],
                  points=[{"position": [0.0, 0.0, 600.0], "label": "tilt limit"}],
                  surface={"vertices": [[-300, -300, 700], [300, -300, 700], [0, 300, 700]], "triangles": [[0, 1, 2]],
@@ -313,7 +314,8 @@ def test_every_overlay_is_drawn_in_a_real_browser(tmp_path):
                            "--dump-dom", page.as_uri()], capture_output=True, text=True, timeout=120)
     assert [line for line in done.stderr.splitlines() if ":CONSOLE" in line and "GL Driver Message" not in line] == []
     dom = done.stdout
-    assert len(re.findall(r'<button class="kingen-marker"', dom)) == 2
+    buttons = re.findall(r'<button class="kingen-marker" title="([^"]*)"[^>]*>([^<]*)</button>', dom)
+    assert buttons == [("1: line 8", "1"), ("2: line 12\n3: line 12 too", "2-3")]  # one button per place
     assert "identified changes (changes shown ×100)" in dom and "tilt limits" in dom
     assert "residual x1000" in dom and "tilt limit" in dom
     answer = json.loads(re.search(r'<pre id="kingen-joints" hidden="">([^<]*)</pre>', dom).group(1))
@@ -331,3 +333,38 @@ def test_the_postures_are_named_by_their_branches_as_solve_prints_them():
     assert posture_branches(tau) == [f"{k:03b}" for k in range(8)]
     for posture, branches in enumerate(posture_branches(tau)):  # the digit is the limb's branch in that posture
         assert tau.posture_branches(posture) == tuple(int(digit) for digit in branches)
+
+
+def test_an_address_the_page_cannot_read_is_said_and_the_rest_shown_in_a_real_browser(page_of, tmp_path):
+    """hexapod (one posture): an address that is not six numbers, or names a posture the robot has
+    not, leaves the page at what it can read (the home pose, or the address's pose in the working
+    posture) with the reference's joints there; #kingen-joints carries ``address_warning`` naming
+    each part left out (the note says the same), and nothing is written on the console."""
+    require_browser()
+    robot = load_robot("hexapod")
+    home = np.asarray(robot.verification.home, dtype=float)
+    one = "is not a posture (the robot has posture 0 only)"
+    for fragment, pose, words in (("#pose=1,2,3&posture=banana", home, ["pose=1,2,3 is not 6 numbers", f"posture=banana {one}"]),
+                                  ("#pose=0,0,400,0,0,0&posture=7", [0.0, 0, 400, 0, 0, 0], [f"posture=7 {one}"])):
+        answer = open_page(page_of("hexapod"), fragment, tmp_path / "shot.png", tmp_path / "profile")["joints"]
+        assert answer["by"] == "wasm" and answer["posture"] == 0 and answer["pose"] == pytest.approx(pose)
+        expected = solve(robot, t6_from_pose(np.array([pose])))
+        np.testing.assert_allclose(answer["joints"], expected.joints[0, :, 0], atol=1e-9)
+        assert all(word in answer["address_warning"] for word in words), answer
+
+
+@pytest.mark.parametrize("name", ("linear_delta", "tau"))
+def test_the_view_opens_with_the_whole_machine_in_sight(name, page_of, tmp_path):
+    """The rails are framed with the rest (a linear delta's towers rise far above its platform):
+    in the screenshot at load, the 3D stage's outer 12 px are its background on every side
+    (nothing of the machine cut off by the stage's edge) and the machine is drawn."""
+    require_browser()
+    from matplotlib.image import imread
+
+    shot = tmp_path / "shot.png"
+    open_page(page_of(name), "", shot, tmp_path / "profile")
+    pixels = np.round(imread(shot)[:, :, :3] * 255)
+    drawn = np.any(pixels[60:695, 2:605] != BACKGROUND, axis=-1)  # the stage, below the title, left of the side panel
+    edges = {"top": drawn[:12], "bottom": drawn[-12:], "left": drawn[:, :12], "right": drawn[:, -12:]}
+    assert {side: float(band.mean()) for side, band in edges.items()} == dict.fromkeys(edges, 0.0)
+    assert drawn.mean() > 0.02

@@ -25,10 +25,12 @@ def path_view(outcome):
     frames, markers = overlays["frames"], overlays["markers"]
     start = markers[0]["frame"] if markers else 0
     program = Path(outcome.program).name
+    marked = ("no problem to mark on the timeline" if not markers else
+              f"{len(markers)} problem{'s' if len(markers) > 1 else ''} numbered on the timeline (click one to see "
+              "the machine there)")
     shown = {**scene(outcome.robot, frames[start]["pose"] if frames else None, outcome.posture), **overlays,
-             "description": f"{program} on {outcome.robot.name}, posture {outcome.posture}: {len(frames)} frames "
-                            f"along the program, {len(markers)} problems numbered on the timeline (click one to see "
-                            "the machine there)"}
+             "description": f"{program} on {outcome.robot.name}, posture {outcome.posture}: {len(frames):,} frames "
+                            f"along the program, {marked}"}
     if frames:
         shown["start_frame"] = start
     return view_fragment(outcome.robot, shown, title=f"{outcome.robot.name}: {program}", routine=False,

@@ -11,8 +11,9 @@ FRAMES frames of the path, evenly thinned from the findings' trace (its first an
 plus one frame at each problem's own place (at most findings.MAX_PROBLEMS), in the order of ``t``.
 
 Travel: per joint the travel the check judged (the robot file's and the .ini's), ``[lower,
-upper]`` in the robot file's units (mm, degrees), None where either side is unlimited: the view
-colours a limb beyond it.
+upper]`` in the robot file's units (mm, degrees), a side without a limit None (None where neither
+side has one): the view colours a limb beyond it; ``travel_from`` where it came from, in words
+(the robot file, the .ini).
 
 Markers: ``{frame, label}``, one per problem of the report's table (report.problem_rows), in
 its order; ``frame`` indexes ``frames``: the problem's own place, or, for one with no joints
@@ -23,6 +24,7 @@ import numpy as np
 
 from ..conventions import pose_from_t6
 from ..kinematics.routine import answer_frame
+from ..units import travel_ends
 from .program import is_gcode
 from .report import problem_rows
 
@@ -61,12 +63,12 @@ def _frame(t, pose, joints, warning, line):
 def travel(outcome):
     """Each joint's judged travel (module docstring)."""
     scale = outcome.findings.display_scale
-    return [[float(low * factor), float(high * factor)] if np.isfinite(low) and np.isfinite(high) else None
-            for low, high, factor in zip(outcome.limits.lower, outcome.limits.upper, scale)]
+    return [travel_ends(low, high, factor) for low, high, factor in zip(outcome.limits.lower, outcome.limits.upper, scale)]
 
 
 def playback(outcome):
-    """{"frames": [...], "markers": [...], "travel": [...]} of ``outcome`` (module docstring)."""
+    """{"frames": [...], "markers": [...], "travel": [...], "travel_from": "..."} of ``outcome``
+    (module docstring)."""
     path = path_frames(outcome)
     problems = outcome.findings.sorted_problems()
     own = [place for place in problems if place.sample is not None and np.all(np.isfinite(place.joints))]
@@ -84,7 +86,8 @@ def playback(outcome):
         index = number[id(frame)] if frame is not None else _on_line(frames, place.line)
         if index is not None:
             markers.append({"frame": index, "label": _label(row)})
-    return {"frames": frames, "markers": markers, "travel": travel(outcome)}
+    return {"frames": frames, "markers": markers, "travel": travel(outcome),
+            "travel_from": " and ".join(outcome.limits.sources)}
 
 
 def _on_line(frames, line):

@@ -60,6 +60,7 @@ def page_html(robot, scene, *, title, routine=True):
         banner=f"kingen {VERSION} view of {html.escape(robot.name)} (three.js {THREE_VERSION}, MIT licence)",
         title=html.escape(title), description=html.escape(scene.get("description", "")),
         about=f"Drawn with three.js {THREE_VERSION} (MIT licence), inside this page.",
+        travel_from=html.escape(scene.get("travel_from", "the robot file")),
         scene=_json_in_script(scene), three=(HERE / "vendor" / "three.module.min.js").read_text(),
         routine=script, view=(HERE / "view.js").read_text())
 

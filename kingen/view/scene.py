@@ -9,7 +9,9 @@ origin (mm), H[0..2][0..2] the rotation (kingen.conventions.matrix_from_pose; no
 Keys: ``robot`` and ``description``; ``coordinates`` (x y z roll pitch yaw) and ``free`` (those
 the page's fields set: a machine with task coordinates, its task coordinates); ``region`` {home,
 range} (the verification region, mm and degrees: the sliders' span); ``joint_names``,
-``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, or None);
+``joint_units`` ("mm" or "rad"), ``travel`` ([lower, upper] in mm or degrees, a side without a
+limit None; None where neither side has one), ``travel_from`` (where that travel comes from, in
+words: "the robot file", or a check's robot file and LinuxCNC .ini);
 ``postures``, ``posture_branches`` (per posture, its branches as `kingen solve` prints them) and
 ``posture``; ``pose`` (6), ``t6`` (4 x 4, DELMIA's layout), ``joints`` and
 ``warning`` (the reference's there); ``size`` (mm, the robot's largest length: the drawing's
@@ -43,6 +45,7 @@ import numpy as np
 
 from ..conventions import branch_of_posture, matrix_from_t6, pose_from_t6, t6_from_pose
 from ..errors import KingenError
+from ..units import travel_ends
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE, WARNING_NAMES
 from ..kinematics.hybrid.wrist import rotation_about
@@ -93,12 +96,6 @@ def posture_branches(robot):
         limbs = k // 2 if wrist else k
         words.append("".join(str(branch_of_posture(limbs, bit)) for bit in digits) + wrist or "-")
     return words
-
-
-def _travel(limits, index, scale):
-    """[lower, upper] of joint ``index`` in the robot file's units (mm or degrees), or None."""
-    lower, upper = limits[0][index], limits[1][index]
-    return [float(lower / scale), float(upper / scale)] if math.isfinite(lower) and math.isfinite(upper) else None
 
 
 def model(robot):
@@ -208,7 +205,8 @@ def scene(robot, pose=None, posture=None):
         "region": {"home": [float(v) for v in region.home], "range": [float(v) for v in region.range]},
         "joint_names": list(robot.joint_names),
         "joint_units": ["rad" if t.wraps else "mm" for t in robot.joint_types],
-        "travel": [_travel(limits, index, scales[index]) for index in range(robot.joint_count)],
+        "travel": [travel_ends(limits[0][index], limits[1][index], 1.0 / scales[index]) for index in range(robot.joint_count)],
+        "travel_from": "the robot file",
         "postures": robot.postures,
         "posture_branches": posture_branches(robot),
         "posture": posture,

@@ -114,13 +114,20 @@ function gauss(a, b) {  // a x = b by elimination with partial pivoting; null wh
   return x;
 }
 
+// Whether joint `index` at q (mm, radians) is beyond its travel (scene.travel: mm or degrees, a
+// side without a limit null).
+function beyondTravel(scene, index, q) {
+  const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? DEG : 1;
+  return Boolean(travel) && ((travel[0] !== null && q < travel[0] * unit - 1e-12)
+                             || (travel[1] !== null && q > travel[1] * unit + 1e-12));
+}
+
 // A limb's colour key (scene.py's machine): unreachable where its link cannot close, beyond its
 // travel, singular where the posture is and the link is within scene.singular_across (the cosine
 // of its angle) of square to its base side's motion (a rail's or a crank's radicand near 0).
 function limbStatus(scene, index, q, residual, warning, across) {
-  const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? DEG : 1;
   if (scene.model.limbs[index].exact && Math.abs(residual) > 1e-6 * scene.size) return "unreachable";
-  if (travel && (q < travel[0] * unit - 1e-12 || q > travel[1] * unit + 1e-12)) return "limits";
+  if (beyondTravel(scene, index, q)) return "limits";
   return warning === "WARN_SINGULAR_SOLUTION" && across <= scene.singular_across ? "singular" : "good";
 }
 
@@ -167,6 +174,12 @@ function drawingAt(scene, pose, joints, warning, previous) {
   return {platform, limbs, tool, status: warning};
 }
 
+// A carriage's rail as drawn (base frame, mm): its ends at the joint's travel, a side without a
+// limit 100 mm beyond both 0 and the joint's value q.
+function railEnds(limb, travel, q) {
+  return [baseSide(limb, travel?.[0] ?? Math.min(0, q) - 100), baseSide(limb, travel?.[1] ?? Math.max(0, q) + 100)];
+}
+
 // ---- text ----
 
 function valueDigits(scene, index, value) {  // a joint's value in mm or degrees to 3 decimals, no -0.000
@@ -178,10 +191,14 @@ function valueText(scene, index, value) {
   return `${valueDigits(scene, index, value)}${scene.joint_units[index] === "rad" ? "°" : " mm"}`;
 }
 
-function travelText(scene, index) {
-  const travel = scene.travel[index];
-  return travel ? `${travel[0]} to ${travel[1]}${scene.joint_units[index] === "rad" ? "°" : " mm"}` : "no travel given";
+function travelText(scene, index) {  // "a to b mm", "from a mm", "up to b°", or "no travel given"
+  const travel = scene.travel[index], unit = scene.joint_units[index] === "rad" ? "°" : " mm";
+  if (!travel) return "no travel given";
+  if (travel[0] === null) return `up to ${travel[1]}${unit}`;
+  return travel[1] === null ? `from ${travel[0]}${unit}` : `${travel[0]} to ${travel[1]}${unit}`;
 }
+
+const bothEnds = travel => Boolean(travel) && travel[0] !== null && travel[1] !== null;
 
 // ---- three.js drawing ----
 
@@ -293,8 +310,7 @@ class Drawing {
       const shown = drawing.limbs[i], colour = STATUS_COLOURS[shown.status] || STATUS_COLOURS.good;
       const travel = this.scene.travel[i];
       if (limb.actuator === "carriage") {
-        const ends = travel ? travel : [Math.min(0, joints[i]) - 100, Math.max(0, joints[i]) + 100];
-        this.rod(baseSide(limb, ends[0]), baseSide(limb, ends[1]), r * 0.8, 0x5a5f66);
+        this.rod(...railEnds(limb, travel, joints[i]), r * 0.8, 0x5a5f66);
         this.ball(shown.base_side, r * 2.2, colour);
       } else if (limb.actuator === "arm") {
         this.ball(limb.pivot, r * 1.8, 0x5a5f66);
@@ -340,17 +356,27 @@ class Drawing {
 
 // ---- the page ----
 
-function parseFragment(hash) {  // #pose=x,y,z,roll,pitch,yaw&posture=K, or #joints=q1,...,qn&posture=K
-  const found = {};
-  for (const part of hash.replace(/^#/, "").split("&")) {
-    const [key, value] = part.split("=");
-    if ((key === "pose" || key === "joints") && value) {
-      const numbers = value.split(",").map(Number);
-      if ((key === "joints" || numbers.length === 6) && numbers.every(Number.isFinite)) found[key] = numbers;
-    } else if (key === "posture" && /^\d+$/.test(value || "")) {
-      found.posture = Number(value);
-    } else if (key === "bench" && /^\d+$/.test(value || "")) {
-      found.bench = Number(value);
+// #pose=x,y,z,roll,pitch,yaw&posture=K, or #joints=q1,...,qn&posture=K, for a scene: what it
+// asks ({pose, joints, posture, bench}) and, in `problems`, each part left out and why.
+function parseFragment(hash, scene) {
+  const found = {problems: []};
+  let text = hash.replace(/^#/, "");
+  try { text = decodeURIComponent(text); } catch (error) { found.problems.push(`${text} is not a well-formed address`); return found; }
+  for (const part of text ? text.split("&") : []) {
+    const [key, value = ""] = part.split("=");
+    const numbers = value.split(",").map(v => (v.trim() === "" ? NaN : Number(v)));
+    if (key === "pose" || key === "joints") {
+      const count = key === "pose" ? 6 : scene.joint_names.length;
+      if (numbers.length === count && numbers.every(Number.isFinite)) found[key] = numbers;
+      else found.problems.push(`${key}=${value} is not ${count} numbers`);
+    } else if (key === "posture" || key === "bench") {
+      const number = /^\d+$/.test(value) ? Number(value) : NaN;
+      const postures = scene.postures === 1 ? "the robot has posture 0 only" : `the robot's are 0 to ${scene.postures - 1}`;
+      if (key === "posture" && !(number < scene.postures)) found.problems.push(`posture=${value} is not a posture (${postures})`);
+      else if (Number.isInteger(number)) found[key] = number;
+      else found.problems.push(`bench=${value} is not a count`);
+    } else {
+      found.problems.push(`"${part}" is not pose=, joints= or posture=`);
     }
   }
   return found;
@@ -391,7 +417,11 @@ class View {
     const base = new THREE.Group();  // the base frame at its origin: x red, y green, z blue
     this.world.add(base);
     new Drawing(THREE, scene, base, 1).frame([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], scene.size / 6);
-    const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point)];
+    const points = [...scene.model.limbs.map(l => l.pivot), ...scene.machine.limbs.map(l => l.platform_point),
+                    ...scene.machine.limbs.map(l => l.base_side)];
+    scene.model.limbs.forEach((limb, i) => {  // a rail whole: the view opens with every part of the machine in sight
+      if (limb.actuator === "carriage") points.push(...railEnds(limb, scene.travel[i], scene.joints[i]));
+    });
     if (scene.machine.tool) points.push([0, 1, 2].map(r => scene.machine.tool[r][3]));
     for (const arrow of scene.arrows || []) points.push(arrow.origin, add(arrow.origin, arrow.vector));
     points.push(...(scene.points || []).map(point => point.position), ...(scene.surface ? scene.surface.vertices : []));
@@ -529,20 +559,31 @@ class View {
         this.showFrame(next);
       }, 40);
     });
+    // One button per place of the path (the markers' frames' t): several problems at one place
+    // share it, numbered "1-6" (or "2,5"); the labels in full on hover and beside the slider there.
+    const places = new Map();
     (this.scene.markers || []).forEach((marker, n) => {
+      const t = frames[marker.frame].t;
+      places.set(t, [...(places.get(t) || []), [marker, n]]);
+    });
+    for (const group of places.values()) {
+      const numbers = group.map(([, n]) => n + 1), frame = group[0][0].frame;
       const button = marks.appendChild(document.createElement("button"));
       button.className = "kingen-marker";
-      button.textContent = String(n + 1);  // the label in full on hover and beside the slider at its frame
-      button.title = `${n + 1}: ${marker.label}`;
-      button.style.left = `${100 * marker.frame / Math.max(1, frames.length - 1)}%`;
-      button.addEventListener("click", () => { slider.value = marker.frame; this.showFrame(marker.frame); });
-    });
+      button.textContent = numbers.length === 1 ? String(numbers[0])
+        : numbers.every((v, i) => i === 0 || v === numbers[i - 1] + 1) ? `${numbers[0]}-${numbers.at(-1)}` : numbers.join(",");
+      button.title = group.map(([marker, n]) => `${n + 1}: ${marker.label}`).join("\n");
+      button.style.left = `${100 * frame / Math.max(1, frames.length - 1)}%`;
+      button.addEventListener("click", () => { slider.value = frame; this.showFrame(frame); });
+    }
     if (Number.isInteger(this.scene.start_frame)) slider.value = this.scene.start_frame;  // startView shows it
+    else box.querySelector(".kingen-frame").textContent = `as it opened; move the slider to see the ${frames.length} frames`;
   }
 
   showFrame(index) {
     const frame = this.scene.frames[index];
-    const marked = (this.scene.markers || []).map((marker, n) => [marker, n]).filter(([marker]) => marker.frame === index);
+    const marked = (this.scene.markers || []).map((marker, n) => [marker, n])
+      .filter(([marker]) => this.scene.frames[marker.frame].t === frame.t);  // every problem at this place
     this.root.querySelector(".kingen-frame").textContent = [frame.label ?? `t = ${Number(frame.t).toFixed(3)} s`,
       ...marked.map(([marker, n]) => `${n + 1}: ${marker.label}`)].join("; ");
     if (this.routine) { this.setPose(frame.pose, frame.posture ?? this.posture); return; }
@@ -609,7 +650,10 @@ class View {
     this.drawn = drawingAt(this.scene, this.pose, joints, warning, this.drawn);
     this.machine.draw(this.drawn, joints);
     const out = document.getElementById("kingen-joints");
-    if (out && this.root.dataset.primary === "1") out.textContent = JSON.stringify({joints, warning, by, pose: this.pose, posture: this.posture});
+    if (out && this.root.dataset.primary === "1") {
+      out.textContent = JSON.stringify({joints, warning, by, pose: this.pose, posture: this.posture,
+                                        ...(this.addressWarning ? {address_warning: this.addressWarning} : {})});
+    }
     const drawn = document.getElementById("kingen-drawing");
     if (drawn && this.root.dataset.primary === "1") drawn.textContent = JSON.stringify(this.drawn);
     if (!this.rows) this.rows = joints.map((_, i) => this.tableRow(i));
@@ -617,7 +661,7 @@ class View {
       const status = i < this.drawn.limbs.length ? this.drawn.limbs[i].status : wristStatus(this.scene, i, q);
       const [row, value, words, gauge] = this.rows[i], travel = this.scene.travel[i];
       row.className = `kingen-${status}`;
-      if (travel) {
+      if (bothEnds(travel)) {
         const shown = this.scene.joint_units[i] === "rad" ? q / DEG : q;
         gauge.firstChild.style.left = `${100 * Math.max(0, Math.min(1, (shown - travel[0]) / (travel[1] - travel[0])))}%`;
       }
@@ -649,7 +693,7 @@ class View {
     }
     const travel = row.insertCell(), gauge = document.createElement("span");
     travel.textContent = travelText(this.scene, i);
-    if (this.scene.travel[i]) {  // where the joint is in its travel: a mark on a bar, as a jog dialog shows it
+    if (bothEnds(this.scene.travel[i])) {  // where the joint is in its travel: a mark on a bar, as a jog dialog shows it
       gauge.className = "kingen-gauge";
       gauge.append(document.createElement("i"));
       travel.append(gauge);
@@ -679,17 +723,30 @@ class View {
         const h = this.drawn.platform;
         place(div, add([h[0][3], h[1][3], h[2][3]], [0, 0, this.scene.size * 0.06 * (i - this.drawn.limbs.length + 1)]));
       }
-      const travel = this.scene.travel[i];
       div.textContent = `${this.scene.joint_names[i]} ${valueText(this.scene, i, this.joints[i])}`
-        + (travel ? ` [${travel[0]}, ${travel[1]}]` : "");
+        + (this.scene.travel[i] ? ` [${this.scene.travel[i][0] ?? "-∞"}, ${this.scene.travel[i][1] ?? "∞"}]` : "");
     });
     for (const [position, div] of this.extraLabels) place(div, position);
+    this.unclutter();
+  }
+
+  // A label that would cover one before it is hidden (the table and the timeline hold every
+  // value): the overlays' labels (a report's findings) first, then the joints'. The boxes are all
+  // read in one layout, then the hidden ones hidden.
+  unclutter() {
+    const divs = [...this.extraLabels.map(([, div]) => div), ...this.labels];
+    divs.forEach(div => { div.style.visibility = ""; });
+    const boxes = divs.map(div => div.getBoundingClientRect()), kept = [];
+    const covers = (a, b) => a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
+    boxes.forEach((box, i) => {
+      if (box.width && kept.some(other => covers(box, other))) divs[i].style.visibility = "hidden";
+      else kept.push(box);
+    });
   }
 }
 
 function wristStatus(scene, index, q) {
-  const travel = scene.travel[index];
-  return travel && (q < travel[0] * DEG || q > travel[1] * DEG) ? "limits" : "good";
+  return beyondTravel(scene, index, q) ? "limits" : "good";
 }
 
 // #bench=N: N changes of the first free coordinate's slider, each an input event as a user's
@@ -708,7 +765,11 @@ async function startView(root) {
   const THREE = await loadThree();
   if (window.kingenRoutineReady) await window.kingenRoutineReady;
   const view = new View(root, scene, THREE);
-  const asked = root.dataset.primary === "1" ? parseFragment(window.location.hash) : {};
+  const asked = root.dataset.primary === "1" ? parseFragment(window.location.hash, scene) : {problems: []};
+  if (asked.problems.length) {  // said in the note and in #kingen-joints (show() writes it there)
+    view.addressWarning = `The address is not read in full: ${asked.problems.join("; ")}.`;
+    view.root.querySelector(".kingen-note").textContent += ` ${view.addressWarning}`;
+  }
   if (asked.joints && view.routine) {
     if (asked.posture !== undefined) view.posture = asked.posture;
     view.jog(asked.joints);
