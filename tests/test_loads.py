@@ -389,3 +389,29 @@ def test_kingen_loads_answers_a_tricept_with_its_wrist_legs_then_wrist_torques(t
     assert entries[0]["units"] == ["N", "N", "N", "N m", "N m"]
     expected = loads(load_robot(path), t6_from_pose(np.array([[60.0, -40, -1250, 170, 10, 30]]))).forces[0]
     assert np.allclose([entry["forces"] for entry in entries], expected, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("name", ["exechon_constrained", "tricept_wrist"])
+def test_a_hand_written_library_without_static_loads_verifies_with_c_loads_not_exercised(tmp_path, name):
+    """<prefix>_static_loads is optional in a hand-written library (a constrained machine, a
+    wrist): a library without it is not refused; its 'c loads' check judges nothing and says
+    why, and every other check still runs."""
+    from kingen.hosts.c.render import render
+
+    robot = load_robot(name)
+    files = render(robot)
+    source = files[f"kingen_{name}.c"]
+    definition = f"int kingen_{name}_static_loads("
+    assert source.count(definition) == 1
+    header = files[f"kingen_{name}.h"]
+    declaration = header[header.index(f"int kingen_{name}_static_loads("):]
+    declaration = declaration[:declaration.index(";") + 1]
+    (tmp_path / f"kingen_{name}.h").write_text(header.replace(declaration, ""))
+    (tmp_path / "routine.c").write_text(source.replace(definition, f"static __attribute__((unused)) int unused_loads("))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", name, "--host", "c", "--source",
+                             str(tmp_path / "routine.c"), "--samples", "300", "--out-dir", str(tmp_path / "out")],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    line = next(line for line in result.stdout.splitlines() if "c loads:" in line)
+    assert f"the library does not export kingen_{name}_static_loads (optional)" in line
+    assert "ok     c jacobian:" in result.stdout

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
-from ..c.loader import Library, entry_points
+from ..c.loader import OPTIONAL_ENTRY_POINTS, Library, entry_points
 from .build import BATCH_EXPORTS
 
 WASI = "wasi_snapshot_preview1"
@@ -159,7 +159,7 @@ class WasmLibrary(Library):
     """A WebAssembly module of the C library for ``robot``, loaded through wasmtime: the C host's
     :class:`~kingen.hosts.c.loader.Library` with the module in place of the shared library.
     KingenError for no such file; PluginDefect for a module that does not load, imports anything
-    but WASI, or lacks a function of the header."""
+    but WASI, or lacks a function of the header (but the optional ones)."""
 
     def __init__(self, library, routine, robot):
         path = Path(library).resolve()
@@ -172,6 +172,8 @@ class WasmLibrary(Library):
         for name in entry_points(robot):
             symbol = f"{routine}_{name}"
             if symbol not in self.module.exports:
+                if name in OPTIONAL_ENTRY_POINTS:
+                    continue
                 raise PluginDefect(f"the module does not export {symbol}")
             if name == "default_geometry":
                 self.geometry = self.module.exports[symbol].value(self.module.store)
