@@ -415,3 +415,21 @@ def test_a_hand_written_library_without_static_loads_verifies_with_c_loads_not_e
     line = next(line for line in result.stdout.splitlines() if "c loads:" in line)
     assert f"the library does not export kingen_{name}_static_loads (optional)" in line
     assert "ok     c jacobian:" in result.stdout
+
+
+def test_a_c_library_whose_wrist_torques_alone_are_wrong_fails_c_loads(tmp_path):
+    """The wrist joints' torques are judged as well as the legs' loads: a library whose wrist
+    torques have the opposite sign (tau_j = +z_j . M_c), its legs' loads right, fails 'c loads'."""
+    from kingen.hosts.c.render import render
+
+    name = "tricept_wrist3"
+    files = render(load_robot(name))
+    line = "            torques[j] += (fixed[0][k]"
+    assert files[f"kingen_{name}.c"].count(line) == 1
+    (tmp_path / f"kingen_{name}.h").write_text(files[f"kingen_{name}.h"])
+    (tmp_path / "routine.c").write_text(files[f"kingen_{name}.c"].replace(line, line.replace("+=", "-=")))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", name, "--host", "c", "--source",
+                             str(tmp_path / "routine.c"), "--samples", "300", "--out-dir", str(tmp_path / "out")],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED c loads:" in result.stdout and "FAILED (1 of " in result.stdout, result.stdout
