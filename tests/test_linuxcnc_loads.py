@@ -45,8 +45,8 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     """The pins through the HAL stand-in, the payload set through the module's parameters: at
     the verification home (no rotation) a payload at the platform origin loads each leg of the
     symmetric hexapod with m g / (6 cos theta), theta the leg's tilt from vertical (from the
-    robot file's points), pushing up (positive: the legs lengthen upwards); a failed inverse
-    and a payload of mass 0 write 0."""
+    robot file's points), pushing up (positive: the legs lengthen upwards); a failed inverse,
+    a payload of mass 0 and a weight past a double's range write 0."""
     robot = load_robot("hexapod")
     host = get_host("linuxcnc")
     built = host.build(robot, tmp_path / "b")
@@ -65,6 +65,9 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     assert np.all(loads[1] == 0.0)
     unloaded, _ = module.static_loads(world[:1], (0.0, (0.0, 0.0, 0.0), (0.0, 0.0, -9.81)))
     assert np.all(unloaded == 0.0)
+    # a weight past a double's range (m g = 9.81e307 * 9.81): no inf or NaN on the pins, 0
+    beyond, returned = module.static_loads(world[:1], (9.81e307, (0.0, 0.0, 0.0), (0.0, 0.0, -9.81)))
+    assert returned[0] == 0 and np.all(beyond == 0.0)
 
 
 def test_the_payload_parameters_default_to_the_robot_files_in_the_machines_units(tmp_path):

@@ -433,3 +433,25 @@ def test_a_c_library_whose_wrist_torques_alone_are_wrong_fails_c_loads(tmp_path)
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 1, result.stdout + result.stderr
     assert "FAILED c loads:" in result.stdout and "FAILED (1 of " in result.stdout, result.stdout
+
+
+@pytest.mark.parametrize("name", ["hexapod", "exechon_constrained"])
+def test_the_c_librarys_static_loads_give_no_inf_or_nan(tmp_path, name):
+    """At the verification home the library's loads of a 120 kg payload are the reference's;
+    a weight past a double's range (m g = 9.81e307 * 9.81) gives -2 and forces 0, never inf
+    or NaN."""
+    from kingen.hosts.c.build import build_library
+    from kingen.hosts.c.loader import Library
+
+    robot = load_robot(name)
+    home = np.array([robot.verification.home], dtype=float)
+    posture = int(np.flatnonzero(solve(robot, t6_from_pose(home)).warnings[0] == WARNINGS["WARN_GOOD_SOLUTION"])[0])
+    built = build_library(robot, tmp_path)
+    library = Library(built.library, built.routine, robot)
+    pose = (t6_from_pose(home)[0]).T.reshape(16)
+    held = replace(robot, payload=PAYLOAD)
+    expected = loads(held, t6_from_pose(home)).forces[0, posture]
+    forces, returned = library.static_loads(pose, posture, [PAYLOAD.mass, *PAYLOAD.centre, 0.0, 0.0, -9.81])
+    assert returned == 0 and np.allclose(forces, expected, rtol=1e-9, atol=1e-9 * np.max(np.abs(expected)))
+    forces, returned = library.static_loads(pose, posture, [9.81e307, *PAYLOAD.centre, 0.0, 0.0, -9.81])
+    assert returned == -2 and np.all(forces == 0.0)
