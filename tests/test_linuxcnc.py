@@ -332,7 +332,9 @@ def test_a_name_past_linuxcncs_hal_limit_gets_a_shorter_hal_component_that_verif
     """linuxcnc_hexapod_calibrated (calibrate's name) would make 55-character pin names: its HAL
     component is cut to its module name's first characters and 4 hex digits of its sha256, every
     pin and parameter fits LinuxCNC's 47 characters, the package's setp lines name them, and the
-    module verifies through the HAL stand-in (which refuses a longer name, as LinuxCNC does)."""
+    module verifies through the HAL stand-in (which refuses a longer name, as LinuxCNC does).
+    The module (its file, loadrt, the .ini's KINEMATICS) has the component's name: LinuxCNC's
+    halcmd unloads a realtime module by its component's name."""
     import hashlib
 
     path = tmp_path / "linuxcnc_hexapod_calibrated.yaml"
@@ -345,8 +347,11 @@ def test_a_name_past_linuxcncs_hal_limit_gets_a_shorter_hal_component_that_verif
         b"linuxcnc_hexapod_calibratedkins").hexdigest()[:4]
     built = host.build(robot, tmp_path / "b")
     assert f'#define KINGEN_COMPONENT "{component}"' in built.source.read_text()
-    setp = [line.split()[1] for line in render_package(robot, host.machine_units(robot))[
-        "linuxcnc_hexapod_calibratedkins.hal"].splitlines() if line.startswith("setp ")]
+    assert built.routine == component and built.library.name == f"{component}.so"
+    package = render_package(robot, host.machine_units(robot))
+    assert f"loadrt {component}\n" in package[f"{component}.hal"]
+    assert re.search(rf"^KINEMATICS = {re.escape(component)}$", package[f"{component}.ini"], re.M)
+    setp = [line.split()[1] for line in package[f"{component}.hal"].splitlines() if line.startswith("setp ")]
     assert setp and all(name.startswith(f"{component}.") and len(name) <= 47 for name in setp)
     assert max(map(len, setp)) == 47
     module = host.load(built.library, built.routine, host.as_seen(robot))

@@ -45,8 +45,8 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     """The pins through the HAL stand-in, the payload set through the module's parameters: at
     the verification home (no rotation) a payload at the platform origin loads each leg of the
     symmetric hexapod with m g / (6 cos theta), theta the leg's tilt from vertical (from the
-    robot file's points), pushing up (positive: the legs lengthen upwards); a failed inverse
-    and a payload of mass 0 write 0."""
+    robot file's points), pushing up (positive: the legs lengthen upwards); a failed inverse,
+    a payload of mass 0 and a weight past a double's range write 0."""
     robot = load_robot("hexapod")
     host = get_host("linuxcnc")
     built = host.build(robot, tmp_path / "b")
@@ -65,6 +65,9 @@ def test_a_centred_payload_loads_each_hexapod_leg_with_m_g_over_six_cos_tilt(tmp
     assert np.all(loads[1] == 0.0)
     unloaded, _ = module.static_loads(world[:1], (0.0, (0.0, 0.0, 0.0), (0.0, 0.0, -9.81)))
     assert np.all(unloaded == 0.0)
+    # a weight past a double's range (m g = 9.81e307 * 9.81): no inf or NaN on the pins, 0
+    beyond, returned = module.static_loads(world[:1], (9.81e307, (0.0, 0.0, 0.0), (0.0, 0.0, -9.81)))
+    assert returned[0] == 0 and np.all(beyond == 0.0)
 
 
 def test_the_payload_parameters_default_to_the_robot_files_in_the_machines_units(tmp_path):
@@ -84,3 +87,19 @@ def test_the_payload_parameters_default_to_the_robot_files_in_the_machines_units
     assert read == pytest.approx({"payload.mass": 7.5, "payload.centre.x": 1.0, "payload.centre.y": -0.5,
                                   "payload.centre.z": 2.0, "gravity.x": 0.0, "gravity.y": 0.5, "gravity.z": -9.8},
                                  rel=1e-15, abs=1e-15)
+
+
+def test_a_module_whose_wrist_torques_alone_are_wrong_fails_hal_loads(tmp_path):
+    """The wrist joints' pins are judged as well as the legs': a module whose wrist torques have
+    the opposite sign (tau_j = +z_j . M_c), its legs' loads right, fails 'hal loads' alone."""
+    robot = load_robot("tricept_wrist3")
+    host = get_host("linuxcnc")
+    (source_name, source), = render(robot, host.machine_units(robot)).items()
+    line = "            torques[j] += (fixed[0][k]"
+    assert source.count(line) == 1
+    (tmp_path / source_name).write_text(source.replace(line, line.replace("+=", "-=")))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", "tricept_wrist3", "--host", "linuxcnc",
+                             "--source", str(tmp_path / source_name), "--samples", "300", "--out-dir", str(tmp_path / "out")],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED hal loads:" in result.stdout and "FAILED (1 of " in result.stdout, result.stdout

@@ -250,3 +250,37 @@ def test_linuxcnc_runs_a_wrist_machines_module_to_the_reference(name, case, tmp_
     before, after = outcome["jog"]["before"], outcome["jog"]["after"]
     assert after["joints"][0] - before["joints"][0] == pytest.approx(case["jog"], abs=1e-6)
     assert after["joints"][1:] == before["joints"][1:]
+
+
+@pytest.mark.xdist_group("linuxcnc")
+def test_a_shortened_module_loads_and_unloads_in_a_real_linuxcnc(tmp_path):
+    """linuxcnc_hexapod_calibrated's module, its name cut to fit HAL's 47 characters, in a real
+    LinuxCNC realtime environment: halcmd's loadrt finds its component (halcmd waits for a
+    component of the module's name), its payload parameter reads the robot file's (none: 0),
+    and unloadrt (by the component's name, as LinuxCNC's shutdown does) removes it."""
+    path = tmp_path / "linuxcnc_hexapod_calibrated.yaml"
+    path.write_text((Path(__file__).parent.parent / "robots" / "linuxcnc_hexapod.yaml").read_text().replace(
+        "name: linuxcnc_hexapod\n", "name: linuxcnc_hexapod_calibrated\n"))
+    robot = load_robot(path)
+    built = get_host("linuxcnc").build(robot, tmp_path / "module")
+    module = built.routine
+    assert module.startswith("linuxcnc_hexapod_c-") and built.library.name == f"{module}.so"
+    modules = tmp_path / "modules"
+    shutil.copytree(MODULES, modules, symlinks=True)
+    shutil.copy2(built.library, modules / built.library.name)
+    (tmp_path / "run.hal").write_text(f"loadrt {module}\nshow comp {module}\ngetp {module}.payload.mass\n"
+                                      f"unloadrt {module}\nshow comp {module}\n")
+    fifo = Path(tempfile.mkdtemp(prefix="kingen-rtapi-"))
+    fifo.chmod(0o777)
+    environment = {**os.environ, "RTAPI_UID": "65534", "RTAPI_FIFO_PATH": str(fifo / "rtapi_fifo")}
+    realtime = "/usr/lib/linuxcnc/realtime"
+    with open("/tmp/kingen-linuxcnc-test.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        run = subprocess.run(["unshare", "-m", "sh", "-c", f"mount --bind '{modules}' '{MODULES}' && {realtime} start && "
+                              f"halcmd -f run.hal; status=$?; {realtime} stop; exit $status"],
+                             cwd=tmp_path, env=environment, capture_output=True, text=True, timeout=60)
+    shutil.rmtree(fifo, ignore_errors=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    _, loaded, unloaded = run.stdout.split("Loaded HAL Components:")
+    assert f" RT    {module} " in loaded and "\n0\n" in loaded, run.stdout
+    assert module not in unloaded, run.stdout

@@ -406,3 +406,69 @@ def test_a_task_machines_loads_do_not_depend_on_the_basis_of_its_tangents(name, 
     both = np.isfinite(fast) & np.isfinite(slow)
     assert np.mean(both) > 0.5
     assert np.max(np.abs(fast[both] - slow[both])) <= 1e-9 * np.max(np.abs(slow[both]))
+
+
+@pytest.mark.parametrize("name", ["exechon_constrained", "tricept_wrist"])
+def test_a_hand_written_library_without_static_loads_verifies_with_c_loads_not_exercised(tmp_path, name):
+    """<prefix>_static_loads is optional in a hand-written library (a constrained machine, a
+    wrist): a library without it is not refused; its 'c loads' check judges nothing and says
+    why, and every other check still runs."""
+    from kingen.hosts.c.render import render
+
+    robot = load_robot(name)
+    files = render(robot)
+    source = files[f"kingen_{name}.c"]
+    definition = f"int kingen_{name}_static_loads("
+    assert source.count(definition) == 1
+    header = files[f"kingen_{name}.h"]
+    declaration = header[header.index(f"int kingen_{name}_static_loads("):]
+    declaration = declaration[:declaration.index(";") + 1]
+    (tmp_path / f"kingen_{name}.h").write_text(header.replace(declaration, ""))
+    (tmp_path / "routine.c").write_text(source.replace(definition, f"static __attribute__((unused)) int unused_loads("))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", name, "--host", "c", "--source",
+                             str(tmp_path / "routine.c"), "--samples", "300", "--out-dir", str(tmp_path / "out")],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    line = next(line for line in result.stdout.splitlines() if "c loads:" in line)
+    assert f"the library does not export kingen_{name}_static_loads (optional)" in line
+    assert "ok     c jacobian:" in result.stdout
+
+
+def test_a_c_library_whose_wrist_torques_alone_are_wrong_fails_c_loads(tmp_path):
+    """The wrist joints' torques are judged as well as the legs' loads: a library whose wrist
+    torques have the opposite sign (tau_j = +z_j . M_c), its legs' loads right, fails 'c loads'."""
+    from kingen.hosts.c.render import render
+
+    name = "tricept_wrist3"
+    files = render(load_robot(name))
+    line = "            torques[j] += (fixed[0][k]"
+    assert files[f"kingen_{name}.c"].count(line) == 1
+    (tmp_path / f"kingen_{name}.h").write_text(files[f"kingen_{name}.h"])
+    (tmp_path / "routine.c").write_text(files[f"kingen_{name}.c"].replace(line, line.replace("+=", "-=")))
+    result = subprocess.run([sys.executable, "-m", "kingen.cli", "verify", name, "--host", "c", "--source",
+                             str(tmp_path / "routine.c"), "--samples", "300", "--out-dir", str(tmp_path / "out")],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert "FAILED c loads:" in result.stdout and "FAILED (1 of " in result.stdout, result.stdout
+
+
+@pytest.mark.parametrize("name", ["hexapod", "exechon_constrained"])
+def test_the_c_librarys_static_loads_give_no_inf_or_nan(tmp_path, name):
+    """At the verification home the library's loads of a 120 kg payload are the reference's;
+    a weight past a double's range (m g = 9.81e307 * 9.81) gives -2 and forces 0, never inf
+    or NaN."""
+    from kingen.hosts.c.build import build_library
+    from kingen.hosts.c.loader import Library
+
+    robot = load_robot(name)
+    home = np.array([robot.verification.home], dtype=float)
+    posture = int(np.flatnonzero(solve(robot, t6_from_pose(home)).warnings[0] == WARNINGS["WARN_GOOD_SOLUTION"])[0])
+    built = build_library(robot, tmp_path)
+    library = Library(built.library, built.routine, robot)
+    pose = (t6_from_pose(home)[0]).T.reshape(16)
+    held = replace(robot, payload=PAYLOAD)
+    expected = loads(held, t6_from_pose(home)).forces[0, posture]
+    forces, returned = library.static_loads(pose, posture, [PAYLOAD.mass, *PAYLOAD.centre, 0.0, 0.0, -9.81])
+    assert returned == 0 and np.allclose(forces, expected, rtol=1e-9, atol=1e-9 * np.max(np.abs(expected)))
+    forces, returned = library.static_loads(pose, posture, [9.81e307, *PAYLOAD.centre, 0.0, 0.0, -9.81])
+    assert returned == -2 and np.all(forces == 0.0)

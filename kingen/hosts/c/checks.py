@@ -24,7 +24,9 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
 - ``c loads``: the library's static loads (a wrist's joints' torques after the legs' loads)
   against kingen's (:func:`kingen.kinematics.loads.loads`) on regular postures of the sample,
   holding the robot file's payload (or, where it gives none, a stand-in: 10 kg whose centre lies
-  a tenth of the robot's size off the platform origin, so that every term is exercised).
+  a tenth of the robot's size off the platform origin, so that every term is exercised); not
+  exercised for a library that does not export it (optional in a hand-written one) or where
+  kingen's loads hold no load on any of the postures.
 """
 
 from dataclasses import replace
@@ -46,6 +48,7 @@ from ...verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, forward_see
 from ...verify.options import CONDITIONING_FACTOR, report_tolerance_mm
 from ...verify.report import not_exercised
 from ..loads import checked_payload, payload_words
+from .render import has_machine_pose
 
 FORWARD_POSES = 500
 JACOBIAN_PAIRS = 200
@@ -226,7 +229,7 @@ def constraint_statuses(radicand):
 class CMachinePose(VerifyCheck, name="c machine pose", needs="compared poses"):
     def run(self, context):
         robot, library, tally = context.robot, context.routine, context.tally
-        if not robot.task or robot.wrist is not None:
+        if not has_machine_pose(robot):
             return [not_exercised(self.name, f"{robot.name} has no task coordinates" if not robot.task else
                                   f"{robot.name} has a wrist: its pose is the tool's")]
         t6 = np.concatenate([tally.first[0][:FORWARD_POSES]]
@@ -256,6 +259,11 @@ class CMachinePose(VerifyCheck, name="c machine pose", needs="compared poses"):
 class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
     poses = JACOBIAN_PAIRS
 
+    def refusal(self, context):
+        if "static_loads" not in context.routine.functions:
+            return f"the library does not export {context.routine.routine}_static_loads (optional)"
+        return None
+
     def judge(self, context, t6, pairs):
         robot, library = context.robot, context.routine
         pose_index, posture, _, _, _, _ = pairs
@@ -263,17 +271,21 @@ class CLoads(OnRegularPairs, name="c loads", needs="compared poses"):
         expected = loads(replace(without_parts(robot), payload=payload),  # the library holds the payload alone
                          t6[pose_index]).forces[np.arange(len(pose_index)), posture]
         given = [payload.mass, *payload.centre, *robot.gravity]
-        worst, refused = 0.0, 0
+        worst, refused, compared = 0.0, 0, 0
         for number, (pose, k) in enumerate(zip(matrix_from_t6(t6[pose_index]).reshape(-1, 16), posture)):
             forces, returned = library.static_loads(pose, int(k), given)
             refused += returned < 0
             scale = np.max(np.abs(expected[number]))
             if returned >= 0 and np.isfinite(scale) and scale > 0:
+                compared += 1
                 worst = max(worst, float(np.max(np.abs(forces - expected[number])) / scale))
+        if not compared and not refused:
+            return not_exercised(self.name, f"kingen's loads hold no load on the {len(pose_index)} regular postures of "
+                                            f"{len(t6)} poses: nothing compared")
         return Check(self.name, worst <= C_LOADS_TOLERANCE and not refused,
-                     f"the library's static loads against kingen's holding {payload_words(robot)} on {len(pose_index)} regular "
-                     f"postures of {len(t6)} poses: max relative difference {worst:.3g} (at most {C_LOADS_TOLERANCE:g}); "
-                     f"{refused} refused", judged=len(pose_index))
+                     f"the library's static loads against kingen's holding {payload_words(robot)} on {compared} of "
+                     f"{len(pose_index)} regular postures of {len(t6)} poses: max relative difference {worst:.3g} (at most "
+                     f"{C_LOADS_TOLERANCE:g}); {refused} refused", judged=compared)
 
 
 CHECKS = (Definition(), Values(), Warnings(), Closure(), Jacobian(), CJacobian(), CDirectIndex(), CLoads(), RoundTrip(),

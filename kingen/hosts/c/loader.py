@@ -19,17 +19,21 @@ from ...runtime.file_gate import refuse_special_file
 from ...runtime.files import cache_dir, cached, digest, write_atomic
 from ...defaults import DEFAULT_TIMEOUT, VERSION
 from .checks import CHECKS
+from .render import has_machine_pose
 
 BATCH = Path(__file__).resolve().parent / "templates" / "kingen_c_batch.c"
 ENTRY_POINTS = ("inverse", "inverse_posture", "forward", "jacobian", "static_loads", "default_geometry")
 """What the header declares for every robot (``<routine>_<name>``); six-limb robots add
 ``direct_index``, machines with task coordinates and no wrist ``machine_pose``."""
+OPTIONAL_ENTRY_POINTS = ("static_loads",)
+"""What a library may leave out (a hand-written one): its checks then judge nothing ('c loads'
+not exercised) instead of the library being refused."""
 
 
 def entry_points(robot):
     """What ``robot``'s library exports (``<routine>_<name>``): :data:`ENTRY_POINTS` and its own."""
     return (*ENTRY_POINTS, *(("direct_index",) if robot.dof == 6 else ()),
-            *(("machine_pose",) if robot.task and robot.wrist is None else ()))
+            *(("machine_pose",) if has_machine_pose(robot) else ()))
 _batch_ffi = cffi.FFI()
 _batch_ffi.cdef("""
 void kingen_c_inverse_batch(void *function, const void *geometry, int count, const double *poses, double *joints,
@@ -73,7 +77,8 @@ def poses_of(t6):
 class Library:
     """A loaded C host library for ``robot``: ``routine`` is its prefix, kingen_<name>.
     KingenError for what is the user's (no such file), PluginDefect for a library lacking a
-    function of the header."""
+    function of the header but those of :data:`OPTIONAL_ENTRY_POINTS` (``functions`` holds what
+    it exports)."""
 
     summarises_branches = False
 
@@ -107,6 +112,8 @@ class Library:
                 self.functions[name] = (self.ffi.addressof(self.library, f"{routine}_{name}") if name == "default_geometry"
                                         else getattr(self.library, f"{routine}_{name}"))
             except (AttributeError, KeyError):
+                if name in OPTIONAL_ENTRY_POINTS:
+                    continue
                 raise PluginDefect(f"the library does not export {routine}_{name}") from None
         self.geometry = self.ffi.cast("void *", self.functions["default_geometry"])
         self.routine, self.robot = routine, robot

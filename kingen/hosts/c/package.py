@@ -69,7 +69,6 @@ def render_package(robot):
     version = ".".join(re.findall(r"\d+", VERSION)[:3]) or "0"
     package_view = {**view, **_example_view(robot), "cmake_version": version, "model_fields": _model_fields(view),
                     "calibration_example": _calibration_example(view),
-                    "machine_pose": bool(robot.task) and robot.wrist is None,
                     "wrist_sheet": sheet_words(robot) if robot.wrist is not None else None}
     return {
         f"include/{prefix}.h": header,

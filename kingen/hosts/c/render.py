@@ -39,6 +39,12 @@ def robot_problem(robot):
     return None
 
 
+def has_machine_pose(robot):
+    """Whether ``robot``'s library exports <prefix>_machine_pose: a machine with task coordinates
+    and no wrist (a wrist machine's pose is the tool's)."""
+    return bool(robot.task) and robot.wrist is None
+
+
 def check_robot(robot):
     refuse(robot, robot_problem(robot))
 
@@ -80,6 +86,7 @@ def view_model(robot):
         "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": newton_step(robot),
+        "machine_pose": has_machine_pose(robot),
         **loads_view(robot, free, lambda row, column: f"pose[{4 * row + column}]"),
     }
 

@@ -1,5 +1,6 @@
 """LinuxCNC, the open real-time CNC controller: a kinematics module (``<name>kins.c``, built
-into ``<name>kins.so``, loaded by ``loadrt <name>kins``) whose inverse is kingen's closed form
+into ``<name>kins.so``, loaded by ``loadrt <name>kins``; the name cut where its pins' names
+would pass HAL's 47 characters, :func:`.render.module_name`) whose inverse is kingen's closed form
 at the robot's working posture and whose forward is Newton's method with the analytic
 Jacobian; verified through a HAL stand-in (:mod:`.loader`) and packaged with ``.hal`` and
 ``.ini`` snippets and a setup sheet. linuxcnc.md in the project's shared notes has the facts.

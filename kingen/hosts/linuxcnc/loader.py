@@ -20,7 +20,7 @@ from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
 from ...kinematics.routine import WARNINGS, Calls
 from .build import harness
-from .render import hal_prefix, module_name, translating
+from .render import translating
 from .checks import CHECKS, WRIST_CHECKS
 from .five_axis import world_of_t6
 
@@ -71,9 +71,9 @@ def _batch(routine, forward, poses, joints, pin):
 class Module:
     """A loaded kinematics module for ``robot`` (a one-posture view: the joints LinuxCNC sees).
 
-    ``routine`` is the HAL module name (``<name>kins``, ``genhexkins``); ``self.routine`` its HAL
-    component's, which starts its pins' and parameters' names (kingen's own may be shorter:
-    kingen.hosts.linuxcnc.render.hal_prefix). ``setp`` is {name: value} set after ``rtapi_app_main``.
+    ``routine`` is the HAL module name (``<name>kins``, ``genhexkins``; kingen's own cut where its
+    pin names would be too long: kingen.hosts.linuxcnc.render.module_name), its HAL component's
+    too, which starts its pins' and parameters' names. ``setp`` is {name: value} set after ``rtapi_app_main``.
     Raises KingenError for what is the user's (no such file, not a library) and PluginDefect
     for a module that lacks an entry point or whose rtapi_app_main fails."""
 
@@ -90,8 +90,6 @@ class Module:
         folder = Path(tempfile.mkdtemp(prefix="kingen-module-"))
         copy = folder / path.name  # a fresh copy: each load gets the module's own static state
         shutil.copy2(path, copy)
-        if robot is not None and routine == module_name(robot):  # kingen's own: its HAL component may be shorter
-            routine = hal_prefix(robot)
         hal.kingen_hal_forget(f"{routine}.".encode())
         try:
             self.library = ffi.dlopen(str(copy), ffi.RTLD_NOW)

@@ -44,9 +44,17 @@ servo cycle's) before it fails instead of jumping to another assembly mode."""
 TRANSLATION = ("x", "y", "z")
 
 
-def module_name(robot):
-    """The HAL module name: <name>kins."""
+def full_name(robot):
+    """The module's name before any cut: <name>kins."""
     return f"{robot.name}kins"
+
+
+def module_name(robot):
+    """The HAL module's name, its file's (<module>.so, ``loadrt <module>``) and its HAL
+    component's, which starts every pin's and parameter's name: the same, since LinuxCNC unloads
+    a module by its component's name (``halcmd unloadrt``, ``unload all`` at shutdown);
+    :func:`hal_prefix`."""
+    return hal_prefix(robot)
 
 
 def source_name(robot):
@@ -73,12 +81,12 @@ def free_indices(robot):
 
 def robot_problem(robot):
     """Why this host cannot drive ``robot``, or None."""
-    if module_name(robot) in STOCK_MODULES:
-        return f"name: the module name '{module_name(robot)}' is LinuxCNC's own module's"
+    if full_name(robot) in STOCK_MODULES:
+        return f"name: the module name '{full_name(robot)}' is LinuxCNC's own module's"
     if robot.dof != 6 and not translating(robot) and not robot.task and robot.wrist is None:
         return (f"forward: LinuxCNC drives six-limb robots and translating platforms (forward: {{free: [x, y, z]}}); "
                 f"{robot.name} has {robot.dof} limbs and free coordinates {list(robot.forward_free)}")
-    longest = f"{_cut(module_name(robot), SHORTEST_PREFIX)}.{max(hal_suffixes(robot), key=len)}"
+    longest = f"{_cut(full_name(robot), SHORTEST_PREFIX)}.{max(hal_suffixes(robot), key=len)}"
     if len(longest) > HAL_NAME_LEN:
         return (f"name: the HAL name '{longest}' has {len(longest)} characters with the HAL component cut to its "
                 f"shortest; LinuxCNC takes at most {HAL_NAME_LEN}: shorten the limbs' names")
@@ -100,12 +108,12 @@ def hal_suffixes(robot):
 
 
 def hal_prefix(robot):
-    """The module's HAL component name, which starts every name of its pins and parameters: the
-    module's name (<name>kins) where every such name then fits LinuxCNC's HAL_NAME_LEN, else its
-    first characters, a '-' and the first 4 hex digits of its sha256, as long as the longest
-    name allows (at least SHORTEST_PREFIX characters: robot_problem refuses a robot whose limbs'
+    """The module's HAL component name, which starts every name of its pins and parameters: <name>kins
+    (:func:`full_name`) where every such name then fits LinuxCNC's HAL_NAME_LEN, else its first
+    characters, a '-' and the first 4 hex digits of its sha256, as long as the longest name
+    allows (at least SHORTEST_PREFIX characters: robot_problem refuses a robot whose limbs'
     names leave less)."""
-    module = module_name(robot)
+    module = full_name(robot)
     room = HAL_NAME_LEN - 1 - max(len(suffix) for suffix in hal_suffixes(robot))
     return module if len(module) <= room else _cut(module, room)
 
@@ -168,6 +176,7 @@ def view_model(robot, units="mm"):
         **view,
         "module": module_name(robot),
         "component": hal_prefix(robot),
+        "full_name": full_name(robot),
         "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                 ("posture", robot.working_posture))),
         "unit_name": units,

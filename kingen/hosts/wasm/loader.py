@@ -18,7 +18,7 @@ import numpy as np
 
 from ...errors import KingenError, PluginDefect
 from ...runtime.file_gate import refuse_special_file
-from ..c.loader import Library, entry_points, poses_of
+from ..c.loader import OPTIONAL_ENTRY_POINTS, Library, entry_points, poses_of
 from .build import BATCH_EXPORTS
 
 WASI = "wasi_snapshot_preview1"
@@ -220,7 +220,7 @@ class WasmLibrary(Library):
     """A WebAssembly module of the C library for ``robot``, loaded through wasmtime: the C host's
     :class:`~kingen.hosts.c.loader.Library` with the module in place of the shared library.
     KingenError for no such file; PluginDefect for a module that does not load, imports anything
-    but WASI, or lacks a function of the header (or exports it as another kind)."""
+    but WASI, or lacks a function of the header but the optional ones (or exports it as another kind)."""
 
     def __init__(self, library, routine, robot):
         path = Path(library).resolve()
@@ -232,6 +232,8 @@ class WasmLibrary(Library):
         self.functions, self.indices = {}, {}
         for name in entry_points(robot):
             symbol = f"{routine}_{name}"
+            if name in OPTIONAL_ENTRY_POINTS and symbol not in self.module.exports:
+                continue
             if name == "default_geometry":
                 value = self.module.export(symbol, "Global").value(self.module.store)
                 self.geometry = self.module.address(value, 1, f"{symbol} (the geometry's address)")

@@ -23,8 +23,7 @@ def render_package(robot):
     header = template("header.c.j2", TEMPLATES.parent.parent / "c" / "templates").render(**view)
     package_view = {**view, "meta": json.dumps(module_meta(robot)), "posture": judged_posture(robot).posture,
                     "home": ", ".join(repr(float(value)) for value in robot.verification.home),
-                    "wrist_sheet": sheet_words(robot) if robot.wrist is not None else None,
-                    "machine_pose": bool(robot.task) and robot.wrist is None}
+                    "wrist_sheet": sheet_words(robot) if robot.wrist is not None else None}
     return {
         file_names(robot)[0]: header,
         GLUE.name: GLUE.read_text(),
