@@ -7,9 +7,10 @@ from dataclasses import replace
 import numpy as np
 
 from ..conventions import pose_from_t6
+from .hybrid.parasitic import solve_parasitic
+from .hybrid.wrist_loads import wrist_loads
 from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platform_loads
 from .reference import solve
-from .hybrid.wrist_loads import wrist_loads
 
 __all__ = ["Loads", "Motion", "beyond_limits", "held_problem", "held_text", "load_limited", "load_unit", "loads",
            "machine_pose", "machine_t6", "static_loads_of", "without_parts"]
@@ -40,15 +41,15 @@ def loads(robot, t6, wrench=None, motion=None, postures=None):
 
 def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
     """loads() over one block of poses (``solution``: the reference's at ``t6``, the poses the
-    machine takes, when the caller has it)."""
+    machine takes, when the caller has it; without it a machine with task coordinates answers at
+    the pose it takes for each T6's task coordinates, whatever the T6's rotation)."""
     if robot.wrist is not None:
         return wrist_loads(robot, t6, wrench, motion, chosen)
     if solution is None:
+        if robot.task:  # the pose the machine takes for the task coordinates asked (off its manifold: its rotations)
+            t6 = solve_parasitic(robot, t6).t6
         solution = solve(robot, t6)
-        machine = solution.machine if robot.task else t6
-    else:  # the pose the caller's solution was solved at: the machine's already
-        machine = t6
-    return platform_loads(robot, machine, solution, chosen, *applied_wrenches(robot, machine, wrench, motion), motion)
+    return platform_loads(robot, t6, solution, chosen, *applied_wrenches(robot, t6, wrench, motion), motion)
 
 
 def machine_pose(loads_result):

@@ -238,19 +238,10 @@ def _solve_each_3(matrices, right):
                          for i in range(3)], axis=-1)
 
 
-def _inverse_3(matrices):
-    """((n, 3, 3), (n,)): the inverses of 3 x 3 matrices and how well conditioned each is,
-    |det| over Hadamard's bound (0 to 1; 0 where singular or not finite)."""
-    cofactor, determinant, bound = _cofactors(matrices)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        quality = np.nan_to_num(np.abs(determinant) / bound)
-        inverse = np.stack([np.stack([cofactor[j][i] for j in range(3)], axis=-1) for i in range(3)], axis=-2)
-        return inverse / determinant[:, None, None], quality
-
-
 WELL_CONDITIONED = 1e-6
-"""How well conditioned (_inverse_3) a task machine's constraint block must be to give its tangents
-in closed form; elsewhere kingen.kinematics.hybrid.parasitic.task_twists solves for them."""
+"""How well conditioned (|det| over the whole rows' Hadamard bound) a task machine's constraint
+block must be to give its tangents in closed form; elsewhere
+kingen.kinematics.hybrid.parasitic.task_twists solves for them."""
 
 
 def _task_tangents(robot, t6):
@@ -261,17 +252,24 @@ def _task_tangents(robot, t6):
     conditioned (WELL_CONDITIONED; loads do not depend on the basis)."""
     rows = constraint_rows(robot, t6)
     splits = [np.array(columns) for columns in itertools.combinations(range(6), 3)]
-    sample = rows[:SAMPLED]
-    chosen = max(splits, key=lambda columns: np.mean(_inverse_3(sample[:, :, columns])[1]))  # an unreachable pose: 0
+    norms = np.prod(np.linalg.norm(rows, axis=-1), axis=-1)  # Hadamard's bound of any split, from the whole rows
+
+    def quality(columns, stack=slice(None)):
+        """|det G_A| over the whole rows' bound (0 to 1; 0 where not finite): a row whose part in
+        A is tiny beside its whole makes the split poor, however its part in A is shaped."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.nan_to_num(np.abs(_cofactors(rows[stack][:, :, columns])[1]) / norms[stack])
+
+    chosen = max(splits, key=lambda columns: np.mean(quality(columns, slice(SAMPLED))))  # an unreachable pose: 0
     others = np.setdiff1d(np.arange(6), chosen)
-    cofactor, determinant, bound = _cofactors(rows[:, :, chosen])
+    cofactor, determinant, _ = _cofactors(rows[:, :, chosen])
     basis = np.zeros((len(t6), 6, 3))
     with np.errstate(invalid="ignore", divide="ignore"):
-        quality, inverse = np.nan_to_num(np.abs(determinant) / bound), 1.0 / determinant
+        inverse = 1.0 / determinant
         for i, k in itertools.product(range(3), range(3)):  # -(G_A^-1 G_B)[i, k], G_A^-1[i, j] = cofactor[j][i] / det
             basis[:, chosen[i], k] = -sum(cofactor[j][i] * rows[:, j, others[k]] for j in range(3)) * inverse
     basis[:, others, np.arange(3)] = 1.0
-    poor = quality < WELL_CONDITIONED
+    poor = quality(chosen) < WELL_CONDITIONED
     if np.any(poor):
         basis[poor] = task_twists(robot, t6[poor])
     return basis
