@@ -239,7 +239,8 @@ WRIST3_INCH_CASE = {"moves": [[1.2, 0.8, -50.0, 170, 10, 30], [-1.6, 3.5, -52.0,
 
 
 @pytest.mark.xdist_group("linuxcnc")
-@pytest.mark.parametrize("name, case, units", [("exechon_wrist", WRIST_CASE, None), ("tricept_wrist3", WRIST3_CASE, None),
+@pytest.mark.parametrize("name, case, units", [("exechon_wrist", WRIST_CASE, None),
+                                               ("tricept_wrist3", WRIST3_CASE, None),
                                                ("exechon_wrist", WRIST_INCH_CASE, "inch"),
                                                ("tricept_wrist3", WRIST3_INCH_CASE, "inch")],
                          ids=["five_axis", "six_axis", "five_axis_inch", "six_axis_inch"])

@@ -36,20 +36,23 @@ def wrist_table(robot, mm_per_unit=1.0):
     first, second = wrist.axes[:2]
     three, start = wrist.whole_pose, turned_axis(wrist)
     cosine, normal, onto_second = first @ second, np.cross(first, second), start @ second
-    table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach / mm_per_unit),
+    table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start),
+             "reach": c_double(wrist.reach / mm_per_unit),
              "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
              "onto_second": c_double(onto_second), "normal": c_vector(normal),
              "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
-             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3] / mm_per_unit),
+             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]],
+             "tool_offset": c_vector(wrist.tool[:3, 3] / mm_per_unit),
              "three": three, "zero": [c_double(zero) for zero in wrist.zero] if np.any(wrist.zero) else []}
     return {**table, **_third_table(wrist, mm_per_unit)} if three else table
 
 
 def _third_table(wrist, mm_per_unit):
     """What a three-axis wrist adds to its table (C text): ``tip`` t (kingen.robot.wrist.Wrist.tip,
-    in a unit of ``mm_per_unit`` mm, the tool frame: the wrist centre is p = q - R t for the tool pose R, q), ``axis_tool``
-    R0^T a3 (R0 the tool's rotation at zero) and ``second_normal`` a2's part normal to a3, on
-    which the third angle is measured (templates/wrist.c.j2, kingen_wrist_third)."""
+    in a unit of ``mm_per_unit`` mm, the tool frame: the wrist centre is p = q - R t for the tool
+    pose R, q), ``axis_tool`` R0^T a3 (R0 the tool's rotation at zero) and ``second_normal`` a2's
+    part normal to a3, on which the third angle is measured (templates/wrist.c.j2,
+    kingen_wrist_third)."""
     second, third = wrist.axes[1], wrist.axes[2]
     return {"tip": c_vector(wrist.tip / mm_per_unit), "axis_tool": c_vector(wrist.tool[:3, :3].T @ third),
             "second_normal": c_vector(second - (second @ third) * third)}
