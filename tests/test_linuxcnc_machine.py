@@ -129,13 +129,14 @@ def machine_moves(robot, moves):
     return on_manifold(robot, np.array(moves, dtype=float)).tolist() if robot.task else moves
 
 
-def run_machine(name, tmp_path, case=None):
+def run_machine(name, tmp_path, case=None, units=None):
     """Run LinuxCNC on kingen's module for shipped robot ``name`` making the moves of ``case``
-    (default CASES[name]): (robot, the driver's result)."""
+    (default CASES[name]) on a machine in ``units`` (LINEAR_UNITS; default the robot file's):
+    (robot, the driver's result)."""
     case = CASES[name] if case is None else case
     robot = load_robot(name)
-    host = get_host("linuxcnc")
-    units = robot.length_unit
+    units = units or robot.length_unit
+    host = get_host("linuxcnc").configured(units=units)
     built = host.build(robot, tmp_path / "module")
     modules = tmp_path / "modules"
     shutil.copytree(MODULES, modules, symlinks=True)
@@ -229,22 +230,37 @@ gimbal lock, which the module answers as singular); A
 stays near 180 (195 is roll -165) so that the straight move in A B C stays within the wrist's travel."""
 
 
+WRIST_INCH_CASE = {"moves": [[1.2, 0.8, -57.9, 12, 40], [-1.6, 3.5, -55.9, 20, -60]], "axes": "XYZAC", "jog": 0.08,
+                   "first_jog": "4 10"}
+"""WRIST_CASE on an inch machine: X Y Z and the joint-0 jog in inches (near WRIST_CASE's mm)."""
+WRIST3_INCH_CASE = {"moves": [[1.2, 0.8, -50.0, 170, 10, 30], [-1.6, 3.5, -52.0, 195, -8, -50]], "jog": 0.08,
+                    "first_jog": "4 10"}
+"""WRIST3_CASE on an inch machine."""
+
+
 @pytest.mark.xdist_group("linuxcnc")
-@pytest.mark.parametrize("name, case", [("exechon_wrist", WRIST_CASE), ("tricept_wrist3", WRIST3_CASE)],
-                         ids=["five_axis", "six_axis"])
-def test_linuxcnc_runs_a_wrist_machines_module_to_the_reference(name, case, tmp_path):
+@pytest.mark.parametrize("name, case, units", [("exechon_wrist", WRIST_CASE, None),
+                                               ("tricept_wrist3", WRIST3_CASE, None),
+                                               ("exechon_wrist", WRIST_INCH_CASE, "inch"),
+                                               ("tricept_wrist3", WRIST3_INCH_CASE, "inch")],
+                         ids=["five_axis", "six_axis", "five_axis_inch", "six_axis_inch"])
+def test_linuxcnc_runs_a_wrist_machines_module_to_the_reference(name, case, units, tmp_path):
     """The five-axis module (world X Y Z A C: B is not a coordinate) and the six-axis one (X Y Z A
-    B C): the joints LinuxCNC commands for each move and the world it reads back, against the
-    reference, to 1e-9; a joint jog moves that joint alone."""
-    robot, outcome = run_machine(name, tmp_path, case)
+    B C), on a mm machine and an inch one (X Y Z, the legs and the wrist's lengths in inches, the
+    angles in degrees): the joints LinuxCNC commands for each move and the world it reads back,
+    against the reference, to 1e-9 (machine units); a joint jog moves that joint alone."""
+    robot, outcome = run_machine(name, tmp_path, case, units)
+    scale = 25.4 if units == "inch" else 1.0
     jogged = outcome["first_jog"]["after"]["joints"]
     assert jogged[4] - outcome["first_jog"]["before"]["joints"][4] == pytest.approx(10.0, abs=1e-6)
     five_axis = len(robot.wrist.names) == 2
     for move in outcome["moves"]:
-        asked = tool_t6(robot, move["pose"]) if five_axis else t6_from_pose(np.array([move["pose"]], dtype=float))
+        pose = np.array(move["pose"], dtype=float)
+        pose[:3] *= scale
+        asked = tool_t6(robot, pose) if five_axis else t6_from_pose(pose[None])
         expected = solve(robot, asked).joints[0, :, robot.working_posture]
-        joints = np.array(move["joints"][:robot.joint_count]) * np.where(robot.revolute, np.pi / 180.0, 1.0)
-        assert np.max(np.abs(joints - expected)) <= 1e-9, move
+        joints = np.array(move["joints"][:robot.joint_count]) * np.where(robot.revolute, np.pi / 180.0, scale)
+        assert np.max(np.abs(joints - expected)) <= 1e-9 * scale, move
         world = np.array(move["world"])[[0, 1, 2, 3, 5] if five_axis else slice(0, 6)]
         assert np.max(np.abs(world - move["pose"])) <= 1e-9, move
     before, after = outcome["jog"]["before"], outcome["jog"]["after"]

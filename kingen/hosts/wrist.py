@@ -20,37 +20,41 @@ def turned_axis(wrist):
     return wrist.axes[2] if wrist.whole_pose else wrist.tool[:3, 2]
 
 
-def wrist_table(robot):
-    """The wrist's table of ``robot`` (with a wrist) as C text: ``axes`` (two or three rows, unit,
-    platform frame), ``start`` the axis z0 the first two joints turn (:func:`turned_axis`) and
-    ``reach`` (mm) the tool tip's distance along the tool's z axis from the wrist centre, every
+def wrist_table(robot, mm_per_unit=1.0):
+    """The wrist's table of ``robot`` (with a wrist) as C text, its lengths in a unit of
+    ``mm_per_unit`` mm (1: mm; 25.4: a LinuxCNC machine in inches): ``axes`` (two or three rows,
+    unit, platform frame), ``start`` the axis z0 the first two joints turn (:func:`turned_axis`) and
+    ``reach`` (that unit) the tool tip's distance along the tool's z axis from the wrist centre, every
     wrist joint at 0 (kingen.robot.wrist.Wrist), ``three`` whether it has three joints (then
     :func:`_third_table`'s entries too), then what follows from
     them alone, by kingen.kinematics.hybrid.wrist's operations: a1.a2, 1 - (a1.a2)^2, z0.a2, a1 x a2,
     its length and z0's part normal to a2; and the tool frame (``tool_rotation`` rows,
-    ``tool_offset`` mm) in the platform frame at zero, for the wrist's forward; ``zero`` the
+    ``tool_offset``, that unit) in the platform frame at zero, for the wrist's forward; ``zero`` the
     joints' zero offsets (rad, kingen.robot.wrist.Wrist.zero), empty when all are 0 (the C is
     then as without them)."""
     wrist = robot.wrist
     first, second = wrist.axes[:2]
     three, start = wrist.whole_pose, turned_axis(wrist)
     cosine, normal, onto_second = first @ second, np.cross(first, second), start @ second
-    table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start), "reach": c_double(wrist.reach),
+    table = {"axes": [c_vector(axis) for axis in wrist.axes], "start": c_vector(start),
+             "reach": c_double(wrist.reach / mm_per_unit),
              "cosine": c_double(cosine), "denominator": c_double(1.0 - cosine * cosine),
              "onto_second": c_double(onto_second), "normal": c_vector(normal),
              "normal_length": c_double(np.linalg.norm(normal)), "start_normal": c_vector(start - onto_second * second),
-             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]], "tool_offset": c_vector(wrist.tool[:3, 3]),
+             "tool_rotation": [c_vector(row) for row in wrist.tool[:3, :3]],
+             "tool_offset": c_vector(wrist.tool[:3, 3] / mm_per_unit),
              "three": three, "zero": [c_double(zero) for zero in wrist.zero] if np.any(wrist.zero) else []}
-    return {**table, **_third_table(wrist)} if three else table
+    return {**table, **_third_table(wrist, mm_per_unit)} if three else table
 
 
-def _third_table(wrist):
+def _third_table(wrist, mm_per_unit):
     """What a three-axis wrist adds to its table (C text): ``tip`` t (kingen.robot.wrist.Wrist.tip,
-    mm, the tool frame: the wrist centre is p = q - R t for the tool pose R, q), ``axis_tool``
-    R0^T a3 (R0 the tool's rotation at zero) and ``second_normal`` a2's part normal to a3, on
-    which the third angle is measured (templates/wrist.c.j2, kingen_wrist_third)."""
+    in a unit of ``mm_per_unit`` mm, the tool frame: the wrist centre is p = q - R t for the tool
+    pose R, q), ``axis_tool`` R0^T a3 (R0 the tool's rotation at zero) and ``second_normal`` a2's
+    part normal to a3, on which the third angle is measured (templates/wrist.c.j2,
+    kingen_wrist_third)."""
     second, third = wrist.axes[1], wrist.axes[2]
-    return {"tip": c_vector(wrist.tip), "axis_tool": c_vector(wrist.tool[:3, :3].T @ third),
+    return {"tip": c_vector(wrist.tip / mm_per_unit), "axis_tool": c_vector(wrist.tool[:3, :3].T @ third),
             "second_normal": c_vector(second - (second @ third) * third)}
 
 

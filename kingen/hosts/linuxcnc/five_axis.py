@@ -11,6 +11,7 @@ import numpy as np
 
 from ...conventions import pose_from_t6, t6_from_pose
 from ...robot.limbs import c_double, c_vector
+from ...units import LENGTH_UNITS
 from ..wrist import wrist_joint_rows, wrist_table
 
 COORDINATES = "XYZAC"
@@ -73,18 +74,20 @@ def world_of_t6(robot, t6, scale=1.0):
     return world
 
 
-def wrist_view(robot):
-    """What templates/five_axis.c.j2 shows of ``robot``'s wrist at its working posture: the wrist's
+def wrist_view(robot, units="mm"):
+    """What templates/five_axis.c.j2 shows of ``robot``'s wrist at its working posture, lengths
+    in the machine's ``units`` ('mm' or 'inch', as X Y Z and the legs'): the wrist's
     table, its branch and travel (radians), and what follows from w0 alone (its length normal
     to the base x axis and angle about it, as :func:`world_of_axis` computes them), and the
-    platform's verification home (mm; a six-axis forward's second start)."""
-    wrist = robot.wrist
+    platform's verification home (a six-axis forward's second start)."""
+    wrist, mm_per_unit = robot.wrist, LENGTH_UNITS[units]
     w0 = home_axis(robot)
-    return {**wrist_table(robot), "names": ", ".join(wrist.names), "count": len(wrist.names),
+    return {**wrist_table(robot, mm_per_unit), "names": ", ".join(wrist.names), "count": len(wrist.names),
             "branch": robot.working_posture % 2,
             "home_axis": c_vector(w0), "home_radius": c_double(np.hypot(w0[1], w0[2])),
             "home_phi": c_double(np.arctan2(w0[1], w0[2])),
-            "home_centre": c_vector(robot.parallel.verification.home[:3]), "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
+            "home_centre": c_vector(np.asarray(robot.parallel.verification.home[:3]) / mm_per_unit),
+            "lower": c_vector(np.clip(wrist.lower, -1e300, 1e300)),
             "upper": c_vector(np.clip(wrist.upper, -1e300, 1e300))}
 
 

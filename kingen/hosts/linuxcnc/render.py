@@ -149,7 +149,7 @@ def view_model(robot, units="mm"):
     check_robot(robot)
     if robot.wrist is not None:
         parallel = replace(robot.parallel, working_posture_given=True, payload=robot.payload, gravity=robot.gravity)
-        return {**view_model(parallel, units), "wrist": wrist_view(robot),
+        return {**view_model(parallel, units), "wrist": wrist_view(robot, units),
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}
     labels = branch_words(robot)
