@@ -112,6 +112,12 @@ SECTION_FIGURES = {
          "samples": None}]},
     "planner": {"blends": [{"line": 2, "linuxcnc": 20.59, "planner": 20.56, "rest_to_rest": 21.82,
                             "planner_error": 0.002, "rest_to_rest_error": 0.06}]},
+    "view": {"changes": 300, "load_average": 1.5, "pages": [
+        {"robot": "tau", "bytes": 772522, "load_ms": 100.4, "changes": 300, "median_ms": 1.0, "p95_ms": 3.2,
+         "max_ms": 7.3, "over_50_ms": 0, "routine_median_ms": 0.0, "routine_max_ms": 1.9}]},
+    "wasm_host": {"rounds": 2, "calls": 1000, "verify": [{"robot": "tau", "c": [1.8, 2.2], "wasm": [1.4, 2.1]}],
+                  "inverse": [{"robot": "tau", "postures": 8, "c": {"min": 36.6, "median": 62.8},
+                               "wasm": {"min": 109.4, "median": 150.7}}]},
 }
 """Small figures of every section of benchmarks/sections.py, in the shapes their scripts write."""
 
