@@ -4,8 +4,7 @@ the sampled pose (:mod:`kingen.kinematics.forward`), within what the joints expl
 import numpy as np
 
 from ...conventions import joint_errors
-from ...kinematics.forward import closure_derivative, free_mask, newton, poses_of, t6_of
-from ...kinematics.parasitic import task_twists
+from ...kinematics.forward import free_mask, newton, poses_of, scaled_closure_derivative, t6_of
 from ...kinematics.reference import solve
 from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
@@ -125,13 +124,11 @@ def regular_postures(expected, transmissions):
 def pose_conditioning(robot, wrenches, poses, free):
     """The smallest singular value (m,) of the closure's derivative with respect to the free
     pose coordinates (what forward kinematics solves for) at poses (m, 6) (mm, radians):
-    forward.closure_derivative of the limbs' unit wrenches (m, dof, 6), the matrix Newton
+    forward.scaled_closure_derivative of the limbs' unit wrenches (m, dof, 6), the matrix Newton
     solves with, rotations per mm of arc at the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
     where the free coordinates are not all determined; non-finite counts as 0."""
-    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
     with np.errstate(all="ignore"):  # a constrained machine's joints move along its manifold
-        matrix = (wrenches @ task_twists(robot, t6_of(poses)) if robot.task
-                  else closure_derivative(wrenches, poses, free)) * scale
+        matrix = scaled_closure_derivative(robot, wrenches, poses, free)
     finite = np.all(np.isfinite(matrix), axis=(1, 2))
     matrix = np.where(finite[:, None, None], matrix, 0.0)
     return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)
