@@ -141,7 +141,7 @@ def newton(robot, starts, joints, free):
     """Newton-Raphson from every start (n, 6) towards the joints (n, dof): the converged
     poses (n, 6) and their largest residuals (n,). ``free`` (6,) bool: the coordinates solved
     for; the others keep the start's values."""
-    poses = _on_manifold(robot, np.array(starts, dtype=float))
+    poses = manifold_poses(robot, np.array(starts, dtype=float))
     with np.errstate(all="ignore"):
         for _ in range(ITERATIONS):
             residual, wrenches = closure(robot, poses, joints)
@@ -150,14 +150,14 @@ def newton(robot, starts, joints, free):
             step = np.where(np.isfinite(step), step, 0.0)
             step = _limited(step, robot.size_mm, free)
             poses[:, free] += step
-            poses = _on_manifold(robot, poses)
+            poses = manifold_poses(robot, poses)
             if np.all(np.abs(step) <= CONVERGED * np.array([robot.size_mm] * 3 + [1.0] * 3)[free]):
                 break
         residual, _ = closure(robot, poses, joints)
     return poses, np.where(np.all(np.isfinite(residual), axis=1), np.max(np.abs(residual), axis=1), np.inf)
 
 
-def _on_manifold(robot, poses):
+def manifold_poses(robot, poses):
     """Poses (n, 6) (mm, radians) of a machine with task coordinates with x, y and yaw its own
     for their z, roll and pitch (kingen.kinematics.parasitic); other robots' as they are."""
     if not robot.task:
