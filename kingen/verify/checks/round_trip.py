@@ -165,7 +165,7 @@ def newton_assured(robot, seeds, poses, joints, free):
     within 2 eta of the seed; every limb's radicand must stay above the singular band
     (SINGULAR_TOLERANCE) there too, as it changes between the seed and the pose, since a host's
     Newton stops at an iterate inside it. Near a singularity a start a servo cycle away may lie
-    beyond either (h above 1 on a machine 30 mm across): there Newton may stop or jump to another
+    beyond either (h of 5 on a machine 36 mm across): there Newton may stop or jump to another
     assembly mode without a fault of its own. A seed or pose where the derivative is not finite
     or singular is not assured."""
     seeds = manifold_poses(robot, np.asarray(seeds, dtype=float))
