@@ -6,7 +6,8 @@ report order (the shared ones of :mod:`kingen.verify.checks` and these three).
   directions of the free coordinates) and far away (10 mm, 5 degrees), returns that pose
   within the value bound or what the posture's conditioning explains; near starts must all
   return it where Newton's convergence from them is assured (Kantorovich's condition,
-  kingen.verify.checks.round_trip.newton_assured; a machine with a wrist: every one), far ones may fail or return another assembly mode (a pose the reference gives these
+  kingen.verify.checks.round_trip.newton_assured; a machine with a wrist: every one), far ones
+  may fail or return another assembly mode (a pose the reference gives these
   joints, within a thousand times the value bounds) but never a pose without these joints. A
   machine with task coordinates is started off in those only, and the whole pose it writes
   (its parasitic coordinates too) is compared; a machine with a wrist is started off in every
@@ -160,8 +161,9 @@ class Forward(OnRegularPairs, name="forward", needs="compared poses"):
                        else newton_assured(robot, start + offset, start, joints, free))
             unjudged = (f"; {np.count_nonzero(failed & ~premise)} from a seed Newton is not assured to converge "
                         f"from, not judged" if np.any(failed & ~premise) else "")
+            listed = ", ".join(f"{n} x {c}" for c, n in zip(codes, counts)) or "none"
             parts.append(f"{label}: {int(right.sum())} of {len(start)} returned the pose, {int(failed.sum())} failed"
-                         f" ({', '.join(f'{n} x {c}' for c, n in zip(codes, counts)) or 'none'}{unjudged}), {int(wrong.sum())}"
+                         f" ({listed}{unjudged}), {int(wrong.sum())}"
                          f" returned a wrong pose, {int(other_mode.sum())} another assembly mode (a pose with these "
                          f"joints)" + (f"; Newton steps mean {steps.mean():.2f}, max {steps.max()}" if len(steps) else ""))
             passed = passed and not np.any(wrong) and (label != "a servo cycle away" or not np.any(failed & premise))

@@ -181,7 +181,8 @@ def newton_assured(robot, seeds, poses, joints, free):
         units = np.array([1.0] * 3 + [robot.size_mm] * 3)[free]
         apart = np.linalg.norm((seeds - poses)[:, free] * units, axis=1)
         values = np.linalg.svd(at_seed, compute_uv=False)
-        step = np.linalg.norm(np.linalg.pinv(at_seed) @ np.where(finite[:, None], residual, 0.0)[..., None], axis=(1, 2))
+        residual = np.where(finite[:, None], residual, 0.0)
+        step = np.linalg.norm(np.linalg.pinv(at_seed) @ residual[..., None], axis=(1, 2))
         change = np.linalg.norm(at_seed - at_pose, ord=2, axis=(1, 2)) / apart
         assured = step * change / values[:, -1] <= NEWTON_ASSURED
         seed_radicands = solve(robot, t6_of(seeds)).radicands

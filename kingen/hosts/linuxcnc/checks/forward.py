@@ -2,7 +2,8 @@
 away (0.01 mm, 0.01 degree) and far away (10 mm, 5 degrees), returns the sampled pose within
 the value bounds, or fails; it never returns another pose (another assembly mode). Judged on
 the regular poses of the sample (a servo cycle's failure only from a seed where the reference is
-regular too and Newton's convergence is assured: kingen.verify.checks.round_trip.newton_assured) (as the round trip: away from singularities, where the pose
+regular too and Newton's convergence is assured: kingen.verify.checks.round_trip.newton_assured)
+(as the round trip: away from singularities, where the pose
 is not determined by the joints); the report gives the failure rates and Newton's iterations,
 and what the first call after loading returned (LinuxCNC's switchable modules start it from
 the all-zero pose: on a mm machine genhexkins' max-error, sized for inches, stops it)."""
@@ -79,7 +80,8 @@ class Forward(VerifyCheck, name="forward", needs="compared poses"):
             premise &= newton_assured(robot, np.concatenate([seeded[:, :3], np.radians(seeded[:, 3:])], axis=1),
                                       radians, joints, free)
             unjudged = (f"; {np.count_nonzero(failed & ~premise)} from a seed the reference finds singular or out "
-                        "of reach, or Newton is not assured to converge from, not judged" if np.any(failed & ~premise) else "")
+                        "of reach, or Newton is not assured to converge from, not judged"
+                        if np.any(failed & ~premise) else "")
             failed_codes.update(int(code) for code in returns[failed])
             counted = iterations[converged & np.isfinite(iterations)]
             statistics = (f"iterations mean {counted.mean():.2f}, max {int(counted.max())}" if len(counted)
