@@ -186,8 +186,8 @@ def exechon(draw, units="mm"):
 @st.composite
 def wrist(draw, units="mm"):
     """A Tricept or Exechon-type parallel part (in mm: a wrist needs it) with an RR wrist at the
-    platform origin (about the platform's z axis, then the x axis it carries), or on a Tricept an
-    RRR one (then about the z axis the second carries), and a tool."""
+    platform origin (about the platform's z axis, then the x axis it carries), or an RRR one (then
+    about the z axis the second carries), and a tool."""
     s = _scale(draw, "mm")
     if draw(st.booleans()):
         body, z = _tricept_body(draw, s)
@@ -197,8 +197,7 @@ def wrist(draw, units="mm"):
         family = "Exechon type with a wrist"
     joints = [{"name": "ax4", "axis": [0, 0, 1], "travel": [-270, 270]},
               {"name": "ax5", "axis": [1, 0, 0], "travel": [-110, 110]}]
-    if family.startswith("Tricept") and draw(st.booleans()):  # a spherical wrist: the tool's turn too
-        # (on an Exechon-type part: tests/data/random_machines/exechon_spherical_wrist.yaml, open)
+    if draw(st.booleans()):  # a spherical wrist: the tool's turn too
         joints.append({"name": "ax6", "axis": [0, 0, 1], "travel": [-360, 360]})
         family = family.replace("a wrist", "a three-axis wrist")
     body.update({"wrist": joints, "tool": [0, 0, _r(-s * draw(st.floats(0.1, 0.4))), 180, 0, 0], "working_posture": 0})

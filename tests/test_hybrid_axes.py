@@ -5,12 +5,15 @@ written here), the thesis's home and its observed tilt, the constraints closed a
 pose, the off-manifold answer, the generated routine against the reference on both hosts, forward
 kinematics and bad declarations."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from kingen.conventions import rotation_from_rpy, t6_from_pose
 from kingen.kinematics.hybrid.parasitic import on_manifold
 from kingen.kinematics.reference import solve
+from kingen.kinematics.hybrid.wrist import tool_t6
 from kingen.robot.model import load_robot
 
 from constrained import (UNREACHABLE, check_declaration_refused, check_forward_returns, check_task_poses_match,
@@ -97,3 +100,26 @@ def test_analyze_sweeps_the_task_coordinates_with_the_parasitic_rotation_followi
     for axis in ("x", "y"):
         assert [entry["cause"] for entry in result["sweeps"][axis]] == ["none"] * len(result["sweeps"][axis])
     assert "xy" in result["slices"] and "xz" in result["slices"]
+
+
+def test_inside_the_constraint_singular_band_the_platform_turns_by_a_rotation_the_wrist_completes():
+    """Just inside the constraint's singular band (D = -9e-6: the pair's two planes' line misses
+    the unit sphere) the machine's platform rotation is a rotation, its pair axis the unit vector
+    nearest that line (x0 / |x0|, x0 the line's point nearest the origin, by least squares here),
+    and the three-axis wrist's joints of every posture rebuild the asked tool pose (the routine
+    matched the reference there only once this held: tests/data/random_machines)."""
+    robot = load_robot(str(Path(__file__).parent / "data" / "random_machines" / "exechon_spherical_wrist.yaml"))
+    t6 = t6_from_pose(np.array([[-250.60345390497815, -9.122110697473602, -70.59626883590306, 180.0, 0.0, 0.0]]))
+    answer = solve(robot, t6)
+    assert -1e-5 <= answer.constraint[0] < 0.0
+    platform = answer.platform[0]
+    rotation, centre = platform[:3, :3].T, platform[3, :3]
+    assert np.max(np.abs(rotation @ rotation.T - np.eye(3))) < 1e-14 and abs(np.linalg.det(rotation) - 1.0) < 1e-14
+    (axis, base_1, point_1), (_, base_2, point_2) = (limb.platform_constraint() for limb in robot.limbs[:2])
+    nearest = np.linalg.lstsq(np.array([base_1 - base_2, base_1 - centre]),
+                              np.array([axis @ (point_1 - point_2), axis @ point_1]), rcond=None)[0]
+    assert np.linalg.norm(nearest) > 1.0
+    assert np.max(np.abs(rotation @ axis - nearest / np.linalg.norm(nearest))) < 1e-12
+    for posture in range(robot.postures):
+        rebuilt = tool_t6(robot, answer.platform, answer.joints[:, robot.dof:, posture])
+        assert np.max(np.abs(rebuilt - t6)) < 1e-12, posture

@@ -29,7 +29,7 @@ from kingen.hosts.linuxcnc.checks.refusal import far_pose
 from kingen.kinematics.home import judged_posture
 from kingen.kinematics.routine import WARNINGS
 from kingen.robot.model import robot_from_data
-from kingen.conventions import t6_from_pose
+from kingen.conventions import pose_from_t6, t6_from_pose
 from kingen.hosts.linuxcnc.render import robot_problem
 from kingen.kinematics.reference import solve as reference_solve
 from kingen.robot.model import load_robot
@@ -279,3 +279,59 @@ def test_a_machine_in_inches_or_metres_and_the_same_in_mm_get_the_same_verdict(d
     assert np.allclose(joints[0], joints[1], rtol=1e-9, atol=1e-9 * robots[0].size_mm), family
     verdicts = [run_verify(path, "c", folder)[:2] for path in paths]
     assert verdicts[0][0] == verdicts[1][0] == 0, (family, failed_checks(verdicts[0][1]), failed_checks(verdicts[1][1]))
+
+
+def _plain_newton(robot, posture, joints, seed, steps=30):
+    """z, roll, pitch (mm, radians) of a machine with task coordinates z, roll, pitch whose
+    posture ``posture`` has ``joints``: undamped Newton from ``seed`` (6,; mm, radians) on the
+    reference's inverse at the machine's pose (x, y, yaw following), derivative by central
+    differences; (coordinates (3,), converged)."""
+    from kingen.kinematics.hybrid.parasitic import on_manifold
+
+    def joints_at(coordinates):
+        pose = np.array([[0.0, 0.0, coordinates[0], *np.degrees(coordinates[1:]), 0.0]])
+        return reference_solve(robot, t6_from_pose(on_manifold(robot, pose))).joints[0, :, posture]
+
+    coordinates = np.array(seed)[[2, 3, 4]]
+    for _ in range(steps):
+        derivative = np.stack([(joints_at(coordinates + step) - joints_at(coordinates - step)) / (2 * np.sum(step))
+                               for step in np.diag([1e-6, 1e-8, 1e-8])], axis=1)
+        step = np.linalg.solve(derivative, joints_at(coordinates) - joints)
+        coordinates = coordinates - step
+        if np.max(np.abs(step)) < 1e-12:
+            return coordinates, True
+    return coordinates, False
+
+
+def test_a_servo_seed_is_judged_only_where_newton_is_assured_to_return_the_pose():
+    """inch_prs_newton's pose whose servo-cycle seed the C library's Newton refused (-4): from that
+    seed Kantorovich's condition fails (kingen.verify.checks.round_trip.newton_assured), and an
+    undamped Newton written here converges to another pose with the same joints; from a seed ten
+    times nearer the condition holds and it returns the pose. Every servo seed of prs_head's
+    forward check is assured: the check keeps judging shipped machines."""
+    from kingen.hosts.c.checks import regular_pairs
+    from kingen.kinematics.forward import free_mask
+    from kingen.kinematics.poses import PoseStream
+    from kingen.verify.checks.round_trip import forward_seeds, newton_assured, seed_offsets
+
+    robot = load_robot(str(REGRESSIONS[0].parent / "inch_prs_newton.yaml"))
+    pose = np.array([0.015981078531749040, 0.010542071304474255, -34.827707738734823,
+                     0.075706956715337198, 0.032122863086801859, 0.0011365851711661965])
+    offset = np.array([0.0, 0.0, 0.0072297361299589295, -2.7575815832992562e-06, -1.7446931011820687e-04, 0.0])
+    joints = np.array([-32.801322166946143, -32.894630463550648, -27.591386477953314])
+    assert np.allclose(reference_solve(robot, t6_from_pose(np.concatenate([pose[:3], np.degrees(pose[3:])])[None]))
+                       .joints[0, :, 1], joints, rtol=0, atol=1e-9)
+    free = free_mask(robot)
+    for scale, expected in ((1.0, False), (0.1, True)):
+        assert newton_assured(robot, (pose + scale * offset)[None], pose[None], joints[None], free)[0] == expected
+        found, converged = _plain_newton(robot, 1, joints, pose + scale * offset)
+        assert converged and (np.max(np.abs(found - pose[[2, 3, 4]])) < 1e-9) == expected, (scale, found)
+    robot = load_robot("prs_head")
+    t6 = t6_from_pose(PoseStream(robot, 0).draw(300))
+    pose_index, _, joints, _, _, _ = regular_pairs(robot, t6)
+    sampled = pose_from_t6(t6[pose_index])
+    starts = np.concatenate([sampled[:, :3], np.radians(sampled[:, 3:])], axis=1)
+    distance_mm, distance_deg = forward_seeds(robot)["a servo cycle away"]
+    offsets = seed_offsets(np.random.default_rng(0), len(starts), distance_mm, distance_deg, free_mask(robot))
+    offsets[:, 3:] = np.radians(offsets[:, 3:])
+    assert np.all(newton_assured(robot, starts + offsets, starts, joints, free_mask(robot)))

@@ -24,8 +24,7 @@ import numpy as np
 from ..conventions import pose_from_t6, t6_from_pose
 from ..errors import KingenError
 from ..kinematics.collision import clearances
-from ..kinematics.forward import closure, closure_derivative, free_mask, t6_of
-from ..kinematics.hybrid.parasitic import task_twists
+from ..kinematics.forward import closure, free_mask, scaled_closure_derivative
 from ..kinematics.reference import solve
 from ..kinematics.routine import WARNINGS
 from . import identifiability
@@ -90,10 +89,7 @@ def _regular(robot, poses, joints):
     radians = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
     _, wrenches = closure(robot, radians, joints)
     free = free_mask(robot)
-    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
-    derivative = (wrenches @ task_twists(robot, t6_of(radians)) if robot.task
-                  else closure_derivative(wrenches, radians, free))
-    values = np.linalg.svd(derivative * scale, compute_uv=False)
+    values = np.linalg.svd(scaled_closure_derivative(robot, wrenches, radians, free), compute_uv=False)
     return values[:, -1] >= MARGIN * values[:, 0]
 
 

@@ -117,34 +117,47 @@ def pose_jacobian(poses):
     return jacobian
 
 
-def closure_derivative(wrenches, poses, free):
-    """d(residuals)/d(free pose coordinates) (n, dof, free count) at poses (n, 6) (mm, radians)
-    from the limbs' unit wrenches there (n, dof, 6): mm per mm, or mm per radian."""
+def closure_derivative(robot, wrenches, poses, free):
+    """d(residuals)/d(free coordinates) (n, dof, free count) at poses (n, 6) (mm, radians) from
+    the limbs' unit wrenches there (n, dof, 6), the matrix forward kinematics' Newton solves
+    with: for a machine with task coordinates along its manifold, per unit rate of each task
+    coordinate in the robot's task order (kingen.kinematics.hybrid.parasitic.task_twists); otherwise
+    over the pose coordinates ``free`` (6,) bool, R = Rz(yaw) Ry(pitch) Rx(roll). mm per mm, or
+    mm per radian."""
+    if robot.task:
+        return wrenches @ task_twists(robot, t6_of(poses))
     return (wrenches @ pose_jacobian(poses))[:, :, free]
+
+
+def scaled_closure_derivative(robot, wrenches, poses, free):
+    """closure_derivative with each angle's column per mm of arc at the robot's size (divided by
+    its size_mm): dimensionless, so that its singular values compare free of units."""
+    names = robot.task or [name for name, chosen in zip(COORDINATES, free) if chosen]
+    scale = np.array([1.0 if name in COORDINATES[:3] else 1.0 / robot.size_mm for name in names])
+    return closure_derivative(robot, wrenches, poses, free) * scale
 
 
 def newton(robot, starts, joints, free):
     """Newton-Raphson from every start (n, 6) towards the joints (n, dof): the converged
     poses (n, 6) and their largest residuals (n,). ``free`` (6,) bool: the coordinates solved
     for; the others keep the start's values."""
-    poses = _on_manifold(robot, np.array(starts, dtype=float))
+    poses = manifold_poses(robot, np.array(starts, dtype=float))
     with np.errstate(all="ignore"):
         for _ in range(ITERATIONS):
             residual, wrenches = closure(robot, poses, joints)
-            matrix = (wrenches @ task_twists(robot, t6_of(poses)) if robot.task
-                      else closure_derivative(wrenches, poses, free))
+            matrix = closure_derivative(robot, wrenches, poses, free)
             step = _least_squares(matrix, -residual)
             step = np.where(np.isfinite(step), step, 0.0)
             step = _limited(step, robot.size_mm, free)
             poses[:, free] += step
-            poses = _on_manifold(robot, poses)
+            poses = manifold_poses(robot, poses)
             if np.all(np.abs(step) <= CONVERGED * np.array([robot.size_mm] * 3 + [1.0] * 3)[free]):
                 break
         residual, _ = closure(robot, poses, joints)
     return poses, np.where(np.all(np.isfinite(residual), axis=1), np.max(np.abs(residual), axis=1), np.inf)
 
 
-def _on_manifold(robot, poses):
+def manifold_poses(robot, poses):
     """Poses (n, 6) (mm, radians) of a machine with task coordinates with x, y and yaw its own
     for their z, roll and pitch (kingen.kinematics.hybrid.parasitic); other robots' as they are."""
     if not robot.task:
@@ -268,13 +281,7 @@ def _singular(robot, poses, joints, free):
     if not len(poses):
         return np.zeros(0, dtype=bool)
     _, wrenches = closure(robot, poses, np.tile(joints, (len(poses), 1)))
-    if robot.task:  # along the manifold, per unit rate of each task coordinate
-        matrix = wrenches @ task_twists(robot, t6_of(poses))
-        scale = np.array([1.0 if name in ("x", "y", "z") else 1.0 / robot.size_mm for name in robot.task])
-    else:
-        matrix = closure_derivative(wrenches, poses, free)
-        scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
-    values = np.linalg.svd(matrix * scale, compute_uv=False)
+    values = np.linalg.svd(scaled_closure_derivative(robot, wrenches, poses, free), compute_uv=False)
     return values[:, -1] <= SINGULAR_RCOND * values[:, 0]
 
 

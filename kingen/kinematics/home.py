@@ -13,7 +13,7 @@ from ..conventions import rpy_from_rotation, t6_from_pose
 from ..errors import located
 from ..units import LENGTH_UNITS
 from .forward import closure_derivative, free_mask, unit_wrenches
-from .hybrid.parasitic import off_manifold_words, task_twists
+from .hybrid.parasitic import off_manifold_words
 from .reference import solve
 from .routine import WARNINGS
 
@@ -38,10 +38,8 @@ def closure_square(robot, t6, points, joints):
     free = free_mask(robot)
     if np.all(free):
         return wrenches
-    if robot.task:
-        return wrenches @ task_twists(robot, t6)
     poses = np.concatenate([t6[:, 3, :3], rpy_from_rotation(np.swapaxes(t6[:, :3, :3], 1, 2))], axis=1)
-    return closure_derivative(wrenches, poses, free)
+    return closure_derivative(robot, wrenches, poses, free)
 
 
 def equilibrated_det(square):

@@ -168,7 +168,7 @@ def _boundaries(robot, origins, directions, kinds):
     sides = _both_sides(robot, warnings_at, rays, low, high)
     first = 0
     for kind, count in met:
-        yield kind, count, _chosen(sides, range(first, first + count))
+        yield kind, count, _chosen(sides, range(first, first + count), WARNINGS.get(kind), postures)
         first += count
 
 
@@ -196,24 +196,35 @@ def _bisected(low, high, levels, inside):
 
 
 def _both_sides(robot, warnings_at, rays, low, high):
-    """For each offset of OFFSETS and side (before, after) of each bracketed boundary: the
-    poses there and which of them lie outside the tolerance band. All in one reference solve
-    (each pose is solved on its own, so batching changes no pose)."""
+    """For each offset of OFFSETS and side (before, after) of each bracketed boundary, then the
+    bracket's own ends (offset 0, within a tenth of the smallest offset of the boundary): the
+    poses there, which of them lie outside the tolerance band, and the reference's warnings
+    there (count, postures). All in one reference solve (each pose is solved on its own, so
+    batching changes no pose)."""
     cases = [(side, fractions) for offset in OFFSETS
              for side, fractions in (("before", np.clip(low - offset, 0.0, None)), ("after", high + offset))]
+    cases += [("before", low), ("after", high)]
     solution, poses = warnings_at(np.concatenate([fractions for _, fractions in cases]), np.tile(rays, len(cases)))
     clear = ~np.any(warnings_in_band(robot, solution), axis=1)
     count = len(rays)
-    return [(side, poses[k * count:(k + 1) * count], clear[k * count:(k + 1) * count])
-            for k, (side, _) in enumerate(cases)]
+    return [(side, poses[k * count:(k + 1) * count], clear[k * count:(k + 1) * count],
+             solution.warnings[k * count:(k + 1) * count]) for k, (side, _) in enumerate(cases)]
 
 
-def _chosen(sides, brackets):
+def _chosen(sides, brackets, code, postures):
     """A pose before and one after each of ``brackets`` (indices into the bisected rays), as
-    near its boundary as the tolerance band allows."""
-    chosen = {}
-    for side, poses, clear in sides:
+    near its boundary as the tolerance band allows. After a warning's boundary (its ``code``;
+    None for the direct index's threshold), the pose nearest it that gives that warning in the
+    bracket's posture (``postures``, by ray) where one does: a singular band narrower than the
+    smallest offset is stepped over into unreachable poses, but the bracket's end lies in it."""
+    chosen, fallback = {}, {}
+    for side, poses, clear, warnings in sides:
         for index in brackets:
-            if clear[index]:
+            if not clear[index]:
+                continue
+            fallback.setdefault((side, index), poses[index])
+            if side == "before" or code is None or warnings[index, postures[index]] == code:
                 chosen.setdefault((side, index), poses[index])
+    for key, pose in fallback.items():
+        chosen.setdefault(key, pose)
     return np.array(list(chosen.values())) if chosen else np.zeros((0, 6))

@@ -349,14 +349,11 @@ def wrist_error(robot, t6, expected, solutions):
     ``t6`` (n, 4, 4): the larger of the tool tip's distance (mm) and the tool axes' (unit
     vectors; with two wrist joints the tool's z axis only, the turn about it free; with three
     every axis: the whole pose, kingen.kinematics.hybrid.wrist.tool_miss). Judged: postures the reference reaches,
-    outside the wrist's singular bands (where its closest approach misses by design) and the
-    parallel part's constraint's (where its platform's rotation is not determined); NaN
-    joints count as infinitely wrong."""
+    outside the wrist's singular bands (where its closest approach misses by design); inside the
+    parallel part's constraint's band too (its platform's rotation is still a rotation, with the
+    wrist centre where asked); NaN joints count as infinitely wrong."""
     reachable = expected.warnings != UNREACHABLE
     regular = np.all(np.abs(expected.radicands[:, robot.dof:]) > SINGULAR_TOLERANCE + WARNING_BAND, axis=1)
-    if expected.constraint is not None:  # at a constraint singularity the platform's rotation is not determined
-        with np.errstate(invalid="ignore"):
-            regular &= expected.constraint > SINGULAR_TOLERANCE + WARNING_BAND
     judged = reachable & regular[:, None]
     worst = 0.0
     for posture in range(robot.postures):

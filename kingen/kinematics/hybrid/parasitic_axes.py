@@ -34,7 +34,9 @@ def home_axes(robot, table):
 
 def _unit_on_two_planes(first, first_rhs, second, second_rhs, home):
     """(x (n, 3), radicand (n,)): the unit x with x.first = first_rhs, x.second = second_rhs,
-    on the side of their common normal ``home`` is on; radicand 1 - |x0|^2 (below 0: none)."""
+    on the side of their common normal ``home`` is on; radicand 1 - |x0|^2 (below 0: none, and
+    x is x0 / |x0|, the unit vector nearest the planes' line, so that the rotation built from it
+    is one)."""
     ff, fs, ss = (np.sum(first * first, -1), np.sum(first * second, -1), np.sum(second * second, -1))
     determinant = ff * ss - fs * fs
     alpha = (first_rhs * ss - second_rhs * fs) / determinant
@@ -44,6 +46,7 @@ def _unit_on_two_planes(first, first_rhs, second, second_rhs, home):
     normal = np.cross(first, second)
     step = np.sqrt(np.where(radicand > 0.0, radicand, 0.0) / determinant)
     step = np.where(np.sum(normal * home, -1) >= 0.0, step, -step)
+    particular = particular / np.sqrt(np.where(radicand < 0.0, 1.0 - radicand, 1.0))[..., None]
     return particular + step[..., None] * normal, radicand
 
 

@@ -4,10 +4,9 @@ the sampled pose (:mod:`kingen.kinematics.forward`), within what the joints expl
 import numpy as np
 
 from ...conventions import joint_errors
-from ...kinematics.forward import closure_derivative, free_mask, newton, poses_of, t6_of
-from ...kinematics.hybrid.parasitic import task_twists
+from ...kinematics.forward import closure, free_mask, manifold_poses, newton, poses_of, scaled_closure_derivative, t6_of
 from ...kinematics.reference import solve
-from ...kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
+from ...kinematics.routine import SINGULAR_TOLERANCE, VALUE_TOLERANCE_RAD, WARNINGS
 from ...kinematics.singularity import posture_wrenches
 from ...kinematics.hybrid.wrist import orientation_rows
 from ...kinematics.hybrid.wrist_forward import tool_forward
@@ -125,13 +124,11 @@ def regular_postures(expected, transmissions):
 def pose_conditioning(robot, wrenches, poses, free):
     """The smallest singular value (m,) of the closure's derivative with respect to the free
     pose coordinates (what forward kinematics solves for) at poses (m, 6) (mm, radians):
-    forward.closure_derivative of the limbs' unit wrenches (m, dof, 6), the matrix Newton
+    forward.scaled_closure_derivative of the limbs' unit wrenches (m, dof, 6), the matrix Newton
     solves with, rotations per mm of arc at the robot's size. Dimensionless (mm of closure per mm of pose); 0 at a singularity and
     where the free coordinates are not all determined; non-finite counts as 0."""
-    scale = np.array([1.0] * 3 + [1.0 / robot.size_mm] * 3)[free]
     with np.errstate(all="ignore"):  # a constrained machine's joints move along its manifold
-        matrix = (wrenches @ task_twists(robot, t6_of(poses)) if robot.task
-                  else closure_derivative(wrenches, poses, free)) * scale
+        matrix = scaled_closure_derivative(robot, wrenches, poses, free)
     finite = np.all(np.isfinite(matrix), axis=(1, 2))
     matrix = np.where(finite[:, None, None], matrix, 0.0)
     return np.where(finite, np.linalg.svd(matrix, compute_uv=False)[:, -1], 0.0)
@@ -149,6 +146,50 @@ of x y z and degrees along a random direction of roll pitch yaw (the free coordi
 FAR_AT_MOST = 0.01
 """A seed "far away" is at most this fraction of the machine's size away (10 mm is a third of a
 machine 30 mm across, where another assembly mode may lie nearer than the pose)."""
+
+
+NEWTON_ASSURED = 0.5
+"""Kantorovich's bound: Newton's method started where h = beta eta L is at most this converges
+to the root within 2 eta of the start, the only one that near (newton_assured)."""
+
+
+def newton_assured(robot, seeds, poses, joints, free):
+    """(n,) bool: whether Newton's method on the closure equations of ``joints`` (n, dof; mm,
+    radians), started at ``seeds`` (n, 6; mm, radians; a machine with task coordinates: its pose
+    for their task coordinates), is assured to converge to ``poses`` (n, 6), the reference's
+    poses for these joints, by Kantorovich's condition h = beta eta L <= NEWTON_ASSURED: beta
+    1 / the smallest singular value of the closure's derivative at the seed (over the free
+    coordinates, angles in mm of arc at the robot's size: scaled_closure_derivative), eta the
+    length of Newton's first step, L the derivative's change per unit of that length between
+    the seed and the pose (a secant's estimate of its Lipschitz constant). Its iterates then stay
+    within 2 eta of the seed; every limb's radicand must stay above the singular band
+    (SINGULAR_TOLERANCE) there too, as it changes between the seed and the pose, since a host's
+    Newton stops at an iterate inside it. Near a singularity a start a servo cycle away may lie
+    beyond either (h of 5 on a machine 36 mm across): there Newton may stop or jump to another
+    assembly mode without a fault of its own. A seed or pose where the derivative is not finite
+    or singular is not assured."""
+    seeds = manifold_poses(robot, np.asarray(seeds, dtype=float))
+    with np.errstate(all="ignore"):
+        residual, seed_wrenches = closure(robot, seeds, joints)
+        _, pose_wrenches = closure(robot, poses, joints)
+        at_seed = scaled_closure_derivative(robot, seed_wrenches, seeds, free)
+        at_pose = scaled_closure_derivative(robot, pose_wrenches, poses, free)
+        finite = np.all(np.isfinite(at_seed), axis=(1, 2)) & np.all(np.isfinite(at_pose), axis=(1, 2))
+        finite &= np.all(np.isfinite(residual), axis=1)
+        at_seed = np.where(finite[:, None, None], at_seed, np.eye(*at_seed.shape[1:]))
+        at_pose = np.where(finite[:, None, None], at_pose, 0.0)
+        units = np.array([1.0] * 3 + [robot.size_mm] * 3)[free]
+        apart = np.linalg.norm((seeds - poses)[:, free] * units, axis=1)
+        values = np.linalg.svd(at_seed, compute_uv=False)
+        residual = np.where(finite[:, None], residual, 0.0)
+        step = np.linalg.norm(np.linalg.pinv(at_seed) @ residual[..., None], axis=(1, 2))
+        change = np.linalg.norm(at_seed - at_pose, ord=2, axis=(1, 2)) / apart
+        assured = step * change / values[:, -1] <= NEWTON_ASSURED
+        seed_radicands = solve(robot, t6_of(seeds)).radicands
+        slope = np.abs(seed_radicands - solve(robot, t6_of(poses)).radicands) / apart[:, None]
+        lowest = np.where(np.isfinite(seed_radicands), seed_radicands - slope * 2.0 * step[:, None], np.inf)
+        assured &= np.all(lowest > SINGULAR_TOLERANCE, axis=1)
+    return finite & (values[:, -1] > 0.0) & np.where(apart > 0.0, assured, True)
 
 
 def forward_seeds(robot):

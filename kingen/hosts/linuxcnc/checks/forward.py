@@ -2,7 +2,8 @@
 away (0.01 mm, 0.01 degree) and far away (10 mm, 5 degrees), returns the sampled pose within
 the value bounds, or fails; it never returns another pose (another assembly mode). Judged on
 the regular poses of the sample (a servo cycle's failure only from a seed where the reference is
-regular too) (as the round trip: away from singularities, where the pose
+regular too and Newton's convergence is assured: kingen.verify.checks.round_trip.newton_assured)
+(as the round trip: away from singularities, where the pose
 is not determined by the joints); the report gives the failure rates and Newton's iterations,
 and what the first call after loading returned (LinuxCNC's switchable modules start it from
 the all-zero pose: on a mm machine genhexkins' max-error, sized for inches, stops it)."""
@@ -16,7 +17,8 @@ from ....kinematics.routine import VALUE_TOLERANCE_RAD, WARNINGS
 from ....kinematics.singularity import posture_wrenches
 from ....verify.report import not_exercised
 from ....verify.checks.base import Check, VerifyCheck
-from ....verify.checks.round_trip import ROUND_TRIP_MIN_CONDITIONING, forward_seeds, pose_conditioning, seed_offsets
+from ....verify.checks.round_trip import (ROUND_TRIP_MIN_CONDITIONING, forward_seeds, newton_assured, pose_conditioning,
+                                          seed_offsets)
 from ....verify.options import value_tolerance_mm
 
 FORWARD_POSES = 1000
@@ -70,11 +72,16 @@ class Forward(VerifyCheck, name="forward", needs="compared poses"):
             wrong = converged & ~right
             failed = ~converged
             # A seed where the reference is not regular (a limb within its singular band, or out of
-            # reach: the module's closure refuses it) is no premise for a servo cycle's failure.
+            # reach: the module's closure refuses it), or one Newton's convergence from is not
+            # assured, is no premise for a servo cycle's failure.
             seeded = np.concatenate([seeds[:, :3] * module.scale, seeds[:, 3:6]], axis=1)
             premise = solve(robot, t6_from_pose(seeded)).warnings[:, 0] == WARNINGS["WARN_GOOD_SOLUTION"]
+            radians = np.concatenate([poses[:, :3], np.radians(poses[:, 3:])], axis=1)
+            premise &= newton_assured(robot, np.concatenate([seeded[:, :3], np.radians(seeded[:, 3:])], axis=1),
+                                      radians, joints, free)
             unjudged = (f"; {np.count_nonzero(failed & ~premise)} from a seed the reference finds singular or out "
-                        "of reach, not judged" if np.any(failed & ~premise) else "")
+                        "of reach, or Newton is not assured to converge from, not judged"
+                        if np.any(failed & ~premise) else "")
             failed_codes.update(int(code) for code in returns[failed])
             counted = iterations[converged & np.isfinite(iterations)]
             statistics = (f"iterations mean {counted.mean():.2f}, max {int(counted.max())}" if len(counted)
