@@ -32,6 +32,19 @@ about 1e-16 of the size times the pose's conditioning, which a machine of metres
 1e-10 mm; the step after which Newton stops leaves an error of about its square."""
 
 
+NEWTON_STALL_RELATIVE = 1e-9
+"""The C library's Newton also stops when a step is no shorter than half the step before it and
+at most NEWTON_STALL_RELATIVE of the machine's size: quadratic convergence is over and the
+steps are rounding's (about 1e-16 of the size over the pose's conditioning, which verify keeps
+above 1e-4); the pose returned is then within about that step of the root."""
+
+
+def newton_stall(robot):
+    """The C text of the longest step (mm and radians) a generated C forward stops at when it no
+    longer halves the step before it (NEWTON_STALL_RELATIVE), for ``robot`` in mm."""
+    return c_double(NEWTON_STALL_RELATIVE * robot.size_mm)
+
+
 def newton_step(robot):
     """The C text of the longest Newton step a generated forward stops at, for ``robot`` in the
     units the routine computes in (NEWTON_STEP)."""

@@ -11,7 +11,7 @@ from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
 from ...robot.limbs import c_double
 from ..loads import loads_view
-from ..render import closed_form_model, newton_step, refuse, robot_view, template
+from ..render import closed_form_model, newton_stall, newton_step, refuse, robot_view, template
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -86,6 +86,7 @@ def view_model(robot):
         "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": newton_step(robot),
+        "stall": newton_stall(robot),
         "machine_pose": has_machine_pose(robot),
         **loads_view(robot, free, lambda row, column: f"pose[{4 * row + column}]"),
     }
