@@ -116,6 +116,24 @@ def test_the_forward_fails_rather_than_stray_far_from_the_pose_passed_in(modules
     assert np.max(np.abs(found[:2, :6] - np.r_[home][None])) < 1e-9 and iterations[0] == 1
 
 
+def test_a_forward_whose_tolerance_is_below_rounding_stops_at_roundings_floor(modules):
+    """With .tolerance 0 no step is ever short enough: Newton stops where its steps no longer
+    halve (rounding's floor, at most 1e-9 of the machine's size) and returns the pose."""
+    robot, seen, built = modules("hexapod")
+    module = Module(built.library, built.routine, seen, setp={"hexapodkins.tolerance": 0.0})
+    rng = np.random.default_rng(7)
+    world = np.zeros((200, 9))
+    world[:, :6] = np.array(robot.verification.home) + rng.uniform(-1, 1, (200, 6)) * [20, 20, 20, 3, 3, 3]
+    joints, returns, _ = module.inverse(world)
+    assert np.all(returns == 0)
+    seeds = world.copy()
+    seeds[:, :6] += rng.uniform(-1, 1, (200, 6)) * [0.01, 0.01, 0.01, 0.001, 0.001, 0.001]
+    found, returns, iterations = module.forward(joints, seeds)
+    assert np.all(returns == 0) and np.max(iterations) < 20, (np.unique(returns), np.max(iterations))
+    assert np.max(np.abs(found[:, :3] - world[:, :3])) < 1e-9 * robot.size_mm
+    assert np.max(np.abs(np.radians(found[:, 3:6] - world[:, 3:6]))) < 1e-9
+
+
 def test_a_wrong_inverse_fails_values_and_a_wrong_forward_fails_forward(modules, tmp_path, capsys):
     _, _, built = modules("hexapod")
     text = built.source.read_text()
@@ -282,6 +300,8 @@ def test_an_inch_machine_gets_its_module_in_inches(tmp_path):
     files = render_package(robot, "inch")
     assert f"setp hexapodkins.leg1.reference-length {399.413 * (1 / 25.4)!r}\n" in files["hexapodkins.hal"]
     assert "X Y Z in inch" in files["hexapodkins.c"]
+    # rounding's floor for the forward's Newton: 1e-9 of the robot's 515 mm (z 465 + 50), in inches
+    assert f"#define KINGEN_STALL {515e-9 / 25.4!r} " in files["hexapodkins.c"]
 
 
 def test_towers_in_another_order_are_named(tmp_path):

@@ -171,6 +171,7 @@ def test_linuxcnc_sheet_of_a_hexapod_speaks_of_newton_and_leg_extensions():
     # the tolerance: 1e-12 of the robot's size where that exceeds 1e-10 (kingen.hosts.render.newton_step)
     assert robot.size_mm == 515.0  # z 465 + 50 of the verification region
     assert "`.max-step`, `.max-step-angle`: the forward's\n  settings (20, 5.15e-10, 25.0 mm, 10.0 degrees)." in text
+    assert "halves the one before it and is at most 5.15e-07 (rounding's floor, compiled in)." in text  # 1e-9 of 515 mm
     assert "- A leg joint (mm) is the leg's extension from its reference length (positive extends it" in text
     assert "closed form" not in text and "carriage" not in text
 

@@ -33,16 +33,17 @@ about 1e-16 of the size times the pose's conditioning, which a machine of metres
 
 
 NEWTON_STALL_RELATIVE = 1e-9
-"""The C library's Newton also stops when a step is no shorter than half the step before it and
-at most NEWTON_STALL_RELATIVE of the machine's size: quadratic convergence is over and the
+"""A generated forward's Newton also stops when a step is no shorter than half the step before
+it and at most NEWTON_STALL_RELATIVE of the machine's size: quadratic convergence is over and the
 steps are rounding's (about 1e-16 of the size over the pose's conditioning, which verify keeps
 above 1e-4); the pose returned is then within about that step of the root."""
 
 
-def newton_stall(robot):
-    """The C text of the longest step (mm and radians) a generated C forward stops at when it no
-    longer halves the step before it (NEWTON_STALL_RELATIVE), for ``robot`` in mm."""
-    return c_double(NEWTON_STALL_RELATIVE * robot.size_mm)
+def newton_stall(robot, unit_mm=1.0):
+    """The C text of the longest step a generated forward stops at when it no longer halves the
+    step before it: NEWTON_STALL_RELATIVE of ``robot``'s size (``robot`` in mm, as loaded), in
+    the routine's length unit of ``unit_mm`` mm (25.4 for an inch machine); radians alike."""
+    return c_double(NEWTON_STALL_RELATIVE * robot.size_mm / unit_mm)
 
 
 def newton_step(robot):

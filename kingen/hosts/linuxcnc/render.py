@@ -10,8 +10,8 @@ from pathlib import Path
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
 from ..loads import loads_view
-from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_step, robot_view, schur_test_lines,
-                      template)
+from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_stall, newton_step, robot_view,
+                      schur_test_lines, template)
 from . import LinuxcncHost
 from .five_axis import wrist_view
 from ...kinematics.routine import SINGULAR_TOLERANCE
@@ -153,6 +153,7 @@ def view_model(robot, units="mm"):
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}
     labels = branch_words(robot)
+    stall = newton_stall(robot, LENGTH_UNITS[units])
     robot = robot_in_units(robot, units)
     view = robot_view(robot, HOST)
     branches = robot.posture_branches(robot.working_posture)
@@ -199,6 +200,7 @@ def view_model(robot, units="mm"):
         "parameters": _parameters(robot),
         "max_iterations": MAX_ITERATIONS,
         "tolerance": newton_step(robot),
+        "stall": stall,
         "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),
         "max_step_angle": c_double(MAX_STEP_ANGLE),
         "degree": c_double(math.pi / 180.0),
