@@ -7,7 +7,6 @@ from dataclasses import replace
 import numpy as np
 
 from ..conventions import pose_from_t6
-from .hybrid.parasitic import solve_parasitic
 from .hybrid.wrist_loads import wrist_loads
 from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platform_loads
 from .reference import solve
@@ -19,6 +18,9 @@ SIDES = ("base", "platform")
 
 BLOCK_POSTURES = 65536
 """Poses times postures computed at once: their (n, p, m, 6) arrays about 20 MB each."""
+MANIFOLD_MATCH = 1e-12
+"""A T6 is the pose the machine takes when no entry differs from it by more than this fraction
+of the machine's size (rotation entries and mm alike)."""
 
 
 def loads(robot, t6, wrench=None, motion=None, postures=None):
@@ -46,9 +48,10 @@ def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
     if robot.wrist is not None:
         return wrist_loads(robot, t6, wrench, motion, chosen)
     if solution is None:
-        if robot.task:  # the pose the machine takes for the task coordinates asked (off its manifold: its rotations)
-            t6 = solve_parasitic(robot, t6).t6
         solution = solve(robot, t6)
+        if robot.task and np.max(np.abs(solution.machine - t6), initial=0.0) > MANIFOLD_MATCH * max(robot.size_mm, 1.0):
+            t6 = solution.machine  # a T6 off the manifold: the pose the machine takes for its task coordinates
+            solution = solve(robot, t6)
     return platform_loads(robot, t6, solution, chosen, *applied_wrenches(robot, t6, wrench, motion), motion)
 
 
