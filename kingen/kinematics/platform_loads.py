@@ -251,16 +251,11 @@ def _task_tangents(robot, t6):
     split best conditioned on average over the first poses (SAMPLED), and task_twists answers where G_A is poorly
     conditioned (WELL_CONDITIONED; loads do not depend on the basis)."""
     rows = constraint_rows(robot, t6)
+    squared = np.einsum("nij,nij->ni", rows, rows)
+    norms = np.sqrt(squared[:, 0] * squared[:, 1] * squared[:, 2])  # Hadamard's bound of any split, from the whole rows
+    sample = rows[:SAMPLED]
     splits = [np.array(columns) for columns in itertools.combinations(range(6), 3)]
-    norms = np.prod(np.linalg.norm(rows, axis=-1), axis=-1)  # Hadamard's bound of any split, from the whole rows
-
-    def quality(columns, stack=slice(None)):
-        """|det G_A| over the whole rows' bound (0 to 1; 0 where not finite): a row whose part in
-        A is tiny beside its whole makes the split poor, however its part in A is shaped."""
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.nan_to_num(np.abs(_cofactors(rows[stack][:, :, columns])[1]) / norms[stack])
-
-    chosen = max(splits, key=lambda columns: np.mean(quality(columns, slice(SAMPLED))))  # an unreachable pose: 0
+    chosen = max(splits, key=lambda columns: np.mean(_quality(_cofactors(sample[:, :, columns])[1], norms[:SAMPLED])))
     others = np.setdiff1d(np.arange(6), chosen)
     cofactor, determinant, _ = _cofactors(rows[:, :, chosen])
     basis = np.zeros((len(t6), 6, 3))
@@ -269,7 +264,7 @@ def _task_tangents(robot, t6):
         for i, k in itertools.product(range(3), range(3)):  # -(G_A^-1 G_B)[i, k], G_A^-1[i, j] = cofactor[j][i] / det
             basis[:, chosen[i], k] = -sum(cofactor[j][i] * rows[:, j, others[k]] for j in range(3)) * inverse
     basis[:, others, np.arange(3)] = 1.0
-    poor = quality(chosen) < WELL_CONDITIONED
+    poor = _quality(determinant, norms) < WELL_CONDITIONED
     if np.any(poor):
         basis[poor] = task_twists(robot, t6[poor])
     return basis
@@ -277,6 +272,14 @@ def _task_tangents(robot, t6):
 
 SAMPLED = 16
 """The poses whose constraint rows choose _task_tangents' split."""
+
+
+def _quality(determinant, norms):
+    """|det G_A| over the whole rows' Hadamard bound ``norms`` (0 to 1; 0 where not finite): a
+    row whose part in the split A is tiny beside its whole makes the split poor, however that
+    part is shaped."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.nan_to_num(np.abs(determinant) / norms)
 
 
 def about_origin(wrench, t6):
