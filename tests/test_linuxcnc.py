@@ -302,6 +302,8 @@ def test_an_inch_machine_gets_its_module_in_inches(tmp_path):
     assert "X Y Z in inch" in files["hexapodkins.c"]
     # rounding's floor for the forward's Newton: 1e-9 of the robot's 515 mm (z 465 + 50), in inches
     assert f"#define KINGEN_STALL {515e-9 / 25.4!r} " in files["hexapodkins.c"]
+    # Newton's tolerance: 1e-12 of the same 515 mm, in inches too
+    assert f"setp hexapodkins.tolerance {515e-12 / 25.4!r}\n" in files["hexapodkins.hal"]
 
 
 def test_towers_in_another_order_are_named(tmp_path):

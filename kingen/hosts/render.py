@@ -46,10 +46,11 @@ def newton_stall(robot, unit_mm=1.0):
     return c_double(NEWTON_STALL_RELATIVE * robot.size_mm / unit_mm)
 
 
-def newton_step(robot):
-    """The C text of the longest Newton step a generated forward stops at, for ``robot`` in the
-    units the routine computes in (NEWTON_STEP)."""
-    return c_double(max(NEWTON_STEP, NEWTON_STEP_RELATIVE * robot.size_mm))
+def newton_step(robot, unit_mm=1.0):
+    """The C text of the longest Newton step a generated forward stops at (NEWTON_STEP), for
+    ``robot`` in mm as loaded, in the routine's length unit of ``unit_mm`` mm (25.4 for an inch
+    machine); radians alike."""
+    return c_double(max(NEWTON_STEP, NEWTON_STEP_RELATIVE * robot.size_mm) / unit_mm)
 
 
 def _partial_source(name):

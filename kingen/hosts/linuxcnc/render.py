@@ -153,7 +153,7 @@ def view_model(robot, units="mm"):
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}
     labels = branch_words(robot)
-    stall = newton_stall(robot, LENGTH_UNITS[units])
+    stall, tolerance = newton_stall(robot, LENGTH_UNITS[units]), newton_step(robot, LENGTH_UNITS[units])
     robot = robot_in_units(robot, units)
     view = robot_view(robot, HOST)
     branches = robot.posture_branches(robot.working_posture)
@@ -199,7 +199,7 @@ def view_model(robot, units="mm"):
         "singular_tolerance": c_double(SINGULAR_TOLERANCE),
         "parameters": _parameters(robot),
         "max_iterations": MAX_ITERATIONS,
-        "tolerance": newton_step(robot),
+        "tolerance": tolerance,
         "stall": stall,
         "max_step": c_double(MAX_STEP / LENGTH_UNITS[units]),
         "max_step_angle": c_double(MAX_STEP_ANGLE),
