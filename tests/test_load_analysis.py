@@ -48,6 +48,16 @@ def test_sweeps_carry_the_load_fraction_and_the_least_stiffness(tmp_path):
     assert home_entry["min_stiffness_n_per_mm"] == pytest.approx(least_stiffness(robot, 20000.0), rel=1e-5)
 
 
+def test_the_least_stiffness_does_not_depend_on_the_limbs_masses(tmp_path):
+    """Stiffness is the machine's (the passive joints rigid, the loads linear): the limbs' parts,
+    whose weight the loads carry, leave it as the central differences give it."""
+    parts = "parts: {actuator: {mass: 3.5, centre: 60}, link: {mass: 1.75, centre: 110}}"
+    robot = loaded(tmp_path, f"max_force: 1000, stiffness: 20000, {parts}")
+    result = analyze(robot, settings=Settings(tilt_step_deg=2.0, azimuth_step_deg=180.0, tilt_max_deg=10.0))
+    home_entry = min(result["sweeps"]["x"], key=lambda entry: abs(entry["value"]))
+    assert home_entry["min_stiffness_n_per_mm"] == pytest.approx(least_stiffness(robot, 20000.0), rel=1e-5)
+
+
 def least_stiffness(robot, stiffness):
     """N/mm at home from K = J^T k J, J by central differences of the reference along the six
     unit twists (translations, then rotations about the base axes through the base origin)."""

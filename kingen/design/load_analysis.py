@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..kinematics.loads import SIDES, load_limited, static_loads_of
+from ..kinematics.loads import SIDES, load_limited, static_loads_of, without_parts
 
 LOAD_KEYS = ("load_fraction", "min_stiffness_n_per_mm")
 """What analyze records of loads per pose: the largest |load| / limit, and the least stiffness (N/mm)."""
@@ -49,7 +49,7 @@ def _least_stiffness(robot, t6, posture, solution):
     (NaN without every limb's stiffness, or where the posture holds no load)."""
     if not stiffness_given(robot):
         return np.full(len(t6), np.nan)
-    unloaded = replace(robot, payload=None)
+    unloaded = without_parts(replace(robot, payload=None))  # stiffness is the machine's, whatever it carries
     columns = [static_loads_of(unloaded, t6, solution, posture, np.r_[force, 0.0, 0.0, 0.0]).deflection[:, 0, :3]
                for force in UNIT_FORCES]
     compliance = np.stack(columns, axis=2)  # (n, 3, 3) mm per N
