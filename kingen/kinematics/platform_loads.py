@@ -315,13 +315,6 @@ def _deflection(robot, t6, reduced, twists, static):
     return np.concatenate([displacement, twist[..., 3:]], axis=-1)
 
 
-def _in_both_frames(directions, t6):
-    """(directions, the same in the platform frame): each limb's passive-link direction (n, p, m, 3)
-    (unit, from the base side to the platform point: its force line's, base frame) at T6 (n, 4, 4)."""
-    t6 = np.asarray(t6, dtype=float)
-    return directions, (t6[:, None, None, :3, :3] @ directions[..., None])[..., 0]  # R^T f, R = t6[:3, :3]^T
-
-
 def neutral_axes(robot):
     """((m, 3), (m, 3)): each limb's base joint axis (base frame) and platform joint axis
     (platform frame): the file's ``base_axis``/``platform_axis``, else the link's direction at
@@ -330,7 +323,8 @@ def neutral_axes(robot):
     solution = solve(robot, at_home)
     wrenches, _ = limb_wrenches(robot, solution.points, branch_values(robot, solution.joints), with_transmissions=False)
     table = branch_table(robot)[[robot.working_posture], :robot.dof]
-    base, platform = _in_both_frames(wrenches[:, np.arange(robot.dof), table][..., :3], at_home)
+    base = wrenches[:, np.arange(robot.dof), table][..., :3]  # (1, 1, m, 3) unit, base side to platform point
+    platform = (at_home[:, None, None, :3, :3] @ base[..., None])[..., 0]  # R^T f, R = t6[:3, :3]^T
     bases = np.array([limb.base_axis if limb.base_axis is not None else base[0, 0, index]
                       for index, limb in enumerate(robot.limbs)], dtype=float)
     platforms = np.array([limb.platform_axis if limb.platform_axis is not None else platform[0, 0, index]

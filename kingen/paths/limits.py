@@ -62,12 +62,12 @@ class Machine:
 
     axis_speed: np.ndarray
     axis_acceleration: np.ndarray
-    arc_blends: bool = PLANNER_KEYS["ARC_BLEND_ENABLE"] != 0.0
-    depth: int = int(PLANNER_KEYS["ARC_BLEND_OPTIMIZATION_DEPTH"])
-    kink_ratio: float = PLANNER_KEYS["ARC_BLEND_KINK_RATIO"]
-    cycle: float = 0.001
-    feed_scale: float = 1.0
-    unit: float = 1.0
+    arc_blends: bool
+    depth: int
+    kink_ratio: float
+    cycle: float
+    feed_scale: float
+    unit: float
     """mm per the .ini's [TRAJ] LINEAR_UNITS (ini_unit): what the interpreter reads lengths in."""
 
     @property
