@@ -29,6 +29,8 @@ import time
 import urllib.request
 from pathlib import Path
 
+from c_host import _table
+
 ABOUT = ("[kingen view](how-to/view.md)'s page: its size and how long it takes to answer a slider change "
          "(the WebAssembly routine, the drawing's update and its render), measured in the page with "
          "performance.now() in headless Chromium drawing with SwiftShader on the processor. Goals: under 5 MB, "
@@ -124,12 +126,10 @@ def markdown(figures):
     rows += [[row["robot"], f"{row['bytes'] / 1e6:.2f}", f"{row['load_ms']:.1f}", str(row["changes"]), f"{row['median_ms']:.1f}",
               f"{row['p95_ms']:.1f}", f"{row['max_ms']:.1f}", str(row["over_50_ms"]), f"{row['routine_median_ms']:.2f}",
               f"{row['routine_max_ms']:.2f}"] for row in figures["pages"]]
-    table = ["| " + " | ".join(row) + " |" for row in rows]
-    table.insert(1, "|" + " --- |" * len(rows[0]))
     return (f"Each page's first free coordinate moved {figures['changes']} times by input events; every answer timed "
             "in the page (performance.now(), 0.1 ms resolution); the first answer, at load, compiles the shaders. "
             f"The machine's load average over a minute, at the end: {figures['load_average']:.1f} (its other work "
-            "makes the worst changes).\n\n" + "\n".join(table))
+            "makes the worst changes).\n\n" + _table(rows[0], rows[1:]))
 
 
 def main():

@@ -19,6 +19,7 @@ import numpy as np
 from ..conventions import matrix_from_t6, pose_from_t6
 from ..kinematics.reference import solve
 from ..kinematics.routine import answer_frame
+from ..robot.placement import base_joints
 from .analysis import tilted_t6
 from .figures import LABELS
 
@@ -50,7 +51,7 @@ def _labelled(rows):
 def away_from_base(robot, home):
     """+1 when the T6 z axis at ``home`` (4, 4 matrix) points away from the base (from the limbs'
     base joints' centre towards the tool point, or across it), else -1."""
-    centre = np.mean([limb.base_joint() for limb in robot.parallel.limbs], axis=0)
+    centre = base_joints(robot.parallel).mean(axis=0)
     return 1.0 if (home[:3, 3] - centre) @ home[:3, 2] >= 0.0 else -1.0
 
 

@@ -150,9 +150,7 @@ def machine_at(robot, t6, posture):
     if solution.platform is not None:
         platform = matrix_from_t6(solution.platform[0])
     elif parallel.task:
-        from ..kinematics.hybrid.parasitic import solve_parasitic
-
-        platform = matrix_from_t6(solve_parasitic(parallel, t6).t6[0])
+        platform = matrix_from_t6(solution.machine[0])
     else:
         platform = matrix_from_t6(t6[0])
     lower, upper = robot.travel_limits()

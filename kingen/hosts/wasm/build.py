@@ -19,7 +19,7 @@ from ...errors import KingenError
 from ...runtime.compiler import compile_c, compile_given_source, compiler_command, first_diagnostic, run_compiler
 from ...runtime.files import cache_dir, cached, default_out_dir, digest, write_atomic, write_files
 from ..base import BuildResult
-from ..c.build import STRICT_FLAGS
+from ..c.build import STRICT_FLAGS, write_source
 from ..c.render import file_names, prefix, render
 
 BATCH = Path(__file__).resolve().parents[1] / "c" / "templates" / "kingen_c_batch.c"
@@ -156,10 +156,10 @@ def build_wasm(robot, out_dir=None, timeout=DEFAULT_TIMEOUT):
     """``robot``'s header, source and module written into ``out_dir`` (default :func:`default_dir`)."""
     out_dir = Path(out_dir or default_dir(robot))
     module = compile_wasm(robot, timeout)
-    write_files({out_dir / name: text for name, text in render(robot).items()})
+    source = write_source(robot, out_dir)
     target = out_dir / module.name
     write_atomic(target, module.read_bytes())
-    return BuildResult(out_dir / file_names(robot)[1], target, prefix(robot), compiled=True)
+    return BuildResult(source, target, prefix(robot), compiled=True)
 
 
 def build_source(source, out_dir, timeout=DEFAULT_TIMEOUT):
