@@ -168,7 +168,7 @@ def test_linuxcnc_sheet_of_a_hexapod_speaks_of_newton_and_leg_extensions():
     robot = load_robot("hexapod")
     text = render_linuxcnc(robot)["SETUP.md"]
     assert "`hexapodkins.iterations` (s32 out): Newton's steps in the last forward." in text
-    # the tolerance: 1e-12 of the robot's size where that exceeds 1e-10 (kingen.hosts.render.newton_step)
+    # the tolerance: 1e-12 of the robot's size where that exceeds 1e-10 (kingen.hosts.render.newton_stops)
     assert robot.size_mm == 515.0  # z 465 + 50 of the verification region
     assert "`.max-step`, `.max-step-angle`: the forward's\n  settings (20, 5.15e-10, 25.0 mm, 10.0 degrees)." in text
     assert "halves the one before it and is at most 5.15e-07 (rounding's floor, compiled in)." in text  # 1e-9 of 515 mm

@@ -39,18 +39,13 @@ steps are rounding's (about 1e-16 of the size over the pose's conditioning, whic
 above 1e-4); the pose returned is then within about that step of the root."""
 
 
-def newton_stall(robot, unit_mm=1.0):
-    """The C text of the longest step a generated forward stops at when it no longer halves the
-    step before it: NEWTON_STALL_RELATIVE of ``robot``'s size (``robot`` in mm, as loaded), in
-    the routine's length unit of ``unit_mm`` mm (25.4 for an inch machine); radians alike."""
-    return c_double(NEWTON_STALL_RELATIVE * robot.size_mm / unit_mm)
-
-
-def newton_step(robot, unit_mm=1.0):
-    """The C text of the longest Newton step a generated forward stops at (NEWTON_STEP), for
-    ``robot`` in mm as loaded, in the routine's length unit of ``unit_mm`` mm (25.4 for an inch
-    machine); radians alike."""
-    return c_double(max(NEWTON_STEP, NEWTON_STEP_RELATIVE * robot.size_mm) / unit_mm)
+def newton_stops(robot, unit_mm=1.0):
+    """The C texts (step, stall) a generated forward's Newton stops at, for ``robot`` in mm as
+    loaded, in the routine's length unit of ``unit_mm`` mm (25.4 for an inch machine), radians
+    alike: the longest step (NEWTON_STEP) and the longest step that no longer halves the one
+    before it (NEWTON_STALL_RELATIVE of the machine's size)."""
+    step = max(NEWTON_STEP, NEWTON_STEP_RELATIVE * robot.size_mm)
+    return c_double(step / unit_mm), c_double(NEWTON_STALL_RELATIVE * robot.size_mm / unit_mm)
 
 
 def _partial_source(name):

@@ -26,6 +26,8 @@ import signal
 import socket
 import stat
 
+from .text import counted
+
 WRITE_FLAGS = (os.O_WRONLY, os.O_RDWR, os.O_CREAT, os.O_TRUNC)
 OPENING = {"open": (None, 0, 1), "openat": (0, 1, 2), "creat": (None, 0, None)}
 """For each call that opens a file: the argument holding its folder's descriptor (None: the
@@ -249,7 +251,7 @@ class Supervisor:
                 if (self._link(pid, "ns/pid") == self._namespace) if self.namespaced else self._descends(pid):
                     left.append(pid)
         if left:
-            self._tell("left", f"left {len(left)} process{'es' if len(left) > 1 else ''} running when its job ended")
+            self._tell("left", f"left {counted(len(left), 'process', 'processes')} running when its job ended")
 
     def _running(self, pid):
         try:

@@ -11,7 +11,7 @@ from ...kinematics.routine import SINGULAR_TOLERANCE
 from ...kinematics.singularity import TRANSLATION_SINGULAR
 from ...robot.limbs import c_double
 from ..loads import loads_view
-from ..render import closed_form_model, newton_stall, newton_step, refuse, robot_view, template
+from ..render import closed_form_model, newton_stops, refuse, robot_view, template
 from . import CHost
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
@@ -60,6 +60,7 @@ def view_model(robot):
     joints = [{**joint, "unit": "radians" if joint_type.wraps else "mm"}
               for joint, joint_type in zip(view["joints"], robot.joint_types)]
     digits = ", ".join(f"{joint['name']} {joint['bit']}" for joint in joints if joint["bit"] >= 0)
+    tolerance, stall = newton_stops(robot)
     return {
         **view,
         "joints": joints,
@@ -85,8 +86,8 @@ def view_model(robot):
         "fixed_names": " ".join(name for index, name in enumerate(COORDINATES) if not free[index]) or "none",
         "translation_singular": c_double(TRANSLATION_SINGULAR),
         "max_iterations": MAX_ITERATIONS,
-        "tolerance": newton_step(robot),
-        "stall": newton_stall(robot),
+        "tolerance": tolerance,
+        "stall": stall,
         "machine_pose": has_machine_pose(robot),
         **loads_view(robot, free, lambda row, column: f"pose[{4 * row + column}]"),
     }

@@ -10,7 +10,7 @@ from pathlib import Path
 from ...robot.limbs import c_double
 from ...robot.placement import branch_words
 from ..loads import loads_view
-from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_stall, newton_step, robot_view,
+from ..render import (refuse, build_info, closed_form_model, gram_lines, newton_stops, robot_view,
                       schur_test_lines, template)
 from . import LinuxcncHost
 from .five_axis import wrist_view
@@ -153,7 +153,7 @@ def view_model(robot, units="mm"):
                 "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                         ("posture", robot.working_posture)))}
     labels = branch_words(robot)
-    stall, tolerance = newton_stall(robot, LENGTH_UNITS[units]), newton_step(robot, LENGTH_UNITS[units])
+    tolerance, stall = newton_stops(robot, LENGTH_UNITS[units])
     robot = robot_in_units(robot, units)
     view = robot_view(robot, HOST)
     branches = robot.posture_branches(robot.working_posture)
@@ -176,7 +176,6 @@ def view_model(robot, units="mm"):
     return {
         **view,
         "module": module_name(robot),
-        "component": hal_prefix(robot),
         "full_name": full_name(robot),
         "build_info": build_info(robot, module_name(robot), 1, (("host", "linuxcnc"),
                                                                 ("posture", robot.working_posture))),
