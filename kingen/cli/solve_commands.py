@@ -63,9 +63,10 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     import numpy as np
 
     from ..runtime.files import write_atomic
-    from ..conventions import branch_of_posture, t6_from_pose
+    from ..conventions import t6_from_pose
     from ..kinematics.reference import solve as reference_solve
     from ..kinematics.routine import calls_decoder
+    from ..view.scene import posture_branches
 
     if (pose is None) == (t6 is None):
         raise click.UsageError("give exactly one of --pose and --t6")
@@ -88,10 +89,7 @@ def solve(robot, out_dir, pose, t6, degrees, json_path, switch, wide, link_lengt
     compact = (["posture", "branches"] + names
                + ["warning", "max |plugin - reference|", "reference warning", "direct index (mm)", "min inverse index"])
     rows, compact_rows = [header], [compact]
-    digits = [bit for bit in model.branch_bits if bit >= 0]
-    for k in range(model.postures):
-        wrist = str(k % 2) if model.wrist is not None else ""  # the wrist's branch: the posture's last bit
-        branches = "".join(str(branch_of_posture(k // 2 if wrist else k, bit)) for bit in digits) + wrist or "-"
+    for k, branches in enumerate(posture_branches(model)):
         plugin = [fixed_text(v, 9) for v in calls.solutions[0, :, k] * scale] + [_warning_name(calls.warnings[0, k])]
         indices = [_index_text(direct[k]), inverse_text]
         difference = np.abs(calls.solutions[0, :, k] - expected.joints[0, :, k]) * scale
