@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..kinematics.loads import SIDES, load_limited, static_loads_of, without_parts
+from ..kinematics.loads import SIDES, load_limited, loads_of, without_parts
 
 LOAD_KEYS = ("load_fraction", "min_stiffness_n_per_mm")
 """What analyze records of loads per pose: the largest |load| / limit, and the least stiffness (N/mm)."""
@@ -29,7 +29,7 @@ def load_quantities(robot, t6, posture, solution):
     limited actuators (NaN: none limited, or unreachable); min_stiffness_n_per_mm: (n,) (NaN without
     every limb's stiffness)}."""
     count = len(t6)
-    held = static_loads_of(robot, t6, solution, posture)
+    held = loads_of(robot, t6, solution, posture)
     forces = np.abs(held.forces[:, 0, :robot.dof])
     limits = np.array([limb.actuator_limit or np.nan for limb in robot.limbs])
     with np.errstate(invalid="ignore"):
@@ -50,7 +50,7 @@ def _least_stiffness(robot, t6, posture, solution):
     if not stiffness_given(robot):
         return np.full(len(t6), np.nan)
     unloaded = without_parts(replace(robot, payload=None))  # stiffness is the machine's, whatever it carries
-    columns = [static_loads_of(unloaded, t6, solution, posture, np.r_[force, 0.0, 0.0, 0.0]).deflection[:, 0, :3]
+    columns = [loads_of(unloaded, t6, solution, posture, np.r_[force, 0.0, 0.0, 0.0]).deflection[:, 0, :3]
                for force in UNIT_FORCES]
     compliance = np.stack(columns, axis=2)  # (n, 3, 3) mm per N
     symmetric = 0.5 * (compliance + np.swapaxes(compliance, 1, 2))

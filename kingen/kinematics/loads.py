@@ -12,7 +12,7 @@ from .platform_loads import Loads, Motion, applied_wrenches, machine_t6, platfor
 from .reference import solve
 
 __all__ = ["Loads", "Motion", "beyond_limits", "held_problem", "held_text", "load_limited", "load_unit", "loads",
-           "machine_pose", "machine_t6", "static_loads_of", "without_parts"]
+           "loads_of", "machine_pose", "machine_solution", "machine_t6", "without_parts"]
 SIDES = ("base", "platform")
 """A limb's passive joints, as joint_limits names them."""
 
@@ -48,11 +48,22 @@ def _block_loads(robot, t6, wrench, motion, chosen, solution=None):
     if robot.wrist is not None:
         return wrist_loads(robot, t6, wrench, motion, chosen)
     if solution is None:
-        solution = solve(robot, t6)
-        if robot.task and np.max(np.abs(solution.machine - t6), initial=0.0) > MANIFOLD_MATCH * max(robot.size_mm, 1.0):
-            t6 = solution.machine  # a T6 off the manifold: the pose the machine takes for its task coordinates
-            solution = solve(robot, t6)
+        t6, solution = machine_solution(robot, t6)
     return platform_loads(robot, t6, solution, chosen, *applied_wrenches(robot, t6, wrench, motion), motion)
+
+
+def machine_solution(robot, t6):
+    """(T6 (n, 4, 4) the machine takes, the reference's Solution there) for T6 ``t6``: a machine
+    with task coordinates takes, for a T6 off its manifold, the pose for the T6's task coordinates
+    (whatever its rotation); (``t6``, None) for a robot with a wrist, whose loads solve the wrist
+    and its parallel part themselves (kingen.kinematics.hybrid.wrist_loads)."""
+    if robot.wrist is not None:
+        return t6, None
+    solution = solve(robot, t6)
+    if robot.task and np.max(np.abs(solution.machine - t6), initial=0.0) > MANIFOLD_MATCH * max(robot.size_mm, 1.0):
+        t6 = solution.machine  # a T6 off the manifold: the pose the machine takes for its task coordinates
+        solution = solve(robot, t6)
+    return t6, solution
 
 
 def machine_pose(loads_result):
@@ -60,11 +71,12 @@ def machine_pose(loads_result):
     return pose_from_t6(loads_result.machine)
 
 
-def static_loads_of(robot, t6, solution, posture=0, wrench=None):
-    """Loads of ``robot`` in ``posture`` at rest (the payload under gravity, and ``wrench`` at the
-    platform origin) at T6 (n, 4, 4) the machine takes, from the reference's ``solution`` there
-    (no solve again): what check-path and analyze judge per sample."""
-    return _block_loads(robot, np.asarray(t6, dtype=float), wrench, None, np.array([posture]), solution)
+def loads_of(robot, t6, solution, posture=0, wrench=None, motion=None):
+    """Loads of ``robot`` in ``posture`` (the payload under gravity, moving with ``motion`` or at
+    rest, and ``wrench`` at the platform origin) at T6 (n, 4, 4) the machine takes, from the
+    reference's ``solution`` there (:func:`machine_solution`; no solve again): what check-path and
+    analyze judge per sample."""
+    return _block_loads(robot, np.asarray(t6, dtype=float), wrench, motion, np.array([posture]), solution)
 
 
 def without_parts(robot):

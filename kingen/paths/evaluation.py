@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.collision import clearances
-from ..kinematics.loads import SIDES, static_loads_of
+from ..kinematics.loads import SIDES, loads_of
 from ..kinematics.reference import solve
 from ..kinematics.routine import SINGULAR_TOLERANCE
 from ..kinematics.singularity import limb_wrenches
@@ -148,7 +148,7 @@ class Evaluator:
         clearance = dict(zip(("rods", "cranks"), clearances(self.robot, solution.points, joints))) \
             if self.collisions else {}
         index = solution.direct_index[:, 0] if solution.direct_index is not None else np.full(len(u), np.nan)
-        held = static_loads_of(self.robot, t6, solution) if self.loads_judged else None
+        held = loads_of(self.robot, t6, solution) if self.loads_judged else None
         for column, quantity in enumerate(self.quantities):
             joint = quantity.joint
             if quantity.kind == "travel":

@@ -9,7 +9,7 @@ the rotation matrix, [omega] = R' R^T and [alpha] = the skew part of R'' R^T (ba
 
 import numpy as np
 
-from ..kinematics.loads import Motion, loads
+from ..kinematics.loads import Motion, loads_of, machine_solution
 from .timing import joint_rates
 
 W_PER_N_MM_PER_S = 1e-3
@@ -47,9 +47,10 @@ def actuator_power(robot, t6, motion, speeds):
     of it its load at rest gives (NaN where a sample is not timed or not reachable)."""
     count = len(robot.limbs)
     scale = np.where(robot.revolute[:count], 1.0, W_PER_N_MM_PER_S) * speeds[:, :count]
+    t6, solution = machine_solution(robot, t6)  # solved once, for both
     with np.errstate(invalid="ignore"):
-        moving = loads(robot, t6, motion=motion, postures=[0]).forces[:, 0, :count] * scale
-        resting = loads(robot, t6, postures=[0]).forces[:, 0, :count] * scale
+        moving = loads_of(robot, t6, solution, motion=motion).forces[:, 0, :count] * scale
+        resting = loads_of(robot, t6, solution).forces[:, 0, :count] * scale
     return moving, resting
 
 
